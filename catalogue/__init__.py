@@ -1,0 +1,2 @@
+"""catalogue: named mechanisms (TOML files with sources), number and type synthesis,
+atlases (SQLite, HTML), distributed enumeration."""

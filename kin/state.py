@@ -1,0 +1,102 @@
+"""The result of a kinematic analysis: :class:`KinematicState` (frozen).
+
+Shapes follow one rule: a leading batch axis over positions, the last axis is the
+coordinate.  ``positions`` is ``(N, n_joints, 2)``, ``angles`` is ``(N, n_links)``.
+
+Conventions
+-----------
+* ``inputs[:, k]`` is the value of driver ``k``: rotation (rad) of the driver's
+  ``links[1]`` relative to ``links[0]`` measured from the reference configuration,
+  or the slide (m) from the reference for a P joint.
+* ``positions[:, i]`` is joint ``i``'s point; for a P joint, the point of the
+  *slider* that sat at the joint's ``at`` in the reference configuration.
+* ``angles[:, k]`` is link ``k``'s rotation from the reference configuration (rad,
+  counter-clockwise); the frame's is 0.
+* Derivatives are with respect to time for the input rates ``input_rates``
+  (default 1 rad/s or 1 m/s for every driver, zero input acceleration), so for one
+  driver they are the seed's analogues d/dφ and d²/dφ² (seed 000).
+* ``status[n]`` is ``"ok"`` or the reason position ``n`` failed (which group, why);
+  failed rows are NaN.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from topo.model import Mechanism
+
+__all__ = ["KinematicState"]
+
+
+@dataclass(frozen=True)
+class KinematicState:
+    mechanism: Mechanism
+    inputs: np.ndarray                      # (N, n_drivers)
+    positions: np.ndarray                   # (N, n_joints, 2)
+    angles: np.ndarray                      # (N, n_links)
+    status: np.ndarray                      # (N,) object array of str
+    velocities: np.ndarray | None = None    # (N, n_joints, 2)
+    accelerations: np.ndarray | None = None
+    omegas: np.ndarray | None = None        # (N, n_links)
+    epsilons: np.ndarray | None = None
+    input_rates: np.ndarray | None = None   # (n_drivers,)
+    branches: tuple = ()                    # per-group assembly branch, free-form
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Boolean mask of positions that assembled."""
+        return self.status == "ok"
+
+    @property
+    def success(self) -> bool:
+        return bool(np.all(self.ok))
+
+    @property
+    def n_positions(self) -> int:
+        return self.positions.shape[0]
+
+    def joint_index(self, name: str) -> int:
+        return self.mechanism.joint_names.index(name)
+
+    def link_index(self, name: str) -> int:
+        return self.mechanism.link_names.index(name)
+
+    def _anchor(self, link: str) -> int:
+        """Index of a joint on ``link`` whose point moves with the link."""
+        m = self.mechanism
+        for i, j in enumerate(m.joints):
+            if link in j.links and (j.kind.value == "R" or j.links[1] == link):
+                return i
+        raise ValueError(f"link '{link}' has no joint point that moves with it")
+
+    def point_on_link(self, link: str, at_ref) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """Position, velocity, acceleration of the material point of ``link`` that was at
+        ``at_ref`` in the reference configuration.  Shapes ``(N, 2)``.
+
+        Rigid-body transport from an anchor joint X of the link:
+        ``P = X + R(θ) r``, ``v = v_X + ω × r'``, ``a = a_X + ε × r' − ω² r'``
+        with ``r' = R(θ) r`` and ``r = at_ref − X_ref``.
+        """
+        m = self.mechanism
+        k = self.link_index(link)
+        if m.link(link).is_frame:
+            p = np.broadcast_to(np.asarray(at_ref, float), (self.n_positions, 2)).copy()
+            z = np.zeros_like(p)
+            return p, (z if self.velocities is not None else None), (z if self.accelerations is not None else None)
+        i = self._anchor(link)
+        x_ref = np.asarray(m.joints[i].at, float)
+        r = np.asarray(at_ref, float) - x_ref
+        th = self.angles[:, k]
+        c, s = np.cos(th), np.sin(th)
+        rr = np.stack([c * r[0] - s * r[1], s * r[0] + c * r[1]], axis=-1)
+        pos = self.positions[:, i] + rr
+        vel = acc = None
+        if self.velocities is not None and self.omegas is not None:
+            w = self.omegas[:, k][:, None]
+            perp = np.stack([-rr[:, 1], rr[:, 0]], axis=-1)
+            vel = self.velocities[:, i] + w * perp
+            if self.accelerations is not None and self.epsilons is not None:
+                e = self.epsilons[:, k][:, None]
+                acc = self.accelerations[:, i] + e * perp - w * w * rr
+        return pos, vel, acc

@@ -1,0 +1,5 @@
+import sys
+
+from multiloop.cli import main
+
+sys.exit(main())

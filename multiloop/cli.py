@@ -1,0 +1,72 @@
+"""The ``multiloop`` console command: parses arguments and dispatches.
+
+Each sub-command lives in ``multiloop/commands/<name>.py`` with two functions,
+``add_arguments(parser)`` and ``run(args) -> int``.  Errors derived from
+``topo.errors.LinkageError`` print their message on stderr and exit 2 (bad input);
+anything else is an internal error, exit 1 (traceback only with ``--debug``).
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from topo.errors import LinkageError
+
+COMMANDS = {
+    "analyse": "structural report of a chain or mechanism (seed 002 numbers)",
+    "decompose": "Assur groups in solving order",
+    "solve": "positions, velocities, accelerations over the input range",
+    "forces": "kinetostatics: reactions and balancing force/moment",
+    "engine": "crank-slider engines: diagrams of seed 004",
+    "platform": "six-strut spatial platform: strut forces, screws, frequencies",
+    "atlas": "number/type synthesis: atlases of chains (SQLite, HTML)",
+    "catalogue": "list the bundled mechanisms",
+    "bench": "run the benchmarks and print ratios",
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="multiloop", description=__doc__.splitlines()[0])
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    parser.add_argument("--version", action="version", version="multiloop 0.1.0")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, help_text in COMMANDS.items():
+        try:
+            module = importlib.import_module(f"multiloop.commands.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"multiloop.commands.{name}":
+                continue
+            raise
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args._run(args) or 0)
+    except LinkageError as exc:
+        print(f"multiloop {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+    except Exception as exc:  # noqa: BLE001 - the last line of defence
+        if args.debug:
+            raise
+        print(f"multiloop {args.command}: internal error: {type(exc).__name__}: {exc} "
+              "(run with --debug for the traceback, and please report it)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

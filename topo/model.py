@@ -1,0 +1,505 @@
+"""Frozen value objects of a planar linkage and the validating builder.
+
+A :class:`Mechanism` is immutable and hashable; no algorithm ever changes it
+(anything that depends on motion lives in a result object).  It is built through
+:class:`MechanismBuilder`, whose :meth:`~MechanismBuilder.build` validates the whole
+description and reports *every* problem at once.
+
+Model (SPEC §1, seed 002 notation):
+
+* a **link** is a rigid body; at most one is the **frame** (a bare chain has none);
+* an ``R`` **joint** (pin) joins two or more links; a pin joining ``n'`` links is a
+  *multiple joint* of multiplicity ``j = n' - 1`` and counts as ``n' - 1`` pairs;
+* a ``P`` **joint** (slider) joins exactly two links, guide first, slider second;
+* geometry (optional): the reference position ``at`` of every joint and, for a P
+  joint, the guide direction ``axis``, all in one configuration that satisfies
+  closure;
+* **drivers** name the joints whose relative motion is the input;
+* optional mass data, tracer points, external forces, gravity.
+"""
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Iterable, Sequence
+
+from .errors import InputError, TopologyError, explain
+
+__all__ = [
+    "JointKind",
+    "Link",
+    "Joint",
+    "Driver",
+    "TracerPoint",
+    "Load",
+    "Mechanism",
+    "MechanismBuilder",
+    "chain_from_joint_lists",
+]
+
+Vec2 = tuple[float, float]
+
+
+class JointKind(str, enum.Enum):
+    """Lower-pair kind: ``R`` revolute pin, ``P`` prismatic slider."""
+
+    R = "R"
+    P = "P"
+
+
+@dataclass(frozen=True, slots=True)
+class Link:
+    """A rigid body.
+
+    Attributes
+    ----------
+    name : str
+    is_frame : bool
+        True for the ground link.
+    mass : float or None
+        Mass in kg (kinetostatics).
+    cg : (float, float) or None
+        Centre of mass in the reference configuration (m).
+    inertia : float or None
+        Moment of inertia about the centre of mass (kg m^2).
+    """
+
+    name: str
+    is_frame: bool = False
+    mass: float | None = None
+    cg: Vec2 | None = None
+    inertia: float | None = None
+    color: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Joint:
+    """A lower pair.
+
+    ``links`` is ordered: for a P joint ``links[0]`` is the guide and ``links[1]``
+    the slider; for an R joint used as a driver, the input is the rotation of
+    ``links[1]`` relative to ``links[0]``.
+    """
+
+    name: str
+    kind: JointKind
+    links: tuple[str, ...]
+    at: Vec2 | None = None
+    axis: Vec2 | None = None
+
+    @property
+    def multiplicity(self) -> int:
+        """``j = n' - 1``: 1 for a simple joint, ``j >= 2`` for a multiple joint."""
+        return len(self.links) - 1
+
+    @property
+    def n_pairs(self) -> int:
+        """Kinematic pairs this joint counts for (``n' - 1``)."""
+        return len(self.links) - 1
+
+    @property
+    def is_multiple(self) -> bool:
+        return len(self.links) > 2
+
+
+@dataclass(frozen=True, slots=True)
+class Driver:
+    """An input: relative rotation (R) or slide (P) of ``links[1]`` w.r.t. ``links[0]``.
+
+    ``speed`` (rad/s or m/s) and ``acceleration`` are used by kinetostatics; the
+    kinematic analogues assume unit speed and zero acceleration.
+    """
+
+    joint: str
+    links: tuple[str, str]
+    speed: float | None = None
+    acceleration: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class TracerPoint:
+    """A point fixed on a link, given in the reference configuration."""
+
+    name: str
+    link: str
+    at: Vec2
+
+
+@dataclass(frozen=True, slots=True)
+class Load:
+    """An external force (and/or moment) on a link.
+
+    ``value`` is a constant force ``(Fx, Fy)`` in the frame; ``table`` optionally gives
+    it against the input as rows ``(input_deg, Fx, Fy)`` (linear interpolation,
+    periodic over 360 deg).  ``moment`` is a constant couple (N m, counter-clockwise).
+    """
+
+    link: str
+    at: Vec2 | None = None
+    value: Vec2 = (0.0, 0.0)
+    table: tuple[tuple[float, float, float], ...] | None = None
+    moment: float = 0.0
+    name: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Mechanism:
+    """An immutable planar linkage (or bare chain when it has no frame).
+
+    Build it with :class:`MechanismBuilder` or :func:`topo.io.load`; never mutate it.
+    """
+
+    links: tuple[Link, ...]
+    joints: tuple[Joint, ...]
+    drivers: tuple[Driver, ...] = ()
+    points: tuple[TracerPoint, ...] = ()
+    loads: tuple[Load, ...] = ()
+    gravity: Vec2 | None = None
+    name: str | None = None
+    description: str | None = None
+    source: str | None = None
+
+    # -- lookups -----------------------------------------------------------------
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(link.name for link in self.links)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(joint.name for joint in self.joints)
+
+    @property
+    def n_links(self) -> int:
+        return len(self.links)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def frame(self) -> str | None:
+        """Name of the frame link, or None for a bare chain."""
+        for link in self.links:
+            if link.is_frame:
+                return link.name
+        return None
+
+    @property
+    def has_geometry(self) -> bool:
+        """True when every joint has a reference position (and every P joint an axis)."""
+        return bool(self.joints) and all(
+            j.at is not None and (j.kind is JointKind.R or j.axis is not None)
+            for j in self.joints)
+
+    def link(self, name: str) -> Link:
+        return self._links_by_name[name]
+
+    def joint(self, name: str) -> Joint:
+        return self._joints_by_name[name]
+
+    def joints_of(self, link: str) -> tuple[Joint, ...]:
+        """All joints the link lies on, in file order."""
+        return tuple(j for j in self.joints if link in j.links)
+
+    def degree(self, link: str) -> int:
+        """Number of joints on the link (an *i*-vertex link has degree *i*)."""
+        return sum(1 for j in self.joints if link in j.links)
+
+    @property
+    def _links_by_name(self) -> dict[str, Link]:
+        return {link.name: link for link in self.links}
+
+    @property
+    def _joints_by_name(self) -> dict[str, Joint]:
+        return {j.name: j for j in self.joints}
+
+    def with_drivers(self, drivers: Sequence[Driver]) -> "Mechanism":
+        """A copy with another driver set (validated)."""
+        b = MechanismBuilder.from_mechanism(self)
+        b.drivers = list(drivers)
+        return b.build()
+
+    def with_frame(self, frame: str | None) -> "Mechanism":
+        """A copy with another frame link (``None`` gives the bare chain)."""
+        b = MechanismBuilder.from_mechanism(self)
+        b.links = [Link(lk.name, lk.name == frame, lk.mass, lk.cg, lk.inertia, lk.color)
+                   for lk in b.links]
+        if frame is not None and frame not in {lk.name for lk in b.links}:
+            raise TopologyError(explain("frame", expected="a link of the chain",
+                                        got=repr(frame)))
+        return b.build()
+
+    def relabelled(self, link_map: dict[str, str], joint_map: dict[str, str] | None = None,
+                   order: Sequence[int] | None = None) -> "Mechanism":
+        """A copy with links (and joints) renamed; ``order`` permutes the joint list.
+
+        Used by tests for relabelling invariance.
+        """
+        joint_map = joint_map or {}
+        joints = [Joint(joint_map.get(j.name, j.name), j.kind,
+                        tuple(link_map[x] for x in j.links), j.at, j.axis)
+                  for j in self.joints]
+        if order is not None:
+            joints = [joints[i] for i in order]
+        links = [Link(link_map[lk.name], lk.is_frame, lk.mass, lk.cg, lk.inertia, lk.color)
+                 for lk in self.links]
+        drivers = [Driver(joint_map.get(d.joint, d.joint),
+                          (link_map[d.links[0]], link_map[d.links[1]]), d.speed,
+                          d.acceleration) for d in self.drivers]
+        points = [TracerPoint(p.name, link_map[p.link], p.at) for p in self.points]
+        loads = [Load(link_map[ld.link], ld.at, ld.value, ld.table, ld.moment, ld.name)
+                 for ld in self.loads]
+        return Mechanism(tuple(links), tuple(joints), tuple(drivers), tuple(points),
+                         tuple(loads), self.gravity, self.name, self.description, self.source)
+
+
+@dataclass
+class MechanismBuilder:
+    """Mutable staging area; :meth:`build` validates and freezes.
+
+    Examples
+    --------
+    >>> b = MechanismBuilder(name="four-bar")
+    >>> b.add_link("ground", frame=True)
+    >>> for name, links, at in [("O", ("ground", "crank"), (0, 0)),
+    ...                         ("A", ("crank", "coupler"), (1, 1)),
+    ...                         ("B", ("coupler", "rocker"), (4, 2)),
+    ...                         ("C", ("rocker", "ground"), (4, 0))]:
+    ...     b.add_joint(name, "R", links, at=at)
+    >>> b.add_driver("O")
+    >>> m = b.build()
+    >>> m.n_links, m.n_joints, m.frame
+    (4, 4, 'ground')
+    """
+
+    name: str | None = None
+    description: str | None = None
+    source: str | None = None
+    links: list[Link] = field(default_factory=list)
+    joints: list[Joint] = field(default_factory=list)
+    drivers: list[Driver | tuple] = field(default_factory=list)
+    points: list[TracerPoint] = field(default_factory=list)
+    loads: list[Load] = field(default_factory=list)
+    gravity: Vec2 | None = None
+
+    @classmethod
+    def from_mechanism(cls, m: Mechanism) -> "MechanismBuilder":
+        return cls(m.name, m.description, m.source, list(m.links), list(m.joints),
+                   list(m.drivers), list(m.points), list(m.loads), m.gravity)
+
+    def add_link(self, name: str, frame: bool = False, mass: float | None = None,
+                 cg: Iterable[float] | None = None, inertia: float | None = None,
+                 color: str | None = None) -> None:
+        self.links.append(Link(name, bool(frame), mass,
+                               None if cg is None else _vec2(cg), inertia, color))
+
+    def add_joint(self, name: str, kind: str | JointKind, links: Iterable[str],
+                  at: Iterable[float] | None = None,
+                  axis: Iterable[float] | None = None) -> None:
+        self.joints.append(Joint(name, kind if isinstance(kind, JointKind) else kind,  # type: ignore[arg-type]
+                                 tuple(links), None if at is None else _vec2(at),
+                                 None if axis is None else _vec2(axis)))
+
+    def add_driver(self, joint: str, links: Sequence[str] | None = None,
+                   speed: float | None = None, acceleration: float | None = None) -> None:
+        self.drivers.append((joint, None if links is None else tuple(links), speed,
+                             acceleration))
+
+    def add_point(self, name: str, link: str, at: Iterable[float]) -> None:
+        self.points.append(TracerPoint(name, link, _vec2(at)))
+
+    def add_load(self, link: str, at: Iterable[float] | None = None,
+                 value: Iterable[float] = (0.0, 0.0), table=None, moment: float = 0.0,
+                 name: str | None = None) -> None:
+        self.loads.append(Load(link, None if at is None else _vec2(at), _vec2(value),
+                               None if table is None else tuple(tuple(map(float, r)) for r in table),
+                               float(moment), name))
+
+    # ---------------------------------------------------------------------------
+    def build(self) -> Mechanism:
+        """Validate everything and return the frozen :class:`Mechanism`.
+
+        Raises
+        ------
+        InputError
+            Malformed names, kinds, link counts or coordinates (all problems listed).
+        TopologyError
+            Unknown links, disconnected chains, drivers on unknown joints.
+        """
+        problems: list[str] = []
+        # links: explicit + implied by joints, in order of first appearance
+        links: dict[str, Link] = {}
+        for link in self.links:
+            if not isinstance(link.name, str) or not link.name:
+                problems.append(explain("[[link]] name", expected="a non-empty string",
+                                        got=repr(link.name)))
+                continue
+            if link.name in links:
+                problems.append(explain(f"link '{link.name}'", expected="a unique name",
+                                        got="a duplicate [[link]] entry"))
+            links[link.name] = link
+        frames = [lk.name for lk in links.values() if lk.is_frame]
+        if len(frames) > 1:
+            problems.append(explain("frame", expected="exactly one link with frame = true",
+                                    got=f"{len(frames)} ({', '.join(frames)})"))
+        joints: list[Joint] = []
+        seen_joint: set[str] = set()
+        for j in self.joints:
+            where = f"joint '{j.name}'"
+            if not isinstance(j.name, str) or not j.name:
+                problems.append(explain("[[joint]] name", expected="a non-empty string",
+                                        got=repr(j.name)))
+                continue
+            if j.name in seen_joint:
+                problems.append(explain(where, expected="a unique name",
+                                        got="a duplicate [[joint]] entry"))
+            seen_joint.add(j.name)
+            try:
+                kind = JointKind(j.kind)
+            except ValueError:
+                problems.append(explain(f"{where} kind", expected="'R' or 'P'",
+                                        got=repr(j.kind)))
+                continue
+            names = j.links
+            if not all(isinstance(x, str) and x for x in names):
+                problems.append(explain(f"{where} links", expected="link names (strings)",
+                                        got=repr(list(names))))
+                continue
+            if len(names) < 2:
+                problems.append(explain(where, expected="at least 2 links",
+                                        got=f"{len(names)} ({', '.join(names) or 'none'})",
+                                        hint="a joint connects two or more links"))
+            if kind is JointKind.P and len(names) != 2:
+                problems.append(explain(where, expected="exactly 2 links for a P joint (guide, slider)",
+                                        got=f"{len(names)}"))
+            if len(set(names)) != len(names):
+                problems.append(explain(f"{where} links", expected="distinct links",
+                                        got=repr(list(names))))
+            if kind is JointKind.P and j.at is not None and j.axis is None:
+                problems.append(explain(f"{where} axis", expected="a guide direction [dx, dy] for a P joint with geometry",
+                                        got="nothing"))
+            if j.axis is not None:
+                if kind is JointKind.R:
+                    problems.append(explain(f"{where} axis", expected="no axis on an R joint",
+                                            got=repr(j.axis)))
+                elif math.hypot(*j.axis) == 0.0:
+                    problems.append(explain(f"{where} axis", expected="a non-zero direction",
+                                            got=repr(list(j.axis))))
+            for x in names:
+                if x not in links:
+                    links[x] = Link(x)
+            joints.append(Joint(j.name, kind, tuple(names), j.at, j.axis))
+        if not joints:
+            problems.append(explain("chain", expected="at least one joint", got="none"))
+        # geometry all-or-nothing
+        with_at = [j.name for j in joints if j.at is not None]
+        if with_at and len(with_at) != len(joints):
+            missing = [j.name for j in joints if j.at is None]
+            problems.append(explain("geometry", expected="'at' on every joint or on none",
+                                    got=f"missing on {', '.join(missing)}"))
+        joint_by_name = {j.name: j for j in joints}
+        # drivers
+        drivers: list[Driver] = []
+        for d in self.drivers:
+            if isinstance(d, Driver):
+                jn, dl, speed, acc = d.joint, d.links, d.speed, d.acceleration
+            else:
+                jn, dl, speed, acc = d
+            if jn not in joint_by_name:
+                problems.append(explain(f"[[driver]] joint '{jn}'", expected="the name of a [[joint]]",
+                                        got="an unknown joint",
+                                        hint=f"known joints: {', '.join(sorted(joint_by_name)) or 'none'}"))
+                continue
+            jt = joint_by_name[jn]
+            if dl is None:
+                dl = jt.links[:2]
+            dl = tuple(dl)
+            if len(dl) != 2 or any(x not in jt.links for x in dl) or dl[0] == dl[1]:
+                bad = [x for x in dl if x not in links]
+                problems.append(explain(f"[[driver]] on joint '{jn}' links",
+                                        expected=f"two distinct links of that joint ({', '.join(jt.links)})",
+                                        got=repr(list(dl)) + (f" (unknown link {', '.join(bad)})" if bad else "")))
+                continue
+            if any(x.joint == jn and set(x.links) == set(dl) for x in drivers):
+                problems.append(explain(f"[[driver]] on joint '{jn}'", expected="one driver per pair",
+                                        got="a duplicate"))
+            drivers.append(Driver(jn, dl, speed, acc))  # type: ignore[arg-type]
+        # points and loads refer to known links
+        seen_pts: set[str] = set()
+        for p in self.points:
+            if p.link not in links:
+                problems.append(explain(f"[[point]] '{p.name}' link", expected="a known link",
+                                        got=repr(p.link)))
+            if p.name in seen_pts:
+                problems.append(explain(f"[[point]] '{p.name}'", expected="a unique name",
+                                        got="a duplicate"))
+            seen_pts.add(p.name)
+        for ld in self.loads:
+            if ld.link not in links:
+                problems.append(explain(f"[[force]] link", expected="a known link", got=repr(ld.link)))
+        for lk in links.values():
+            if lk.mass is not None and lk.mass < 0:
+                problems.append(explain(f"link '{lk.name}' mass", expected="a mass >= 0",
+                                        got=repr(lk.mass)))
+        if problems:
+            raise InputError("; ".join(problems) if len(problems) == 1 else
+                             f"{len(problems)} problems in the mechanism:\n  - " + "\n  - ".join(problems))
+        # connectivity (a topology problem, reported on its own)
+        comps = _components(list(links), joints)
+        if len(comps) > 1:
+            desc = " | ".join("{" + ", ".join(sorted(c)) + "}" for c in comps)
+            raise TopologyError(explain("chain", expected="one connected chain",
+                                        got=f"{len(comps)} separate parts: {desc}",
+                                        hint="every link must be reachable through joints"))
+        return Mechanism(tuple(links.values()), tuple(joints), tuple(drivers),
+                         tuple(self.points), tuple(self.loads), self.gravity, self.name,
+                         self.description, self.source)
+
+
+def _components(links: list[str], joints: list[Joint]) -> list[set[str]]:
+    parent = {x: x for x in links}
+
+    def find(x: str) -> str:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for j in joints:
+        for other in j.links[1:]:
+            a, b = find(j.links[0]), find(other)
+            if a != b:
+                parent[a] = b
+    groups: dict[str, set[str]] = {}
+    for x in links:
+        groups.setdefault(find(x), set()).add(x)
+    return sorted(groups.values(), key=lambda s: (-len(s), sorted(s)))
+
+
+def _vec2(v: Iterable[float]) -> Vec2:
+    t = tuple(float(x) for x in v)
+    if len(t) != 2:
+        raise InputError(explain("coordinate", expected="2 numbers [x, y]", got=repr(list(t))))
+    return (t[0], t[1])
+
+
+def chain_from_joint_lists(joint_lists: Sequence[Sequence[str]], name: str | None = None,
+                           frame: str | None = None) -> Mechanism:
+    """A bare chain from the SPEC §1 short form ``joints = [["a","b"], ["b","c","d"], ...]``.
+
+    Joints are named ``J1, J2, …`` in the order given and are all pins (R).
+
+    Examples
+    --------
+    >>> m = chain_from_joint_lists([["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]])
+    >>> [j.multiplicity for j in m.joints]
+    [1, 2, 1, 1, 1]
+    """
+    b = MechanismBuilder(name=name)
+    for i, lks in enumerate(joint_lists, 1):
+        b.add_joint(f"J{i}", "R", tuple(lks))
+    if frame is not None:
+        b.add_link(frame, frame=True)
+    return b.build()
