@@ -1,0 +1,181 @@
+"""``multiloop platform FILE [--json] [--plot out.png]``: six-strut platform report.
+
+Prints the strut forces (tension positive, by virtual velocities and by the six
+equilibrium equations), the kinematic screw of the platform with each strut
+removed (pitch, axis point, axis direction), and, when every strut has a stiffness
+and the file has a ``[body]``, the natural circular frequencies and mode shapes.
+FILE may also name a bundled platform (``doronin_platform``, ``gough_stewart``).
+JSON keys are documented in docs/platform.md.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from kin.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
+
+__all__ = ["add_arguments", "run", "report"]
+
+_SYMBOL = {"x": "x", "y": "y", "z": "z", "phi_x": "φx", "phi_y": "φy", "phi_z": "φz"}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("file", metavar="FILE",
+                        help="platform file (.toml/.json) or a bundled name, e.g. doronin_platform")
+    parser.add_argument("--json", action="store_true", help="print a JSON report (keys: docs/platform.md)")
+    parser.add_argument("--plot", metavar="PNG", help="draw platform, struts coloured by force, screw axes")
+    parser.add_argument("--modes", choices=("first", "mass", "max"), default="first",
+                        help="normalisation of the printed mode shapes: x = 1 as in Doronin 2015 (default), "
+                             "phi^T A phi = 1, or largest component = 1 (JSON always has 'shape' mass-normalised "
+                             "and 'shape_x1')")
+
+
+def _resolve(name: str) -> Path:
+    p = Path(name)
+    if p.exists() or p.suffix:
+        return p
+    bundled = resources.files("catalogue") / "platforms" / f"{name}.toml"
+    if bundled.is_file():
+        return Path(str(bundled))
+    return p
+
+
+def _clean(x: float, scale: float) -> float:
+    """Snap round-off to zero (display only)."""
+    return 0.0 if abs(x) <= 1e-9 * scale else float(x)
+
+
+def _list(a, scale: float = 1.0) -> list:
+    return [_clean(float(v), scale) for v in np.asarray(a, dtype=float).ravel()]
+
+
+def report(platform: Platform, normalise: str = "first") -> dict:
+    """The JSON-ready report of a platform (statics always, vibrations when possible)."""
+    st = platform_statics(platform)
+    fscale = max(1.0, float(np.max(np.abs(st.forces))))
+    screws = []
+    for strut, tw in zip(platform.struts, st.twists):
+        arr = tw.as_array()
+        translation = tw.is_infinite_pitch
+        screws.append({
+            "strut": strut.name,
+            "twist": _list(arr),
+            "pitch": None if translation else _clean(tw.pitch, 1.0),
+            "translation": translation,
+            "axis_point": None if translation else _list(tw.axis_point),
+            "axis_direction": _list(tw.axis_direction),
+        })
+    out = {
+        "name": platform.name,
+        "source": platform.source,
+        "conventions": {
+            "forces": "N, tension positive: strut i pulls the platform hinge towards the base hinge; "
+                      "'forces' from the six equilibrium equations, 'forces_screws' by virtual velocities",
+            "strut_direction": "e_i = unit vector from the platform hinge to the base hinge",
+            "screws": "Plücker (direction; moment about the file's origin), moment = r x d",
+            "twist": "(omega; v_O), unit |omega| = 1 (|v| = 1 for a translation), signed so strut i lengthens",
+            "frequencies": "rad/s, ascending",
+            "modes": "q = (x, y, z, phi_x, phi_y, phi_z) of the centre of mass",
+        },
+        "forces": _list(st.forces, fscale),
+        "forces_screws": _list(st.forces_screws, fscale),
+        "discrepancy": st.discrepancy,
+        "residual": st.residual,
+        "condition_number": st.condition_number,
+        "singular": False,
+        "wrench": _list(st.wrench.as_array()),
+        "screws": screws,
+        "coordinates": list(COORDINATES),
+        "frequencies": None,
+        "frequencies_hz": None,
+        "modes": None,
+    }
+    if platform.has_vibration_data:
+        md = platform_modes(platform)
+        first = md.shapes("first")
+        chosen = md.shapes(normalise)
+        out["modes_normalisation"] = normalise
+        out["frequencies"] = _list(md.frequencies)
+        out["frequencies_hz"] = _list(md.frequencies_hz)
+        out["modes"] = [{
+            "frequency": float(md.frequencies[j]),
+            "label": md.labels[j],
+            "dominant": md.dominant[j],
+            "shape": _list(md.modes[:, j]),
+            "shape_x1": None if np.isnan(first[0, j]) else _list(first[:, j]),
+            "shape_printed": None if np.isnan(chosen[0, j]) else _list(chosen[:, j]),
+        } for j in range(6)]
+    return out
+
+
+def _fmt(v, width=10, prec=4) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "—".rjust(width)
+    return f"{v:{width}.{prec}f}"
+
+
+def _text(rep: dict) -> str:
+    lines = [f"platform: {rep['name']}"]
+    if rep["source"]:
+        lines.append(f"source:   {rep['source']}")
+    lines.append("conventions: tension positive; e_i from platform hinge to base hinge; "
+                 "moments about the file's origin (r × F); twists (ω; v_O)")
+    lines.append(f"condition number (dimensionless Plücker matrix): {rep['condition_number']:.4g}")
+    lines.append("")
+    lines.append("strut forces (N, tension +)")
+    lines.append(f"  {'strut':<6}{'equilibrium':>16}{'screw method':>16}")
+    for s, a, b in zip(rep["screws"], rep["forces"], rep["forces_screws"]):
+        lines.append(f"  {s['strut']:<6}{a:16.4f}{b:16.4f}")
+    lines.append(f"  max difference between the methods: {rep['discrepancy']:.2g} N")
+    lines.append("")
+    lines.append("kinematic screw with strut i removed (unit twist ω; v_O) and its axis")
+    lines.append(f"  {'strut':<6}{'ω':>26}{'v_O':>28}{'pitch (m)':>12}{'axis point (m)':>28}  {'direction':>26}")
+    for s in rep["screws"]:
+        tw = s["twist"]
+        om = "(" + ", ".join(f"{v:7.4f}" for v in tw[:3]) + ")"
+        vo = "(" + ", ".join(f"{v:7.4f}" for v in tw[3:]) + ")"
+        pitch = "∞ (transl.)" if s["translation"] else f"{s['pitch']:.4f}"
+        ap = "—" if s["axis_point"] is None else "(" + ", ".join(f"{v:7.4f}" for v in s["axis_point"]) + ")"
+        ad = "(" + ", ".join(f"{v:7.4f}" for v in s["axis_direction"]) + ")"
+        lines.append(f"  {s['strut']:<6}{om:>26}{vo:>28}{pitch:>12}{ap:>28}  {ad:>26}")
+    lines.append("")
+    if rep["frequencies"] is None:
+        lines.append("vibrations: skipped (needs a stiffness on every strut and a [body] table)")
+        return "\n".join(lines)
+    lines.append("natural circular frequencies")
+    for m, hz in zip(rep["modes"], rep["frequencies_hz"]):
+        lines.append(f"  {m['label']}   [{hz:.4f} Hz]")
+    lines.append("")
+    how = {"first": "x = 1 as printed by Doronin 2015", "mass": "mass-normalised, φᵀAφ = 1",
+           "max": "largest component = 1"}[rep["modes_normalisation"]]
+    lines.append(f"mode shapes (columns by ascending frequency; {how})")
+    header = "".join(f"{'k=' + format(m['frequency'], '.2f'):>12}" for m in rep["modes"])
+    lines.append(f"  {'':<6}{header}")
+    for i, c in enumerate(rep["coordinates"]):
+        row = ""
+        for m in rep["modes"]:
+            v = None if m["shape_printed"] is None else m["shape_printed"][i]
+            row += "           —" if v is None else f"{v:12.3f}"
+        lines.append(f"  {_SYMBOL[c]:<6}{row}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    platform = load_platform(_resolve(args.file))
+    rep = report(platform, args.modes)
+    if args.plot:
+        from kin.platform_plot import plot_platform
+
+        plot_platform(platform, path=args.plot)
+    if args.json:
+        print(json.dumps(rep, indent=2, ensure_ascii=False, allow_nan=False))
+    else:
+        print(_text(rep))
+        if args.plot:
+            print(f"\nplot written to {args.plot}")
+    return 0

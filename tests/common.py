@@ -1,0 +1,55 @@
+"""Shared test helpers: random chains (hypothesis strategies) and relabelling."""
+from __future__ import annotations
+
+import random
+
+from hypothesis import strategies as st
+
+from topo.model import Mechanism, chain_from_joint_lists
+
+
+def random_joint_lists(rng: random.Random, n_links: int, extra: int, p_multiple: float) -> list[list[str]]:
+    """A connected chain whose links all have >= 2 joints: a Hamiltonian cycle over the
+    links plus ``extra`` joints; with probability ``p_multiple`` a new joint is a pin on
+    three (rarely four) links."""
+    names = [f"l{i}" for i in range(n_links)]
+    rng.shuffle(names)
+    joints = [[names[i], names[(i + 1) % n_links]] for i in range(n_links)]
+    for _ in range(extra):
+        k = 2
+        if rng.random() < p_multiple:
+            k = 3 if rng.random() < 0.8 or n_links < 4 else 4
+        joints.append(rng.sample(names, min(k, n_links)))
+    # occasionally merge two existing simple joints that share a link into one pin
+    if p_multiple and rng.random() < p_multiple and len(joints) > 3:
+        a = joints[0]
+        for b in joints[1:]:
+            shared = set(a) & set(b)
+            if shared and len(set(a) | set(b)) == 3 and \
+                    sum(1 for j in joints if shared <= set(j)) >= 3:  # shared link keeps >= 2 joints
+                joints.remove(b)
+                joints.remove(a)
+                joints.append(sorted(set(a) | set(b)))
+                break
+    return joints
+
+
+@st.composite
+def chains(draw, min_links: int = 3, max_links: int = 9, multiple: bool = True):
+    n = draw(st.integers(min_links, max_links))
+    extra = draw(st.integers(0, n // 2 + 2))
+    seed = draw(st.integers(0, 2 ** 32 - 1))
+    rng = random.Random(seed)
+    return chain_from_joint_lists(random_joint_lists(rng, n, extra, 0.4 if multiple else 0.0))
+
+
+def relabel(m: Mechanism, seed: int) -> Mechanism:
+    """A copy with link names permuted, joints renamed and reordered."""
+    rng = random.Random(seed)
+    new = [f"x{i}" for i in range(m.n_links)]
+    rng.shuffle(new)
+    link_map = dict(zip(m.link_names, new))
+    joint_map = {j.name: f"q{k}" for k, j in enumerate(m.joints)}
+    order = list(range(m.n_joints))
+    rng.shuffle(order)
+    return m.relabelled(link_map, joint_map, order)

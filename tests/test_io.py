@@ -1,0 +1,151 @@
+"""File formats (SPEC §1) and every kind of malformed input: a message naming the
+table/key at fault, exit code 2, no traceback."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from multiloop.cli import main
+from topo.errors import InputError, TopologyError
+from topo.io import dumps_json, dumps_toml, load, loads, mechanism_from_dict
+
+CRANK_SLIDER = '''
+name = "crank-slider"
+[[link]]
+name = "frame"
+frame = true
+[[link]]
+name = "crank"
+[[link]]
+name = "rod"
+[[link]]
+name = "piston"
+[[joint]]
+name = "O"
+kind = "R"                  # R (may list 2 or more links) or P (exactly 2: guide, slider)
+links = ["frame", "crank"]
+at = [0.0, 0.0]             # reference position (metres)
+[[joint]]
+name = "A"
+kind = "R"
+links = ["crank", "rod"]
+at = [0.05, 0.0]
+[[joint]]
+name = "B"
+kind = "R"
+links = ["rod", "piston"]
+at = [0.25, 0.0]
+[[joint]]
+name = "S"
+kind = "P"
+links = ["frame", "piston"]
+at = [0.25, 0.0]            # a point of the slider on the guide line
+axis = [1.0, 0.0]           # guide direction
+[[driver]]
+joint = "O"                 # R: angle of links[1] relative to links[0]; P: slide
+[[point]]
+name = "G"                  # tracer point fixed on a link
+link = "rod"
+at = [0.1, 0.0]
+'''
+BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
+
+
+def test_spec_examples_accepted_exactly_as_written():
+    m = loads(CRANK_SLIDER)
+    assert m.frame == "frame" and m.n_links == 4 and m.joint("S").kind.value == "P"
+    assert m.drivers[0].links == ("frame", "crank") and m.points[0].link == "rod"
+    c = loads(BARE)
+    assert c.frame is None and c.joint("J2").links == ("b", "c", "d")
+
+
+def test_round_trip_toml_and_json(tmp_path):
+    m = loads(CRANK_SLIDER)
+    assert loads(dumps_toml(m)) == m
+    assert loads(dumps_json(m), fmt="json") == m
+    p = tmp_path / "m.json"
+    p.write_text(dumps_json(m))
+    assert load(p) == m
+
+
+def test_model_is_frozen_and_hashable():
+    m = loads(CRANK_SLIDER)
+    with pytest.raises(Exception):
+        m.name = "x"  # type: ignore[misc]
+    assert hash(m) == hash(loads(CRANK_SLIDER))
+
+
+BAD = [
+    ("syntax", "joints = [[\"a\", \"b\"\n", "TOML syntax error"),
+    ("unknown top key", BARE + "colour = 1\n", "unknown key 'colour'"),
+    ("unknown joint key", CRANK_SLIDER + '[[joint]]\nname = "X"\nlinks = ["rod", "crank"]\nangle = 3\n', "unknown key 'angle'"),
+    ("unknown kind", CRANK_SLIDER.replace('kind = "P"', 'kind = "Q"'), "'R' or 'P'"),
+    ("one link", CRANK_SLIDER + '[[joint]]\nname = "X"\nlinks = ["rod"]\nat = [0.0, 0.0]\n', "joint 'X': expected at least 2 links"),
+    ("P with 3 links", CRANK_SLIDER.replace('links = ["frame", "piston"]', 'links = ["frame", "piston", "rod"]'), "exactly 2 links for a P joint"),
+    ("duplicate joint", CRANK_SLIDER.replace('name = "B"', 'name = "A"'), "joint 'A': expected a unique name"),
+    ("duplicate link", CRANK_SLIDER.replace('name = "rod"\n[[link]]', 'name = "crank"\n[[link]]', 1), "link 'crank': expected a unique name"),
+    ("unknown driver joint", CRANK_SLIDER.replace('joint = "O"', 'joint = "Z"'), "[[driver]] joint 'Z'"),
+    ("driver link not on joint", CRANK_SLIDER.replace('joint = "O"  ', 'joint = "O"\nlinks = ["frame", "rod"]  '), "two distinct links of that joint"),
+    ("non-numeric coordinate", CRANK_SLIDER.replace("at = [0.05, 0.0]", 'at = [0.05, "x"]'), "[[joint]] #2 ('A') at: expected a number"),
+    ("coordinate length", CRANK_SLIDER.replace("at = [0.05, 0.0]", "at = [0.05]"), "a pair of numbers"),
+    ("two frames", CRANK_SLIDER.replace('name = "crank"\n', 'name = "crank"\nframe = true\n'), "exactly one link with frame = true"),
+    ("P without axis", CRANK_SLIDER.replace("axis = [1.0, 0.0]", ""), "axis: expected a guide direction"),
+    ("unknown point link", CRANK_SLIDER.replace('link = "rod"', 'link = "beam"'), "[[point]] 'G' link"),
+    ("partial geometry", CRANK_SLIDER.replace("at = [0.25, 0.0]            # a point", "# a point"), "'at' on every joint or on none"),
+    ("bare + tables", BARE + '[[joint]]\nname = "X"\nlinks = ["a", "b"]\n', "either 'joints' (bare chain) or [[joint]] tables"),
+]
+
+
+@pytest.mark.parametrize("label,text,needle", BAD, ids=[b[0] for b in BAD])
+def test_bad_input_named(tmp_path, capsys, label, text, needle):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(InputError) as exc:
+        load(f)
+    assert needle in str(exc.value)
+    assert main(["analyse", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and "Traceback" not in err
+
+
+def test_disconnected_chain(tmp_path, capsys):
+    f = tmp_path / "two.toml"
+    f.write_text('joints = [["a", "b"], ["b", "c"], ["c", "a"], ["x", "y"], ["y", "z"], ["z", "x"]]\n')
+    with pytest.raises(TopologyError, match=r"2 separate parts: \{a, b, c\} \| \{x, y, z\}"):
+        load(f)
+    assert main(["analyse", str(f)]) == 2
+
+
+def test_wrong_suffix_and_missing_file(tmp_path, capsys):
+    f = tmp_path / "m.yaml"
+    f.write_text("a: 1\n")
+    assert main(["analyse", str(f)]) == 2
+    assert "expected a .toml or .json file" in capsys.readouterr().err
+    assert main(["analyse", str(tmp_path / "none.toml")]) == 2
+    assert "expected an existing file" in capsys.readouterr().err
+
+
+def test_json_top_level_must_be_object(tmp_path, capsys):
+    f = tmp_path / "m.json"
+    f.write_text("[1, 2]")
+    assert main(["analyse", str(f)]) == 2
+    assert "a JSON object at top level" in capsys.readouterr().err
+
+
+def test_all_problems_reported_at_once():
+    with pytest.raises(InputError) as exc:
+        mechanism_from_dict({"joint": [{"name": "A", "links": ["a"]}, {"name": "A", "links": ["a", "b"]}]})
+    msg = str(exc.value)
+    assert "2 problems" in msg and "at least 2 links" in msg and "unique name" in msg
+
+
+def test_analyse_json_keys(tmp_path, capsys):
+    f = tmp_path / "c.toml"
+    f.write_text(BARE)
+    assert main(["analyse", str(f), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    for key in ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc", "SL", "La", "L0",
+                "code", "code_star", "planar", "degenerate", "fractionated", "canonical"):
+        assert key in d
+    assert d["LA"] == [4, 1] and d["MJA"] == [1] and d["La"] == sorted(d["La"])
