@@ -42,6 +42,15 @@ class KinematicState:
     epsilons: np.ndarray | None = None
     input_rates: np.ndarray | None = None   # (n_drivers,)
     branches: tuple = ()                    # per-group assembly branch, free-form
+    # -- added by kin.solve (fields at the end; defaults keep older callers valid)
+    point_names: tuple = ()                 # tracer point names, in file order
+    point_positions: np.ndarray | None = None      # (N, n_points, 2)
+    point_velocities: np.ndarray | None = None
+    point_accelerations: np.ndarray | None = None
+    notes: tuple = ()                       # branch events, lead-in failures (plain text)
+    poses: np.ndarray | None = None         # (N, n_links, 3): (X, Y, θ) of each link's reference point
+    pose_rates: np.ndarray | None = None
+    pose_accelerations: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:
@@ -51,6 +60,18 @@ class KinematicState:
     @property
     def success(self) -> bool:
         return bool(np.all(self.ok))
+
+    @property
+    def message(self) -> str:
+        """``"ok"`` or the first failing position's input and reason."""
+        bad = np.flatnonzero(~self.ok)
+        if bad.size == 0:
+            return "ok"
+        n = int(bad[0])
+        return f"{bad.size} of {self.n_positions} positions failed; first at input {self.inputs[n].tolist()}: {self.status[n]}"
+
+    def point_index(self, name: str) -> int:
+        return self.point_names.index(name)
 
     @property
     def n_positions(self) -> int:

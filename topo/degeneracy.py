@@ -68,11 +68,11 @@ def _exhaustive(m: Mechanism) -> tuple[str, ...] | None:
 def _mincut_best(m: Mechanism, forced_in: tuple[str, ...], forced_out: tuple[str, ...] = ()):
     """Maximise 2c(S) − 3|S| over S ⊇ forced_in, S ∩ forced_out = ∅ by a minimum cut.
 
-    Minimise  Σ_l 3 s_l + Σ_J 2 y_J − Σ_J Σ_{l∈J} 2 y_J s_l  (a submodular pseudo-boolean
-    function); with t_J = 1 − y_J each pair term becomes 2·s_l·t_J ... represented as
-    the classic "project selection" cut: joint J is a project of profit 2|J|−2?  We use
-    the direct construction: source side = chosen.  Edge l→J of capacity 2 charges a
-    chosen link whose joint is not chosen; y_J chosen costs 2, s_l chosen costs 3 − Σ 2.
+    With binary s_l (link chosen) and y_J (joint active), minimise the submodular
+    ``E = Σ_l 3 s_l + Σ_J (2 − 2|J|) y_J + 2 Σ_J Σ_{l∈J} y_J (1 − s_l)``, whose minimum
+    over y is ``3|S| − 2c(S)``: source side = value 1; edge J→l (capacity 2) is cut
+    when the joint is active and its link is not; unary costs go to the terminals.
+    Returns (max value, chosen links).
     """
     g = nx.DiGraph()
     src, snk = "__s", "__t"
@@ -117,8 +117,10 @@ def _mincut(m: Mechanism) -> tuple[str, ...] | None:
     best = None
     for a, b in sorted(pairs):
         value, chosen = _mincut_best(m, (a, b))
+        if value + 3 < 0:      # no subset containing a and b is rigid
+            continue
         candidates = [(value, chosen)]
-        if len(chosen) == n:   # whole chain optimal (F <= 0): force one link out
+        if len(chosen) == n:   # the whole chain qualifies (F <= 0): force one link out
             candidates = [_mincut_best(m, (a, b), (c,)) for c in m.link_names if c not in (a, b)]
         for value, chosen in candidates:
             if value + 3 >= 0 and 2 <= len(chosen) < n:

@@ -89,9 +89,6 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
     (4, 4, 6)
     """
     g = incidence_graph(m)
-    planar, _ = nx.check_planarity(g)
-    if not planar:
-        return LoopAssortment(False, None, None)
     inner: list[int] = []
     outer_total = 0
     n_emb = 0
@@ -99,7 +96,10 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
         if len(block) < 3:           # a bridge: no face of its own
             continue
         sub = g.subgraph(block)
-        faces, count = _best_block_faces(sub)
+        best = _best_block_faces(sub)
+        if best is None:
+            return LoopAssortment(False, None, None, n_emb)
+        faces, count = best
         n_emb += count
         faces = sorted(faces)
         outer_total += faces[-1]
@@ -173,23 +173,43 @@ def _simple_cycles(vertices, edges):
     return list(unique.items())
 
 
-def _can_be_face(block: nx.Graph, keep, edges, mask: int, path) -> bool:
-    """Cycle C is a face of some planar embedding iff ``block + w`` with a new vertex w
-    joined to every vertex of C is planar (w sits inside the face)."""
-    cyc = {keep[v] for v in path}
-    for e, edge in enumerate(edges):
-        if (mask >> e) & 1:
-            cyc.update(edge[3])
-    g = block.copy()
-    apex = ("W", "apex")
-    g.add_edges_from((apex, v) for v in cyc)
+def _reduced_graph(n_keep: int, edges, subdivide: int = 0) -> nx.Graph:
+    """The reduced block as a simple graph (planarity is unchanged by suppressing
+    degree-2 vertices and merging parallel paths); reduced edges in the bit mask
+    ``subdivide`` keep one subdivision vertex so that they stay distinct."""
+    g = nx.Graph()
+    g.add_nodes_from(range(n_keep))
+    for e, (u, v, *_r) in enumerate(edges):
+        if (subdivide >> e) & 1:
+            g.add_edge(u, ("s", e))
+            g.add_edge(("s", e), v)
+        else:
+            g.add_edge(u, v)
+    return g
+
+
+def _can_be_face(n_keep: int, edges, mask: int, path) -> bool:
+    """Cycle C is a face of some planar embedding iff the graph plus an apex joined to
+    every vertex of C is planar (the apex sits inside the face)."""
+    g = _reduced_graph(n_keep, edges, mask)
+    apex = ("apex",)
+    g.add_edges_from((apex, v) for v in path)
+    g.add_edges_from((apex, ("s", e)) for e in range(len(edges)) if (mask >> e) & 1)
     return nx.check_planarity(g)[0]
 
 
-def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
+class _BudgetExceeded(Exception):
+    pass
+
+
+def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: bool = True,
+                     node_budget: int | None = None):
     """Yield the face-size lists of every planar embedding of a 2-connected block.
 
-    Each yielded value is a sorted tuple of face sizes (in links).
+    Each yielded value is a sorted tuple of face sizes (in links).  ``use_filter``
+    applies the apex planarity test to every cycle first (slower per cycle, but it
+    keeps dense blocks tractable); ``node_budget`` aborts the search with
+    ``_BudgetExceeded`` after that many search nodes.
     """
     keep, edges = _reduce(block)
     if not keep:   # the block is a single cycle
@@ -197,6 +217,10 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
         yield (s, s)
         return
     n_faces = len(edges) - len(keep) + 2
+    kidx = {v: i for i, v in enumerate(keep)}
+    idx_edges = [(kidx[u], kidx[v]) for u, v, *_r in edges]
+    if not nx.check_planarity(_reduced_graph(len(keep), idx_edges))[0]:
+        return
     cycles = _simple_cycles(keep, edges)
     vertex_edges = {v: [] for v in keep}
     for e, (u, v, *_rest) in enumerate(edges):
@@ -207,7 +231,7 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
     masks = []
     verts = []
     for mask, path in cycles:
-        if not _can_be_face(block, keep, edges, mask, path):
+        if use_filter and not _can_be_face(len(keep), idx_edges, mask, path):
             continue
         w = sum(edges[e][2] for e in range(len(edges)) if (mask >> e) & 1)
         w += sum(1 for v in path if _is_link(keep[v]))
@@ -288,10 +312,15 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
             e += 1
         return True
 
+    nodes = 0
+
     def search(used1: int, used2: int, chosen: list[int]):
-        nonlocal count
+        nonlocal count, nodes
         if count >= limit:
             return
+        nodes += 1
+        if node_budget is not None and nodes > node_budget:
+            raise _BudgetExceeded
         if used2 == full or len(chosen) == n_faces:
             # every edge twice and no wheel closed early: each rotation is one cycle
             if used2 == full and len(chosen) == n_faces:
@@ -302,14 +331,14 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
         for e in range(n_edges):
             if (used2 >> e) & 1:
                 continue
-            opts = [c for c in by_edge[e] if not (masks[c] & used2) and allowed(c, used1)
-                    and corners_ok(c)]
+            opts = [c for c in by_edge[e] if not (masks[c] & used2) and allowed(c, used1)]
             if best_opts is None or len(opts) < len(best_opts):
                 best_e, best_opts = e, opts
                 if len(opts) <= 1:
                     break
         if not best_opts:
             return
+        best_opts = [c for c in best_opts if corners_ok(c)]
         uncovered = not (used1 >> best_e) & 1
         for c in best_opts:
             mask = masks[c]
@@ -330,13 +359,17 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS):
             yield faces
 
 
-def _best_block_faces(block: nx.Graph) -> tuple[list[int], int]:
-    best = None
-    count = 0
-    for faces in block_embeddings(block):
-        count += 1
-        if best is None or faces < best:
-            best = faces
-    if best is None:  # pragma: no cover - planar blocks always embed
-        raise RuntimeError("no planar embedding found for a planar block")
-    return list(best), count
+#: search nodes allowed to the unfiltered search before the apex filter is switched on
+NODE_BUDGET = 2_000
+
+
+def _best_block_faces(block: nx.Graph) -> tuple[list[int], int] | None:
+    """Canonical face sizes of a block and the number of embeddings, or None when the
+    block is not planar (tested on the reduced graph first)."""
+    try:
+        found = list(block_embeddings(block, use_filter=False, node_budget=NODE_BUDGET))
+    except _BudgetExceeded:
+        found = list(block_embeddings(block, use_filter=True))
+    if not found:
+        return None
+    return list(min(found)), len(found)

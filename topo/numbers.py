@@ -19,7 +19,7 @@ F_λ        ``λ(n − 1) − Σ (λ − f_k) p_k`` (Dobrovolsky/Malyshev; f_k =
 =========  ==========================================================================
 
 Codes: [LA] lists ``n2 … n_imax`` with ``imax = max(K + 1, largest i)``; [MJA] lists
-``V2 … V_jmax`` with ``jmax = max(K, largest j)``; counts are concatenated, a count
+``V2 … V_jmax`` with ``jmax = max(K, largest j)`` (at least V2); counts are concatenated, a count
 of two or more digits is separated from its neighbours by ``.``; [MJA] entries are
 joined by ``-``.  ``Code = [LA]/V``, ``Code* = [LA]/[MJA]`` (e.g. ``[8110]/3``,
 ``[11.0001]/[0-0-0-1]``).
@@ -229,7 +229,7 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
     SL_formula = 2 * (F1 + 3 * K) - V
     j_max = max(j.multiplicity for j in m.joints)
     imax_code = max(K + 1, max(degrees.values()))
-    jmax_code = max(K, j_max)
+    jmax_code = max(K, j_max, 2)   # at least V2, so a chain with K = 1 reads [LA]/[0]
     LA = link_assortment(m)
     MJA = joint_assortment(m)
     la_code = format_counts(link_assortment(m, imax_code))

@@ -1,0 +1,431 @@
+"""SQLite atlas of chains: resumable builds and safe queries.
+
+Schema (``PRAGMA user_version = 1``)
+------------------------------------
+``builds``
+    one row per set of :class:`~catalogue.synthesis.SynthesisOptions`
+    (``options`` is :meth:`SynthesisOptions.key`, UNIQUE), with ``n``, ``F``,
+    ``status`` (``running``/``done``), ``count`` (when done) and ``seconds``.
+``tasks``
+    the independent tasks of each build (``build_id``, ``key`` UNIQUE together),
+    ``status`` (``pending``/``done``), ``n_chains``, ``seconds``.
+``chains``
+    one row per chain, ``canonical`` UNIQUE (nauty canonical form of the coloured
+    incidence graph, the string of :func:`topo.isomorphism.canonical_form`); ``n``,
+    ``F``, ``p``, ``K``, ``V``, ``n_joints``, ``j_max``, ``i_max``, ``LA``, ``MJA``
+    (JSON lists), ``code``, ``code_star``, ``planar``, ``fractionated``, ``loops``
+    (the loop assortment [La], JSON list or NULL; query name ``La``), ``L0``, ``joints`` (JSON list of link-index lists).
+
+Resumability: the chains of a task and the task's ``done`` mark are written in one
+transaction, and chains are inserted with ``INSERT OR IGNORE``; a build killed at
+any moment loses at most the tasks in flight, and rerunning it runs only the
+pending tasks.  The count of a build is a query over ``chains`` with the build's
+filters, so it never counts a row twice.
+
+Queries: :func:`parse_query` accepts only ``column op value`` comparisons over the
+known columns, joined by ``AND``/``OR``/``NOT`` and parentheses, and turns them into
+SQL with bound parameters (no user text reaches SQL unquoted).
+"""
+from __future__ import annotations
+
+import json
+import re
+import sqlite3
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator, Sequence
+
+from topo.errors import InputError, explain
+
+from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
+
+__all__ = ["Atlas", "BuildResult", "QUERY_COLUMNS", "parse_query", "build_atlas"]
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS builds (
+    id INTEGER PRIMARY KEY,
+    options TEXT NOT NULL UNIQUE,
+    n INTEGER NOT NULL, F INTEGER NOT NULL,
+    status TEXT NOT NULL DEFAULT 'running',
+    count INTEGER, seconds REAL DEFAULT 0, loops INTEGER NOT NULL DEFAULT 1
+);
+CREATE TABLE IF NOT EXISTS tasks (
+    build_id INTEGER NOT NULL REFERENCES builds(id),
+    key TEXT NOT NULL, m INTEGER NOT NULL, res INTEGER NOT NULL, mod INTEGER NOT NULL,
+    status TEXT NOT NULL DEFAULT 'pending', n_chains INTEGER, seconds REAL,
+    PRIMARY KEY (build_id, key)
+);
+CREATE TABLE IF NOT EXISTS chains (
+    id INTEGER PRIMARY KEY,
+    canonical TEXT NOT NULL UNIQUE,
+    n INTEGER NOT NULL, F INTEGER NOT NULL, p INTEGER NOT NULL, K INTEGER NOT NULL,
+    V INTEGER NOT NULL, n_joints INTEGER NOT NULL, j_max INTEGER NOT NULL,
+    i_max INTEGER NOT NULL,
+    LA TEXT NOT NULL, MJA TEXT NOT NULL, code TEXT NOT NULL, code_star TEXT NOT NULL,
+    planar INTEGER, fractionated INTEGER NOT NULL, loops TEXT, L0 INTEGER,
+    joints TEXT NOT NULL
+);
+CREATE INDEX IF NOT EXISTS chains_nF ON chains (n, F);
+"""
+
+#: columns a query may name (and their SQL type class)
+QUERY_COLUMNS = {
+    "n": "int", "F": "int", "p": "int", "K": "int", "V": "int", "n_joints": "int",
+    "j_max": "int", "i_max": "int", "planar": "int", "fractionated": "int", "L0": "int",
+    "LA": "text", "MJA": "text", "code": "text", "code_star": "text", "La": "text",
+    "loops": "text",
+    "canonical": "text", "id": "int",
+}
+#: query names that differ from the SQL column (SQLite names are case-insensitive)
+_SQL_NAME = {"La": "loops"}
+
+
+def _column(word: str) -> str | None:
+    if word in QUERY_COLUMNS:
+        return _SQL_NAME.get(word, word)
+    low = [k for k in QUERY_COLUMNS if k.lower() == word.lower()]
+    return _SQL_NAME.get(low[0], low[0]) if len(low) == 1 else None
+
+_TOKEN = re.compile(r"""\s*(?:
+    (?P<num>-?\d+)
+  | (?P<str>'[^']*')
+  | (?P<op><=|>=|!=|<>|==|=|<|>)
+  | (?P<lp>\()
+  | (?P<rp>\))
+  | (?P<word>[A-Za-z_][A-Za-z_0-9]*)
+)""", re.VERBOSE)
+
+
+def _tokens(text: str) -> list[tuple[str, str]]:
+    out, pos = [], 0
+    text = text.strip()
+    while pos < len(text):
+        mt = _TOKEN.match(text, pos)
+        if not mt or mt.end() == pos:
+            raise InputError(explain("--query", expected="column op value terms joined by AND/OR/NOT",
+                                     got=f"unexpected text at {text[pos:pos + 12]!r}"))
+        kind = mt.lastgroup
+        out.append((kind, mt.group(kind)))
+        pos = mt.end()
+        while pos < len(text) and text[pos].isspace():
+            pos += 1
+    return out
+
+
+def parse_query(text: str) -> tuple[str, list]:
+    """Turn a user expression into a parameterised SQL ``WHERE`` clause.
+
+    Grammar: ``expr := term (OR term)*``, ``term := factor (AND factor)*``,
+    ``factor := NOT factor | '(' expr ')' | column op value``; ``op`` is one of
+    ``= == != <> < <= > >=``, ``value`` an integer, a quoted string or
+    ``true``/``false``.
+
+    Raises
+    ------
+    InputError
+        Unknown column, bad syntax (the message lists the columns).
+
+    Examples
+    --------
+    >>> parse_query("V=2 AND K=4")
+    ('("V" = ?) AND ("K" = ?)', [2, 4])
+    >>> parse_query("code_star = '[8110]/[3-0-0]' or not planar = true")
+    ('("code_star" = ?) OR (NOT ("planar" = ?))', ['[8110]/[3-0-0]', 1])
+    """
+    toks = _tokens(text)
+    pos = 0
+    params: list = []
+
+    def peek():
+        return toks[pos] if pos < len(toks) else (None, None)
+
+    def bad(what):
+        raise InputError(explain("--query", expected=what, got=repr(peek()[1]) if peek()[0] else "end of text",
+                                 hint="columns: " + ", ".join(QUERY_COLUMNS)))
+
+    def expr():
+        nonlocal pos
+        parts = [term()]
+        while peek()[0] == "word" and peek()[1].upper() == "OR":
+            pos += 1
+            parts.append(term())
+        return " OR ".join(parts)
+
+    def term():
+        nonlocal pos
+        parts = [factor()]
+        while peek()[0] == "word" and peek()[1].upper() == "AND":
+            pos += 1
+            parts.append(factor())
+        return " AND ".join(parts)
+
+    def factor():
+        nonlocal pos
+        kind, val = peek()
+        if kind == "word" and val.upper() == "NOT":
+            pos += 1
+            return f"(NOT {factor()})"
+        if kind == "lp":
+            pos += 1
+            inner = expr()
+            if peek()[0] != "rp":
+                bad("')'")
+            pos += 1
+            return f"({inner})"
+        col = _column(val) if kind == "word" else None
+        if col is None:
+            bad("a column name (LA and La are case-sensitive)")
+        pos += 1
+        kind, op = peek()
+        if kind != "op":
+            bad("a comparison operator")
+        pos += 1
+        op = {"==": "=", "<>": "!="}.get(op, op)
+        kind, v = peek()
+        if kind == "num":
+            value = int(v)
+        elif kind == "str":
+            value = v[1:-1]
+        elif kind == "word" and v.lower() in ("true", "false"):
+            value = int(v.lower() == "true")
+        else:
+            bad("a number, 'string', true or false")
+        pos += 1
+        params.append(value)
+        return f'("{col}" {op} ?)'
+
+    if not toks:
+        return "1", []
+    sql = expr()
+    if pos != len(toks):
+        bad("AND, OR or the end of the query")
+    return sql, params
+
+
+@dataclass(frozen=True, slots=True)
+class BuildResult:
+    """Outcome of :meth:`Atlas.build`."""
+
+    options: SynthesisOptions
+    count: int
+    tasks_run: int
+    tasks_total: int
+    seconds: float
+
+
+class Atlas:
+    """An atlas file (SQLite).  Use as a context manager or call :meth:`close`.
+
+    Examples
+    --------
+    >>> from catalogue.synthesis import SynthesisOptions, nauty_available
+    >>> with Atlas(":memory:") as atlas:                  # doctest: +SKIP
+    ...     atlas.build(SynthesisOptions(8, 1, simple_joints=True), progress=False).count
+    16
+    """
+
+    def __init__(self, path: str | Path = "atlas.sqlite"):
+        self.path = str(path)
+        self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
+        self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
+        self.con.execute("PRAGMA synchronous=NORMAL")
+        self.con.executescript(_SCHEMA)
+        self.con.execute("PRAGMA user_version = 1")
+        self.con.commit()
+
+    def close(self) -> None:
+        self.con.close()
+
+    def __enter__(self) -> "Atlas":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @contextmanager
+    def _tx(self):
+        try:
+            self.con.execute("BEGIN IMMEDIATE")
+            yield self.con
+            self.con.execute("COMMIT")
+        except BaseException:
+            self.con.execute("ROLLBACK")
+            raise
+
+    # ------------------------------------------------------------------ build
+    def _build_id(self, opts: SynthesisOptions, loops: bool) -> int:
+        cur = self.con.execute("SELECT id FROM builds WHERE options = ?", (opts.key(),))
+        row = cur.fetchone()
+        if row:
+            return row[0]
+        with self._tx() as con:
+            bid = con.execute("INSERT INTO builds (options, n, F, loops) VALUES (?, ?, ?, ?)",
+                              (opts.key(), opts.n, opts.F, int(loops))).lastrowid
+            con.executemany("INSERT INTO tasks (build_id, key, m, res, mod) VALUES (?, ?, ?, ?, ?)",
+                            [(bid, t.key, t.m, t.res, t.mod) for t in plan_tasks(opts)])
+        return bid
+
+    def pending_tasks(self, opts: SynthesisOptions, loops: bool = True):
+        bid = self._build_id(opts, loops)
+        keys = {r[0] for r in self.con.execute(
+            "SELECT key FROM tasks WHERE build_id = ? AND status = 'pending'", (bid,))}
+        return bid, [t for t in plan_tasks(opts) if t.key in keys]
+
+    def store_task(self, bid: int, task, records: Sequence[ChainRecord], seconds: float = 0.0) -> None:
+        """Insert one task's chains and mark it done, in one transaction."""
+        rows = [_row(r) for r in records]
+        with self._tx() as con:
+            con.executemany(
+                "INSERT OR IGNORE INTO chains (canonical, n, F, p, K, V, n_joints, j_max, i_max, LA,"
+                " MJA, code, code_star, planar, fractionated, loops, L0, joints)"
+                " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
+            con.execute("UPDATE tasks SET status = 'done', n_chains = ?, seconds = ? "
+                        "WHERE build_id = ? AND key = ?", (len(records), seconds, bid, task.key))
+            con.execute("UPDATE builds SET seconds = seconds + ? WHERE id = ?", (seconds, bid))
+
+    def build(self, opts: SynthesisOptions, loops: bool = True, workers: int | None = 1,
+              scheduler=None, progress: bool = True, max_tasks: int | None = None) -> BuildResult:
+        """Build (or resume) the atlas of ``opts``; returns the exact count.
+
+        Parameters
+        ----------
+        opts : SynthesisOptions
+        loops : bool
+            Compute planarity and loop assortments (``--no-loops`` skips them unless
+            ``opts.planar``).
+        workers : int or None
+            Local processes (None: all cores).
+        scheduler : str or distributed.Client, optional
+            Dask scheduler address.
+        progress : bool
+            A rich progress bar on stderr.
+        max_tasks : int, optional
+            Stop after this many tasks (used to test resuming).
+        """
+        from .distributed import map_tasks
+
+        t0 = time.perf_counter()
+        bid, pending = self.pending_tasks(opts, loops)
+        total = self.con.execute("SELECT count(*) FROM tasks WHERE build_id = ?", (bid,)).fetchone()[0]
+        if max_tasks is not None:
+            pending = pending[:max_tasks]
+        run = 0
+        bar = _progress(progress)
+        with bar:
+            tid = bar.add_task(f"n={opts.n} F={opts.F}", total=total,
+                               completed=total - len(self.pending_tasks(opts, loops)[1]))
+            started = time.perf_counter()
+            for task, records in map_tasks(pending, opts, loops, workers=workers, scheduler=scheduler):
+                now = time.perf_counter()
+                self.store_task(bid, task, records, now - started)
+                started = now
+                run += 1
+                bar.advance(tid)
+        left = self.con.execute("SELECT count(*) FROM tasks WHERE build_id = ? AND status = 'pending'",
+                                (bid,)).fetchone()[0]
+        count = self.count(opts)
+        if left == 0:
+            with self._tx() as con:
+                con.execute("UPDATE builds SET status = 'done', count = ? WHERE id = ?", (count, bid))
+        return BuildResult(opts, count, run, total, time.perf_counter() - t0)
+
+    def is_complete(self, opts: SynthesisOptions) -> bool:
+        row = self.con.execute("SELECT status FROM builds WHERE options = ?", (opts.key(),)).fetchone()
+        return bool(row) and row[0] == "done"
+
+    # ------------------------------------------------------------------ queries
+    def _where(self, opts: SynthesisOptions | None, query: str | None) -> tuple[str, list]:
+        clauses, params = [], []
+        if opts is not None:
+            clauses += ["n = ?", "F = ?"]
+            params += [opts.n, opts.F]
+            if opts.simple_joints:
+                clauses.append("V = 0")
+            if opts.max_multiplicity is not None:
+                clauses.append("j_max <= ?")
+                params.append(opts.max_multiplicity)
+            if opts.max_link_degree is not None:
+                clauses.append("i_max <= ?")
+                params.append(opts.max_link_degree)
+            if opts.planar:
+                clauses.append("planar = 1")
+            if opts.no_fractionated:
+                clauses.append("fractionated = 0")
+        if query:
+            sql, qp = parse_query(query)
+            clauses.append(f"({sql})")
+            params += qp
+        return (" AND ".join(clauses) or "1"), params
+
+    def count(self, opts: SynthesisOptions | None = None, query: str | None = None) -> int:
+        where, params = self._where(opts, query)
+        return self.con.execute(f"SELECT count(*) FROM chains WHERE {where}", params).fetchone()[0]
+
+    def chains(self, opts: SynthesisOptions | None = None, query: str | None = None,
+               limit: int | None = None) -> Iterator[ChainRecord]:
+        """Stored chains (ordered by n, F, V, LA, canonical)."""
+        where, params = self._where(opts, query)
+        sql = (f"SELECT n, F, K, V, j_max, LA, MJA, code, code_star, planar, fractionated, loops, L0,"
+               f" joints, canonical FROM chains WHERE {where} ORDER BY n, F, V, LA, canonical")
+        if limit is not None:
+            sql += " LIMIT ?"
+            params = params + [int(limit)]
+        for row in self.con.execute(sql, params):
+            n, F, K, V, jmax, LA, MJA, code, code_star, planar, frac, La, L0, joints, canon = row
+            yield ChainRecord(n=n, F=F, joints=tuple(tuple(j) for j in json.loads(joints)),
+                              canonical=canon, LA=tuple(json.loads(LA)), MJA=tuple(json.loads(MJA)),
+                              V=V, K=K, j_max=jmax, code=code, code_star=code_star,
+                              fractionated=bool(frac), planar=None if planar is None else bool(planar),
+                              La=None if La is None else tuple(json.loads(La)), L0=L0)
+
+    def builds(self) -> list[dict]:
+        cur = self.con.execute("SELECT options, n, F, status, count, seconds FROM builds ORDER BY n, F")
+        return [dict(zip(("options", "n", "F", "status", "count", "seconds"), r)) for r in cur]
+
+    def duplicates(self) -> int:
+        """Rows sharing a canonical form (0 by the UNIQUE constraint; a test hook)."""
+        return self.con.execute("SELECT count(*) - count(DISTINCT canonical) FROM chains").fetchone()[0]
+
+
+def _row(r: ChainRecord) -> tuple:
+    deg = [sum(1 for j in r.joints if x in j) for x in range(r.n)]
+    p = sum(len(j) - 1 for j in r.joints)
+    return (r.canonical, r.n, r.F, p, r.K, r.V, len(r.joints), r.j_max, max(deg),
+            json.dumps(list(r.LA)), json.dumps(list(r.MJA)), r.code, r.code_star,
+            None if r.planar is None else int(r.planar), int(r.fractionated),
+            None if r.La is None else json.dumps(list(r.La)), r.L0,
+            json.dumps([list(j) for j in r.joints]))
+
+
+class _NoBar:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def add_task(self, *a, **k):
+        return 0
+
+    def advance(self, *a, **k):
+        pass
+
+
+def _progress(enabled: bool):
+    if not enabled:
+        return _NoBar()
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(TextColumn("[bold]atlas {task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TextColumn("tasks"), TimeElapsedColumn(),
+                    console=Console(stderr=True), transient=not sys.stderr.isatty())
+
+
+def build_atlas(opts: SynthesisOptions, db: str | Path = "atlas.sqlite", **kwargs) -> BuildResult:
+    """Open ``db``, build (or resume) the atlas of ``opts``, close it."""
+    with Atlas(db) as atlas:
+        return atlas.build(opts, **kwargs)

@@ -1,0 +1,355 @@
+"""Drawings of chains as in published atlases: SVG strings and matplotlib axes.
+
+A **link** is drawn as a bar (two joints) or a shaded polygon through its joints
+(three or more, in angular order around the link's layout point); a **simple joint**
+is a small open circle; a **multiple joint** (a pin on ``n' >= 3`` links) is a larger
+filled red circle with a ring and its multiplicity ``j`` next to it, so it cannot be
+mistaken for two joints drawn close together.
+
+Layout (:func:`chain_layout`): the link–joint incidence graph is laid out, link
+and joint vertices alike.  A planar chain gets a **Tutte (barycentric) embedding**
+with its longest face on a circle; if rounding or a non-3-connected graph makes two
+edges cross, networkx's straight-line planar layout (Chrobak–Payne) is used
+instead, so planar chains are always drawn without crossings (:func:`has_crossings`
+checks it).  Non-planar chains use the Kamada–Kawai spring layout.
+
+References
+----------
+.. [1] W. T. Tutte, "How to draw a graph", Proc. London Math. Soc. 13 (1963) 743–767.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import networkx as nx
+import numpy as np
+
+__all__ = ["ChainLayout", "chain_layout", "has_crossings", "chain_svg", "draw_chain",
+           "existence_domain_chart", "invariant_merges", "invariant_merge_chart"]
+
+
+@dataclass(frozen=True, slots=True)
+class ChainLayout:
+    """Positions in the unit square (y up).
+
+    Attributes
+    ----------
+    links : tuple of (x, y)
+        Layout point of every link (centre of its polygon).
+    joints : tuple of (x, y)
+        Position of every joint.
+    method : str
+        ``"tutte"``, ``"planar"`` or ``"spring"``.
+    """
+
+    links: tuple[tuple[float, float], ...]
+    joints: tuple[tuple[float, float], ...]
+    method: str
+
+
+def _graph(n: int, joints: Sequence[Sequence[int]]) -> nx.Graph:
+    g = nx.Graph()
+    g.add_nodes_from(range(n + len(joints)))
+    g.add_edges_from((x, n + a) for a, j in enumerate(joints) for x in j)
+    return g
+
+
+def _faces(emb: nx.PlanarEmbedding) -> list[list]:
+    seen, faces = set(), []
+    for u, v in emb.edges():
+        if (u, v) in seen:
+            continue
+        face = emb.traverse_face(u, v, mark_half_edges=seen)
+        faces.append(face)
+    return faces
+
+
+def _tutte(g: nx.Graph, outer: list) -> dict:
+    pos = {}
+    k = len(outer)
+    for i, v in enumerate(outer):
+        a = 2 * math.pi * i / k + math.pi / 2
+        pos[v] = (math.cos(a), math.sin(a))
+    inner = [v for v in g if v not in pos]
+    if inner:
+        idx = {v: i for i, v in enumerate(inner)}
+        A = np.zeros((len(inner), len(inner)))
+        b = np.zeros((len(inner), 2))
+        for v in inner:
+            i = idx[v]
+            A[i, i] = g.degree(v)
+            for w in g[v]:
+                if w in idx:
+                    A[i, idx[w]] -= 1
+                else:
+                    b[i] += pos[w]
+        sol = np.linalg.solve(A, b)
+        for v in inner:
+            pos[v] = tuple(sol[idx[v]])
+    return pos
+
+
+def _segments_cross(p1, p2, p3, p4) -> bool:
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    d1, d2 = orient(p3, p4, p1), orient(p3, p4, p2)
+    d3, d4 = orient(p1, p2, p3), orient(p1, p2, p4)
+    eps = 1e-9
+    return (d1 * d2 < -eps) and (d3 * d4 < -eps)
+
+
+def has_crossings(g: nx.Graph, pos: dict) -> bool:
+    """True when two edges without a common end cross, or two vertices coincide."""
+    pts = np.array([pos[v] for v in g])
+    if len(pts) > 1:
+        d = np.linalg.norm(pts[:, None] - pts[None], axis=2) + np.eye(len(pts))
+        if d.min() < 1e-6:
+            return True
+    edges = list(g.edges())
+    for i, (a, b) in enumerate(edges):
+        for c, d_ in edges[i + 1:]:
+            if len({a, b, c, d_}) < 4:
+                continue
+            if _segments_cross(pos[a], pos[b], pos[c], pos[d_]):
+                return True
+    return False
+
+
+def _normalise(pos: dict) -> dict:
+    pts = np.array(list(pos.values()), dtype=float)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = max(hi - lo) or 1.0
+    centre = (lo + hi) / 2
+    return {v: tuple(((np.array(p) - centre) / span) + 0.5) for v, p in pos.items()}
+
+
+def chain_layout(n: int, joints: Sequence[Sequence[int]]) -> ChainLayout:
+    """Layout of a chain given as joints (tuples of link indices ``0…n−1``).
+
+    Examples
+    --------
+    >>> lay = chain_layout(4, [(0, 1), (1, 2), (2, 3), (3, 0)])
+    >>> lay.method, len(lay.links), len(lay.joints)
+    ('tutte', 4, 4)
+    """
+    g = _graph(n, joints)
+    planar, emb = nx.check_planarity(g)
+    pos = None
+    method = "spring"
+    if planar:
+        faces = sorted(_faces(emb), key=lambda f: (-len(f), sorted(f)))
+        for outer in faces[:6]:            # longest faces first as the outer loop
+            try:
+                pos = _tutte(g, outer)
+            except np.linalg.LinAlgError:
+                pos = None
+                continue
+            method = "tutte"
+            if not has_crossings(g, pos):
+                break
+            pos = None
+        if pos is None:
+            pos = nx.planar_layout(g)
+            method = "planar"
+    else:
+        pos = nx.kamada_kawai_layout(g)
+    pos = _normalise(pos)
+    return ChainLayout(tuple(tuple(map(float, pos[x])) for x in range(n)),
+                       tuple(tuple(map(float, pos[n + a])) for a in range(len(joints))), method)
+
+
+def _link_polygon(layout: ChainLayout, joints: Sequence[Sequence[int]], link: int) -> list[tuple[float, float]]:
+    cx, cy = layout.links[link]
+    pts = [layout.joints[a] for a, j in enumerate(joints) if link in j]
+    return sorted(pts, key=lambda p: math.atan2(p[1] - cy, p[0] - cx))
+
+
+_PALETTE = ["#4e79a7", "#59a14f", "#9c755f", "#76b7b2", "#edc948", "#b07aa1", "#ff9da7", "#bab0ac"]
+
+
+def chain_svg(n: int, joints: Sequence[Sequence[int]], size: int = 180, title: str | None = None,
+              layout: ChainLayout | None = None) -> str:
+    """An ``<svg>`` element of the chain (links as bars/polygons, multiple joints in red).
+
+    Examples
+    --------
+    >>> svg = chain_svg(4, [(0, 1), (1, 2), (2, 3), (3, 0)])
+    >>> svg.startswith("<svg") and svg.count("<line") == 4
+    True
+    """
+    lay = layout or chain_layout(n, joints)
+    pad = 14
+    s = size - 2 * pad
+
+    def xy(p):
+        return pad + p[0] * s, pad + (1 - p[1]) * s
+
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" '
+           f'viewBox="0 0 {size} {size}" class="chain">']
+    if title:
+        out.append(f"<title>{_esc(title)}</title>")
+    out.append(f'<rect width="{size}" height="{size}" fill="white"/>')
+    for x in range(n):
+        poly = _link_polygon(lay, joints, x)
+        colour = _PALETTE[x % len(_PALETTE)]
+        if len(poly) == 2:
+            (x1, y1), (x2, y2) = xy(poly[0]), xy(poly[1])
+            out.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" '
+                       f'stroke="{colour}" stroke-width="5" stroke-linecap="round"/>')
+        else:
+            pts = " ".join(f"{a:.1f},{b:.1f}" for a, b in map(xy, poly))
+            out.append(f'<polygon points="{pts}" fill="{colour}" fill-opacity="0.35" '
+                       f'stroke="{colour}" stroke-width="3" stroke-linejoin="round"/>')
+    for a, j in enumerate(joints):
+        cx, cy = xy(lay.joints[a])
+        if len(j) > 2:
+            out.append(f'<circle cx="{cx:.1f}" cy="{cy:.1f}" r="7" fill="#e15759" stroke="black" stroke-width="1.5"/>')
+            out.append(f'<circle cx="{cx:.1f}" cy="{cy:.1f}" r="10" fill="none" stroke="#e15759" stroke-width="1.5"/>')
+            out.append(f'<text x="{cx + 10:.1f}" y="{cy - 9:.1f}" font-size="10" font-family="sans-serif" '
+                       f'fill="#b00">{len(j) - 1}</text>')
+        else:
+            out.append(f'<circle cx="{cx:.1f}" cy="{cy:.1f}" r="4" fill="white" stroke="black" stroke-width="1.5"/>')
+    out.append("</svg>")
+    return "".join(out)
+
+
+def _esc(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
+def draw_chain(ax, n: int, joints: Sequence[Sequence[int]], title: str | None = None,
+               layout: ChainLayout | None = None):
+    """Draw the chain on a matplotlib axes (same conventions as :func:`chain_svg`)."""
+    from matplotlib.patches import Circle, Polygon
+
+    lay = layout or chain_layout(n, joints)
+    for x in range(n):
+        poly = _link_polygon(lay, joints, x)
+        colour = _PALETTE[x % len(_PALETTE)]
+        if len(poly) == 2:
+            ax.plot([poly[0][0], poly[1][0]], [poly[0][1], poly[1][1]], color=colour, lw=4,
+                    solid_capstyle="round", zorder=1)
+        else:
+            ax.add_patch(Polygon(poly, closed=True, facecolor=colour, alpha=0.35, edgecolor=colour,
+                                 lw=2.5, zorder=1))
+    for a, j in enumerate(joints):
+        cx, cy = lay.joints[a]
+        if len(j) > 2:
+            ax.add_patch(Circle((cx, cy), 0.035, facecolor="#e15759", edgecolor="black", zorder=3))
+            ax.add_patch(Circle((cx, cy), 0.05, facecolor="none", edgecolor="#e15759", zorder=3))
+            ax.text(cx + 0.05, cy + 0.05, str(len(j) - 1), color="#b00", fontsize=8, zorder=4)
+        else:
+            ax.add_patch(Circle((cx, cy), 0.02, facecolor="white", edgecolor="black", zorder=3))
+    ax.set_xlim(-0.08, 1.08)
+    ax.set_ylim(-0.08, 1.08)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    if title:
+        ax.set_title(title, fontsize=8)
+    return ax
+
+
+# ---------------------------------------------------------------------- atlas charts
+def existence_domain_chart(atlas, path, pairs=None) -> dict:
+    """Seed 002 fig. 10 drawn from an atlas: the (V, j_max) cells that occur for each K.
+
+    Every stored chain (or those of ``pairs`` = [(n, F), …]) adds its cell
+    ``(V, j_max)`` to the set of its K; the chart draws the existence domain
+    ``j <= K``, ``V <= 2(K − 1)`` of every K as a rectangle and the occupied cells as
+    dots.  Returns ``{K: sorted cells}``.
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    sql = "SELECT DISTINCT K, V, j_max FROM chains"
+    params: list = []
+    if pairs:
+        sql += " WHERE " + " OR ".join("(n = ? AND F = ?)" for _ in pairs)
+        params = [x for pr in pairs for x in pr]
+    cells: dict[int, set] = {}
+    for K, V, j in atlas.con.execute(sql, params):
+        cells.setdefault(K, set()).add((V, j))
+    fig, ax = plt.subplots(figsize=(7, 5))
+    colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(cells), 1)))
+    for c, K in zip(colours, sorted(cells)):
+        ax.add_patch(Rectangle((-0.4, 0.6), 2 * (K - 1) + 0.8, K - 0.2, fill=False, ls="--",
+                               edgecolor=c, lw=1.2))
+        ax.text(2 * (K - 1) + 0.45, K + 0.45, f"K={K}", color=c, fontsize=9)
+        off = (K - np.mean(sorted(cells))) * 0.07
+        xs = [v + off for v, j in sorted(cells[K])]
+        ys = [j + off for v, j in sorted(cells[K])]
+        ax.scatter(xs, ys, color=c, s=36, label=f"K={K}: {len(cells[K])} cells", zorder=3)
+    top = max(cells) if cells else 2
+    ax.set_xlim(-0.8, 2 * (top - 1) + 1.8)
+    ax.set_ylim(0.4, top + 1)
+    ax.set_xlabel("MJ factor V = Σ (j − 1) V_j")
+    ax.set_ylabel("largest multiplicity j (1 = simple joints only)")
+    ax.set_title("Existence domain j ≤ K, V ≤ 2(K − 1) (seed 002 fig. 10):\ncells occupied by the atlas")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return {K: sorted(v) for K, v in cells.items()}
+
+
+def invariant_merges(atlas, n: int, F: int) -> dict[str, tuple[int, int, int]]:
+    """How often the seed's invariants merge non-isomorphic chains of (n, F).
+
+    For each signature level — [LA]; [LA]+[MJA]; +[La]; +MJ link sets (the link
+    degrees on every multiple joint) — returns ``(chains, classes, merged)``: the
+    number of chains, of distinct signatures, and of chains that share their
+    signature with at least one non-isomorphic chain.
+    """
+    import json as _json
+    from collections import Counter
+
+    rows = list(atlas.con.execute("SELECT LA, MJA, loops, joints, n FROM chains WHERE n = ? AND F = ?",
+                                  (n, F)))
+    sigs: dict[str, list] = {"[LA]": [], "+[MJA]": [], "+[La]": [], "+MJ link sets": []}
+    for LA, MJA, La, joints, nn in rows:
+        js = _json.loads(joints)
+        deg = Counter(x for j in js for x in j)
+        mj = tuple(sorted(tuple(sorted(deg[x] for x in j)) for j in js if len(j) > 2))
+        sigs["[LA]"].append(LA)
+        sigs["+[MJA]"].append((LA, MJA))
+        sigs["+[La]"].append((LA, MJA, La))
+        sigs["+MJ link sets"].append((LA, MJA, La, mj))
+    out = {}
+    for level, keys in sigs.items():
+        c = Counter(keys)
+        out[level] = (len(keys), len(c), sum(v for v in c.values() if v > 1))
+    return out
+
+
+def invariant_merge_chart(atlas, path, pairs=None) -> dict:
+    """Bar chart of the share of chains merged by each signature level, per (n, F)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if pairs is None:
+        pairs = sorted({(r[0], r[1]) for r in atlas.con.execute(
+            "SELECT DISTINCT n, F FROM chains WHERE loops IS NOT NULL OR planar = 0")})
+    data = {pr: invariant_merges(atlas, *pr) for pr in pairs}
+    levels = ["[LA]", "+[MJA]", "+[La]", "+MJ link sets"]
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(pairs) + 2), 4.5))
+    width = 0.8 / len(levels)
+    for k, level in enumerate(levels):
+        ys = [100.0 * data[pr][level][2] / max(data[pr][level][0], 1) for pr in pairs]
+        xs = np.arange(len(pairs)) + (k - 1.5) * width
+        ax.bar(xs, ys, width, label=level)
+    ax.set_xticks(np.arange(len(pairs)))
+    ax.set_xticklabels([f"n={n} F={F}\n({data[(n, F)]['[LA]'][0]})" for n, F in pairs], fontsize=8)
+    ax.set_ylabel("% of chains sharing the signature\nwith a non-isomorphic chain")
+    ax.set_title("Seed 002 invariants are not sufficient: wrong merges per signature level")
+    ax.legend(fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return data

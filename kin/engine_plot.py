@@ -1,0 +1,192 @@
+"""Figures of the engine analysis (seed 004 diagrams) and of kinetostatics (PNG, Agg).
+
+:func:`engine_plots` writes, into a directory:
+
+* ``kinematics.png`` — piston displacement, velocity, acceleration over 720° (exact,
+  with the λ-approximation of the acceleration dashed);
+* ``pressure.png`` — cylinder pressure against the crank angle, the p–V diagram, the
+  gas force on each piston;
+* ``balancing.png`` — balancing moment M_b and its mean (= −W_ind / 4π);
+* ``cyclogram.png`` — the four-stroke cyclogram of every cylinder;
+* ``rod_com.png`` — con-rod centre-of-mass path and the radius of curvature;
+* ``reactions.png`` — crank-pin, main-bearing and wall reactions.
+
+:func:`plot_forces` draws the balancing force/moment and the reaction magnitudes of a
+:class:`~kin.forces.ForceResult` against the input.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["engine_plots", "plot_forces"]
+
+_STROKE_COLOURS = {"intake": "#9ecae1", "compression": "#fdd0a2", "power": "#fc9272", "exhaust": "#bdbdbd"}
+
+
+def _plt():
+    import matplotlib  # noqa: PLC0415
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+    return plt
+
+
+def _xaxis(ax):
+    ax.set_xlim(0, 720)
+    ax.set_xticks(np.arange(0, 721, 90))
+    ax.grid(True, alpha=0.3)
+
+
+def engine_plots(res, outdir) -> list[Path]:
+    """Write the six PNG diagrams of an :class:`~kin.engine.EngineResult`; returns the paths."""
+    plt = _plt()
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    spec = res.spec
+    phi = res.phi_deg
+    names = [c.name for c in spec.cylinders]
+    paths = []
+
+    fig, axs = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    for j, nm in enumerate(names):
+        axs[0].plot(phi, res.displacement[:, j] * 1e3, label=f"cyl {nm}")
+        axs[1].plot(phi, res.velocity[:, j], label=f"cyl {nm}")
+        axs[2].plot(phi, res.acceleration[:, j], label=f"cyl {nm} exact")
+        if spec.offset == 0.0:
+            axs[2].plot(phi, res.approx["a"][:, j], "--", lw=0.8, label=f"cyl {nm} λ-approx.")
+    axs[0].set_ylabel("s from TDC (mm)")
+    axs[1].set_ylabel("v (m/s)")
+    axs[2].set_ylabel("a (m/s²)")
+    axs[2].set_xlabel("crank angle φ (deg)")
+    err = res.approx_error["a"]
+    axs[0].set_title(f"{spec.name}: piston motion at {spec.rpm:g} rpm (λ-approx. error of a: "
+                     f"{err['max_abs']:.3g} m/s², {100 * err['max_rel']:.2f} %)", fontsize=9)
+    for ax in axs:
+        _xaxis(ax)
+        ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    paths.append(out / "kinematics.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    fig, axs = plt.subplots(1, 3, figsize=(14, 4.2))
+    for j, nm in enumerate(names):
+        axs[0].plot(phi, res.pressure[:, j] / 1e6, label=f"cyl {nm}")
+        order = np.argsort(res.psi_deg[:, j])
+        axs[1].plot(res.volume[order, j] * 1e6, res.pressure[order, j] / 1e6, label=f"cyl {nm}")
+        axs[2].plot(phi, res.gas_force[:, j] / 1e3, label=f"cyl {nm}")
+    axs[0].set_xlabel("crank angle φ (deg)")
+    axs[0].set_ylabel("cylinder pressure (MPa, absolute)")
+    _xaxis(axs[0])
+    axs[1].set_xlabel("volume (cm³)")
+    axs[1].set_ylabel("pressure (MPa)")
+    axs[1].set_title(f"W_ind = {res.indicated_work.sum():.4g} J per cycle", fontsize=9)
+    axs[1].grid(True, alpha=0.3)
+    axs[2].set_xlabel("crank angle φ (deg)")
+    axs[2].set_ylabel("gas force along the axis (kN)")
+    _xaxis(axs[2])
+    for ax in axs:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    paths.append(out / "pressure.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.plot(phi, res.balancing, label="M_b (on the crank, CCW +)")
+    mean = res.cycle_integral / (4 * np.pi)
+    ax.axhline(mean, color="k", lw=0.8, ls="--", label=f"mean {mean:.4g} N m = −W_ind/4π")
+    ax.set_xlabel("crank angle φ (deg)")
+    ax.set_ylabel("balancing moment (N m)")
+    ax.set_title(f"∮M_b dφ = {res.cycle_integral:.6g} J, −W_ind = {-res.indicated_work.sum():.6g} J", fontsize=9)
+    _xaxis(ax)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(out / "balancing.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 1.0 + 0.5 * len(names)))
+    cyc = res.cyclogram
+    for j, row in enumerate(cyc["cylinders"]):
+        y = len(names) - 1 - j
+        for name, a, b in row["strokes"]:
+            segs = [(a, b - a)] if b > a else [(a, 720.0 - a), (0.0, b)]
+            ax.broken_barh(segs, (y - 0.35, 0.7), facecolors=_STROKE_COLOURS[name], edgecolor="k", lw=0.5)
+            mid = (a + ((b - a) % 720.0) / 2.0) % 720.0
+            ax.text(mid, y, name, ha="center", va="center", fontsize=7)
+        ax.plot([row["firing"]], [y], marker="*", color="red", ms=10)
+    ax.set_yticks(range(len(names)))
+    ax.set_yticklabels([f"cyl {n}" for n in reversed(names)])
+    ax.set_xlabel("crank angle φ (deg); * firing")
+    ax.set_title("four-stroke cyclogram; firing intervals " + "/".join(f"{x:g}" for x in cyc["firing_intervals"])
+                 + " deg, order " + "-".join(cyc["firing_order"]), fontsize=9)
+    _xaxis(ax)
+    fig.tight_layout()
+    paths.append(out / "cyclogram.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
+    for j, nm in enumerate(names):
+        axs[0].plot(res.rod_com[:, j, 0] * 1e3, res.rod_com[:, j, 1] * 1e3, label=f"rod {nm}")
+        axs[1].plot(phi, np.minimum(res.rod_com_radius[:, j], 10.0) * 1e3, label=f"rod {nm}")
+    axs[0].set_aspect("equal")
+    axs[0].set_xlabel("x (mm)")
+    axs[0].set_ylabel("y (mm)")
+    axs[0].set_title("con-rod centre-of-mass paths", fontsize=9)
+    axs[0].grid(True, alpha=0.3)
+    axs[1].set_yscale("log")
+    axs[1].set_xlabel("crank angle φ (deg)")
+    axs[1].set_ylabel("radius of curvature (mm, clipped at 10 m)")
+    _xaxis(axs[1])
+    for ax in axs:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    paths.append(out / "rod_com.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    rx = res.reactions
+    ax.plot(phi, np.linalg.norm(rx["R01"], axis=-1) / 1e3, label="|R01| main bearing")
+    for j, nm in enumerate(names):
+        ax.plot(phi, np.linalg.norm(rx["R12"][:, j], axis=-1) / 1e3, label=f"|R12| crank pin, rod {nm}")
+        ax.plot(phi, rx["N"][:, j] / 1e3, ":", label=f"N wall, cyl {nm}")
+    ax.set_xlabel("crank angle φ (deg)")
+    ax.set_ylabel("kN")
+    ax.set_title("reactions (crank pin A is a multiple joint: one reaction per rod)", fontsize=9)
+    _xaxis(ax)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    paths.append(out / "reactions.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+    return paths
+
+
+def plot_forces(fr, x, out) -> Path:
+    """Balancing moment/force of each driver and |reaction| of each pair against ``x``."""
+    plt = _plt()
+    m = fr.mechanism
+    fig, axs = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    for i, d in enumerate(m.drivers):
+        axs[0].plot(x, fr.balancing[:, i], marker=".", label=f"driver {d.joint}")
+    axs[0].set_ylabel("balancing (N m or N)")
+    axs[0].grid(True, alpha=0.3)
+    axs[0].legend(fontsize=8)
+    for i, p in enumerate(fr.pairs):
+        axs[1].plot(x, np.linalg.norm(fr.reactions[:, i], axis=-1), label=p.name)
+    axs[1].set_ylabel("|reaction| (N)")
+    axs[1].set_xlabel("input (deg or m)")
+    axs[1].grid(True, alpha=0.3)
+    axs[1].legend(fontsize=7, ncol=2)
+    axs[0].set_title(f"{m.name or 'mechanism'}: kinetostatics ({fr.method}); "
+                     f"max relative virtual-power residual {np.nanmax(fr.relative_residual):.2g}", fontsize=9)
+    fig.tight_layout()
+    p = Path(out)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p

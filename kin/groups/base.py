@@ -1,0 +1,94 @@
+"""Shared helpers of the group kernels: planar vector algebra on ``(..., 2)``
+arrays, Cramer's rule for the 2×2 systems and the singularity threshold.
+
+Notation (seed 000 [1]_ with the OCR noise removed): ``perp(a) = (-a_y, a_x)``
+(the left normal, ``n(φ)`` for ``a = e(φ)``), ``cross(a, b) = a_x b_y - a_y b_x``.
+Useful identities: ``cross(perp a, perp b) = cross(a, b)``,
+``cross(u, perp a) = u·a``.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from topo.errors import SingularityError, explain
+
+__all__ = ["SINGULAR_RTOL", "REACH_RTOL", "xy", "stack", "cramer", "is_singular",
+           "sign_of", "quiet"]
+
+#: ``|det| <= SINGULAR_RTOL · |c1| |c2|`` marks a singular system.  For a dyad
+#: near a turning point the relative det behaves like sqrt(2δ) (δ the relative
+#: distance to the limit), so 1e-8 flags positions within round-off (δ ≲ 1e-16)
+#: of the singular configuration; the velocity error grows like eps/det_rel² before
+#: that (see ``docs/groups.md``), and callers may apply their own threshold on ``det``.
+SINGULAR_RTOL = 1e-8
+#: a distance beyond reach by at most this relative amount is clamped (tangency).
+REACH_RTOL = 1e-12
+
+
+def quiet(func):
+    """Decorator: batch kernels never warn on 0/0 or inf·0 (NaN/inf is the answer
+    there and the ``ok`` / ``singular`` masks say so)."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return func(*args, **kwargs)
+    return wrapper
+
+
+def xy(a):
+    """Return the x and y components (views) of a ``(..., 2)`` array as floats."""
+    a = np.asarray(a, dtype=float)
+    if a.shape[-1:] != (2,):
+        raise ValueError(explain("point array", expected="shape (..., 2)",
+                                 got=f"shape {a.shape}"))
+    return a[..., 0], a[..., 1]
+
+
+def stack(x, y):
+    """Stack components into a ``(..., 2)`` array."""
+    return np.stack(np.broadcast_arrays(x, y), axis=-1)
+
+
+def cramer(c1x, c1y, c2x, c2y, bx, by):
+    """Solve ``x1 c1 + x2 c2 = b`` by Cramer's rule (seed 000's method).
+
+    Returns ``x1, x2, det`` with ``det = cross(c1, c2)``; where ``det == 0`` the
+    unknowns are ``±inf`` / ``nan`` without a NumPy warning.
+    """
+    det = c1x * c2y - c1y * c2x
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x1 = (bx * c2y - by * c2x) / det
+        x2 = (c1x * by - c1y * bx) / det
+    return x1, x2, det
+
+
+def is_singular(det, c1x, c1y, c2x, c2y):
+    """``|det| <= SINGULAR_RTOL · |c1| |c2|`` (NaN counts as singular)."""
+    scale = np.sqrt((c1x * c1x + c1y * c1y) * (c2x * c2x + c2y * c2y))
+    return ~(np.abs(det) > SINGULAR_RTOL * scale)
+
+
+def sign_of(value, scale, what):
+    """``±1`` array of ``sign(value)``; raise if ``|value| <= SINGULAR_RTOL·scale``.
+
+    Raises
+    ------
+    SingularityError
+        The reference configuration sits on the boundary between branches.
+    """
+    value = np.asarray(value, dtype=float)
+    bad = ~(np.abs(value) > SINGULAR_RTOL * np.asarray(scale, dtype=float))
+    if np.any(bad):
+        raise SingularityError(explain(
+            what, expected="a reference configuration off the branch boundary",
+            got=f"a singular reference at {int(np.count_nonzero(bad))} position(s)",
+            hint="move the reference so that the group's links are not collinear"))
+    return np.where(value > 0, 1.0, -1.0)

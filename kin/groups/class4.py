@@ -1,0 +1,238 @@
+"""Class IV order 2 group: two ternary links T1 (outer pin O1, inner joints J1,
+J2) and T2 (outer pin O2, inner joints J3, J4) closed into a quadrilateral by
+the binaries J1–J3 and J2–J4.
+
+Both this group and the class III triad come from the 5-link Baranov truss
+(``reference/kinematics.md`` §2.1): seen from T1, the pair of known pins O1–O2
+acts as a third binary link of length |O1O2|, T1's joints (J1, J2, O1) are the
+triad's fixed anchors and T2 (J3, J4, O2) is its ternary.  So all modes come from
+the triad's degree-6 polynomial (:func:`kin.groups.triad.triad_modes`), and are
+then rotated into place by the direction of O1→O2.  Velocities and
+accelerations come from one 2×2 system in (θ̇1, θ̇2) solved by Cramer's rule as
+in seed 000 [1]_.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import cramer, is_singular, quiet
+from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, triad_modes
+
+__all__ = ["Class4Modes", "Class4Track", "Class4Rates", "class4_modes",
+           "class4_track", "class4_rates", "class4_points"]
+
+
+class Class4Modes(NamedTuple):
+    """All real modes: ``J`` (N, 6, 4, 2), ``theta`` (N, 6, 2), ``n_modes`` (N,),
+    ``residual`` (N, 6), ``det`` (N, 6); NaN-padded."""
+
+    J: np.ndarray
+    theta: np.ndarray
+    n_modes: np.ndarray
+    residual: np.ndarray
+    det: np.ndarray
+
+
+class Class4Track(NamedTuple):
+    """One mode followed along the batch: ``J`` (N, 4, 2), ``theta`` (N, 2),
+    ``ok``, ``det``, ``status`` (as :class:`kin.groups.triad.TriadTrack`)."""
+
+    J: np.ndarray
+    theta: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+    status: np.ndarray
+
+
+class Class4Rates(NamedTuple):
+    """Rates of the class IV group (acceleration fields ``None`` unless asked)."""
+
+    omega: np.ndarray
+    vJ: np.ndarray
+    eps: np.ndarray | None
+    aJ: np.ndarray | None
+    w_bin: np.ndarray
+    e_bin: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+def class4_points(O, r, theta):
+    """Joints J1..J4 ``(..., 4, 2)`` from outer pins ``O`` (..., 2, 2), local
+    vectors ``r`` (4, 2) and rotations ``theta`` (..., 2)."""
+    O = np.asarray(O, dtype=float)
+    r = np.asarray(r, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    J12 = O[..., :1, :] + _rot(c[..., 0, None], s[..., 0, None], r[:2])
+    J34 = O[..., 1:, :] + _rot(c[..., 1, None], s[..., 1, None], r[2:])
+    return np.concatenate([J12, J34], axis=-2)
+
+
+def _residual(J, m):
+    d = np.linalg.norm(J[..., 2:, :] - J[..., :2, :], axis=-1)
+    return np.max(np.abs(d - m), axis=-1) / np.max(m)
+
+
+@quiet
+def class4_modes(O, r, m) -> Class4Modes:
+    """All real assembly modes of a class IV order 2 group, vectorised.
+
+    Parameters
+    ----------
+    O : array_like, shape (N, 2, 2) or (2, 2)
+        Outer pins O1 (of T1) and O2 (of T2).
+    r : array_like, shape (4, 2)
+        ``J1 - O1``, ``J2 - O1``, ``J3 - O2``, ``J4 - O2`` in the reference.
+    m : array_like, shape (2,)
+        Lengths |J1J3| and |J2J4|.
+
+    Returns
+    -------
+    Class4Modes
+        ``J`` (N, 6, 4, 2), ``theta`` (N, 6, 2) rotations of T1, T2 from the
+        reference, ``n_modes``, ``residual`` (max relative length error),
+        ``det`` (N, 6) of the 2×2 rate system.  NaN-padded, at most 6 modes.
+    """
+    O, single = _as_batch(O, (2, 2))
+    r = np.asarray(r, dtype=float)
+    m = np.asarray(m, dtype=float)
+    N = O.shape[0]
+    e = O[:, 1] - O[:, 0]
+    L = np.hypot(e[:, 0], e[:, 1])
+    anchors = np.broadcast_to(np.stack([r[0], r[1], np.zeros(2)]), (N, 3, 2))
+    b = np.stack([r[2], r[3], np.zeros(2)])
+    ll = np.stack([np.full(N, m[0]), np.full(N, m[1]), L], axis=-1)
+    t = triad_modes(anchors, b, ll)
+    O2l = t.P[..., 2, :]                                  # O2 in T1's frame
+    th1 = np.arctan2(e[:, None, 1], e[:, None, 0]) - np.arctan2(O2l[..., 1], O2l[..., 0])
+    th1 = _wrap(th1)
+    th2 = _wrap(th1 + t.theta)
+    theta = np.stack([th1, th2], axis=-1)
+    J = class4_points(O[:, None], r, theta)
+    res = np.where(np.isfinite(t.theta), np.maximum(_residual(J, m), t.residual), np.nan)
+    rt = class4_rates(np.repeat(O[:, None], MAX_MODES, 1).reshape(-1, 2, 2),
+                      np.nan_to_num(J).reshape(-1, 4, 2), np.zeros((N * MAX_MODES, 2, 2)))
+    det = np.where(np.isfinite(t.theta), rt.det.reshape(N, MAX_MODES), np.nan)
+    out = Class4Modes(J, theta, t.n_modes, res, det)
+    return Class4Modes(*(v[0] for v in out)) if single else out
+
+
+@quiet
+def class4_rates(O, J, vO, aO=None) -> Class4Rates:
+    """Angular velocities (and accelerations) of T1, T2 from one 2×2 system.
+
+    Parameters
+    ----------
+    O : array_like, shape (N, 2, 2) or (2, 2)
+        Outer pins; ``J`` (N, 4, 2) the joints of a solved mode.
+    vO, aO : array_like, shape like ``O``
+        Velocities (and optional accelerations) of the outer pins.
+
+    Returns
+    -------
+    Class4Rates
+        ``omega`` (N, 2), ``vJ`` (N, 4, 2), ``eps``, ``aJ``; ``w_bin`` / ``e_bin``
+        (N, 2) of the binaries J1→J3 and J2→J4; ``det``, ``singular``.
+
+    Notes
+    -----
+    With ``g_k = J_k - O_(k)`` and ``e = J1 - J3``, ``f = J2 - J4``:
+    ``θ̇1 e·perp(g1) - θ̇2 e·perp(g3) = e·(Ȯ2 - Ȯ1)`` and the same with
+    ``(f, g2, g4)``; accelerations: same matrix, right-hand side
+    ``e·(Ö2 - Ö1 + θ̇1² g1 - θ̇2² g3) - |ė|²``.
+    """
+    O, single = _as_batch(O, (2, 2))
+    J = np.asarray(J, dtype=float).reshape(O.shape[:-2] + (4, 2))
+    vO = np.asarray(vO, dtype=float).reshape(O.shape)
+    g = J - np.repeat(O, 2, axis=-2)                      # g1, g2 (O1) g3, g4 (O2)
+    pg = np.stack([-g[..., 1], g[..., 0]], axis=-1)
+    e = J[..., :2, :] - J[..., 2:, :]                     # (e, f)
+    dot = lambda a, c: a[..., 0] * c[..., 0] + a[..., 1] * c[..., 1]  # noqa: E731
+    c1 = dot(e, pg[..., :2, :])                           # (N, 2) rows
+    c2 = -dot(e, pg[..., 2:, :])
+    dv = vO[..., 1, :] - vO[..., 0, :]
+    bv = dot(e, dv[..., None, :])
+    w1, w2, det = cramer(c1[..., 0], c1[..., 1], c2[..., 0], c2[..., 1], bv[..., 0], bv[..., 1])
+    omega = np.stack([w1, w2], axis=-1)
+    wk = np.repeat(omega, 2, axis=-1)[..., None]
+    vJ = np.repeat(vO, 2, axis=-2) + wk * pg
+    de = vJ[..., :2, :] - vJ[..., 2:, :]
+    ee = dot(e, e)
+    w_bin = (e[..., 0] * de[..., 1] - e[..., 1] * de[..., 0]) / ee
+    sing = is_singular(det, c1[..., 0], c1[..., 1], c2[..., 0], c2[..., 1])
+    eps = aJ = e_bin = None
+    if aO is not None:
+        aO = np.asarray(aO, dtype=float).reshape(O.shape)
+        base = np.repeat(aO, 2, axis=-2) - wk ** 2 * g   # J-acceleration without ε
+        ba = -dot(e, base[..., :2, :] - base[..., 2:, :]) - dot(de, de)
+        e1, e2, _ = cramer(c1[..., 0], c1[..., 1], c2[..., 0], c2[..., 1], ba[..., 0], ba[..., 1])
+        eps = np.stack([e1, e2], axis=-1)
+        aJ = base + np.repeat(eps, 2, axis=-1)[..., None] * pg
+        dd = aJ[..., :2, :] - aJ[..., 2:, :]
+        e_bin = (e[..., 0] * dd[..., 1] - e[..., 1] * dd[..., 0]) / ee
+    out = Class4Rates(omega, vJ, eps, aJ, w_bin, e_bin, det, sing)
+    if single:
+        out = Class4Rates(*(None if v is None else v[0] for v in out))
+    return out
+
+
+@quiet
+def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
+    """Follow one assembly mode of a class IV group along a batch of positions.
+
+    Parameters
+    ----------
+    O : array_like, shape (N, 2, 2)
+        Outer pins along the motion.
+    r, m : as in :func:`class4_modes`.
+    start : array_like, shape (2,)
+        Rotations (θ1, θ2) near the wanted mode at ``O[0]`` (``(0, 0)`` = the
+        reference configuration).
+    stride : int, optional
+        As in :func:`kin.groups.triad.triad_track`.
+
+    Returns
+    -------
+    Class4Track
+        ``J`` (N, 4, 2), ``theta`` (N, 2), ``ok``, ``det``, ``status``
+        (0 ok, 1 no assembly, 2 lost/ambiguous here, 3 after a loss).
+
+    Notes
+    -----
+    The group is tracked as its triad reduction (T1's frame, third binary of
+    length |O1O2| whose rate enters the predictor), with the same guards as
+    :func:`kin.groups.triad.triad_track`: never a silent mode switch.
+    """
+    O = np.asarray(O, dtype=float)
+    r = np.asarray(r, dtype=float)
+    m = np.asarray(m, dtype=float)
+    N = O.shape[0]
+    e = O[:, 1] - O[:, 0]
+    L = np.hypot(e[:, 0], e[:, 1])
+    anchors = np.broadcast_to(np.stack([r[0], r[1], np.zeros(2)]), (N, 3, 2))
+    b = np.stack([r[2], r[3], np.zeros(2)])
+    ll = np.stack([np.full(N, m[0]), np.full(N, m[1]), L], axis=-1)
+    th0 = np.asarray(start, dtype=float)
+    J0 = class4_points(O[0], r, th0)
+    loc = np.stack([J0[2], J0[3], O[0, 1]]) - O[0, 0]
+    c, s_ = np.cos(-th0[0]), np.sin(-th0[0])
+    loc = _rot(c, s_, loc)
+    P, phi, status = _track(np.ascontiguousarray(anchors), b, ll, loc, stride)
+    ok = status == 0
+    th1 = _wrap(np.arctan2(e[:, 1], e[:, 0]) - np.arctan2(P[:, 2, 1], P[:, 2, 0]))
+    theta = np.stack([th1, _wrap(th1 + phi)], axis=-1)
+    theta[~ok] = np.nan
+    J = class4_points(O, r, theta)
+    det = np.full(N, np.nan)
+    if ok.any():
+        det[ok] = class4_rates(O[ok], J[ok], np.zeros_like(O[ok])).det
+    return Class4Track(J, theta, ok, det, status)

@@ -1,0 +1,467 @@
+"""Generic Newton solver for any group (or the whole mechanism), with continuation.
+
+Coordinates are body poses: link ``k`` has ``Z[..., k, :] = (X, Y, θ)``, where
+``(X, Y)`` is the current position of the link's reference point ``c_k`` (its
+first joint's reference position, :func:`topo.assur.link_origins`) and ``θ`` its
+rotation from the reference configuration.  The material point that sat at ``r``
+in the reference configuration is at ``X + R(θ)(r − c_k)``, so the reference
+configuration is ``Z = (c, 0)`` for every link.
+
+The equations are those of :class:`topo.assur.Constraint` (pins, sliders,
+drivers).  :class:`ConstraintSystem` compiles a list of them once into index
+arrays; residual, Jacobian and the acceleration term ``γ = (dJ/dt) ż`` are NumPy
+expressions over a leading batch axis.  Velocities and accelerations of the
+unknown links follow from one linear system each, with the same matrix:
+
+    J_u u̇ = −J_k k̇ − Φ_φ φ̇,        J_u ü = −J_k k̈ − Φ_φ φ̈ − γ.
+
+:func:`newton` polishes a batch from a guess (vectorised), :func:`track` follows a
+sequence of positions by continuation (secant predictor, step halving with
+linearly interpolated knowns, a jump guard), which keeps the assembly branch of
+the start.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from topo.assur import Constraint, link_origins
+from topo.model import Mechanism
+
+__all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
+
+
+def _rot(th):
+    return np.cos(th), np.sin(th)
+
+
+@dataclass(frozen=True, eq=False)
+class ConstraintSystem:
+    """Compiled equations of a set of constraints.
+
+    Attributes
+    ----------
+    n_links : int
+        Number of links of the mechanism (columns ``3 * n_links``).
+    n_eq : int
+    R_a, R_b : ndarray of int
+        Link indices of pin constraints; ``R_ra, R_rb`` their local vectors
+        ``r − c`` (shape (nR, 2)); ``R_row`` first row of each.
+    P_* : arrays for slider / slide-driver constraints (``P_dir`` the local
+        direction: normal for a slider, axis for a slide driver).
+    A_* : arrays for angle equations (slider angle, rotation driver).
+    drv : ndarray (n_eq,) of int
+        Driver index acting on each row (-1 none), ``Φ_φ = -1`` there.
+    """
+
+    n_links: int
+    n_eq: int
+    R_a: np.ndarray
+    R_b: np.ndarray
+    R_ra: np.ndarray
+    R_rb: np.ndarray
+    R_row: np.ndarray
+    P_a: np.ndarray
+    P_b: np.ndarray
+    P_ra: np.ndarray
+    P_rb: np.ndarray
+    P_dir: np.ndarray
+    P_row: np.ndarray
+    A_a: np.ndarray
+    A_b: np.ndarray
+    A_row: np.ndarray
+    drv: np.ndarray
+    labels: tuple[str, ...]
+
+    @classmethod
+    def compile(cls, m: Mechanism, constraints) -> "ConstraintSystem":
+        """Compile constraints of ``m`` (see :class:`topo.assur.Constraint`)."""
+        names = m.link_names
+        idx = {x: i for i, x in enumerate(names)}
+        org = link_origins(m)
+        R, P, A, drv, labels = [], [], [], [], []
+        row = 0
+        for c in constraints:
+            jt = m.joint(c.joint)
+            r = np.asarray(jt.at, float)
+            if c.kind == "R":
+                R.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], row))
+                drv += [-1, -1]
+                labels += [f"{c.joint}:{c.a}-{c.b}:x", f"{c.joint}:{c.a}-{c.b}:y"]
+                row += 2
+            elif c.kind == "P":
+                u = np.asarray(jt.axis, float)
+                u = u / np.hypot(*u)
+                A.append((idx[c.a], idx[c.b], row))
+                P.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], np.array([-u[1], u[0]]), row + 1))
+                drv += [-1, -1]
+                labels += [f"{c.joint}:angle", f"{c.joint}:line"]
+                row += 2
+            elif c.kind == "drive_P":
+                u = np.asarray(jt.axis, float)
+                u = u / np.hypot(*u)
+                P.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], u, row))
+                drv.append(c.driver)
+                labels.append(f"{c.joint}:slide")
+                row += 1
+            elif c.kind == "drive_R":
+                A.append((idx[c.a], idx[c.b], row))
+                drv.append(c.driver)
+                labels.append(f"{c.joint}:rotation")
+                row += 1
+            else:  # pragma: no cover
+                raise ValueError(c.kind)
+
+        def arr(lst, k, shape):
+            return np.array([t[k] for t in lst]).reshape(shape) if lst else np.zeros(shape)
+
+        nR, nP, nA = len(R), len(P), len(A)
+        return cls(len(names), row,
+                   arr(R, 0, (nR,)).astype(int), arr(R, 1, (nR,)).astype(int),
+                   arr(R, 2, (nR, 2)), arr(R, 3, (nR, 2)), arr(R, 4, (nR,)).astype(int),
+                   arr(P, 0, (nP,)).astype(int), arr(P, 1, (nP,)).astype(int),
+                   arr(P, 2, (nP, 2)), arr(P, 3, (nP, 2)), arr(P, 4, (nP, 2)),
+                   arr(P, 5, (nP,)).astype(int),
+                   arr(A, 0, (nA,)).astype(int), arr(A, 1, (nA,)).astype(int),
+                   arr(A, 2, (nA,)).astype(int), np.array(drv, int), tuple(labels))
+
+    # -- kinematic primitives ---------------------------------------------------
+    @staticmethod
+    def _rho(Z, k, r):
+        """Rotated local vectors R(θ_k) r, shape (N, n, 2)."""
+        c, s = _rot(Z[:, k, 2])
+        return np.stack([c * r[:, 0] - s * r[:, 1], c * r[:, 1] + s * r[:, 0]], axis=-1)
+
+    def residual(self, Z: np.ndarray, inputs: np.ndarray) -> np.ndarray:
+        """Φ(Z, inputs), shape (N, n_eq).  ``inputs`` is (N, n_drivers)."""
+        N = Z.shape[0]
+        out = np.zeros((N, self.n_eq))
+        if self.R_a.size:
+            pa = Z[:, self.R_a, :2] + self._rho(Z, self.R_a, self.R_ra)
+            pb = Z[:, self.R_b, :2] + self._rho(Z, self.R_b, self.R_rb)
+            d = pa - pb
+            out[:, self.R_row] = d[..., 0]
+            out[:, self.R_row + 1] = d[..., 1]
+        if self.P_a.size:
+            d = (Z[:, self.P_b, :2] + self._rho(Z, self.P_b, self.P_rb)
+                 - Z[:, self.P_a, :2] - self._rho(Z, self.P_a, self.P_ra))
+            n = self._rho(Z, self.P_a, self.P_dir)
+            out[:, self.P_row] = np.sum(n * d, axis=-1)
+        if self.A_a.size:
+            out[:, self.A_row] = Z[:, self.A_b, 2] - Z[:, self.A_a, 2]
+        rows = np.flatnonzero(self.drv >= 0)
+        if rows.size:
+            out[:, rows] -= inputs[:, self.drv[rows]]
+        return out
+
+    def jacobian(self, Z: np.ndarray) -> np.ndarray:
+        """∂Φ/∂Z, shape (N, n_eq, 3 n_links)."""
+        N = Z.shape[0]
+        J = np.zeros((N, self.n_eq, 3 * self.n_links))
+        if self.R_a.size:
+            ra = self._rho(Z, self.R_a, self.R_ra)
+            rb = self._rho(Z, self.R_b, self.R_rb)
+            for k in range(self.R_a.size):
+                r0, a, b = self.R_row[k], 3 * self.R_a[k], 3 * self.R_b[k]
+                J[:, r0, a] += 1.0
+                J[:, r0 + 1, a + 1] += 1.0
+                J[:, r0, a + 2] += -ra[:, k, 1]
+                J[:, r0 + 1, a + 2] += ra[:, k, 0]
+                J[:, r0, b] -= 1.0
+                J[:, r0 + 1, b + 1] -= 1.0
+                J[:, r0, b + 2] -= -rb[:, k, 1]
+                J[:, r0 + 1, b + 2] -= rb[:, k, 0]
+        if self.P_a.size:
+            ra = self._rho(Z, self.P_a, self.P_ra)
+            rb = self._rho(Z, self.P_b, self.P_rb)
+            n = self._rho(Z, self.P_a, self.P_dir)
+            d = Z[:, self.P_b, :2] + rb - Z[:, self.P_a, :2] - ra
+            for k in range(self.P_a.size):
+                r0, a, b = self.P_row[k], 3 * self.P_a[k], 3 * self.P_b[k]
+                nk = n[:, k]
+                J[:, r0, b:b + 2] += nk
+                J[:, r0, b + 2] += nk[:, 0] * -rb[:, k, 1] + nk[:, 1] * rb[:, k, 0]
+                J[:, r0, a:a + 2] -= nk
+                J[:, r0, a + 2] += (-nk[:, 1] * d[:, k, 0] + nk[:, 0] * d[:, k, 1]
+                                    - (nk[:, 0] * -ra[:, k, 1] + nk[:, 1] * ra[:, k, 0]))
+        for k in range(self.A_a.size):
+            J[:, self.A_row[k], 3 * self.A_b[k] + 2] += 1.0
+            J[:, self.A_row[k], 3 * self.A_a[k] + 2] -= 1.0
+        return J
+
+    def gamma(self, Z: np.ndarray, Zd: np.ndarray) -> np.ndarray:
+        """``γ = (dJ/dt) ż``: the acceleration terms not in ``J z̈``, shape (N, n_eq)."""
+        N = Z.shape[0]
+        out = np.zeros((N, self.n_eq))
+        if self.R_a.size:
+            ra = self._rho(Z, self.R_a, self.R_ra)
+            rb = self._rho(Z, self.R_b, self.R_rb)
+            wa = Zd[:, self.R_a, 2][..., None]
+            wb = Zd[:, self.R_b, 2][..., None]
+            g = -wa ** 2 * ra + wb ** 2 * rb
+            out[:, self.R_row] = g[..., 0]
+            out[:, self.R_row + 1] = g[..., 1]
+        if self.P_a.size:
+            ra = self._rho(Z, self.P_a, self.P_ra)
+            rb = self._rho(Z, self.P_b, self.P_rb)
+            n = self._rho(Z, self.P_a, self.P_dir)
+            pn = np.stack([-n[..., 1], n[..., 0]], axis=-1)
+            d = Z[:, self.P_b, :2] + rb - Z[:, self.P_a, :2] - ra
+            wa = Zd[:, self.P_a, 2][..., None]
+            wb = Zd[:, self.P_b, 2][..., None]
+            prb = np.stack([-rb[..., 1], rb[..., 0]], axis=-1)
+            pra = np.stack([-ra[..., 1], ra[..., 0]], axis=-1)
+            dd = Zd[:, self.P_b, :2] + wb * prb - Zd[:, self.P_a, :2] - wa * pra
+            w = wa[..., 0]
+            out[:, self.P_row] = (-w ** 2 * np.sum(n * d, -1) + 2 * w * np.sum(pn * dd, -1)
+                                  + np.sum(n * (-wb ** 2 * rb + wa ** 2 * ra), -1))
+        return out
+
+    @property
+    def involved(self) -> np.ndarray:
+        """Sorted indices of the links that appear in the equations."""
+        return np.unique(np.concatenate([self.R_a, self.R_b, self.P_a, self.P_b,
+                                         self.A_a, self.A_b]).astype(int))
+
+    def input_column(self, n_drivers: int) -> np.ndarray:
+        """∂Φ/∂inputs, shape (n_eq, n_drivers)."""
+        G = np.zeros((self.n_eq, n_drivers))
+        for r, k in enumerate(self.drv):
+            if k >= 0:
+                G[r, k] = -1.0
+        return G
+
+
+def _cols(unknown) -> np.ndarray:
+    u = np.asarray(unknown, int)
+    return (3 * u[:, None] + np.arange(3)).ravel()
+
+
+def newton(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown,
+           tol: float = 1e-13, maxiter: int = 30):
+    """Vectorised Newton on the unknown links' poses from the guess in ``Z``.
+
+    Parameters
+    ----------
+    sys : ConstraintSystem
+    Z : ndarray (N, n_links, 3)
+        Known poses filled in, unknown ones hold the guess (modified copy returned).
+    inputs : ndarray (N, n_drivers)
+    unknown : sequence of int
+        Link indices solved for (``3 len(unknown) == sys.n_eq``).
+    tol : float
+        Stop when the Newton step ``|Δz|∞ ≤ tol · scale`` (the residual before it
+        ``≤ max(tol, 1e-9) · scale``); accept when the final residual is
+        ``≤ max(1e-10, 10 tol) · scale``.
+
+    Returns
+    -------
+    Z : ndarray
+    converged : ndarray of bool (N,)
+    n_iter : int
+    """
+    Z = np.array(Z, float, copy=True)
+    cols = _cols(unknown)
+    u = np.asarray(unknown, int)
+    scale = max(1.0, float(np.nanmax(np.abs(Z[..., :2]))) if Z.size else 1.0)
+    active = np.all(np.isfinite(Z[:, sys.involved].reshape(Z.shape[0], -1)), axis=1)
+    conv = np.zeros(Z.shape[0], bool)
+    it = 0
+    for it in range(1, maxiter + 1):
+        idx = np.flatnonzero(active & ~conv)
+        if idx.size == 0:
+            break
+        Zi = Z[idx]
+        F = sys.residual(Zi, inputs[idx])
+        J = sys.jacobian(Zi)[:, :, cols]
+        try:
+            dz = np.linalg.solve(J, -F[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            dz = np.stack([np.linalg.lstsq(Jk, -Fk, rcond=None)[0] for Jk, Fk in zip(J, F)])
+        bad = ~np.all(np.isfinite(dz), axis=1)
+        dz[bad] = 0.0
+        Zi[:, u, :] += dz.reshape(idx.size, len(u), 3)
+        Z[idx] = Zi
+        res = np.max(np.abs(F), axis=1)
+        step = np.max(np.abs(dz), axis=1)
+        done = (step <= tol * scale) & (res <= max(tol, 1e-9) * scale)
+        conv[idx[done & ~bad]] = True
+        active[idx[bad]] = False
+    # final residual check
+    ok = conv.copy()
+    if ok.any():
+        F = sys.residual(Z[ok], inputs[ok])
+        ok[np.flatnonzero(ok)] = np.max(np.abs(F), axis=1) <= max(1e-10, 10 * tol) * scale
+    return Z, ok, it
+
+
+def _relative_det(J: np.ndarray) -> np.ndarray:
+    norms = np.prod(np.linalg.norm(J, axis=-2), axis=-1)
+    return np.abs(np.linalg.det(J)) / np.where(norms > 0, norms, 1.0)
+
+
+@dataclass(frozen=True)
+class TrackResult:
+    """Result of :func:`track`: poses, per-position ok mask, reasons, relative det."""
+
+    Z: np.ndarray
+    ok: np.ndarray
+    reason: np.ndarray
+    rel_det: np.ndarray
+    n_iter: int
+
+
+def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
+          start: np.ndarray | None = None, singular_tol: float = 1e-9,
+          max_halvings: int = 12, tol: float = 1e-13) -> TrackResult:
+    """Follow the unknown links along a sequence of positions by continuation.
+
+    Position 0 starts from ``start`` (default: the guess already in ``Z[0]``, e.g.
+    the reference configuration).  Each next position is predicted by the secant
+    through the two previous ones and corrected by Newton; when Newton fails, or
+    the correction is larger than the last step (a possible branch jump), the step
+    is halved, the known poses and inputs being interpolated linearly between the
+    two positions (a homotopy that ends at the exact knowns).
+
+    Returns
+    -------
+    TrackResult
+        ``reason[n]`` is ``""`` when ok, else why position n failed.
+    """
+    Z = np.array(Z, float, copy=True)
+    u = np.asarray(unknown, int)
+    cols = _cols(u)
+    N = Z.shape[0]
+    ok = np.zeros(N, bool)
+    reason = np.full(N, "", dtype=object)
+    rel = np.full(N, np.nan)
+    if start is not None:
+        Z[0, u] = start
+    known = np.setdiff1d(sys.involved, u)
+    prev = prev2 = None          # (Zfull, inputs) of the last two good positions
+    iters = 0
+    for n in range(N):
+        if not np.all(np.isfinite(Z[n, known])):
+            reason[n] = "upstream"
+            Z[n, u] = np.nan
+            prev2 = None
+            continue
+        if prev is None:
+            guess = Z[n:n + 1].copy()
+            if n > 0 and np.all(np.isfinite(Z[n - 1, u])):
+                guess[0, u] = Z[n - 1, u]
+            Zs, conv, it = newton(sys, guess, inputs[n:n + 1], u, tol=tol)
+            iters += it
+            if conv[0]:
+                Z[n] = Zs[0]
+                ok[n] = True
+            else:
+                reason[n] = "no assembly (Newton did not converge)"
+                Z[n, u] = np.nan
+        else:
+            zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol)
+            if zz is None:
+                reason[n] = "no assembly (continuation failed: out of reach, or a turning point)"
+                Z[n, u] = np.nan
+            else:
+                Z[n] = zz
+                ok[n] = True
+        if ok[n]:
+            J = sys.jacobian(Z[n:n + 1])[:, :, cols]
+            rel[n] = _relative_det(J)[0]
+            if rel[n] < singular_tol:
+                reason[n] = f"singular position (relative det {rel[n]:.1e})"
+                ok[n] = False
+            prev2, prev = prev, (Z[n].copy(), inputs[n].copy())
+        else:
+            prev2 = None       # keep the last good position: the next one continues from it
+    return TrackResult(Z, ok, reason, rel, iters)
+
+
+def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13):
+    """One continuation step from ``prev`` to the target knowns ``Zn``/inputs ``xn``."""
+    Za, xa = prev
+    Zn = Zn.copy()             # known angles: go the short way round (closed forms wrap θ)
+    Zn[:, 2] = Za[:, 2] + (Zn[:, 2] - Za[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    tangent = np.zeros_like(Za[u])
+    if prev2 is not None:
+        Zb, xb = prev2
+        db2 = float(np.dot(xa - xb, xa - xb))
+        if db2 > 0:          # secant scaled by the signed ratio of the input steps
+            tangent = (Za[u] - Zb[u]) * (float(np.dot(xn - xa, xa - xb)) / db2)
+    scale = max(1.0, float(np.max(np.abs(Za[:, :2]))))
+    t, h, cur = 0.0, 1.0, Za[u].copy()
+    halvings = 0
+    while t < 1.0:
+        t1 = min(1.0, t + h)
+        Zt = Za + (Zn - Za) * t1
+        xt = xa + (xn - xa) * t1
+        guess = Zt.copy()
+        pred = tangent * (t1 - t)
+        guess[u] = cur + pred
+        Zs, conv, _ = newton(sys, guess[None], xt[None], u, tol=tol)
+        good = bool(conv[0])
+        if good and prev2 is not None:
+            corr = np.max(np.abs(Zs[0, u] - guess[u]))
+            # jump guard: the corrector must stay small next to the predicted step
+            # (plus 2 % of the size per unit step, for dwells where the step is ~0)
+            if corr > 0.5 * np.max(np.abs(pred)) + (0.02 * (t1 - t) + 1e-9) * scale:
+                good = False
+        if good:
+            tangent = (Zs[0, u] - cur) / (t1 - t)
+            cur = Zs[0, u]
+            t = t1
+            h = min(1.0, 2.0 * h)
+            prev2 = True
+        else:
+            halvings += 1
+            if halvings > max_halvings:
+                return None
+            h *= 0.5
+    out = Zn.copy()
+    out[u] = cur
+    return out
+
+
+def rates(sys: ConstraintSystem, Z: np.ndarray, Zd: np.ndarray, input_rates: np.ndarray,
+          unknown, Zdd: np.ndarray | None = None, input_acc: np.ndarray | None = None):
+    """Velocities (and accelerations) of the unknown links from the linear systems.
+
+    Parameters
+    ----------
+    Z : (N, n_links, 3) solved poses; Zd (and Zdd) hold the known links' rates.
+    input_rates : (N, n_drivers); input_acc : (N, n_drivers) or None (zero).
+
+    Returns
+    -------
+    Zd, Zdd (Zdd None when ``Zdd`` was None), rel_det (N,)
+    """
+    u = np.asarray(unknown, int)
+    cols = _cols(u)
+    N = Z.shape[0]
+    J = sys.jacobian(Z)
+    G = sys.input_column(input_rates.shape[1])
+    known = np.setdiff1d(sys.involved, u)
+    kcols = _cols(known) if known.size else np.zeros(0, int)
+    Ju = J[:, :, cols]
+    Jk = J[:, :, kcols]
+    Zd = np.array(Zd, float, copy=True)
+    Zd[:, u] = 0.0
+    b = -np.einsum("nij,nj->ni", Jk, Zd.reshape(N, -1)[:, kcols]) - input_rates @ G.T
+    with np.errstate(all="ignore"):
+        v = np.linalg.solve(Ju, b[..., None])[..., 0]
+    Zd[:, u] = v.reshape(N, len(u), 3)
+    if Zdd is None:
+        return Zd, None
+    Zdd = np.array(Zdd, float, copy=True)
+    Zdd[:, u] = 0.0
+    acc = input_acc if input_acc is not None else np.zeros_like(input_rates)
+    b = (-np.einsum("nij,nj->ni", Jk, Zdd.reshape(N, -1)[:, kcols]) - acc @ G.T - sys.gamma(Z, Zd))
+    with np.errstate(all="ignore"):
+        a = np.linalg.solve(Ju, b[..., None])[..., 0]
+    Zdd[:, u] = a.reshape(N, len(u), 3)
+    return Zd, Zdd
+
+
+_ = Constraint

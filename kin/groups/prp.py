@@ -1,0 +1,141 @@
+"""Kind 4 dyad (PRP): two sliders joined by a pin B, each sliding on a guide line
+of a known link.  Linear: one solution, no branch.
+
+Seed 000 [1]_, figure 4, eqs. (23)-(29).  ``B = P1 + s1 u1 + h1 n(u1) = P2 + s2 u2
++ h2 n(u2)`` (seed: ``u1 = e(φ2)``, ``u2 = e(φ3)``, ``h1 = l2``, ``h2 = l3``,
+``s1 = l1``, ``s2 = l4``).  Matrix columns ``c1 = u1``, ``c2 = -u2``;
+``det = cross(u2, u1) = sin(φ2-φ3)``.
+
+Seed misprints: the second right-hand sides of eqs. (25), (27), (29) lost their
+signs; ours follow from the loop equation (``reference/kinematics.md`` §1.5).
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import cramer, is_singular, stack, xy, quiet
+
+__all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates"]
+
+
+class PRPPosition(NamedTuple):
+    """Result of :func:`prp_position`: ``B`` (..., 2), slides ``s1, s2``, ``ok``, ``det``."""
+
+    B: np.ndarray
+    s1: np.ndarray
+    s2: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+
+
+class PRPRates(NamedTuple):
+    """Result of :func:`prp_rates` (acceleration fields ``None`` unless asked)."""
+
+    s1d: np.ndarray
+    s2d: np.ndarray
+    vB: np.ndarray
+    s1dd: np.ndarray | None
+    s2dd: np.ndarray | None
+    aB: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+@quiet
+def prp_position(P1, u1, h1, P2, u2, h2) -> PRPPosition:
+    """Pin B of a PRP dyad: intersection of two offset guide lines, vectorised.
+
+    Parameters
+    ----------
+    P1, u1, P2, u2 : array_like, shape (..., 2)
+        Points and unit directions of the two guides (of known links).
+    h1, h2 : float or array_like
+        Offsets of B's tracks along ``n(u1)``, ``n(u2)``.
+
+    Returns
+    -------
+    PRPPosition
+        ``B``, ``s1``, ``s2``, ``ok`` (False for parallel guides, NaN there),
+        ``det = cross(u2, u1)``.
+
+    Notes
+    -----
+    Seed 000 eqs. (23)-(25): ``s1 u1 - s2 u2 = P2 - P1 + h2 n(u2) - h1 n(u1)``.
+    """
+    p1x, p1y = xy(P1)
+    u1x, u1y = xy(u1)
+    p2x, p2y = xy(P2)
+    u2x, u2y = xy(u2)
+    q1x, q1y = p1x - h1 * u1y, p1y + h1 * u1x      # points of the two tracks
+    q2x, q2y = p2x - h2 * u2y, p2y + h2 * u2x
+    s1, s2, det = cramer(u1x, u1y, -u2x, -u2y, q2x - q1x, q2y - q1y)
+    ok = ~is_singular(det, u1x, u1y, u2x, u2y)
+    s1 = np.where(ok, s1, np.nan)
+    s2 = np.where(ok, s2, np.nan)
+    B = stack(q1x + s1 * u1x, q1y + s1 * u1y)
+    return PRPPosition(B, s1, s2, ok & np.all(np.isfinite(B), axis=-1), det)
+
+
+@quiet
+def prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2,
+              aP1=None, eps1=None, aP2=None, eps2=None) -> PRPRates:
+    """Slide rates (and accelerations) of a PRP dyad and the motion of B.
+
+    Parameters
+    ----------
+    B, P1, u1, P2, u2 : array_like, shape (..., 2)
+        Positions (B from :func:`prp_position`).
+    vP1, vP2 : array_like, shape (..., 2)
+        Velocities of P1, P2 as points of their guide links.
+    omega1, omega2 : float or array_like
+        Angular velocities of the guide links.
+    aP1, eps1, aP2, eps2 : optional
+        Accelerations (all four, else only velocities).
+
+    Returns
+    -------
+    PRPRates
+        ``s1d, s2d, vB``; ``s1dd, s2dd, aB``; ``det = cross(u2, u1)``, ``singular``.
+
+    Notes
+    -----
+    Seed 000 eqs. (26)-(29):
+    ``s1d u1 - s2d u2 = vP2 - vP1 + ω2 perp(B-P2) - ω1 perp(B-P1)``, and for the
+    accelerations the difference of ``aPi + εi perp(B-Pi) - ωi²(B-Pi) + 2 ωi sid
+    perp(ui)`` (i = 2 minus i = 1).
+    """
+    bx, by = xy(B)
+    p1x, p1y = xy(P1)
+    u1x, u1y = xy(u1)
+    p2x, p2y = xy(P2)
+    u2x, u2y = xy(u2)
+    r1x, r1y = bx - p1x, by - p1y
+    r2x, r2y = bx - p2x, by - p2y
+    v1x, v1y = xy(vP1)
+    v2x, v2y = xy(vP2)
+    t1x, t1y = v1x - omega1 * r1y, v1y + omega1 * r1x   # guide-1 point at B
+    t2x, t2y = v2x - omega2 * r2y, v2y + omega2 * r2x
+    s1d, s2d, det = cramer(u1x, u1y, -u2x, -u2y, t2x - t1x, t2y - t1y)
+    sing = is_singular(det, u1x, u1y, u2x, u2y)
+    vB = stack(t1x + s1d * u1x, t1y + s1d * u1y)
+    s1dd = s2dd = aB = None
+    if aP1 is not None and eps1 is not None and aP2 is not None and eps2 is not None:
+        a1x, a1y = xy(aP1)
+        a2x, a2y = xy(aP2)
+        o1s, o2s = np.square(omega1), np.square(omega2)
+        k1, k2 = 2.0 * omega1 * s1d, 2.0 * omega2 * s2d
+        g1x = a1x - eps1 * r1y - o1s * r1x - k1 * u1y
+        g1y = a1y + eps1 * r1x - o1s * r1y + k1 * u1x
+        g2x = a2x - eps2 * r2y - o2s * r2x - k2 * u2y
+        g2y = a2y + eps2 * r2x - o2s * r2y + k2 * u2x
+        s1dd, s2dd, _ = cramer(u1x, u1y, -u2x, -u2y, g2x - g1x, g2y - g1y)
+        aB = stack(g1x + s1dd * u1x, g1y + s1dd * u1y)
+    return PRPRates(s1d, s2d, vB, s1dd, s2dd, aB, det, sing)

@@ -1,0 +1,147 @@
+"""Kind 5 dyad (RPP): link 2 pivoted at a known pin A slides along link 3, which
+slides along a guide of a known link.  All angles are known; linear.
+
+Seed 000 [1]_, figure 5, eqs. (30)-(36).  ``Q = P + s1 u`` is link 3's point on
+the known guide ``(P, u)``; link 2 slides along ``w = R(alpha) u`` (seed:
+``β = φ3 + α``) with offset ``h``: ``A = Q + s2 w + h n(w)``.  Matrix columns
+``u``, ``w``; ``det = cross(u, w) = sin(alpha)`` (alpha = 0, π is a design error).
+
+Seed misprint: eq. (30) prints the offset as ``(-l2 sin β, -l2 cos β)``, which is
+not a rotated vector; correct is ``+h n(β) = h(-sin β, cos β)``.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import cramer, is_singular, stack, xy, quiet
+
+__all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates"]
+
+
+class RPPPosition(NamedTuple):
+    """Result of :func:`rpp_position`: ``Q`` (..., 2), slides ``s1, s2``, ``ok``, ``det``."""
+
+    Q: np.ndarray
+    s1: np.ndarray
+    s2: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+
+
+class RPPRates(NamedTuple):
+    """Result of :func:`rpp_rates` (acceleration fields ``None`` unless asked)."""
+
+    s1d: np.ndarray
+    s2d: np.ndarray
+    vQ: np.ndarray
+    s1dd: np.ndarray | None
+    s2dd: np.ndarray | None
+    aQ: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+def _w(ux, uy, alpha):
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    return ca * ux - sa * uy, sa * ux + ca * uy
+
+
+@quiet
+def rpp_position(A, P, u, alpha, h=0.0) -> RPPPosition:
+    """Slides of an RPP dyad and link 3's point Q, vectorised.
+
+    Parameters
+    ----------
+    A : array_like, shape (..., 2)
+        Pivot of link 2 (on a known link).
+    P, u : array_like, shape (..., 2)
+        Point and unit direction of the known guide on which link 3 slides.
+    alpha : float or array_like
+        Angle from the known guide to link 3's own guide (constant).
+    h : float or array_like
+        Offset of A from link 3's guide along ``n(w)``.
+
+    Returns
+    -------
+    RPPPosition
+        ``Q = P + s1 u``, ``s1``, ``s2``, ``ok`` (False if ``sin(alpha) ≈ 0``),
+        ``det = sin(alpha)``.
+
+    Notes
+    -----
+    Seed 000 eqs. (30)-(32) (offset corrected): ``s1 u + s2 w = A - P - h n(w)``.
+    """
+    ax, ay = xy(A)
+    px, py = xy(P)
+    ux, uy = xy(u)
+    wx, wy = _w(ux, uy, alpha)
+    s1, s2, det = cramer(ux, uy, wx, wy, ax - px + h * wy, ay - py - h * wx)
+    ok = ~is_singular(det, ux, uy, wx, wy)
+    s1 = np.where(ok, s1, np.nan)
+    s2 = np.where(ok, s2, np.nan)
+    Q = stack(px + s1 * ux, py + s1 * uy)
+    return RPPPosition(Q, s1, s2, ok & np.all(np.isfinite(Q), axis=-1), det)
+
+
+@quiet
+def rpp_rates(A, Q, P, u, alpha, vA, vP, omega, aA=None, aP=None, eps=None) -> RPPRates:
+    """Slide rates (and accelerations) of an RPP dyad and the motion of Q.
+
+    Parameters
+    ----------
+    A, Q, P, u : array_like, shape (..., 2)
+        Positions (Q from :func:`rpp_position`).
+    alpha : float or array_like
+        As in :func:`rpp_position`.
+    vA, vP : array_like, shape (..., 2)
+        Velocity of A and of P as a point of the guide link.
+    omega : float or array_like
+        Angular velocity of the guide link (links 2 and 3 share it).
+    aA, aP, eps : optional
+        Accelerations (all three, else only velocities).
+
+    Returns
+    -------
+    RPPRates
+        ``s1d, s2d, vQ``; ``s1dd, s2dd, aQ``; ``det = sin(alpha)``, ``singular``.
+
+    Notes
+    -----
+    Seed 000 eqs. (33)-(36) in vector form:
+    ``s1d u + s2d w = vA - vP - ω perp(A-P)``;
+    ``s1dd u + s2dd w = aA - aP - ε perp(A-P) + ω²(A-P) - 2ω(s1d perp(u) + s2d perp(w))``.
+    """
+    ax, ay = xy(A)
+    qx, qy = xy(Q)
+    px, py = xy(P)
+    ux, uy = xy(u)
+    wx, wy = _w(ux, uy, alpha)
+    rx, ry = ax - px, ay - py
+    rqx, rqy = qx - px, qy - py
+    vax, vay = xy(vA)
+    vpx, vpy = xy(vP)
+    s1d, s2d, det = cramer(ux, uy, wx, wy, vax - vpx + omega * ry, vay - vpy - omega * rx)
+    sing = is_singular(det, ux, uy, wx, wy)
+    vQ = stack(vpx - omega * rqy + s1d * ux, vpy + omega * rqx + s1d * uy)
+    s1dd = s2dd = aQ = None
+    if aA is not None and aP is not None and eps is not None:
+        aax, aay = xy(aA)
+        apx, apy = xy(aP)
+        o2 = np.square(omega)
+        cx_ = s1d * uy + s2d * wy          # components of -perp(s1d u + s2d w)
+        cy_ = s1d * ux + s2d * wx
+        b1 = aax - apx + eps * ry + o2 * rx + 2.0 * omega * cx_
+        b2 = aay - apy - eps * rx + o2 * ry - 2.0 * omega * cy_
+        s1dd, s2dd, _ = cramer(ux, uy, wx, wy, b1, b2)
+        k = 2.0 * omega * s1d
+        aQ = stack(apx - eps * rqy - o2 * rqx - k * uy + s1dd * ux,
+                   apy + eps * rqx - o2 * rqy + k * ux + s1dd * uy)
+    return RPPRates(s1d, s2d, vQ, s1dd, s2dd, aQ, det, sing)

@@ -1,0 +1,145 @@
+"""Kind 3 dyad (RPR, coulisse): block 2 pivoted at a known pin A slides on guide
+link 3 pivoted at a known pin C.
+
+Seed 000 [1]_, figure 3, eqs. (15)-(22).  ``A = C + s u + h n(u)`` with ``u`` the
+guide direction of link 3 (seed: ``h = l2``, ``s = l3``, ``u = e(φ3)``).  Matrix
+columns ``c1 = u``, ``c2 = perp(A-C) = s n(u) - h u``; ``det = s``.
+
+Seed misprints: eq. (17), second line, prints ``l3 sinφ3 - l2 cosφ3``; correct is
+``l3 sinφ3 + l2 cosφ3 = A_y - C_y``.  Eq. (22) prints
+``b2 = ... + 2 V3 ω3 a11 + a11 ω3²``; correct is ``- 2 V3 ω3 a11 - a12 ω3²``.
+The seed's ``arctan(l2/l3)`` must be ``atan2`` for the ``s < 0`` branch.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+
+__all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates"]
+
+
+class RPRPosition(NamedTuple):
+    """Result of :func:`rpr_position`: guide direction ``u`` (..., 2), slide ``s``,
+    ``ok``, ``det = s``."""
+
+    u: np.ndarray
+    s: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+
+
+class RPRRates(NamedTuple):
+    """Result of :func:`rpr_rates` (acceleration fields ``None`` unless asked)."""
+
+    sd: np.ndarray
+    w3: np.ndarray
+    sdd: np.ndarray | None
+    e3: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+@quiet
+def rpr_position(A, C, h=0.0, sign=1.0) -> RPRPosition:
+    """Guide direction and slide of an RPR dyad, vectorised.
+
+    Parameters
+    ----------
+    A, C : array_like, shape (..., 2)
+        Pivot of the block (A) and of the guide link (C), both on known links.
+    h : float or array_like
+        Signed offset of A from the guide line through C, along ``n(u)``.
+    sign : {+1, -1} or array_like
+        Sign of the slide ``s = (A-C)·u`` (seed's assembly No. 1: ``s >= 0``).
+
+    Returns
+    -------
+    RPRPosition
+        ``u`` unit guide direction of link 3 (block 2 turns with it), ``s``, ``ok``,
+        ``det = s``.
+
+    Notes
+    -----
+    Seed 000 eqs. (15)-(18) without trigonometry: with ``d = A - C``,
+    ``s = sign·sqrt(|d|² - h²)`` and ``u = (s d - h perp(d))/|d|²``.
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    dx, dy = ax - cx, ay - cy
+    d2 = dx * dx + dy * dy
+    hs = np.square(h)
+    q = d2 - hs
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = (q >= -REACH_RTOL * d2) & (d2 > 0)
+        s = np.sqrt(np.where(ok, np.maximum(q, 0.0), np.nan)) * sign
+        ux = (s * dx + h * dy) / d2
+        uy = (s * dy - h * dx) / d2
+    ok = ok & np.isfinite(ux) & np.isfinite(uy)
+    return RPRPosition(stack(ux, uy), s, ok, s)
+
+
+def rpr_branch(A, C, u):
+    """Assembly sign ``sign((A-C)·u)`` of an RPR dyad in a reference configuration.
+
+    Raises
+    ------
+    SingularityError
+        If A sits at the foot of the perpendicular from C (``s = 0``).
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    ux, uy = xy(u)
+    v = (ax - cx) * ux + (ay - cy) * uy
+    return sign_of(v, np.hypot(ax - cx, ay - cy), "RPR dyad reference")
+
+
+@quiet
+def rpr_rates(A, C, u, vA, vC, aA=None, aC=None) -> RPRRates:
+    """Slide rate and angular velocity (and accelerations) of an RPR dyad.
+
+    Parameters
+    ----------
+    A, C, u : array_like, shape (..., 2)
+        Positions and the guide direction from :func:`rpr_position`.
+    vA, vC : array_like, shape (..., 2)
+        Velocities of the pivots; ``aA, aC`` optional accelerations.
+
+    Returns
+    -------
+    RPRRates
+        ``sd`` (slide rate), ``w3`` (angular velocity of links 2 and 3), ``sdd``,
+        ``e3``, ``det = s`` and ``singular``.
+
+    Notes
+    -----
+    Seed 000 eqs. (19)-(22): ``sd u + w3 perp(A-C) = vA - vC``;
+    ``sdd u + e3 perp(A-C) = aA - aC + w3²(A-C) - 2 sd w3 perp(u)``.
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    ux, uy = xy(u)
+    rx, ry = ax - cx, ay - cy
+    c2x, c2y = -ry, rx
+    vax, vay = xy(vA)
+    vcx, vcy = xy(vC)
+    sd, w3, det = cramer(ux, uy, c2x, c2y, vax - vcx, vay - vcy)
+    sing = is_singular(det, ux, uy, c2x, c2y)
+    sdd = e3 = None
+    if aA is not None and aC is not None:
+        aax, aay = xy(aA)
+        acx, acy = xy(aC)
+        w3s = w3 * w3
+        cor = 2.0 * sd * w3
+        b1 = aax - acx + w3s * rx + cor * uy
+        b2 = aay - acy + w3s * ry - cor * ux
+        sdd, e3, _ = cramer(ux, uy, c2x, c2y, b1, b2)
+    return RPRRates(sd, w3, sdd, e3, det, sing)

@@ -1,0 +1,170 @@
+"""Kind 2 dyad (RRP): link 2 = A–B on a known pin A; B (a pin of slider link 3)
+moves along a guide line fixed in a known link.
+
+Seed 000 [1]_, figure 2, eqs. (9)-(14).  The guide is ``(P, u)`` of the known
+link, the track of B is ``P + s u + h n(u)`` (seed: ``h = l3``, ``s = l4``).
+Matrix columns ``c1 = l2 n(φ2) = perp(B-A)``, ``c2 = -u``;
+``det = (B-A)·u = l2 cos(φ2-φ3)``.
+
+Seed misprints: eq. (12) prints ``a12 = l3 sinφ3, a22 = -l3 cosφ3`` (copied from
+kind 1); correct are ``a12 = -cosφ3, a22 = -sinφ3``.  The acceleration right-hand
+side (14) is unreadable; ours is derived from the loop equation (vector form of
+``reference/kinematics.md`` §1.3) and checked against finite differences.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+
+__all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates"]
+
+
+class RRPPosition(NamedTuple):
+    """Result of :func:`rrp_position`: ``B`` (..., 2), slide ``s``, ``ok``, ``det``."""
+
+    B: np.ndarray
+    s: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+
+
+class RRPRates(NamedTuple):
+    """Result of :func:`rrp_rates` (acceleration fields ``None`` unless asked)."""
+
+    w2: np.ndarray
+    sd: np.ndarray
+    vB: np.ndarray
+    e2: np.ndarray | None
+    sdd: np.ndarray | None
+    aB: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+@quiet
+def rrp_position(A, P, u, l2, h=0.0, sign=1.0) -> RRPPosition:
+    """Position of B of an RRP dyad, vectorised.
+
+    Parameters
+    ----------
+    A : array_like, shape (..., 2)
+        Outer pin of link 2 (on a known link).
+    P, u : array_like, shape (..., 2)
+        A point and the unit direction of the guide line (both of the known guide
+        link, current position).
+    l2 : float or array_like
+        Length |AB|.
+    h : float or array_like
+        Signed offset of B's track from the line along ``n(u)``.
+    sign : {+1, -1} or array_like
+        +1: ``(B-A)·u > 0`` (seed's assembly No. 1, ``s = A_x1 + x2``); read it
+        with :func:`rrp_branch`.
+
+    Returns
+    -------
+    RRPPosition
+        ``B``, ``s`` (slide along ``u`` from P), ``ok``, ``det = (B-A)·u``
+        (``sign(det) == sign``).
+
+    Notes
+    -----
+    Seed 000 eqs. (9)-(11): ``A_x1 = (A-P)·u``, ``A_y1 = (A-P)·n(u)``,
+    ``x2 = sqrt(l2² - (h - A_y1)²)``, ``s = A_x1 ± x2``.
+    """
+    ax, ay = xy(A)
+    px, py = xy(P)
+    ux, uy = xy(u)
+    rx, ry = ax - px, ay - py
+    ax1 = rx * ux + ry * uy
+    ay1 = ry * ux - rx * uy
+    l2s = np.square(l2)
+    dy = h - ay1
+    q = l2s - dy * dy
+    with np.errstate(invalid="ignore"):
+        ok = q >= -REACH_RTOL * l2s
+        x2 = np.sqrt(np.where(ok, np.maximum(q, 0.0), np.nan)) * sign
+    s = ax1 + x2
+    bx = px + s * ux - h * uy
+    by = py + s * uy + h * ux
+    ok = ok & np.isfinite(bx) & np.isfinite(by)
+    return RRPPosition(stack(bx, by), s, ok, x2)
+
+
+def rrp_branch(A, B, u):
+    """Assembly sign ``sign((B-A)·u)`` of an RRP dyad in a reference configuration.
+
+    Raises
+    ------
+    SingularityError
+        If link A–B is perpendicular to the guide (relative tolerance 1e-8).
+    """
+    ax, ay = xy(A)
+    bx, by = xy(B)
+    ux, uy = xy(u)
+    v = (bx - ax) * ux + (by - ay) * uy
+    return sign_of(v, np.hypot(bx - ax, by - ay), "RRP dyad reference")
+
+
+@quiet
+def rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates:
+    """Velocities/accelerations of an RRP dyad.
+
+    Parameters
+    ----------
+    A, B, P, u : array_like, shape (..., 2)
+        Positions (B from :func:`rrp_position`), guide point and direction.
+    vA, vP : array_like, shape (..., 2)
+        Velocity of A and of P as a point of the guide link.
+    omega : float or array_like
+        Angular velocity of the guide link.
+    aA, aP, eps : optional
+        Accelerations (all three, else only velocities are solved).
+
+    Returns
+    -------
+    RRPRates
+        ``w2`` (link A–B), ``sd`` (slide rate along u, relative to the guide), ``vB``;
+        ``e2, sdd, aB``; ``det = (B-A)·u`` and ``singular``.
+
+    Notes
+    -----
+    Seed 000 eqs. (12)-(14) with corrected a12, a22:
+    ``w2 perp(B-A) - sd u = vP - vA + omega perp(B-P)``;
+    ``e2 perp(B-A) - sdd u = aP - aA + eps perp(B-P) - omega²(B-P)
+    + 2 omega sd perp(u) + w2²(B-A)``.
+    """
+    ax, ay = xy(A)
+    bx, by = xy(B)
+    px, py = xy(P)
+    ux, uy = xy(u)
+    rax, ray = bx - ax, by - ay
+    rpx, rpy = bx - px, by - py
+    c1x, c1y = -ray, rax
+    c2x, c2y = -ux, -uy
+    vax, vay = xy(vA)
+    vpx, vpy = xy(vP)
+    w2, sd, det = cramer(c1x, c1y, c2x, c2y,
+                         vpx - vax - omega * rpy, vpy - vay + omega * rpx)
+    vB = stack(vax + w2 * c1x, vay + w2 * c1y)
+    sing = is_singular(det, c1x, c1y, c2x, c2y)
+    e2 = sdd = aB = None
+    if aA is not None and aP is not None and eps is not None:
+        aax, aay = xy(aA)
+        apx, apy = xy(aP)
+        om2 = np.square(omega)
+        w2s = w2 * w2
+        cor = 2.0 * omega * sd
+        b1 = apx - aax - eps * rpy - om2 * rpx - cor * uy + w2s * rax
+        b2 = apy - aay + eps * rpx - om2 * rpy + cor * ux + w2s * ray
+        e2, sdd, _ = cramer(c1x, c1y, c2x, c2y, b1, b2)
+        aB = stack(aax + e2 * c1x - w2s * rax, aay + e2 * c1y - w2s * ray)
+    return RRPRates(w2, sd, vB, e2, sdd, aB, det, sing)

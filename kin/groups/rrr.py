@@ -1,0 +1,172 @@
+"""Kind 1 dyad (RRR): two binary links A–B and C–B on known pins A and C.
+
+Seed 000 [1]_, figure 1, eqs. (1)-(8).  Position by the law of cosines, velocity
+and acceleration from one 2×2 system (Cramer) with the seed's matrix
+
+    a11 = -l2 sinφ2, a12 = l3 sinφ3, a21 = l2 cosφ2, a22 = -l3 cosφ3,
+
+i.e. columns ``c1 = perp(B-A)``, ``c2 = -perp(B-C)`` and
+``det = l2 l3 sin(φ2-φ3) = cross(B-C, B-A)``.
+
+Seed misprints (see ``docs/groups.md``): the printed ``B_y = A_y + B_x1 sinα -
+B_y1 cosα`` must read ``+ B_y1 cosα``; the printed acceleration right-hand side
+``b2 = a_Cy - a_Ay + a11 ω2² + a12 ω3²`` must read ``- a11 ω2² - a12 ω3²`` (the
+printed one disagrees with finite differences; tested).
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+
+__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates"]
+
+
+class RRRPosition(NamedTuple):
+    """Result of :func:`rrr_position`: ``B`` (..., 2), ``ok`` (...), ``det`` (...)."""
+
+    B: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+
+
+class RRRRates(NamedTuple):
+    """Result of :func:`rrr_rates` (acceleration fields ``None`` unless asked)."""
+
+    w2: np.ndarray
+    w3: np.ndarray
+    vB: np.ndarray
+    e2: np.ndarray | None
+    e3: np.ndarray | None
+    aB: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+@quiet
+def rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition:
+    """Position of the inner pin B of an RRR dyad, vectorised.
+
+    Parameters
+    ----------
+    A, C : array_like, shape (..., 2)
+        Outer pins (on known links).
+    l2, l3 : float or array_like
+        Lengths |AB| and |CB|.
+    sign : {+1, -1} or array_like
+        Assembly branch: +1 puts B to the left of directed A→C
+        (``cross(C-A, B-A) > 0``, seed 000's "assembly No. 1"); read it from the
+        reference configuration with :func:`rrr_branch`.
+
+    Returns
+    -------
+    RRRPosition
+        ``B`` (..., 2) (NaN where out of reach), ``ok`` (...) bool,
+        ``det = cross(B-C, B-A)`` (... ) (``det < 0`` on branch +1).
+
+    Notes
+    -----
+    Seed 000 eqs. (1)-(3), written without trigonometry:
+    ``t = (l2² + d² - l3²)/(2d²)``, ``k = sign·sqrt(l2²/d² - t²)``,
+    ``B = A + t (C-A) + k perp(C-A)``.  A distance beyond reach by at most
+    1e-12 (relative) is clamped to the tangent position.  O(1) per position.
+
+    Examples
+    --------
+    >>> rrr_position([0., 0.], [2., 0.], 1.0, 1.0).B
+    array([1., 0.])
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    dx = cx - ax
+    dy = cy - ay
+    d2 = dx * dx + dy * dy
+    l2s = np.square(l2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = l2s / d2
+        t = 0.5 * (r + 1.0 - np.square(l3) / d2)
+        q = r - t * t
+        ok = q >= -REACH_RTOL * r
+        k = np.sqrt(np.where(ok, np.maximum(q, 0.0), np.nan)) * sign
+    bx = ax + t * dx - k * dy
+    by = ay + t * dy + k * dx
+    ok = ok & np.isfinite(bx) & np.isfinite(by)
+    det = (bx - cx) * (by - ay) - (by - cy) * (bx - ax)
+    return RRRPosition(stack(bx, by), ok, det)
+
+
+def rrr_branch(A, C, B):
+    """Assembly sign of an RRR dyad in a (reference) configuration.
+
+    Returns ``sign(cross(C-A, B-A))`` as ±1 (float array of the batch shape).
+
+    Raises
+    ------
+    SingularityError
+        If A, B, C are collinear (relative tolerance 1e-8): the branch is undefined.
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    bx, by = xy(B)
+    v = (cx - ax) * (by - ay) - (cy - ay) * (bx - ax)
+    scale = np.hypot(cx - ax, cy - ay) * np.hypot(bx - ax, by - ay)
+    return sign_of(v, scale, "RRR dyad reference")
+
+
+@quiet
+def rrr_rates(A, C, B, vA, vC, aA=None, aC=None) -> RRRRates:
+    """Angular velocities/accelerations of an RRR dyad and those of B.
+
+    Parameters
+    ----------
+    A, C, B : array_like, shape (..., 2)
+        Positions (B from :func:`rrr_position`).
+    vA, vC : array_like, shape (..., 2)
+        Velocities of the outer pins.
+    aA, aC : array_like, shape (..., 2), optional
+        Accelerations of the outer pins; if both given, accelerations are solved.
+
+    Returns
+    -------
+    RRRRates
+        ``w2, w3`` angular velocities of links A–B and C–B, ``vB``; ``e2, e3, aB``
+        (or ``None``); ``det`` of the seed's matrix and the ``singular`` mask.
+
+    Notes
+    -----
+    Seed 000 eqs. (4)-(8), one matrix for both systems:
+    ``w2 perp(B-A) - w3 perp(B-C) = vC - vA`` and
+    ``e2 perp(B-A) - e3 perp(B-C) = aC - aA + w2²(B-A) - w3²(B-C)``.
+    The seed prints the second component of the latter with ``+a11 ω2² + a12 ω3²``;
+    the correct signs are ``-a11 ω2² - a12 ω3²``.
+    """
+    ax, ay = xy(A)
+    cx, cy = xy(C)
+    bx, by = xy(B)
+    rax, ray = bx - ax, by - ay          # B - A = l2 e(φ2)
+    rcx, rcy = bx - cx, by - cy          # B - C = l3 e(φ3)
+    c1x, c1y = -ray, rax                 # a11, a21
+    c2x, c2y = rcy, -rcx                 # a12, a22
+    vax, vay = xy(vA)
+    vcx, vcy = xy(vC)
+    w2, w3, det = cramer(c1x, c1y, c2x, c2y, vcx - vax, vcy - vay)
+    vB = stack(vax + w2 * c1x, vay + w2 * c1y)
+    sing = is_singular(det, c1x, c1y, c2x, c2y)
+    e2 = e3 = aB = None
+    if aA is not None and aC is not None:
+        aax, aay = xy(aA)
+        acx, acy = xy(aC)
+        w2s, w3s = w2 * w2, w3 * w3
+        b1 = acx - aax + w2s * rax - w3s * rcx
+        b2 = acy - aay + w2s * ray - w3s * rcy
+        e2, e3, _ = cramer(c1x, c1y, c2x, c2y, b1, b2)
+        aB = stack(aax + e2 * c1x - w2s * rax, aay + e2 * c1y - w2s * ray)
+    return RRRRates(w2, w3, vB, e2, e3, aB, det, sing)

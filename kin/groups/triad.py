@@ -1,0 +1,598 @@
+"""Class III triad: a ternary link P1P2P3 held by three binary links A_i–P_i on
+known pins A_i.  All real assembly modes, mode tracking, and rates.
+
+Position problem (``reference/kinematics.md`` §2.3): unknown pose of the ternary,
+``p = P1``, rotation ``θ``, with ``P_i = p + R(θ)(b_i - b_1)``:
+
+    |p + R(θ)(b_i - b_1) - A_i|² = l_i²,   i = 1, 2, 3.
+
+Subtracting the first equation from the other two gives two equations linear in
+``p``; Cramer's rule and substitution into the first give a Laurent polynomial
+``F(z)`` in ``z = e^{iθ}`` of degree -3..3, so ``z³F(z)`` has degree 6 (at most 6
+real modes, Hunt 1983).  Its coefficients are read exactly by a 16-point DFT of
+``F`` on the unit circle, the roots are the eigenvalues of the companion matrix
+(batched over positions), roots on the unit circle are the real modes; each is
+polished by Newton on the three original equations and accepted if its
+residual is ≤ 1e-9 (relative).
+
+Seed 000 [1]_ treats dyads only; this group extends its Cramer-rule approach
+(velocities and accelerations by one linear system with the same matrix).
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+.. [2] Hunt K.H. Structural kinematics of in-parallel-actuated robot arms.
+   ASME J. Mech. Transm. Autom. Des. 105(4) (1983) 705-712.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .base import SINGULAR_RTOL, quiet
+
+__all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
+           "triad_rates", "MAX_MODES"]
+
+#: maximum number of real assembly modes of a triad / class IV group.
+MAX_MODES = 6
+_ACCEPT = 1e-9        # relative residual for an accepted mode
+_ON_CIRCLE = 1e-3     # | |z| - 1 | below which a root is tried as a real mode
+_NEWTON_ITERS = 8
+
+
+class TriadModes(NamedTuple):
+    """All real modes: ``P`` (N, 6, 3, 2), ``theta`` (N, 6), ``n_modes`` (N,),
+    ``residual`` (N, 6), ``det`` (N, 6); NaN-padded beyond ``n_modes``."""
+
+    P: np.ndarray
+    theta: np.ndarray
+    n_modes: np.ndarray
+    residual: np.ndarray
+    det: np.ndarray
+
+
+class TriadTrack(NamedTuple):
+    """One mode followed along the batch: ``P`` (N, 3, 2), ``theta`` (N,), ``ok``,
+    ``det`` (N,), ``status`` (N,) int (0 ok, 1 no assembly, 2 mode lost or
+    ambiguous here, 3 after a loss)."""
+
+    P: np.ndarray
+    theta: np.ndarray
+    ok: np.ndarray
+    det: np.ndarray
+    status: np.ndarray
+
+
+class TriadRates(NamedTuple):
+    """Rates of a triad (acceleration fields ``None`` unless asked)."""
+
+    vP: np.ndarray
+    omega: np.ndarray
+    aP: np.ndarray | None
+    eps: np.ndarray | None
+    w_bin: np.ndarray
+    e_bin: np.ndarray | None
+    det: np.ndarray
+    singular: np.ndarray
+
+
+# --------------------------------------------------------------------------- helpers
+def _rot(c, s, v):
+    """Rotate ``v`` (..., 2) by the angle with cosine ``c`` and sine ``s`` (...)."""
+    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
+
+
+def _solve3c(m, r):
+    """Component form of :func:`_solve3`: ``m`` 3×3 nested lists of arrays, ``r``
+    3 arrays; returns the list of 3 solution arrays, ``det``, ``singular``."""
+    (a, b, c), (d, e, f), (g, h, i) = m
+    A_ = e * i - f * h
+    B_ = f * g - d * i
+    C_ = d * h - e * g
+    det = a * A_ + b * B_ + c * C_
+    r0, r1, r2 = r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / det
+        x0 = (r0 * A_ + r1 * (c * h - b * i) + r2 * (b * f - c * e)) * inv
+        x1 = (r0 * B_ + r1 * (a * i - c * g) + r2 * (c * d - a * f)) * inv
+        x2 = (r0 * C_ + r1 * (b * g - a * h) + r2 * (a * e - b * d)) * inv
+    scale = np.sqrt((a * a + b * b + c * c) * (d * d + e * e + f * f)
+                    * (g * g + h * h + i * i))
+    return [x0, x1, x2], det, ~(np.abs(det) > SINGULAR_RTOL * scale)
+
+
+def _as_batch(A, last):
+    A = np.asarray(A, dtype=float)
+    if A.shape[-len(last):] != last:
+        raise ValueError(f"expected shape (N, {', '.join(map(str, last))}) or "
+                         f"{last}, got {A.shape}")
+    single = A.ndim == len(last)
+    return (A[None] if single else A), single
+
+
+def _det(A, P):
+    """Determinant of the triad's rate matrix, (..., 3, 2) -> (...)."""
+    m = [[P[..., i, 0] - A[..., i, 0], P[..., i, 1] - A[..., i, 1],
+          (P[..., i, 1] - A[..., i, 1]) * (P[..., i, 0] - P[..., 0, 0])
+          - (P[..., i, 0] - A[..., i, 0]) * (P[..., i, 1] - P[..., 0, 1])] for i in range(3)]
+    return _solve3c(m, [0.0, 0.0, 0.0])[1]
+
+
+def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
+    """Newton on the three closure equations, vectorised over any batch shape.
+
+    ``A`` (..., 3, 2), ``bb`` (3, 2) = b - b_1, ``l`` (..., 3); ``p`` (..., 2),
+    ``th`` (...).  Component arithmetic; stops early when every correction is
+    below ``tol`` (relative to max l).  Returns ``P`` (..., 3, 2), ``th`` and the
+    relative ``residual`` max_i |‖P_i - A_i‖ - l_i| / max_i l_i.
+    """
+    shape = np.broadcast_shapes(A.shape[:-2], l.shape[:-1], p.shape[:-1], th.shape)
+    Ax = [np.broadcast_to(A[..., i, 0], shape) for i in range(3)]
+    Ay = [np.broadcast_to(A[..., i, 1], shape) for i in range(3)]
+    L = [np.broadcast_to(l[..., i], shape) for i in range(3)]
+    lmax = np.maximum(np.maximum(L[0], L[1]), L[2])
+    px = np.broadcast_to(p[..., 0], shape).copy()
+    py = np.broadcast_to(p[..., 1], shape).copy()
+    th = np.broadcast_to(th, shape).copy()
+
+    def geom(px, py, th):
+        c, s = np.cos(th), np.sin(th)
+        rbx = [c * bb[i, 0] - s * bb[i, 1] for i in range(3)]
+        rby = [s * bb[i, 0] + c * bb[i, 1] for i in range(3)]
+        dx = [px + rbx[i] - Ax[i] for i in range(3)]
+        dy = [py + rby[i] - Ay[i] for i in range(3)]
+        return rbx, rby, dx, dy
+
+    for _ in range(iters):
+        rbx, rby, dx, dy = geom(px, py, th)
+        m = [[dx[i], dy[i], dy[i] * rbx[i] - dx[i] * rby[i]] for i in range(3)]
+        f = [-0.5 * (dx[i] * dx[i] + dy[i] * dy[i] - L[i] * L[i]) for i in range(3)]
+        (ux, uy, ut), _, _ = _solve3c(m, f)
+        ok = np.isfinite(ux) & np.isfinite(uy) & np.isfinite(ut)
+        ux = np.where(ok, ux, 0.0)
+        uy = np.where(ok, uy, 0.0)
+        ut = np.where(ok, ut, 0.0)
+        px += ux
+        py += uy
+        th += ut
+        if np.all(np.abs(ux) + np.abs(uy) + np.abs(ut) * lmax <= tol * lmax):
+            break
+    rbx, rby, dx, dy = geom(px, py, th)
+    res = np.maximum.reduce([np.abs(np.sqrt(dx[i] * dx[i] + dy[i] * dy[i]) - L[i])
+                             for i in range(3)]) / lmax
+    P = np.stack([np.stack([px + rbx[i], py + rby[i]], axis=-1) for i in range(3)], axis=-2)
+    return P, th, res
+
+
+def _wrap(a):
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _linear_terms(z, bc, a, l):
+    """``w_i = z b_i - a_i`` and ``k_i`` of the two linear equations (i = 2, 3)."""
+    w = z[..., None] * bc - a
+    k = (l[..., 1:] ** 2 - l[..., :1] ** 2 - np.abs(bc) ** 2 - np.abs(a) ** 2
+         + 2.0 * (z[..., None] * bc * np.conj(a)).real)
+    return w, k
+
+
+def _poly_coefficients(A, bb, l):
+    """Coefficients (N, 7), highest first, of ``z³F(z)`` (degree 6), with
+    ``F = N_x² + N_y² - l_1² D²`` (``reference/kinematics.md`` §2.3), read exactly
+    by a 16-point DFT on the unit circle; also ``b_i``, ``a_i`` as complex."""
+    bc = bb[1:, 0] + 1j * bb[1:, 1]                                     # (2,)
+    a = (A[:, 1:, 0] - A[:, :1, 0]) + 1j * (A[:, 1:, 1] - A[:, :1, 1])   # (N, 2)
+    z = np.exp(2j * np.pi * np.arange(16) / 16)                          # (16,)
+    w, k = _linear_terms(z[None, :], bc, a[:, None, :], l[:, None, :])   # (N, 16, 2)
+    wr, wi = w.real, w.imag
+    D = wr[..., 0] * wi[..., 1] - wi[..., 0] * wr[..., 1]
+    Nx = 0.5 * (k[..., 0] * wi[..., 1] - k[..., 1] * wi[..., 0])
+    Ny = 0.5 * (wr[..., 0] * k[..., 1] - wr[..., 1] * k[..., 0])
+    F = Nx * Nx + Ny * Ny - l[:, None, 0] ** 2 * D * D
+    c = np.fft.fft(F, axis=-1) / 16.0                    # c[j] = coefficient of z^j
+    return np.stack([c[:, j % 16] for j in range(3, -4, -1)], axis=-1), bc, a
+
+
+def _position_from_angle(A, bc, a, l, th):
+    """P1 from the two linear equations at rotation ``th`` (Cramer); A1 where
+    the 2×2 system is singular."""
+    w, k = _linear_terms(np.exp(1j * th), bc, a, l)
+    wr, wi = w.real, w.imag
+    D = wr[..., 0] * wi[..., 1] - wi[..., 0] * wr[..., 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = 0.5 * (k[..., 0] * wi[..., 1] - k[..., 1] * wi[..., 0]) / D
+        y = 0.5 * (wr[..., 0] * k[..., 1] - wr[..., 1] * k[..., 0]) / D
+    p = np.stack([x, y], axis=-1) + A[..., 0, :]
+    return np.where(np.isfinite(p), p, A[..., 0, :])
+
+
+# --------------------------------------------------------------------------- modes
+@quiet
+def triad_modes(A, b, l) -> TriadModes:
+    """All real assembly modes of a class III triad, vectorised over positions.
+
+    Parameters
+    ----------
+    A : array_like, shape (N, 3, 2) or (3, 2)
+        Outer pins A1, A2, A3 (on known links).
+    b : array_like, shape (3, 2)
+        P1, P2, P3 in the reference configuration (or any rigid copy).
+    l : array_like, shape (3,) or (N, 3)
+        Lengths |A_i P_i|.
+
+    Returns
+    -------
+    TriadModes
+        ``P`` (N, 6, 3, 2), ``theta`` (N, 6) (rotation from ``b``, in (-π, π]),
+        ``n_modes`` (N,), ``residual`` (N, 6) (max |‖P_i - A_i‖ - l_i| / max l),
+        ``det`` (N, 6) of the rate system (its sign does not label a mode).
+        Modes are sorted by ``theta``; padding is NaN.  Without a batch axis the
+        leading N is dropped.
+
+    Notes
+    -----
+    Degree-6 polynomial (``reference/kinematics.md`` §2.3), batched companion
+    eigenvalues (O(N) LAPACK calls of size 6), Newton polish, duplicates merged.
+    Degenerate cases (the linear 2×2 system singular at a mode, i.e. the
+    ternary's two difference vectors parallel there) may lose that mode.
+
+    Examples
+    --------
+    >>> A = [[0.250191, 0.794428], [0.551371, -0.549586], [-0.399667, 0.747107]]
+    >>> b = [[0, 0], [-0.989469, 0.642457], [0.594139, -0.06413]]
+    >>> int(triad_modes(A, b, [0.593942, 0.561953, 0.53133]).n_modes)
+    6
+    """
+    A, single = _as_batch(A, (3, 2))
+    b = np.asarray(b, dtype=float)
+    l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
+    N = A.shape[0]
+    bb = b - b[0]
+    coef, bc, a = _poly_coefficients(A, bb, l)
+    big = np.max(np.abs(coef), axis=-1)
+    lead = coef[:, 0]
+    lead = np.where(np.abs(lead) > 1e-13 * big, lead, 1e-13 * big + 0j)
+    comp = np.zeros((N, 6, 6), dtype=complex)
+    comp[:, 0, :] = -coef[:, 1:] / lead[:, None]
+    comp[:, np.arange(1, 6), np.arange(5)] = 1.0
+    good = np.isfinite(comp).all(axis=(1, 2)) & (big > 0)
+    comp[~good] = np.eye(6) * 10.0                       # no real roots there
+    roots = np.linalg.eigvals(comp)                      # (N, 6)
+    cand = np.abs(np.abs(roots) - 1.0) < _ON_CIRCLE
+    th0 = np.angle(roots)
+    p0 = _position_from_angle(A[:, None], bc, a[:, None], l[:, None], th0)
+    p0 = np.where(np.isfinite(p0), p0, A[:, None, 0, :])
+    P, th, res = _polish(A[:, None], bb, l[:, None], p0, th0)
+    th = _wrap(th)
+    valid = cand & good[:, None] & (res <= _ACCEPT)
+    # merge duplicates (same pose reached from two roots)
+    scale = np.max(l, axis=-1)[:, None, None]
+    p1 = P[:, :, 0, :]
+    dP = (np.abs(p1[:, :, None, 0] - p1[:, None, :, 0]) + np.abs(p1[:, :, None, 1] - p1[:, None, :, 1])
+          + np.abs(_wrap(th[:, :, None] - th[:, None, :])) * scale)
+    same = (dP <= 1e-7 * scale) & valid[:, :, None] & valid[:, None, :]
+    earlier = np.tril(np.ones((6, 6), dtype=bool), -1)   # [j, i]: i < j
+    dup = np.any(same & earlier[None], axis=-1)
+    valid &= ~dup
+    key = np.where(valid, th, np.inf)
+    order = np.argsort(key, axis=-1)
+    valid = np.take_along_axis(valid, order, axis=-1)
+    th = np.where(valid, np.take_along_axis(th, order, axis=-1), np.nan)
+    res = np.where(valid, np.take_along_axis(res, order, axis=-1), np.nan)
+    P = np.where(valid[..., None, None],
+                 np.take_along_axis(P, order[..., None, None], axis=1), np.nan)
+    det = _det(A[:, None], P)
+    out = TriadModes(P, th, valid.sum(axis=-1), res, det)
+    return TriadModes(*(v[0] for v in out)) if single else out
+
+
+# --------------------------------------------------------------------------- rates
+@quiet
+def triad_rates(A, P, vA, aA=None, *, vl=None) -> TriadRates:
+    """Velocities (and accelerations) of a triad from its 3×3 linear system.
+
+    Parameters
+    ----------
+    A, P : array_like, shape (N, 3, 2) or (3, 2)
+        Outer pins and the ternary's joints P1..P3 (a solved mode).
+    vA : array_like, same shape
+        Velocities of the outer pins.
+    aA : array_like, optional
+        Their accelerations.
+    vl : array_like, shape (N, 3), optional
+        Rates of change of the binary lengths (zero for a real triad; used by the
+        class IV reduction, whose third "binary" is the distance O1–O2).  Their
+        second derivatives are taken as zero.
+
+    Returns
+    -------
+    TriadRates
+        ``vP`` (N, 3, 2), ``omega`` (N,) of the ternary, ``aP``, ``eps``; angular
+        velocities ``w_bin`` / accelerations ``e_bin`` (N, 3) of the binaries A_i→P_i;
+        ``det`` and ``singular`` (the three binary lines concurrent or parallel).
+
+    Notes
+    -----
+    Rows ``(d_i, d_i · perp(P_i - P_1))`` with ``d_i = P_i - A_i``; unknowns
+    ``(ṗ, θ̇)``; right-hand sides ``d_i·Ȧ_i`` and
+    ``d_i·(Ä_i + θ̇²(P_i - P_1)) - |ḋ_i|²`` (differentiated ``d_i·ḋ_i = 0``).
+    """
+    A, single = _as_batch(A, (3, 2))
+    P = np.asarray(P, dtype=float).reshape(A.shape)
+    vA = np.asarray(vA, dtype=float).reshape(A.shape)
+    R = range(3)
+    dx = [P[..., i, 0] - A[..., i, 0] for i in R]
+    dy = [P[..., i, 1] - A[..., i, 1] for i in R]
+    rx = [P[..., i, 0] - P[..., 0, 0] for i in R]
+    ry = [P[..., i, 1] - P[..., 0, 1] for i in R]
+    m = [[dx[i], dy[i], dy[i] * rx[i] - dx[i] * ry[i]] for i in R]
+    d2 = [dx[i] * dx[i] + dy[i] * dy[i] for i in R]
+    rv = [dx[i] * vA[..., i, 0] + dy[i] * vA[..., i, 1] for i in R]
+    if vl is not None:
+        vl = np.asarray(vl, dtype=float)
+        rv = [rv[i] + np.sqrt(d2[i]) * vl[..., i] for i in R]
+    (qx, qy, om), det, sing = _solve3c(m, rv)
+    vx = [qx - om * ry[i] for i in R]
+    vy = [qy + om * rx[i] for i in R]
+    ex = [vx[i] - vA[..., i, 0] for i in R]
+    ey = [vy[i] - vA[..., i, 1] for i in R]
+    w_bin = np.stack([(dx[i] * ey[i] - dy[i] * ex[i]) / d2[i] for i in R], axis=-1)
+    vP = np.stack([np.stack([vx[i], vy[i]], axis=-1) for i in R], axis=-2)
+    aP = eps = e_bin = None
+    if aA is not None:
+        aA = np.asarray(aA, dtype=float).reshape(A.shape)
+        o2 = om * om
+        ra = [dx[i] * (aA[..., i, 0] + o2 * rx[i]) + dy[i] * (aA[..., i, 1] + o2 * ry[i])
+              - ex[i] * ex[i] - ey[i] * ey[i] for i in R]
+        if vl is not None:
+            ra = [ra[i] + vl[..., i] * vl[..., i] for i in R]
+        (ax_, ay_, eps), _, _ = _solve3c(m, ra)
+        gx = [ax_ - eps * ry[i] - o2 * rx[i] for i in R]
+        gy = [ay_ + eps * rx[i] - o2 * ry[i] for i in R]
+        aP = np.stack([np.stack([gx[i], gy[i]], axis=-1) for i in R], axis=-2)
+        e_bin = np.stack([(dx[i] * (gy[i] - aA[..., i, 1]) - dy[i] * (gx[i] - aA[..., i, 0]))
+                          / d2[i] for i in R], axis=-1)
+    out = TriadRates(vP, om, aP, eps, w_bin, e_bin, det, sing)
+    if single:
+        out = TriadRates(*(None if v is None else v[0] for v in out))
+    return out
+
+
+# --------------------------------------------------------------------------- tracking
+def _dist(X, Y):
+    """Euclidean distance over all joint coordinates: (..., k, 2) -> (...)."""
+    return np.sqrt(np.sum(np.square(X - Y), axis=(-2, -1)))
+
+
+def follow_modes(P, valid, pred, start, sep_ratio=0.5):
+    """Follow one mode through per-position mode lists by predicted continuity.
+
+    Parameters
+    ----------
+    P : ndarray, shape (N, M, k, 2)
+        Points of every mode at every position (NaN where invalid).
+    valid : ndarray of bool, shape (N, M)
+    pred : ndarray, shape (N-1, M, k, 2)
+        Prediction at position i+1 of each mode of position i.
+    start : int
+        Mode index at position 0.
+    sep_ratio : float
+        The matched mode must be closer to the prediction than ``sep_ratio``
+        times the next candidate, and both the prediction error and the raw step
+        shorter than ``sep_ratio`` times the distance from the mode to the
+        nearest other mode at i (else: mode collision / ambiguous step).
+
+    Returns
+    -------
+    idx : ndarray of int (N,)  (-1 after a loss)
+    status : ndarray of int (N,)  (0 ok, 2 lost/ambiguous here, 3 after)
+    """
+    N, Mm = valid.shape
+    idx = np.full(N, -1)
+    status = np.full(N, 3)
+    status[0] = 0
+    idx[0] = start
+    if N == 1:
+        return idx, status
+    D = np.zeros((N - 1, Mm, Mm))
+    S = np.zeros((N - 1, Mm, Mm))
+    Q = np.zeros((N, Mm, Mm))
+    for c in range(P.shape[2]):
+        for x in range(2):
+            D += np.square(pred[:, :, None, c, x] - P[1:, None, :, c, x])
+            S += np.square(P[:-1, :, None, c, x] - P[1:, None, :, c, x])
+            Q += np.square(P[:, :, None, c, x] - P[:, None, :, c, x])
+    with np.errstate(invalid="ignore"):
+        D = np.sqrt(np.where(valid[1:, None, :], D, np.inf))
+        D = np.where(np.isnan(D), np.inf, D)
+        S = np.sqrt(S)
+        Q = np.sqrt(np.where(valid[:, None, :] & valid[:, :, None], Q, np.inf))
+    Q[:, np.arange(Mm), np.arange(Mm)] = np.inf
+    Q = np.where(np.isnan(Q), np.inf, Q)
+    sep = Q.min(axis=-1)                                        # (N, M)
+    srt = np.sort(D, axis=-1)
+    k1 = np.argmin(D, axis=-1)
+    d1, d2 = srt[..., 0], srt[..., 1]
+    step = np.take_along_axis(S, k1[..., None], axis=-1)[..., 0]
+    ok = (np.isfinite(d1) & (d1 <= sep_ratio * d2)
+          & (step <= sep_ratio * sep[:-1]) & (d1 <= sep_ratio * sep[:-1]))
+    nxt = np.where(ok & valid[:-1], k1, -1).tolist()
+    j = start
+    for i in range(N - 1):
+        j = nxt[i][j]
+        if j < 0:
+            status[i + 1] = 2
+            break
+        idx[i + 1] = j
+        status[i + 1] = 0
+    return idx, status
+
+
+def _nearest(P0, valid0, start):
+    d = np.where(valid0, _dist(P0, start), np.inf)
+    d = np.where(np.isnan(d), np.inf, d)
+    return int(np.argmin(d)) if np.isfinite(d).any() else -1
+
+
+def _predict(A0, P0, A1, l0=None, l1=None):
+    """Second-order Taylor prediction of the pose at (A1, l1) from (A0, P0, l0),
+    along the straight segment; returns points and rotation increment."""
+    vl = None if l0 is None else (l1 - l0)
+    r = triad_rates(A0, P0, A1 - A0, np.zeros_like(A0), vl=vl)
+    return P0 + r.vP + 0.5 * r.aP, r.omega + 0.5 * r.eps, r.singular
+
+
+def _full_follow(A, bb, l, P_start):
+    """All modes at every position of a short path, then :func:`follow_modes`
+    from the mode nearest ``P_start`` at A[0].  Returns P, theta, det, idx, status."""
+    m = triad_modes(A, bb, l)
+    valid = np.isfinite(m.theta)
+    j0 = _nearest(m.P[0], valid[0], P_start)
+    n = A.shape[0]
+    if j0 < 0:
+        return m, np.full(n, -1), np.ones(n, int)
+    if n > 1:
+        Pi = np.where(valid[:-1, :, None, None], m.P[:-1], A[:-1, None])
+        A0 = np.repeat(A[:-1, None], MAX_MODES, axis=1)
+        A1 = np.repeat(A[1:, None], MAX_MODES, axis=1)
+        l0 = np.repeat(l[:-1, None], MAX_MODES, axis=1)
+        l1 = np.repeat(l[1:, None], MAX_MODES, axis=1)
+        pred = _predict(A0.reshape(-1, 3, 2), Pi.reshape(-1, 3, 2), A1.reshape(-1, 3, 2),
+                        l0.reshape(-1, 3), l1.reshape(-1, 3))[0].reshape(n - 1, MAX_MODES, 3, 2)
+    else:
+        pred = np.zeros((0, MAX_MODES, 3, 2))
+    idx, status = follow_modes(m.P, valid, pred, j0)
+    return m, idx, status
+
+
+def _track(A, b, l, start, stride):
+    """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`."""
+    N = A.shape[0]
+    bb = b - b[0]
+    P = np.full((N, 3, 2), np.nan)
+    th = np.full(N, np.nan)
+    status = np.full(N, 3)
+    if stride <= 1 or N <= 2 * stride:
+        m, idx, st = _full_follow(A, b, l, start)
+        ok = idx >= 0
+        P[ok] = m.P[np.flatnonzero(ok), idx[ok]]
+        th[ok] = m.theta[np.flatnonzero(ok), idx[ok]]
+        return P, th, st
+    c = np.arange(0, N, stride)
+    if c[-1] != N - 1:
+        c = np.append(c, N - 1)
+    # 1. coarse all-modes + following
+    mc, ic, sc = _full_follow(A[c], b, l[c], start)
+    if ic[0] < 0:
+        return P, th, np.ones(N, int)
+    good_c = ic >= 0
+    kmax = int(np.flatnonzero(good_c)[-1])           # last good coarse point
+    kk = np.flatnonzero(good_c)
+    Pc = mc.P[kk, ic[kk]]
+    thc = mc.theta[kk, ic[kk]]
+    sep = np.min(np.where(np.isfinite(mc.theta[kk]) & (np.arange(MAX_MODES) != ic[kk, None]),
+                          np.nan_to_num(_dist(mc.P[kk], Pc[:, None]), nan=np.inf), np.inf),
+                 axis=-1)
+    P[c[kk]] = Pc
+    th[c[kk]] = thc
+    status[c[kk]] = 0
+    # 2. fill in between good coarse points: Taylor from the nearest coarse point
+    end = c[kmax]
+    fine = np.setdiff1d(np.arange(end + 1), c[kk], assume_unique=True)
+    bad_int = np.zeros(len(c), bool)                  # interval k: c[k]..c[k+1]
+    if fine.size:
+        left = np.searchsorted(c, fine, side="right") - 1          # c[left] < fine < c[left+1]
+        right = np.minimum(left + 1, kmax)
+        kn = np.where(fine - c[left] <= c[right] - fine, left, right)   # nearest coarse point
+        Pp, dth, sing = _predict(A[c[kn]], Pc[kn], A[fine], l[c[kn]], l[fine])
+        Pf, thf, res = _polish(A[fine], bb, l[fine], Pp[:, 0], thc[kn] + dth)
+        acc = ((res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep[kn])
+               & (_dist(Pf, Pc[kn]) <= 0.5 * sep[kn]))
+        P[fine[acc]] = Pf[acc]
+        th[fine[acc]] = _wrap(thf[acc])
+        status[fine[acc]] = 0
+        bad_int[np.searchsorted(c, fine[~acc], side="right") - 1] = True
+    # 3. refine refused intervals (and the tail after a coarse loss) at full resolution
+    todo = [k for k in np.flatnonzero(bad_int)]
+    if kmax < len(c) - 1:
+        todo.append(kmax)                              # c[kmax] .. N-1
+    for k in sorted(set(todo)):
+        lo = c[k]
+        hi = N - 1 if k >= kmax else c[k + 1]
+        if status[lo] != 0:
+            break                                      # lost before this interval
+        m, idx, st = _full_follow(A[lo:hi + 1], b, l[lo:hi + 1], P[lo])
+        ok = idx >= 0
+        rows = np.flatnonzero(ok)
+        P[lo + rows] = m.P[rows, idx[ok]]
+        th[lo + rows] = m.theta[rows, idx[ok]]
+        status[lo:hi + 1] = st
+        consistent = ok[-1] and k < kmax and _dist(P[hi], Pc[k + 1]) <= 1e-9 * np.max(l)
+        if not consistent:                             # lost inside: the rest is lost
+            P[hi + 1:] = np.nan
+            th[hi + 1:] = np.nan
+            status[hi + 1:] = 3
+            if ok[-1] and k < kmax:                    # reached another mode: refuse it
+                status[hi] = 2
+                P[hi] = np.nan
+                th[hi] = np.nan
+            break
+    lost = np.flatnonzero(status != 0)
+    if lost.size:                                      # first failure is final
+        i = lost[0]
+        if status[i] != 1:
+            status[i] = 2
+        status[i + 1:] = 3
+        P[i:] = np.nan
+        th[i:] = np.nan
+    return P, th, status
+
+
+@quiet
+def triad_track(A, b, l, start, *, stride=32) -> TriadTrack:
+    """Follow one assembly mode of a triad along a batch of anchor positions.
+
+    Parameters
+    ----------
+    A : array_like, shape (N, 3, 2)
+        Outer pins along the motion (consecutive rows = consecutive positions).
+    b, l : as in :func:`triad_modes` (``l`` may be (N, 3)).
+    start : array_like, shape (3, 2)
+        P1..P3 near the wanted mode at ``A[0]`` (e.g. the reference configuration).
+    stride : int, optional
+        All modes are computed every ``stride`` positions; positions in between
+        are Newton-polished from a Taylor prediction and accepted only if they
+        stay well inside their mode's basin (else that interval is redone at
+        full resolution).  ``stride=1``: all modes at every position.
+
+    Returns
+    -------
+    TriadTrack
+        ``P`` (N, 3, 2), ``theta`` (N,), ``ok`` (N,), ``det`` (N,), ``status`` (N,):
+        0 ok, 1 no assembly at the start, 2 lost here (modes collide at a turning
+        point, or the step is ambiguous), 3 after a loss.
+
+    Notes
+    -----
+    Each mode at position i is predicted at the next (sampled) position by a
+    second-order Taylor step along the straight segment of the anchors
+    (:func:`triad_rates` with ``vA = ΔA``, ``aA = 0``), then matched to the
+    nearest mode there (:func:`follow_modes`).  A match is refused when it is
+    not clearly nearer than the next candidate or when the step is not small
+    against the distance to the nearest other mode, so the mode is never
+    switched silently; after a loss ``ok`` stays False.  Cost: one companion
+    eigenproblem per ``stride`` positions plus a vectorised Newton polish.
+    """
+    A = np.asarray(A, dtype=float)
+    b = np.asarray(b, dtype=float)
+    l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
+    P, th, status = _track(A, b, l, np.asarray(start, dtype=float), stride)
+    ok = status == 0
+    det = np.full(A.shape[0], np.nan)
+    if ok.any():
+        det[ok] = _det(A[ok], P[ok])
+    return TriadTrack(P, th, ok, det, status)

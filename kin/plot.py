@@ -1,0 +1,203 @@
+"""Figures of a solved motion (matplotlib, Agg backend; nothing shown on screen).
+
+* :func:`plot_mechanism` — the mechanism at one position (default: the first, the
+  reference when the inputs start at 0): links as bars / polygons through their
+  joints, the frame's pivots hatched, slider guides drawn, joint names, and the
+  paths of every tracer point (and of the joints, faintly) over the whole batch;
+* :func:`plot_analogues` — the analogues against the input: ω = dθ/dφ and
+  ε = d²θ/dφ² of every moving link, and the speed |v| and acceleration |a| of the
+  tracer points (or of the joints when there is none);
+* :func:`animate` — one cycle as a GIF (matplotlib's ``PillowWriter``).
+
+All functions take a :class:`~kin.state.KinematicState` and return the figure
+(or write the file), so they can be used from the API and from the CLI.
+"""
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
+
+from topo.model import JointKind  # noqa: E402
+
+from .state import KinematicState  # noqa: E402
+
+__all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis"]
+
+_COLORS = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+
+
+def input_axis(state: KinematicState) -> tuple[np.ndarray, str]:
+    """The first driver's values for plotting: degrees for R, metres for P."""
+    m = state.mechanism
+    d = m.drivers[0]
+    if m.joint(d.joint).kind is JointKind.R:
+        return np.degrees(state.inputs[:, 0]), f"input {d.joint} (deg)"
+    return state.inputs[:, 0], f"input {d.joint} (m)"
+
+
+def _link_points(state: KinematicState, n: int) -> dict[str, np.ndarray]:
+    m = state.mechanism
+    out: dict[str, list] = {lk: [] for lk in m.link_names}
+    for i, j in enumerate(m.joints):
+        p = state.positions[n, i]
+        for lk in j.links:
+            out[lk].append(p)
+    return {k: np.array(v) for k, v in out.items() if v}
+
+
+def _bounds(state: KinematicState) -> tuple[np.ndarray, np.ndarray]:
+    pts = [state.positions.reshape(-1, 2)]
+    if state.point_positions is not None:
+        pts.append(state.point_positions.reshape(-1, 2))
+    allp = np.concatenate(pts)
+    allp = allp[np.all(np.isfinite(allp), axis=1)]
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    pad = 0.08 * max(hi - lo) + 1e-9
+    return lo - pad, hi + pad
+
+
+def _draw(ax, state: KinematicState, n: int, names: bool = True) -> list:
+    m = state.mechanism
+    art = []
+    pts = _link_points(state, n)
+    for k, lk in enumerate(m.link_names):
+        if lk == m.frame or lk not in pts:
+            continue
+        P = pts[lk]
+        if not np.all(np.isfinite(P)):
+            continue
+        c = _COLORS[k % len(_COLORS)]
+        if len(P) >= 3:
+            centre = P.mean(axis=0)
+            order = np.argsort(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0]))
+            art.append(ax.add_patch(Polygon(P[order], closed=True, alpha=0.35, color=c, lw=2)))
+        else:
+            art += ax.plot(P[:, 0], P[:, 1], "-", color=c, lw=3, solid_capstyle="round")
+    for i, j in enumerate(m.joints):
+        p = state.positions[n, i]
+        if not np.all(np.isfinite(p)):
+            continue
+        if j.kind is JointKind.P:
+            th = state.angles[n, m.link_names.index(j.links[0])]
+            u = np.asarray(j.axis, float) / np.hypot(*j.axis)
+            u = np.array([np.cos(th) * u[0] - np.sin(th) * u[1], np.sin(th) * u[0] + np.cos(th) * u[1]])
+            size = 0.04 * float(np.max(_bounds(state)[1] - _bounds(state)[0]))
+            seg = np.array([p - 3 * size * u, p + 3 * size * u])
+            art += ax.plot(seg[:, 0], seg[:, 1], "k-", lw=1)
+            art += ax.plot([p[0]], [p[1]], "s", ms=9, mfc="w", mec="k")
+        else:
+            on_frame = m.frame in j.links
+            art += ax.plot([p[0]], [p[1]], "^" if on_frame else "o", ms=9 if on_frame else 6,
+                           mfc="w" if not j.is_multiple else "gold", mec="k")
+        if names:
+            art.append(ax.annotate(j.name, p, textcoords="offset points", xytext=(5, 5), fontsize=9))
+    if state.point_positions is not None:
+        for k, name in enumerate(state.point_names):
+            p = state.point_positions[n, k]
+            if np.all(np.isfinite(p)):
+                art += ax.plot([p[0]], [p[1]], "x", color="crimson", ms=8)
+                if names:
+                    art.append(ax.annotate(name, p, textcoords="offset points", xytext=(5, -12),
+                                           fontsize=9, color="crimson"))
+    return art
+
+
+def plot_mechanism(state: KinematicState, index: int = 0, ax=None, title: str | None = None):
+    """The mechanism at position ``index`` with joint names and tracer paths.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    m = state.mechanism
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7, 6), dpi=110)
+    else:
+        fig = ax.figure
+    for i in range(len(m.joints)):
+        path = state.positions[:, i]
+        ax.plot(path[:, 0], path[:, 1], "-", color="0.8", lw=0.8, zorder=0)
+    if state.point_positions is not None:
+        for k in range(len(state.point_names)):
+            path = state.point_positions[:, k]
+            ax.plot(path[:, 0], path[:, 1], "--", color="crimson", lw=1.2, zorder=0)
+    _draw(ax, state, index)
+    lo, hi = _bounds(state)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    ax.grid(True, lw=0.3)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    bad = int(np.count_nonzero(~state.ok))
+    ax.set_title(title or f"{m.name or 'mechanism'}: position {index}"
+                 + (f" ({bad} positions failed)" if bad else ""))
+    return fig
+
+
+def plot_analogues(state: KinematicState):
+    """ω, ε of the moving links and |v|, |a| of tracer points against the input.
+
+    Raises
+    ------
+    ValueError
+        The state has no derivatives (solve with ``derivatives=True``).
+    """
+    if state.omegas is None:
+        raise ValueError("the state has no derivatives: solve with derivatives=True")
+    m = state.mechanism
+    x, label = input_axis(state)
+    fig, axs = plt.subplots(2, 2, figsize=(11, 7), dpi=110, sharex=True)
+    for k, lk in enumerate(m.link_names):
+        if lk == m.frame or np.all(np.abs(np.nan_to_num(state.omegas[:, k])) < 1e-14):
+            continue
+        axs[0, 0].plot(x, state.omegas[:, k], label=lk)
+        axs[1, 0].plot(x, state.epsilons[:, k], label=lk)
+    if state.point_positions is not None and state.point_velocities is not None:
+        names, V, A = state.point_names, state.point_velocities, state.point_accelerations
+    else:
+        names, V, A = state.mechanism.joint_names, state.velocities, state.accelerations
+    for k, name in enumerate(names):
+        axs[0, 1].plot(x, np.hypot(V[:, k, 0], V[:, k, 1]), label=name)
+        axs[1, 1].plot(x, np.hypot(A[:, k, 0], A[:, k, 1]), label=name)
+    axs[0, 0].set_ylabel("ω = dθ/dφ (–)")
+    axs[1, 0].set_ylabel("ε = d²θ/dφ² (–)")
+    axs[0, 1].set_ylabel("|dr/dφ| (m)")
+    axs[1, 1].set_ylabel("|d²r/dφ²| (m)")
+    for a in axs.ravel():
+        a.grid(True, lw=0.3)
+        a.legend(fontsize=7, ncol=2)
+    for a in axs[1]:
+        a.set_xlabel(label)
+    fig.suptitle(f"{m.name or 'mechanism'}: analogues (driver at unit rate)")
+    fig.tight_layout()
+    return fig
+
+
+def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -> None:
+    """Write one cycle (the batch) as a GIF with ``PillowWriter``."""
+    from matplotlib.animation import PillowWriter
+
+    fig, ax = plt.subplots(figsize=(6, 5), dpi=80)
+    lo, hi = _bounds(state)
+    frames = np.unique(np.linspace(0, state.n_positions - 1, min(max_frames, state.n_positions)).astype(int))
+    writer = PillowWriter(fps=fps)
+    with writer.saving(fig, str(path), dpi=80):
+        for n in frames:
+            ax.clear()
+            if state.point_positions is not None:
+                for k in range(len(state.point_names)):
+                    pp = state.point_positions[:, k]
+                    ax.plot(pp[:, 0], pp[:, 1], "--", color="crimson", lw=1)
+            _draw(ax, state, int(n), names=False)
+            ax.set_xlim(lo[0], hi[0])
+            ax.set_ylim(lo[1], hi[1])
+            ax.set_aspect("equal")
+            ax.set_title(f"{state.mechanism.name or ''}  input {input_axis(state)[0][n]:.4g}  {state.status[n][:40]}",
+                         fontsize=9)
+            writer.grab_frame()
+    plt.close(fig)

@@ -1,0 +1,141 @@
+"""``multiloop atlas``: number and type synthesis, SQLite atlas, queries, HTML gallery.
+
+Examples::
+
+    multiloop atlas --links 10 --dof 1 --simple-joints          # 230 chains
+    multiloop atlas --links 10 --dof 1 --table                  # universal structural table
+    multiloop atlas --links 12 --dof 1 --db atlas.sqlite --workers 2 --no-loops
+    multiloop atlas --db atlas.sqlite --query "V=2 AND K=4" --json
+    multiloop atlas --links 8 --dof 1 --html gallery/
+    multiloop atlas --links 12 --dof 1 --scheduler tcp://127.0.0.1:8786
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from topo.errors import InputError, explain
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--links", "-n", type=int, help="number of links n")
+    p.add_argument("--dof", "-F", type=int, default=1, help="degrees of freedom F (default 1)")
+    p.add_argument("--db", default="atlas.sqlite", help="SQLite atlas file (default atlas.sqlite)")
+    p.add_argument("--table", action="store_true",
+                   help="number synthesis: every ([LA], [MJA]) with the number of chains realising it")
+    p.add_argument("--json", action="store_true", help="JSON on stdout (count, chains / table)")
+    p.add_argument("--query", help="filter, e.g. \"V=2 AND K=4\" (columns: n F p K V n_joints j_max "
+                                   "i_max planar fractionated L0 LA MJA La code code_star)")
+    p.add_argument("--simple-joints", action="store_true", help="simple joints only")
+    p.add_argument("--no-fractionated", action="store_true", help="drop fractionated chains")
+    p.add_argument("--planar", action="store_true", help="planar chains only")
+    p.add_argument("--max-multiplicity", type=int, metavar="J", help="largest joint multiplicity j")
+    p.add_argument("--max-link-degree", type=int, metavar="I", help="largest number of joints on a link")
+    p.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786)")
+    loops = p.add_mutually_exclusive_group()
+    loops.add_argument("--loops", dest="loops", action="store_true", default=None,
+                       help="compute loop assortments [La] (default for n <= 10)")
+    loops.add_argument("--no-loops", dest="loops", action="store_false",
+                       help="skip [La] (planarity is still stored)")
+    p.add_argument("--mechanisms", action="store_true",
+                   help="also count the distinct frames and (frame, driver) choices")
+    p.add_argument("--limit", type=int, help="list at most this many chains")
+    p.add_argument("--html", metavar="DIR", help="write the HTML gallery to DIR")
+    p.add_argument("--html-limit", type=int, default=2000, help="chains per gallery page (default 2000)")
+    p.add_argument("--charts", metavar="DIR", help="write the existence-domain and invariant charts (PNG)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _options(args):
+    from catalogue.synthesis import SynthesisOptions
+
+    return SynthesisOptions(args.links, args.dof, simple_joints=args.simple_joints,
+                            max_multiplicity=args.max_multiplicity,
+                            max_link_degree=args.max_link_degree, planar=args.planar,
+                            no_fractionated=args.no_fractionated)
+
+
+def run(args) -> int:
+    from catalogue.atlas import Atlas
+    from catalogue.synthesis import mechanism_choices, universal_table
+
+    if args.links is None and not Path(args.db).exists():
+        raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
+                                 got=repr(args.db)))
+    opts = _options(args) if args.links is not None else None
+    with Atlas(args.db) as atlas:
+        built = None
+        if opts is not None:
+            loops = args.loops if args.loops is not None else opts.n <= 10
+            built = atlas.build(opts, loops=loops, workers=args.workers, scheduler=args.scheduler,
+                                progress=not args.no_progress)
+        out: dict = {}
+        if args.table:
+            if opts is None:
+                raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+            rows = universal_table(opts, atlas.chains(opts))
+            out["table"] = [r.as_dict() for r in rows]
+        count = atlas.count(opts, args.query)
+        out["count"] = count
+        chains = list(atlas.chains(opts, args.query, limit=args.limit))
+        if args.json:
+            items = []
+            for r in chains:
+                d = {"canonical": r.canonical, "LA": list(r.LA), "MJA": list(r.MJA), "V": r.V,
+                     "K": r.K, "n": r.n, "F": r.F, "code": r.code, "code_star": r.code_star,
+                     "planar": r.planar, "fractionated": r.fractionated,
+                     "La": None if r.La is None else list(r.La), "joints": r.joint_lists}
+                if args.mechanisms:
+                    c = mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints])
+                    d["frames"], d["drivers"] = c.n_frames, c.n_drivers
+                items.append(d)
+            out["chains"] = items
+            if built is not None:
+                out["build"] = {"tasks_run": built.tasks_run, "tasks_total": built.tasks_total,
+                                "seconds": round(built.seconds, 3)}
+            json.dump(out, sys.stdout, indent=1)
+            sys.stdout.write("\n")
+        else:
+            _print_text(opts, args, count, chains, out.get("table"), built)
+        if args.html:
+            from catalogue.html import write_gallery
+
+            pairs = [(opts.n, opts.F)] if opts is not None else None
+            paths = write_gallery(atlas, args.html, pairs, args.query, args.html_limit)
+            print(f"gallery: {paths[-1]}", file=sys.stderr)
+        if args.charts:
+            from catalogue.drawing import existence_domain_chart, invariant_merge_chart
+
+            d = Path(args.charts)
+            d.mkdir(parents=True, exist_ok=True)
+            existence_domain_chart(atlas, d / "atlas_existence_domain.png")
+            invariant_merge_chart(atlas, d / "atlas_invariant_merges.png")
+            print(f"charts: {d}", file=sys.stderr)
+    return 0
+
+
+def _print_text(opts, args, count, chains, table, built) -> None:
+    from catalogue.synthesis import mechanism_choices
+
+    head = f"n = {opts.n}, F = {opts.F}: " if opts is not None else ""
+    print(f"{head}{count} chains" + (f" matching {args.query}" if args.query else ""))
+    if built is not None:
+        print(f"  tasks run {built.tasks_run}/{built.tasks_total} in {built.seconds:.2f} s")
+    if table is not None:
+        print(f"{'Code*':<28}{'[LA]':<22}{'[MJA]':<14}{'V':>3}{'K':>3}{'chains':>8}")
+        for r in table:
+            print(f"{r['code_star']:<28}{str(r['LA']):<22}{str(r['MJA']):<14}{r['V']:>3}{r['K']:>3}"
+                  f"{r['chains']:>8}")
+        print(f"{sum(1 for r in table if r['realisable'])} of {len(table)} assortments are realisable")
+        return
+    if args.limit is not None or args.query or count <= 50:
+        for i, r in enumerate(chains, 1):
+            extra = ""
+            if args.mechanisms:
+                c = mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints])
+                extra = f"  frames {c.n_frames} drivers {c.n_drivers}"
+            la = "-".join(map(str, r.La)) if r.La else ("non-planar" if r.planar is False else "")
+            print(f"{i:>5} {r.code_star:<26} V={r.V} K={r.K} La={la:<16}{extra} "
+                  f"joints={r.joint_lists}")

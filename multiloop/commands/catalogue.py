@@ -1,0 +1,65 @@
+"""``multiloop catalogue [--json]``: the bundled mechanisms with their basic numbers.
+
+Lists every ``catalogue/mechanisms/*.toml`` with name, n (links), F (mobility),
+K (independent loops), structural code ([LA]/V of seed 002) and source.  The full
+report of one entry is ``multiloop analyse $(python -c "from catalogue.named import
+path; print(path('excavator'))")``, or in Python ``structural_report(load_named(name))``.
+"""
+from __future__ import annotations
+
+import json
+
+from catalogue.named import load_named, names
+from topo.model import Mechanism
+from topo.numbers import format_counts, joint_assortment, link_assortment
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--json", action="store_true",
+                   help="print a JSON list of {name, n, F, K, code, drivers, description, source}")
+
+
+def summary(name: str) -> dict:
+    """Name, n, F, K, code, drivers, description and source of one catalogue mechanism.
+
+    Only the counting formulas are evaluated (no loop assortment, no degeneracy search),
+    so listing stays fast; ``tests/test_catalogue.py`` checks the values against
+    :func:`topo.numbers.structural_report`.
+    """
+    m: Mechanism = load_named(name)
+    n = m.n_links
+    p = sum(j.n_pairs for j in m.joints)
+    K = p - n + 1
+    V = sum(j.multiplicity - 1 for j in m.joints if j.multiplicity >= 2)
+    imax = max(K + 1, max(m.degree(x) for x in m.link_names))
+    return {
+        "name": name,
+        "n": n,
+        "F": 3 * (n - 1) - 2 * p,
+        "K": K,
+        "code": f"[{format_counts(link_assortment(m, imax))}]/{V}",
+        "drivers": len(m.drivers),
+        "description": m.description,
+        "source": m.source,
+    }
+
+
+def run(args) -> int:
+    rows = [summary(name) for name in names()]
+    if args.json:
+        print(json.dumps(rows, indent=2, ensure_ascii=False))
+        return 0
+    head = ("name", "n", "F", "K", "code", "source")
+    table = [(r["name"], str(r["n"]), str(r["F"]), str(r["K"]), r["code"],
+              _short(r["source"] or "")) for r in rows]
+    widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head[:-1])]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
+    print(fmt.format(*head))
+    for t in table:
+        print(fmt.format(*t))
+    return 0
+
+
+def _short(text: str, width: int = 70) -> str:
+    text = " ".join(text.split()).split("; ")[0]
+    return text if len(text) <= width else text[: width - 3] + "..."

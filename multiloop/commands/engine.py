@@ -1,0 +1,117 @@
+"""``multiloop engine FILE [--steps N] [--json] [--plot DIR]``: the diagrams of seed 004.
+
+FILE is an engine file (``[engine]``, ``[[cylinder]]``, ``[gas]``; docs/forces.md) or
+the name of a bundled one (``single_cylinder``, ``v_twin``, ``radial_5cyl_masses``).
+Prints the main numbers (stroke, λ, swept volume, firing intervals, λ-approximation
+error, indicated work, ∮M_b dφ, peak reactions, the virtual-power check and the
+general-kinetostatics cross-check); ``--json`` gives every array; ``--plot DIR`` writes
+kinematics, pressure, balancing, cyclogram, rod_com and reactions PNGs.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from topo.errors import InputError, explain
+
+
+def add_arguments(p) -> None:
+    p.add_argument("file", help="engine file (.toml/.json) or catalogue name")
+    p.add_argument("--steps", type=int, default=720, metavar="N",
+                   help="crank positions over the 720 deg cycle (default 720)")
+    p.add_argument("--json", action="store_true", help="print the JSON report")
+    p.add_argument("--plot", default=None, metavar="DIR", help="write the diagrams as PNG into DIR")
+    p.add_argument("--no-check", action="store_true", help="skip the general kinetostatics cross-check")
+
+
+def _clean(a):
+    a = np.asarray(a, float)
+    lst = a.tolist()
+
+    def fix(x):
+        if isinstance(x, list):
+            return [fix(y) for y in x]
+        return x if math.isfinite(x) else None
+    return fix(lst)
+
+
+def report_dict(res) -> dict:
+    """JSON-ready dict of an :class:`~kin.engine.EngineResult` (docs/forces.md)."""
+    s = res.spec
+    cyl = []
+    for j, c in enumerate(s.cylinders):
+        cyl.append({"name": c.name, "bank": c.bank, "firing": c.firing,
+                    "displacement": _clean(res.displacement[:, j]), "velocity": _clean(res.velocity[:, j]),
+                    "acceleration": _clean(res.acceleration[:, j]),
+                    "acceleration_approx": _clean(res.approx["a"][:, j]),
+                    "psi": _clean(res.psi_deg[:, j]), "volume": _clean(res.volume[:, j]),
+                    "pressure": _clean(res.pressure[:, j]), "gas_force": _clean(res.gas_force[:, j]),
+                    "rod_com_x": _clean(res.rod_com[:, j, 0]), "rod_com_y": _clean(res.rod_com[:, j, 1]),
+                    "rod_com_radius": _clean(res.rod_com_radius[:, j]),
+                    "indicated_work": float(res.indicated_work[j])})
+    rx = res.reactions
+    reactions = {"O:frame->crank": {"Fx": _clean(rx["R01"][:, 0]), "Fy": _clean(rx["R01"][:, 1])}}
+    for j in range(s.n_cylinders):
+        reactions[f"A:crank->rod{j + 1}"] = {"Fx": _clean(rx["R12"][:, j, 0]), "Fy": _clean(rx["R12"][:, j, 1])}
+        reactions[f"B{j + 1}:rod{j + 1}->piston{j + 1}"] = {"Fx": _clean(rx["R23"][:, j, 0]),
+                                                             "Fy": _clean(rx["R23"][:, j, 1])}
+        reactions[f"S{j + 1}:frame->piston{j + 1}"] = {"normal": _clean(rx["N"][:, j])}
+    return {"name": s.name, "rpm": s.rpm, "omega": s.omega, "lambda": s.lam, "stroke": s.stroke,
+            "swept_volume": s.swept_volume, "compression_ratio": s.compression_ratio,
+            "phi": _clean(res.phi_deg), "cylinders": cyl, "balancing": _clean(res.balancing),
+            "reactions": reactions, "virtual_power_residual": _clean(res.virtual_power_residual),
+            "approx_error": res.approx_error, "cyclogram": res.cyclogram,
+            "indicated_work": float(res.indicated_work.sum()), "cycle_integral": res.cycle_integral,
+            "general_check": res.general_check}
+
+
+def run(args) -> int:
+    from kin.engine import analyse_engine, load_engine  # noqa: PLC0415
+    from multiloop.commands.forces import _resolve  # noqa: PLC0415
+    if args.steps < 8:
+        raise InputError(explain("--steps", expected="at least 8", got=repr(args.steps)))
+    spec = load_engine(_resolve(args.file))
+    res = analyse_engine(spec, args.steps, check=not args.no_check)
+    if args.plot:
+        from kin.engine_plot import engine_plots  # noqa: PLC0415
+        paths = engine_plots(res, args.plot)
+        if not args.json:
+            print("wrote " + ", ".join(str(p) for p in paths))
+    if args.json:
+        print(json.dumps(report_dict(res)))
+        return 0
+    cyc = res.cyclogram
+    W = res.indicated_work.sum()
+    e = res.approx_error
+    rows = [
+        ("engine", spec.name),
+        ("cylinders", ", ".join(f"{c.name} (bank {c.bank:g} deg, firing TDC +{c.firing:g})" for c in spec.cylinders)),
+        ("crank r / rod l / λ / offset", f"{spec.crank_radius * 1e3:g} mm / {spec.rod_length * 1e3:g} mm / "
+                                         f"{spec.lam:.6g} / {spec.offset * 1e3:g} mm"),
+        ("stroke (exact) / swept volume", f"{spec.stroke * 1e3:.6f} mm / {spec.swept_volume * 1e6:.4f} cm3 per cylinder"),
+        ("speed", f"{spec.rpm:g} rpm = {spec.omega:.6g} rad/s"),
+        ("firing angles / intervals", "/".join(f"{x:g}" for x in cyc["firing_angles"]) + " deg / "
+                                      + "/".join(f"{x:g}" for x in cyc["firing_intervals"]) + " deg, order "
+                                      + "-".join(cyc["firing_order"])),
+        ("λ-approximation max error", f"s {e['s']['max_abs'] * 1e6:.4g} µm, v {e['v']['max_abs']:.4g} m/s, "
+                                      f"a {e['a']['max_abs']:.4g} m/s² ({100 * e['a']['max_rel']:.3f} %)"),
+        ("peak acceleration (exact)", f"{np.abs(res.acceleration).max():.6g} m/s²"),
+        ("indicated work W_ind", f"{W:.6g} J per cycle ({W * spec.rpm / 120.0 / 1e3:.4g} kW indicated)"),
+        ("∮ M_b dφ", f"{res.cycle_integral:.6g} J (−W_ind = {-W:.6g} J)"),
+        ("balancing moment min / max / mean", f"{res.balancing.min():.6g} / {res.balancing.max():.6g} / "
+                                              f"{res.cycle_integral / (4 * np.pi):.6g} N m"),
+        ("peak |R12| crank pin / |R01| bearing", f"{np.linalg.norm(res.reactions['R12'], axis=-1).max():.6g} N / "
+                                                 f"{np.linalg.norm(res.reactions['R01'], axis=-1).max():.6g} N"),
+        ("min radius of curvature of rod COM", f"{np.min(res.rod_com_radius) * 1e3:.6g} mm"),
+        ("virtual power residual (max)", f"{np.nanmax(np.abs(res.virtual_power_residual)):.3g} W"),
+    ]
+    if res.general_check:
+        g = res.general_check
+        rows.append(("general kinetostatics vs closed form", f"|ΔM_b| ≤ {g['max_balancing_difference']:.3g} N m "
+                     f"(relative {g['relative_balancing_difference']:.2g}), method {g['method']}"))
+    width = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"  {k:<{width}}  {v}")
+    return 0

@@ -1,0 +1,242 @@
+"""``multiloop solve FILE [--steps N] [--from A --to B] [--derivatives] [--json|--csv]
+[--plot out.png] [--animate out.gif]``: positions, velocities, accelerations.
+
+Inputs on the command line are **degrees** for an R driver and **metres** for a
+P driver.  ``--steps N`` alone: one full turn from the reference in N equal steps,
+the first being the reference itself (0, 360/N, …, 360(N−1)/N degrees); for a P
+driver the default range is a stroke from 0 to +10 % of the mechanism's size
+(the largest extent of its reference joint positions), N points.  ``--from A
+--to B``: N points from A to B inclusive.  With several drivers every driver
+takes the same values.
+
+JSON layout (stable; NaN is ``null``)::
+
+    {"mechanism": name, "formula": "I(0,1) → II1(2,3)",
+     "drivers": [{"joint": "O", "kind": "R", "unit": "deg"}],
+     "input": [...]            # one driver: a list; several: a list of lists
+     "status": ["ok", ...],
+     "joints": {"A": {"x": [...], "y": [...], "vx", "vy", "ax", "ay"}},
+     "links":  {"crank": {"angle": [...], "omega": [...], "epsilon": [...]}},
+     "points": {"M": {"x", "y", "vx", "vy", "ax", "ay"}},
+     "notes": [...]}
+
+``x, y`` in m; ``angle`` in degrees (rotation from the reference);
+``vx…ay``, ``omega``, ``epsilon`` only with ``--derivatives``: time derivatives
+for the driver at 1 rad/s (or 1 m/s) with zero acceleration, i.e. the analogues
+d/dφ and d²/dφ² (m, m, rad, rad per rad of input).  CSV: one row per position,
+columns ``input[_joint]``, ``status``, ``<joint>.x``, … in the same order.
+Files are written only after the whole solve and all figures succeeded.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from topo.errors import InputError, explain
+from topo.io import load
+from topo.model import JointKind
+
+__all__ = ["add_arguments", "run", "state_to_dict", "input_values"]
+
+
+def add_arguments(p) -> None:
+    p.add_argument("file", help="mechanism with geometry, a frame and drivers (.toml or .json)")
+    p.add_argument("--steps", type=int, default=None, metavar="N",
+                   help="number of positions (default 36; alone: one full turn from the reference)")
+    p.add_argument("--from", dest="start", type=float, default=None, metavar="A",
+                   help="first input (deg for R drivers, m for P drivers)")
+    p.add_argument("--to", dest="stop", type=float, default=None, metavar="B",
+                   help="last input (inclusive)")
+    p.add_argument("--derivatives", action="store_true",
+                   help="velocities and accelerations (analogues: driver at unit rate)")
+    p.add_argument("--method", choices=("auto", "closed_form", "newton"), default="auto",
+                   help="closed-form groups (default) or Newton with continuation for all")
+    out = p.add_mutually_exclusive_group()
+    out.add_argument("--json", action="store_true", help="print the stable JSON (see docs/kinematics.md)")
+    out.add_argument("--csv", action="store_true", help="print CSV, one row per position")
+    p.add_argument("--plot", metavar="OUT.png", default=None,
+                   help="mechanism in its reference position with tracer paths; "
+                        "the analogues go to OUT_analogues.png")
+    p.add_argument("--animate", metavar="OUT.gif", default=None, help="one cycle as a GIF")
+
+
+def input_values(m, steps: int | None, start: float | None, stop: float | None) -> np.ndarray:
+    """CLI inputs in CLI units (deg / m), shape (N,)."""
+    if steps is not None and steps < 1:
+        raise InputError(explain("--steps", expected="a positive integer", got=str(steps)))
+    if (start is None) != (stop is None):
+        raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
+    n = steps if steps is not None else 36
+    if start is not None:
+        return np.linspace(start, stop, n) if n > 1 else np.array([start])
+    kinds = {m.joint(d.joint).kind for d in m.drivers}
+    if kinds == {JointKind.R}:
+        return 360.0 * np.arange(n) / n
+    xy = np.array([j.at for j in m.joints], float)
+    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    if kinds == {JointKind.P}:
+        return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
+    raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",
+                             got="no range"))
+
+
+def _to_api(m, x_cli: np.ndarray) -> np.ndarray:
+    cols = []
+    for d in m.drivers:
+        cols.append(np.radians(x_cli) if m.joint(d.joint).kind is JointKind.R else x_cli)
+    return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
+
+
+def _list(a) -> list:
+    a = np.asarray(a, float)
+    return [None if not np.isfinite(v) else float(v) for v in a.ravel()]
+
+
+def state_to_dict(state, plan=None) -> dict:
+    """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc)."""
+    m = state.mechanism
+    drivers = []
+    inp = []
+    for k, d in enumerate(m.drivers):
+        is_r = m.joint(d.joint).kind is JointKind.R
+        drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
+        inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
+    doc = {"mechanism": m.name, "formula": plan.formula if plan is not None else None,
+           "drivers": drivers,
+           "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
+           "status": [str(s) for s in state.status]}
+    der = state.velocities is not None
+    joints = {}
+    for i, j in enumerate(m.joints):
+        e = {"x": _list(state.positions[:, i, 0]), "y": _list(state.positions[:, i, 1])}
+        if der:
+            e.update(vx=_list(state.velocities[:, i, 0]), vy=_list(state.velocities[:, i, 1]),
+                     ax=_list(state.accelerations[:, i, 0]), ay=_list(state.accelerations[:, i, 1]))
+        joints[j.name] = e
+    links = {}
+    for k, lk in enumerate(m.link_names):
+        e = {"angle": _list(np.degrees(state.angles[:, k]))}
+        if der:
+            e.update(omega=_list(state.omegas[:, k]), epsilon=_list(state.epsilons[:, k]))
+        links[lk] = e
+    points = {}
+    for k, name in enumerate(state.point_names):
+        e = {"x": _list(state.point_positions[:, k, 0]), "y": _list(state.point_positions[:, k, 1])}
+        if der:
+            e.update(vx=_list(state.point_velocities[:, k, 0]), vy=_list(state.point_velocities[:, k, 1]),
+                     ax=_list(state.point_accelerations[:, k, 0]), ay=_list(state.point_accelerations[:, k, 1]))
+        points[name] = e
+    doc.update(joints=joints, links=links, points=points, notes=list(state.notes))
+    return doc
+
+
+def _csv(doc: dict) -> str:
+    cols: list[tuple[str, list]] = []
+    inp = doc["input"]
+    if doc["drivers"] and len(doc["drivers"]) > 1:
+        for k, d in enumerate(doc["drivers"]):
+            cols.append((f"input_{d['joint']}", [r[k] for r in inp]))
+    else:
+        cols.append(("input", inp))
+    cols.append(("status", doc["status"]))
+    for table in ("joints", "links", "points"):
+        for name, e in doc[table].items():
+            for key, vals in e.items():
+                cols.append((f"{name}.{key}", vals))
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([c for c, _ in cols])
+    for row in zip(*[v for _, v in cols]):
+        w.writerow(["" if v is None else (repr(v) if isinstance(v, float) else v) for v in row])
+    return buf.getvalue()
+
+
+def _table(doc: dict) -> str:
+    names = list(doc["joints"])
+    unit = doc["drivers"][0]["unit"] if doc["drivers"] else ""
+    head = [f"input ({unit})"] + [f"{n}.{c}" for n in names for c in "xy"]
+    lines = [f"{doc['mechanism'] or 'mechanism'}: {doc['formula']}", "  ".join(f"{h:>12}" for h in head)]
+    for i, s in enumerate(doc["status"]):
+        x = doc["input"][i]
+        x = x[0] if isinstance(x, list) else x
+        if s != "ok":
+            lines.append(f"{x:>12.6g}  {s}")
+            continue
+        vals = [doc["joints"][n][c][i] for n in names for c in "xy"]
+        lines.append(f"{x:>12.6g}  " + "  ".join(f"{v:>12.6g}" for v in vals))
+    for n in doc["notes"]:
+        lines.append(f"note: {n}")
+    return "\n".join(lines)
+
+
+def _atomic_write(path: str, data: bytes) -> None:
+    p = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=str(p.parent if str(p.parent) else "."), suffix=p.suffix)
+    with os.fdopen(fd, "wb") as f:
+        f.write(data)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, p)
+
+
+def run(args) -> int:
+    import warnings
+
+    from kin.solve import compile_plan, solve
+
+    m = load(args.file)
+    for out in (args.plot, args.animate):
+        if out is not None and not Path(out).resolve().parent.is_dir():
+            raise InputError(explain(f"output '{out}'", expected="a file in an existing directory",
+                                     got="a missing directory"))
+    plan = compile_plan(m)
+    x_cli = input_values(m, args.steps, args.start, args.stop)
+    want_der = args.derivatives or args.plot is not None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        state = solve(m, _to_api(m, x_cli), derivatives=want_der, plan=plan, method=args.method)
+    doc_state = state
+    if want_der and not args.derivatives:
+        doc_state = type(state)(state.mechanism, state.inputs, state.positions, state.angles, state.status,
+                                point_names=state.point_names, point_positions=state.point_positions,
+                                notes=state.notes, poses=state.poses)
+    doc = state_to_dict(doc_state, plan.assur)
+    # render every file in memory first: nothing is written half-way
+    files: list[tuple[str, bytes]] = []
+    if args.plot is not None:
+        import matplotlib.pyplot as plt
+
+        from kin.plot import plot_analogues, plot_mechanism
+        p = Path(args.plot)
+        for fig, target in ((plot_mechanism(state), p),
+                            (plot_analogues(state), p.with_name(p.stem + "_analogues" + (p.suffix or ".png")))):
+            buf = io.BytesIO()
+            fig.savefig(buf, format=(target.suffix.lstrip(".") or "png"))
+            plt.close(fig)
+            files.append((str(target), buf.getvalue()))
+    if args.animate is not None:
+        from kin.plot import animate
+        with tempfile.TemporaryDirectory() as d:
+            tmp = Path(d) / "anim.gif"
+            animate(state, tmp)
+            files.append((args.animate, tmp.read_bytes()))
+    if args.json:
+        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
+    elif args.csv:
+        text = _csv(doc)
+    else:
+        text = _table(doc)
+    for path, data in files:
+        _atomic_write(path, data)
+    print(text)
+    if not state.success:
+        print(f"multiloop solve: {state.message}", file=sys.stderr)
+    return 0

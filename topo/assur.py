@@ -1,0 +1,670 @@
+"""Assur decomposition: the solving plan of a mechanism (driver links, then groups).
+
+:func:`decompose` compiles the topology **once** into a frozen :class:`AssurPlan`
+that the solvers of ``kin/`` loop over; they never search the graph again.
+
+Convention (Russian TMM, Artobolevsky; stated because Western texts differ)
+-------------------------------------------------------------------------
+* the frame with a driver link is the *initial mechanism*, class I, written
+  ``I(0,1)``;
+* **class** of a group: the number of pairs of its most complex closed inner
+  contour, or, when the inner pairs form no contour, the largest number of inner
+  pairs on one link, and never less than II.  So a **dyad is class II order 2**, a
+  **triad is class III order 3**, a four-link group whose inner pairs close a
+  quadrilateral is **class IV order 2**;
+* **order**: the number of outer pairs (pairs joining the group to known links);
+* dyad **kind** (вид, seed 000): ``RRR`` = 1, ``RRP`` = 2, ``RPR`` = 3,
+  ``PRP`` = 4, ``RPP`` = 5, read outer–inner–outer (``PRR`` ≡ ``RRP``,
+  ``PPR`` ≡ ``RPP``);
+* the **structure formula** numbers the links ``0`` = frame, then ``1, 2, …`` in
+  solving order, e.g. ``I(0,1) → II1(2,3) → II2(4,5)``: ``IIk`` is a dyad of kind k,
+  ``III`` a triad, ``IV`` a class IV group, ``Gn`` any other n-link group.
+
+Method
+------
+Body coordinates with explicit pin points: every moving link has a pose
+``(x, y, θ)`` (3 unknowns) and every pin (R joint) one point (2 unknowns), shared
+by *all* the links on it, so a multiple joint of k links is one point with k
+attachments (2k equations, 2 unknowns: k − 1 pairs) and is never broken.  A P
+joint gives 2 equations (relative angle, distance from the guide line); a driver
+one (relative angle, or slide).  The scalar incidence *equations × unknowns* is
+put in block-triangular form by Dulmage–Mendelsohn [1]_: maximum bipartite
+matching (Hopcroft–Karp), directed graph of the matched system contracted to
+entities (a link's pose, a pin's point), strongly connected components and a
+topological order.  Blocks that hold links are the Assur groups (as link sets,
+unique by [2]_); blocks of pin points alone are points carried by a known link.
+
+The matching checks only counts (Hall's condition).  Every block is then checked
+for **rigidity**: the rank of its Jacobian at a random realisation of the same
+topology (generic rank; two independent draws) must equal ``3 × links``.  A rigid
+triangle tied to one pin by three bars passes the matching but fails here.
+
+References
+----------
+.. [1] A. Pothen, C.-J. Fan, "Computing the block triangular form of a sparse
+   matrix", ACM TOMS 16(4) (1990) 303–324.
+.. [2] O. Shai, A. Sljoka, W. Whiteley, "Directed graphs, decompositions, and
+   spatial linkages", Discrete Applied Mathematics (2013), arXiv:1010.5552.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import networkx as nx
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import maximum_bipartite_matching
+
+from .errors import DecompositionError, MobilityError, explain
+from .model import JointKind, Mechanism
+
+__all__ = ["Constraint", "DriverStep", "AssurGroup", "AssurPlan", "decompose",
+           "DYAD_KINDS", "reference_jacobian", "link_origins"]
+
+#: dyad kind → number (вид) of seed 000
+DYAD_KINDS = {"RRR": 1, "RRP": 2, "RPR": 3, "PRP": 4, "RPP": 5}
+
+_ROMAN = {1: "I", 2: "II", 3: "III", 4: "IV", 5: "V", 6: "VI", 7: "VII", 8: "VIII"}
+
+
+@dataclass(frozen=True, slots=True)
+class Constraint:
+    """One block of scalar equations between two links (pair form).
+
+    Attributes
+    ----------
+    kind : str
+        ``"R"`` (2 equations: the joint's point on ``a`` equals its point on ``b``),
+        ``"P"`` (2 equations: ``b`` keeps its angle to guide ``a`` and stays on the
+        guide line), ``"drive_R"`` (1 equation: ``θ_b − θ_a = input``),
+        ``"drive_P"`` (1 equation: slide of ``b`` along ``a``'s guide = input).
+    joint : str
+    a, b : str
+        Links (``a`` = host/guide, ``b`` = the other/slider).
+    driver : int
+        Index of the driver for ``drive_*`` constraints, else -1.
+    """
+
+    kind: str
+    joint: str
+    a: str
+    b: str
+    driver: int = -1
+
+    @property
+    def n_equations(self) -> int:
+        return 1 if self.kind.startswith("drive") else 2
+
+
+@dataclass(frozen=True, slots=True)
+class DriverStep:
+    """An input link: link ``link`` moved by driver ``index`` relative to ``base``."""
+
+    index: int
+    joint: str
+    kind: str                       # "R" or "P"
+    base: str                       # driver links[0] (known before)
+    link: str                       # driver links[1] (solved by this step)
+    constraints: tuple[Constraint, ...]
+    number: tuple[int, int] = (0, 1)   # link numbers in the structure formula
+
+
+@dataclass(frozen=True, slots=True)
+class AssurGroup:
+    """One Assur group of the plan (or a driven block, see ``kind``).
+
+    Attributes
+    ----------
+    index : int
+        Position among the groups (0-based, solving order).
+    cls, order : int
+        Class and order (module docstring).
+    kind : str
+        ``RRR``, ``RRP``, ``RPR``, ``PRP``, ``RPP``, ``triad``, ``class IV`` or
+        ``"<n>-link group"``; ``"driven <n>-link group"`` when a driver acts inside.
+    links : tuple of str
+        Real links of the group (unknown here), in file order.
+    joints : tuple of (str, tuple of str)
+        Each link's **full** joint set: ``(link, (joint, ...))``.
+    inner_joints, outer_joints : tuple of str
+        Joints with pairs inside the group / joining it to known links.
+    known_links : tuple of str
+        Known links its outer joints attach to.
+    constraints : tuple of Constraint
+        The group's equations in pair form (3 per link in total, counted by rows).
+    numbers : tuple of int
+        Link numbers in the structure formula.
+    layout : tuple
+        Kind-specific roles used by the closed-form solvers (see ``kin.solve``):
+        for a dyad ``(outer1, inner, outer2, link1, link2)`` as joint/link names in
+        outer–inner–outer order; for a triad ``(ternary, (binary…), (outer…),
+        (inner…))``.
+    drivers : tuple of int
+        Drivers acting inside the group (driven blocks only).
+    """
+
+    index: int
+    cls: int
+    order: int
+    kind: str
+    links: tuple[str, ...]
+    joints: tuple[tuple[str, tuple[str, ...]], ...]
+    inner_joints: tuple[str, ...]
+    outer_joints: tuple[str, ...]
+    known_links: tuple[str, ...]
+    constraints: tuple[Constraint, ...]
+    numbers: tuple[int, ...] = ()
+    layout: tuple = ()
+    drivers: tuple[int, ...] = ()
+
+    @property
+    def is_dyad(self) -> bool:
+        return self.kind in DYAD_KINDS
+
+    @property
+    def label(self) -> str:
+        """Formula token, e.g. ``II1(2,3)``."""
+        roman = _ROMAN.get(self.cls, str(self.cls))
+        if self.is_dyad:
+            head = f"II{DYAD_KINDS[self.kind]}"
+        elif self.kind in ("triad", "class IV"):
+            head = roman
+        else:
+            head = f"G{len(self.links)}"
+        return f"{head}({','.join(map(str, self.numbers))})"
+
+    def describe(self) -> str:
+        return f"group {self.index + 1} {self.label} ({self.kind}; links {', '.join(self.links)})"
+
+
+@dataclass(frozen=True)
+class AssurPlan:
+    """The frozen solving plan of a mechanism.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+    steps : tuple
+        :class:`DriverStep` and :class:`AssurGroup` objects in solving order.
+    link_numbers : dict-like tuple of (link, number)
+        ``0`` = frame, then links in solving order.
+    solved_by : tuple of (link, step index)
+        Which step solves each moving link.
+    """
+
+    mechanism: Mechanism
+    steps: tuple
+    link_numbers: tuple[tuple[str, int], ...]
+    solved_by: tuple[tuple[str, int], ...]
+
+    @property
+    def drivers(self) -> tuple[DriverStep, ...]:
+        return tuple(s for s in self.steps if isinstance(s, DriverStep))
+
+    @property
+    def groups(self) -> tuple[AssurGroup, ...]:
+        return tuple(s for s in self.steps if isinstance(s, AssurGroup))
+
+    @property
+    def formula(self) -> str:
+        """Structure formula, e.g. ``I(0,1) → II1(2,3) → II1(4,5)``."""
+        parts = []
+        for s in self.steps:
+            if isinstance(s, DriverStep):
+                parts.append(f"I({s.number[0]},{s.number[1]})")
+            else:
+                parts.append(s.label)
+        return " → ".join(parts)
+
+    def step_of(self, link: str) -> int:
+        """Index in :attr:`steps` of the step solving ``link`` (-1 for the frame)."""
+        return dict(self.solved_by).get(link, -1)
+
+    def upstream(self, step_indices) -> tuple[int, ...]:
+        """Sorted step indices needed to solve the given steps (themselves included)."""
+        need: set[int] = set()
+        stack = list(step_indices)
+        solved = dict(self.solved_by)
+        while stack:
+            k = stack.pop()
+            if k < 0 or k in need:
+                continue
+            need.add(k)
+            s = self.steps[k]
+            known = (s.base,) if isinstance(s, DriverStep) else s.known_links
+            stack.extend(solved.get(x, -1) for x in known)
+        return tuple(sorted(need))
+
+    def as_dict(self) -> dict:
+        """JSON-ready description (SPEC §7 ``decompose --json``)."""
+        m = self.mechanism
+        groups = []
+        for s in self.groups:
+            groups.append({
+                "class": s.cls, "order": s.order, "kind": s.kind, "label": s.label,
+                "links": list(s.links),
+                "joints": sorted({j for _, js in s.joints for j in js},
+                                 key=m.joint_names.index),
+                "link_joints": {lk: list(js) for lk, js in s.joints},
+                "inner_joints": list(s.inner_joints),
+                "outer_joints": list(s.outer_joints),
+                "known_links": list(s.known_links),
+                "numbers": list(s.numbers),
+            })
+        drivers = [{"joint": d.joint, "kind": d.kind, "links": [d.base, d.link],
+                    "numbers": list(d.number)} for d in self.drivers]
+        return {"mechanism": m.name, "frame": m.frame, "formula": self.formula,
+                "drivers": drivers, "groups": groups,
+                "link_numbers": dict(self.link_numbers)}
+
+
+# ---------------------------------------------------------------------------------
+# geometry helpers shared with topo.mobility and kin (reference configuration)
+def link_origins(m: Mechanism) -> dict[str, np.ndarray]:
+    """Reference point of every link: its first joint's ``at`` (origin for the frame).
+
+    The pose of a link is the current position of this point and the rotation from
+    the reference configuration, so every pose is ``(c, 0)`` at the reference.
+    """
+    out = {}
+    for lk in m.links:
+        js = m.joints_of(lk.name)
+        out[lk.name] = (np.zeros(2) if lk.is_frame or not js or js[0].at is None
+                        else np.asarray(js[0].at, float))
+    return out
+
+
+def _perp(v):
+    return np.array([-v[1], v[0]])
+
+
+def reference_jacobian(m: Mechanism, constraints, columns, joint_at=None, joint_axis=None,
+                       origins=None) -> np.ndarray:
+    """Jacobian of pair constraints at the reference configuration.
+
+    Parameters
+    ----------
+    m : Mechanism
+    constraints : sequence of Constraint
+    columns : sequence of str
+        Links whose poses ``(x, y, θ)`` are the unknowns (3 columns each).
+    joint_at, joint_axis : dict, optional
+        Geometry overrides (a random realisation for generic rank); default the
+        mechanism's own ``at``/``axis``.
+    origins : dict, optional
+        Link reference points (default :func:`link_origins`).
+
+    Returns
+    -------
+    ndarray, shape (n_equations, 3 * len(columns))
+    """
+    col = {x: 3 * i for i, x in enumerate(columns)}
+    at = joint_at or {j.name: np.asarray(j.at, float) for j in m.joints}
+    axis = joint_axis or {j.name: np.asarray(j.axis, float) / np.hypot(*j.axis)
+                          for j in m.joints if j.axis is not None}
+    org = origins or {x: np.zeros(2) for x in m.link_names}
+    rows = []
+    for c in constraints:
+        r = at[c.joint]
+        if c.kind == "R":
+            blk = np.zeros((2, 3 * len(columns)))
+            for link, sgn in ((c.a, 1.0), (c.b, -1.0)):
+                if link in col:
+                    k = col[link]
+                    blk[:, k:k + 2] += sgn * np.eye(2)
+                    blk[:, k + 2] += sgn * _perp(r - org[link])
+            rows.append(blk)
+        elif c.kind in ("P", "drive_P"):
+            u = axis[c.joint]
+            dirs = [_perp(u)] if c.kind == "drive_P" else [_perp(u)]
+            dirs = [u] if c.kind == "drive_P" else [_perp(u)]
+            blk = np.zeros((1 if c.kind == "drive_P" else 2, 3 * len(columns)))
+            if c.kind == "P":   # angle row first
+                if c.b in col:
+                    blk[0, col[c.b] + 2] += 1.0
+                if c.a in col:
+                    blk[0, col[c.a] + 2] -= 1.0
+            d = dirs[0]
+            row = blk.shape[0] - 1
+            if c.b in col:
+                k = col[c.b]
+                blk[row, k:k + 2] += d
+                blk[row, k + 2] += d @ _perp(r - org[c.b])
+            if c.a in col:
+                k = col[c.a]
+                blk[row, k:k + 2] -= d
+                blk[row, k + 2] -= d @ _perp(r - org[c.a])
+            rows.append(blk)
+        elif c.kind == "drive_R":
+            blk = np.zeros((1, 3 * len(columns)))
+            if c.b in col:
+                blk[0, col[c.b] + 2] += 1.0
+            if c.a in col:
+                blk[0, col[c.a] + 2] -= 1.0
+            rows.append(blk)
+        else:  # pragma: no cover
+            raise ValueError(c.kind)
+    return np.vstack(rows) if rows else np.zeros((0, 3 * len(columns)))
+
+
+def _random_realisation(m: Mechanism, seed: int):
+    rng = np.random.default_rng(seed)
+    at = {j.name: rng.uniform(-1.0, 1.0, 2) for j in m.joints}
+    axis = {}
+    for j in m.joints:
+        if j.kind is JointKind.P:
+            t = rng.uniform(0, np.pi)
+            axis[j.name] = np.array([np.cos(t), np.sin(t)])
+    org = {x: rng.uniform(-1.0, 1.0, 2) for x in m.link_names}
+    return at, axis, org
+
+
+# ---------------------------------------------------------------------------------
+def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan:
+    """Split a mechanism into driver links and Assur groups in solving order.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        With a frame and drivers (geometry is not needed).
+    check_rigidity : bool
+        Check every block's generic rank (default True).
+
+    Returns
+    -------
+    AssurPlan
+
+    Raises
+    ------
+    DecompositionError
+        No frame; a part is under-/over-constrained (the free links and surplus
+        joints are named); a block passes the matching but is not rigid.
+    MobilityError
+        The number of drivers does not fit the mobility (Chebyshev–Grübler).
+
+    Examples
+    --------
+    >>> from topo.model import MechanismBuilder
+    >>> b = MechanismBuilder()
+    >>> b.add_link("ground", frame=True)
+    >>> for n, lk in [("O", ("ground", "crank")), ("A", ("crank", "rod")),
+    ...               ("B", ("rod", "rocker")), ("C", ("rocker", "ground"))]:
+    ...     b.add_joint(n, "R", lk)
+    >>> b.add_driver("O")
+    >>> decompose(b.build()).formula
+    'I(0,1) → II1(2,3)'
+
+    Notes
+    -----
+    Matching is Hopcroft–Karp, O(E √V) on the scalar incidence; SCCs are linear.
+    """
+    m = mechanism
+    frame = m.frame
+    if frame is None:
+        raise DecompositionError(explain("mechanism", expected="a frame link (frame = true)",
+                                         got="a bare chain", hint="mark the ground link with frame = true"))
+    moving = [x for x in m.link_names if x != frame]
+    pins = [j for j in m.joints if j.kind is JointKind.R]
+    # ---- columns: link poses (3) then pin points (2)
+    col_entity: list[tuple[str, str]] = []
+    link_col = {}
+    for x in moving:
+        link_col[x] = len(col_entity)
+        col_entity += [("L", x)] * 3
+    pin_col = {}
+    for j in pins:
+        pin_col[j.name] = len(col_entity)
+        col_entity += [("J", j.name)] * 2
+    # ---- rows
+    rows: list[list[int]] = []
+    row_info: list[tuple] = []
+
+    def lc(link, which):
+        return [] if link == frame else [link_col[link] + w for w in which]
+
+    for j in pins:
+        for x in j.links:
+            for k in (0, 1):       # x- and y-equation
+                rows.append([pin_col[j.name] + k] + lc(x, (k, 2)))
+                row_info.append(("R", j.name, x))
+    for j in m.joints:
+        if j.kind is JointKind.P:
+            g, s = j.links
+            rows.append(lc(g, (2,)) + lc(s, (2,)))
+            row_info.append(("P", j.name, s))
+            rows.append(lc(g, (0, 1, 2)) + lc(s, (0, 1, 2)))
+            row_info.append(("P", j.name, s))
+    for i, d in enumerate(m.drivers):
+        jt = m.joint(d.joint)
+        which = (2,) if jt.kind is JointKind.R else (0, 1, 2)
+        rows.append(lc(d.links[0], which) + lc(d.links[1], which))
+        row_info.append(("D", d.joint, i))
+    n_rows, n_cols = len(rows), len(col_entity)
+    # ---- counting first (mobility)
+    p = sum(len(j.links) - 1 for j in m.joints)
+    formula_f = 3 * (m.n_links - 1) - 2 * p
+    data = [(r, c) for r, cs in enumerate(rows) for c in cs]
+    S = csr_matrix((np.ones(len(data)), ([d[0] for d in data], [d[1] for d in data])),
+                   shape=(n_rows, n_cols))
+    match = np.asarray(maximum_bipartite_matching(S, perm_type="column"))  # row -> col
+    free_cols = sorted(set(range(n_cols)) - set(int(c) for c in match if c >= 0))
+    surplus_rows = [r for r in range(n_rows) if match[r] < 0]
+    if free_cols or surplus_rows:
+        under, over = _dm_coarse(rows, match, n_cols, free_cols, surplus_rows)
+        free_links = sorted({col_entity[c][1] for c in under if col_entity[c][0] == "L"},
+                            key=m.link_names.index)
+        free_pins = sorted({col_entity[c][1] for c in under if col_entity[c][0] == "J"},
+                           key=m.joint_names.index)
+        over_joints = sorted({row_info[r][1] for r in over}, key=m.joint_names.index)
+        parts = []
+        if free_cols:
+            parts.append(f"under-constrained part (moves freely): links {', '.join(free_links) or '-'}"
+                         + (f" and pins {', '.join(free_pins)}" if free_pins and not free_links else ""))
+        if surplus_rows:
+            parts.append(f"over-constrained part (surplus constraints): joints {', '.join(over_joints)}")
+        got = (f"{len(m.drivers)} driver(s) for Chebyshev–Grübler mobility F = 3(n−1) − 2p = "
+               f"3·{m.n_links - 1} − 2·{p} = {formula_f}; " + "; ".join(parts))
+        if formula_f != len(m.drivers):
+            raise MobilityError(explain(
+                f"mechanism '{m.name or ''}'", expected=f"{formula_f} driver(s) (one per degree of freedom)",
+                got=got, hint=("add [[driver]] entries" if formula_f > len(m.drivers) else
+                               "remove drivers, or the chain has redundant links (see 'multiloop analyse')")))
+        raise DecompositionError(explain(
+            f"mechanism '{m.name or ''}'", expected="a structurally determined system (every part fixed by its joints and drivers)",
+            got=got, hint="move a driver into the free part, or remove a surplus link/joint"))
+    # ---- entity digraph of the matched system
+    ent_of_col = col_entity
+    g = nx.DiGraph()
+    ents = sorted(set(ent_of_col), key=lambda e: (e[0] != "J", ent_of_col.index(e)))
+    g.add_nodes_from(ents)
+    matched_rows_of: dict[tuple, list[int]] = {}
+    for r, c in enumerate(match):
+        v = ent_of_col[c]
+        matched_rows_of.setdefault(v, []).append(r)
+        for c2 in rows[r]:
+            u = ent_of_col[c2]
+            if u != v:
+                g.add_edge(u, v)
+    cond = nx.condensation(g)
+    members = cond.graph["mapping"]           # entity -> scc id
+    scc_ents: dict[int, list] = {}
+    for e, k in members.items():
+        scc_ents.setdefault(k, []).append(e)
+    order_key = {}
+    for k, es in scc_ents.items():
+        order_key[k] = min(ent_of_col.index(e) for e in es)
+    topo_order = list(nx.lexicographical_topological_sort(cond, key=lambda k: order_key[k]))
+    # ---- build steps
+    steps: list = []
+    known = {frame}
+    solved_by: dict[str, int] = {}
+    numbers = {frame: 0}
+    realisations = [_random_realisation(m, s) for s in (12345, 67890)] if check_rigidity else []
+    for k in topo_order:
+        links = [e[1] for e in scc_ents[k] if e[0] == "L"]
+        if not links:
+            continue  # pin points carried by a known link
+        links.sort(key=m.link_names.index)
+        rows_here = [r for e in scc_ents[k] for r in matched_rows_of.get(e, [])]
+        drv = sorted({row_info[r][2] for r in rows_here if row_info[r][0] == "D"})
+        cons = _pair_constraints(m, links, known)
+        n_eq = sum(c.n_equations for c in cons)
+        if n_eq != 3 * len(links):  # pragma: no cover - guaranteed by the matching
+            raise DecompositionError(f"internal: block {links} has {n_eq} equations for {3 * len(links)} unknowns")
+        for at, axis, org in realisations:
+            J = reference_jacobian(m, cons, links, at, axis, org)
+            rank = np.linalg.matrix_rank(J, tol=1e-9 * max(1.0, np.abs(J).max()))
+            if rank < 3 * len(links):
+                jn = sorted({c.joint for c in cons}, key=m.joint_names.index)
+                raise DecompositionError(explain(
+                    f"block of links {', '.join(links)} (joints {', '.join(jn)})",
+                    expected="a rigid Assur group (its equations independent for a generic geometry)",
+                    got=f"{3 * len(links) - rank} internal degree(s) of freedom with as many redundant constraints "
+                        f"(rank {rank} < {3 * len(links)}): it passes the counting but is not rigid",
+                    hint="some links form a rigid sub-chain while others can move; "
+                         "check the joints named here"))
+        idx = len(steps)
+        for x in links:
+            numbers[x] = len(numbers)
+        if len(links) == 1 and len(drv) == 1:
+            d = m.drivers[drv[0]]
+            jt = m.joint(d.joint)
+            steps.append(DriverStep(drv[0], d.joint, jt.kind.value, d.links[0], d.links[1], tuple(cons),
+                                    (numbers.get(d.links[0], 0), numbers[links[0]])))
+            if d.links[1] != links[0]:   # driver given "backwards": base is the unknown link
+                steps[-1] = DriverStep(drv[0], d.joint, jt.kind.value, d.links[1], d.links[0], tuple(cons),
+                                       (numbers.get(d.links[1], 0), numbers[links[0]]))
+        else:
+            steps.append(_make_group(m, len([s for s in steps if isinstance(s, AssurGroup)]),
+                                     links, cons, known, drv, tuple(numbers[x] for x in links)))
+        for x in links:
+            solved_by[x] = idx
+        known.update(links)
+    return AssurPlan(m, tuple(steps), tuple(numbers.items()), tuple(solved_by.items()))
+
+
+def _dm_coarse(rows, match, n_cols, free_cols, surplus_rows):
+    """Columns of the under-determined part and rows of the over-determined part."""
+    col_rows: dict[int, list[int]] = {}
+    for r, cs in enumerate(rows):
+        for c in cs:
+            col_rows.setdefault(c, []).append(r)
+    row_of_col = {int(c): r for r, c in enumerate(match) if c >= 0}
+    # under: columns reachable from free columns: col -> row containing it -> its matched col
+    under, stack = set(free_cols), list(free_cols)
+    while stack:
+        c = stack.pop()
+        for r in col_rows.get(c, []):
+            c2 = int(match[r])
+            if c2 >= 0 and c2 not in under:
+                under.add(c2)
+                stack.append(c2)
+    # over: rows reachable from surplus rows: row -> its columns -> their matched rows
+    over, stack = set(surplus_rows), list(surplus_rows)
+    while stack:
+        r = stack.pop()
+        for c in rows[r]:
+            r2 = row_of_col.get(c)
+            if r2 is not None and r2 not in over:
+                over.add(r2)
+                stack.append(r2)
+    return under, over
+
+
+def _pair_constraints(m: Mechanism, links: list[str], known: set[str]) -> list[Constraint]:
+    """The block's equations in pair form (host of a pin = a known link if any)."""
+    B = set(links)
+    out: list[Constraint] = []
+    frame = m.frame
+    for j in m.joints:
+        on_b = [x for x in j.links if x in B]
+        if not on_b:
+            continue
+        if j.kind is JointKind.R:
+            kn = [x for x in j.links if x in known]
+            kn.sort(key=lambda x: x != frame)
+            host = kn[0] if kn else on_b[0]
+            for x in on_b:
+                if x != host:
+                    out.append(Constraint("R", j.name, host, x))
+        else:
+            g, s = j.links
+            if (g in B or g in known) and (s in B or s in known):
+                out.append(Constraint("P", j.name, g, s))
+    for i, d in enumerate(m.drivers):
+        a, b = d.links
+        if (a in B or b in B) and all(x in B or x in known for x in (a, b)):
+            kind = "drive_R" if m.joint(d.joint).kind is JointKind.R else "drive_P"
+            out.append(Constraint(kind, d.joint, a, b, i))
+    return out
+
+
+def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constraint],
+                known: set[str], drv: list[int], numbers: tuple[int, ...]) -> AssurGroup:
+    B = set(links)
+    pair_cons = [c for c in cons if c.kind in ("R", "P")]
+    inner = [c for c in pair_cons if c.a in B and c.b in B]
+    outer = [c for c in pair_cons if not (c.a in B and c.b in B)]
+    inner_joints = tuple(dict.fromkeys(c.joint for c in inner))
+    outer_joints = tuple(dict.fromkeys(c.joint for c in outer))
+    known_links = tuple(dict.fromkeys(c.a if c.a not in B else c.b for c in outer))
+    full = tuple((x, tuple(j.name for j in m.joints_of(x))) for x in links)
+    # class: longest inner contour or largest inner degree, at least II
+    lg = nx.MultiGraph()
+    lg.add_nodes_from(links)
+    for c in inner:
+        lg.add_edge(c.a, c.b)
+    deg = max((d for _, d in lg.degree()), default=0)
+    longest = 0
+    simple = nx.Graph(lg)
+    if simple.number_of_edges() >= len(links):  # has a cycle
+        for cyc in nx.simple_cycles(simple.to_directed()):
+            if len(cyc) > 2:
+                longest = max(longest, len(cyc))
+    cls = max(2, longest, deg)
+    order = len(outer)
+    layout: tuple = ()
+    if drv:
+        kind = f"driven {len(links)}-link group"
+    elif len(links) == 2 and len(inner) == 1 and len(outer) == 2 and \
+            {outer[0].a, outer[0].b} & B != {outer[1].a, outer[1].b} & B:
+        o1, o2 = outer
+        l1 = o1.b if o1.b in B else o1.a
+        l2 = links[0] if links[1] == l1 else links[1]
+        ks = [m.joint(o1.joint).kind.value, m.joint(inner[0].joint).kind.value, m.joint(o2.joint).kind.value]
+        s = "".join(ks)
+        if s not in DYAD_KINDS:
+            s = s[::-1]
+            o1, o2, l1, l2 = o2, o1, l2, l1
+        kind = s if s in DYAD_KINDS else "2-link group"
+        layout = (o1.joint, inner[0].joint, o2.joint, l1, l2)
+        cls = 2
+    elif len(links) == 4 and len(inner) == 3 and len(outer) == 3 and deg == 3 and \
+            all(m.joint(c.joint).kind is JointKind.R for c in pair_cons):
+        tern = next(x for x, d in lg.degree() if d == 3)
+        bins = tuple(x for x in links if x != tern)
+        outs = tuple(next(c.joint for c in outer if x in (c.a, c.b)) for x in bins)
+        inns = tuple(next(c.joint for c in inner if x in (c.a, c.b)) for x in bins)
+        kind, layout = "triad", (tern, bins, outs, inns)
+    elif len(links) == 4 and len(inner) == 4 and len(outer) == 2 and longest == 4:
+        kind = "class IV"
+        with_outer = [c.b if c.b in B else c.a for c in outer]
+        bins = [x for x in links if x not in with_outer]
+        if len(set(with_outer)) == 2 and len(bins) == 2 and \
+                all(m.joint(c.joint).kind is JointKind.R for c in pair_cons):
+            def _inner(t, b_):
+                return next((c.joint for c in inner if {c.a, c.b} == {t, b_}), None)
+            t1, t2 = with_outer
+            o1 = next(c.joint for c in outer if t1 in (c.a, c.b))
+            o2 = next(c.joint for c in outer if t2 in (c.a, c.b))
+            js = (_inner(t1, bins[0]), _inner(t1, bins[1]), _inner(t2, bins[0]), _inner(t2, bins[1]))
+            if None not in js:
+                layout = (t1, t2, bins[0], bins[1], o1, o2) + js
+    else:
+        kind = f"{len(links)}-link group"
+    return AssurGroup(index, cls, order, kind, tuple(links), full, inner_joints, outer_joints,
+                      known_links, tuple(cons), numbers, layout, tuple(drv))
+
+
+_ = itertools
