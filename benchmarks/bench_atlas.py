@@ -60,21 +60,29 @@ def _baseline_commands(opts: SynthesisOptions):
             yield [_tool("genbg"), "-cq", "-d2:2", str(n), str(m), f"{e}:{e}"], m
 
 
-def _count_only(cmd) -> int:
+def _count_only(cmd, timeout: float) -> int:
     args = [a for a in cmd[1:] if a != "-cq"] + ["-c"]
-    out = subprocess.run(cmd[:1] + ["-u"] + args, capture_output=True, text=True).stderr
+    out = subprocess.run(cmd[:1] + ["-u"] + args, capture_output=True, text=True,
+                         timeout=timeout).stderr
     for line in out.splitlines():
         if "graphs generated" in line:
             return int(line.split()[1])
     return 0
 
 
-def baseline(opts: SynthesisOptions, budget: float) -> tuple[float, int | None, bool]:
-    """Seconds of generate-and-filter, survivors (None if extrapolated), extrapolated?"""
+def baseline(opts: SynthesisOptions, budget: float) -> tuple[float | None, int | None, bool]:
+    """Seconds of generate-and-filter, survivors (None if extrapolated), extrapolated?
+
+    ``None`` seconds when even counting the unpruned graphs exceeds the budget.
+    """
     t0 = time.perf_counter()
     kept = 0
     seen = 0
-    total = sum(_count_only(c) for c, _ in _baseline_commands(opts))
+    try:
+        total = sum(_count_only(c, budget) for c, _ in _baseline_commands(opts))
+    except subprocess.TimeoutExpired:
+        return None, None, True
+    t0 = time.perf_counter()
     extrapolated = False
     for cmd, m in _baseline_commands(opts):
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE)
@@ -135,10 +143,12 @@ def main(argv=None) -> int:
           f"{'+La 2w':>9}{'baseline s':>12}{'ratio':>8}{'goal s':>8}", flush=True)
     rows = []
     for name, opts, goal in cases:
-        tc, count = ours_count(opts)
         big = opts.n >= 12 and not opts.simple_joints
+        tc, count = (None, None) if big else ours_count(opts)
         t1 = None if big else ours_atlas(opts, 1)[0]     # 1-worker atlas of MJ 12: ~10 min
         t2, count2 = ours_atlas(opts, 2)
+        if count is None:
+            count = count2
         assert count2 == count, (count, count2)
         tl = ours_atlas(opts, 2, loops=True)[0] if opts.n <= 11 else None
         if opts.simple_joints and opts.F == 1:
@@ -146,15 +156,19 @@ def main(argv=None) -> int:
         tb, kept, extra = baseline(opts, args.budget)
         if kept is not None:
             assert kept == count, (name, kept, count)
-        ratio = tb / tc
+        ours = tc if tc is not None else t2
+        ratio = "n/a" if tb is None else f"{tb / ours:.0f}x"
         speed = "" if t1 is None else f"{t1 / t2:.2f}"
-        print(f"{name:<14}{count:>8}{tc:>9.2f}{'' if t1 is None else f'{t1:.2f}':>10}{t2:>10.2f}"
-              f"{speed:>9}{'' if tl is None else f'{tl:.2f}':>9}{tb:>11.1f}{'*' if extra else ' '}{ratio:>7.0f}x{'' if goal is None else f'{goal:.0f}':>8}",
-              flush=True)
+        tbs = "n/a" if tb is None else f"{tb:.1f}"
+        print(f"{name:<14}{count:>8}{'' if tc is None else f'{tc:.2f}':>9}"
+              f"{'' if t1 is None else f'{t1:.2f}':>10}{t2:>10.2f}"
+              f"{speed:>9}{'' if tl is None else f'{tl:.2f}':>9}{tbs:>11}{'*' if extra else ' '}"
+              f"{ratio:>8}{'' if goal is None else f'{goal:.0f}':>8}", flush=True)
         rows.append((name, count, tc, t1, t2, tb, extra))
     me, kids = peak_mb()
     print(f"peak memory: this process {me:.0f} MB, largest child {kids:.0f} MB")
-    print("* baseline extrapolated from its per-graph rate on a prefix (see --budget)")
+    print("* baseline extrapolated from its per-graph rate on a prefix (see --budget); "
+          "n/a: counting the unpruned graphs alone exceeds the budget")
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -164,10 +178,10 @@ def main(argv=None) -> int:
         fig, ax = plt.subplots(figsize=(8, 4.5))
         x = np.arange(len(rows))
         w = 0.2
-        ax.bar(x - 1.5 * w, [r[2] for r in rows], w, label="count (serial)")
+        ax.bar(x - 1.5 * w, [r[2] or 0 for r in rows], w, label="count (serial)")
         ax.bar(x - 0.5 * w, [r[3] or 0 for r in rows], w, label="atlas, 1 worker")
         ax.bar(x + 0.5 * w, [r[4] for r in rows], w, label="atlas, 2 workers")
-        ax.bar(x + 1.5 * w, [r[5] for r in rows], w, label="baseline (generate-and-filter)",
+        ax.bar(x + 1.5 * w, [r[5] or 0 for r in rows], w, label="baseline (generate-and-filter)",
                hatch=None, color="grey")
         ax.set_yscale("log")
         ax.set_xticks(x)

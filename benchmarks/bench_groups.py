@@ -230,9 +230,13 @@ def chart_speed(rows, newton, fdm, res_cf, verr_cf, t_cf, tv_cf, t_fs, res_fs):
     a.loglog([t_cf * 1e6], [max(res_cf, tiny)], "o", ms=9, label="closed form")
     a.loglog([r[1] * 1e6 for r in newton], [max(r[2], tiny) for r in newton], "s-",
              label="Newton (vectorised), tol 1e-4…1e-14")
-    for r in newton:
-        a.annotate(f"{r[0]:.0e}", (r[1] * 1e6, max(r[2], tiny)), fontsize=7,
-                   xytext=(4, 2), textcoords="offset points")
+    groups = {}
+    for r in newton:                       # tolerances reaching the same residual: one label
+        groups.setdefault(f"{max(r[2], tiny):.1e}", []).append(r)
+    for rs in groups.values():
+        a.annotate("tol " + ", ".join(f"{r[0]:.0e}" for r in rs),
+                   (rs[0][1] * 1e6, max(rs[0][2], tiny)), fontsize=7,
+                   xytext=(5, 3), textcoords="offset points")
     a.loglog([t_fs * 1e6], [max(res_fs, tiny)], "^", ms=8, label="scipy fsolve loop")
     a.set_xlabel("time per position (µs)")
     a.set_ylabel("closure residual (relative)")

@@ -234,7 +234,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     if only is not None:
         needed = _needed_steps(sp, only)
     G = _Poses(sp, M)
-    reason = np.full(M, "", dtype=object)
+    reason: dict[int, str] = {}
     has_reason = np.zeros(M, bool)
     notes: list[str] = []
     branches = []
@@ -243,7 +243,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         st = sp.steps[k]
         u = list(st.unknown)
         known = np.setdiff1d(st.system.involved, u)
-        upstream_bad = ~np.all(np.isfinite(G.th[known]), axis=0)
+        upstream_bad = ~G.finite(known)
         if st.solver == "driver" and _driver_closed_form(st):
             okk, why = _solve_driver(sp, st, G, XX)
         elif st.solver in ("dyad", "triad", "class4") and kernels and st.step.kind in kernels:
@@ -258,7 +258,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
             okk, why = tr.ok, tr.reason
         idx = np.flatnonzero(~okk & ~upstream_bad & ~has_reason)
         for n in idx:
-            reason[n] = f"{st.label}: {why[n]}"
+            w = why.get(int(n)) if isinstance(why, dict) else why[n]
+            reason[int(n)] = f"{st.label}: {w or 'no assembly (out of reach)'}"
         has_reason[idx] = True
         G.invalidate(u, ~okk)
         branches.append((st.label, "reference"))
@@ -270,13 +271,13 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     G.unset_to_nan()
     if L:
         G = G.tail(L)
-    reason = reason[L:]
     N = M - L
     failed = np.flatnonzero(has_reason[L:])
     status = np.full(N, "ok", dtype=object)
-    status[failed] = reason[failed]
+    for n in failed:
+        status[n] = reason[int(n) + L]
     solved_links = [i for s in needed for i in sp.steps[s].unknown]
-    finite = np.all(np.isfinite(G.th[solved_links]), axis=0)
+    finite = G.finite(solved_links)
     okm = ~has_reason[L:]
     status[okm & ~finite] = "failed upstream"
     okm &= finite
@@ -376,7 +377,7 @@ def _solve_driver(sp: SolvePlan, st: StepPlan, G: "_Poses", X: np.ndarray):
             k = names.index(d.b)
             P = G.point(d.b, r) - X[:, [d.driver]] * G.direction(d.b, u)
         G.place_cs(lk, P, r, G.c[k], G.s[k], G.th[k])
-    return np.isfinite(G.th[L]), np.full(X.shape[0], "", dtype=object)
+    return np.isfinite(G.th[L]), {}
 
 
 def _rotate(v, th):
@@ -420,7 +421,7 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, branches
             perp = np.stack([-pr[..., 1], pr[..., 0]], axis=-1)
             pvel = Zd[:, ph, :2] + w * perp
             pacc = Zdd[:, ph, :2] + Zdd[:, ph, 2][..., None] * perp - w * w * pr
-    return KinematicState(m, X, pos, np.ascontiguousarray(G.th.T), status, vel, acc, om, ep,
+    return KinematicState(m, X, pos, np.stack(G.th, axis=1), status, vel, acc, om, ep,
                           rates_in, branches, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd)
@@ -456,35 +457,44 @@ def _nrm(u):
 
 
 class _Poses:
-    """Working store of link poses, one contiguous array per link and coordinate.
+    """Working store of link poses: per link, contiguous arrays over the batch.
 
-    ``X[k]`` (M, 2) position of link k's reference point, ``th[k]`` its rotation,
+    ``x[k], y[k]`` position of link k's reference point, ``th[k]`` its rotation,
     ``c[k], s[k]`` = cos, sin of it (kept to avoid recomputing trigonometry).
+    Arrays are stored by reference (no copies); a link never solved is ``None``.
     """
 
     def __init__(self, sp: SolvePlan, M: int):
         self.sp, self.m, self.M = sp, sp.mechanism, M
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
-        self.X = np.empty((nl, M, 2))
-        self.th = np.empty((nl, M))
-        self.c = np.empty((nl, M))
-        self.s = np.empty((nl, M))
+        self.x = [None] * nl
+        self.y = [None] * nl
+        self.th = [None] * nl
+        self.c = [None] * nl
+        self.s = [None] * nl
         self.frame_k = f = self.idx[self.m.frame]
-        self.X[f], self.th[f], self.c[f], self.s[f] = 0.0, 0.0, 1.0, 0.0
-        self.set = {f}
+        z = np.zeros(M)
+        self.x[f], self.y[f], self.th[f], self.c[f], self.s[f] = z, z, z, np.ones(M), z
+
+    def finite(self, links) -> np.ndarray:
+        out = np.ones(self.M, bool)
+        for k in links:
+            out &= np.isfinite(self.th[k]) if self.th[k] is not None else False
+        return out
 
     def unset_to_nan(self) -> None:
         """Links never solved (``only=``) become NaN."""
+        nan = np.full(self.M, np.nan)
         for k in range(self.m.n_links):
-            if k not in self.set:
-                self.X[k] = self.th[k] = self.c[k] = self.s[k] = np.nan
+            if self.th[k] is None:
+                self.x[k] = self.y[k] = self.th[k] = self.c[k] = self.s[k] = nan
 
     def tail(self, L: int) -> "_Poses":
         out = object.__new__(_Poses)
-        out.sp, out.m, out.M, out.idx = self.sp, self.m, self.M - L, self.idx
-        out.X, out.th, out.c, out.s = self.X[:, L:], self.th[:, L:], self.c[:, L:], self.s[:, L:]
-        out.frame_k, out.set = self.frame_k, self.set
+        out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, self.M - L, self.idx, self.frame_k
+        for name in ("x", "y", "th", "c", "s"):
+            setattr(out, name, [a[L:] for a in getattr(self, name)])
         return out
 
     # -- reading -------------------------------------------------------------------
@@ -498,10 +508,10 @@ class _Poses:
         if k == self.frame_k:
             return np.broadcast_to(np.asarray(r, float), (self.M, 2))
         rx, ry = np.asarray(r, float) - self.sp.origins[k]
-        c, s, X = self.c[k], self.s[k], self.X[k]
+        c, s = self.c[k], self.s[k]
         out = np.empty((self.M, 2))
-        out[:, 0] = X[:, 0] + c * rx - s * ry
-        out[:, 1] = X[:, 1] + s * rx + c * ry
+        out[:, 0] = self.x[k] + c * rx - s * ry
+        out[:, 1] = self.y[k] + s * rx + c * ry
         return out
 
     def point(self, link: str, r) -> np.ndarray:
@@ -518,25 +528,23 @@ class _Poses:
     def theta(self, link: str) -> np.ndarray:
         return self.th[self.idx[link]]
 
-    def cs(self, link: str):
-        k = self.idx[link]
-        return self.c[k], self.s[k], self.th[k]
-
     # -- writing -------------------------------------------------------------------
     def place_cs(self, link: str, P, r_ref, c, s, th) -> None:
         """Pose of ``link`` whose material point at ``r_ref`` is at ``P``, rotated (c, s)."""
         k = self.idx[link]
-        self.set.add(k)
         dx, dy = self.sp.origins[k] - np.asarray(r_ref, float)
         self.c[k], self.s[k], self.th[k] = c, s, th
-        self.X[k, :, 0] = P[:, 0] + c * dx - s * dy
-        self.X[k, :, 1] = P[:, 1] + s * dx + c * dy
+        if dx == 0.0 and dy == 0.0:
+            self.x[k], self.y[k] = P[:, 0], P[:, 1]
+        else:
+            self.x[k] = P[:, 0] + c * dx - s * dy
+            self.y[k] = P[:, 1] + s * dx + c * dy
 
     def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
         """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""
         cr, sr = _unit(d_ref)
-        n = np.hypot(d[:, 0], d[:, 1])
-        ca, sa = d[:, 0] / n, d[:, 1] / n
+        inv = 1.0 / np.hypot(d[:, 0], d[:, 1])
+        ca, sa = d[:, 0] * inv, d[:, 1] * inv
         c, s = ca * cr + sa * sr, sa * cr - ca * sr
         self.place_cs(link, P, r_ref, c, s, np.arctan2(s, c))
 
@@ -545,32 +553,25 @@ class _Poses:
         self.place_cs(link, P, r_ref, self.c[k], self.s[k], self.th[k])
 
     def invalidate(self, links, bad) -> None:
-        self.set.update(links)
         if np.any(bad):
             for k in links:
-                self.X[k, bad] = np.nan
-                self.th[k, bad] = self.c[k, bad] = self.s[k, bad] = np.nan
+                for name in ("x", "y", "th", "c", "s"):
+                    arr = getattr(self, name)
+                    arr[k] = np.where(bad, np.nan, arr[k])
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
         nl = self.m.n_links
-        if links is None:
-            Z = np.empty((self.M, nl, 3))
-            Z[:, :, :2] = self.X.transpose(1, 0, 2)
-            Z[:, :, 2] = self.th.T
-            return Z
-        Z = np.full((self.M, nl, 3), np.nan)
-        for k in list(links) + [self.frame_k]:
-            Z[:, k, :2] = self.X[k]
-            Z[:, k, 2] = self.th[k]
+        ks = range(nl) if links is None else list(links) + [self.frame_k]
+        Z = np.empty((self.M, nl, 3)) if links is None else np.full((self.M, nl, 3), np.nan)
+        for k in ks:
+            Z[:, k, 0], Z[:, k, 1], Z[:, k, 2] = self.x[k], self.y[k], self.th[k]
         return Z
 
     def from_Z(self, Z, links) -> None:
         for k in links:
-            self.set.add(k)
-            self.X[k] = Z[:, k, :2]
-            self.th[k] = Z[:, k, 2]
-            self.c[k], self.s[k] = np.cos(Z[:, k, 2]), np.sin(Z[:, k, 2])
+            self.x[k], self.y[k], self.th[k] = Z[:, k, 0].copy(), Z[:, k, 1].copy(), Z[:, k, 2].copy()
+            self.c[k], self.s[k] = np.cos(self.th[k]), np.sin(self.th[k])
 
 
 def _known_on(st: StepPlan, joint: str) -> str:
@@ -633,7 +634,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     N = G.M
     m = sp.mechanism
     kind = g.kind
-    why = np.full(N, "", dtype=object)
+    why: dict[int, str] = {}
     notes: list[str] = []
     scale = sp.size
     if kind == "RRR":
@@ -763,7 +764,7 @@ def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     P = np.full((N, 3, 2), np.nan)
     th = np.full(N, np.nan)
     ok = np.zeros(N, bool)
-    why = np.full(N, "", dtype=object)
+    why: dict[int, str] = {}
     if good.any():
         idx = np.flatnonzero(good)
         r = K.triad_track(A[idx], b, lengths, b)
@@ -791,7 +792,7 @@ def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     J = np.full((N, 4, 2), np.nan)
     th = np.full((N, 2), np.nan)
     ok = np.zeros(N, bool)
-    why = np.full(N, "", dtype=object)
+    why: dict[int, str] = {}
     if good.any():
         idx = np.flatnonzero(good)
         res = K.class4_track(O[idx], r, lengths, np.zeros(2))

@@ -307,13 +307,14 @@ def test_driver_between_moving_links_gives_a_driven_block():
 
 def class4_mechanism():
     """Crank driving a class IV order 2 group: ternaries T2 (A, Q1, Q2) and T1 (K, P1, P2)
-    closed by binaries b1 (Q1–P1) and b2 (Q2–P2) into a quadrilateral."""
+    closed by binaries b1 (Q1–P1) and b2 (Q2–P2) into a quadrilateral (dimensions of
+    catalogue/mechanisms/stephenson_3.toml)."""
     b = MechanismBuilder(name="class-IV")
     b.add_link("frame", frame=True)
-    J = [("O", ("frame", "crank"), (0.0, 0.0)), ("A", ("crank", "T2"), (0.2, 0.0)),
-         ("Q1", ("T2", "b1"), (0.6, 0.5)), ("Q2", ("T2", "b2"), (0.7, -0.2)),
-         ("P1", ("b1", "T1"), (1.2, 0.7)), ("P2", ("b2", "T1"), (1.3, -0.3)),
-         ("K", ("T1", "frame"), (1.6, 0.1))]
+    J = [("O", ("frame", "crank"), (0.1851, 0.0143)), ("A", ("crank", "T2"), (0.1987, -0.0037)),
+         ("Q1", ("T2", "b1"), (0.0391, 0.1598)), ("Q2", ("T2", "b2"), (0.1079, 0.1893)),
+         ("P1", ("b1", "T1"), (-0.0379, 0.0678)), ("P2", ("b2", "T1"), (0.0426, 0.0227)),
+         ("K", ("T1", "frame"), (0.0, 0.0))]
     for n, lk, at in J:
         b.add_joint(n, "R", lk, at=at)
     b.add_driver("O")
@@ -327,3 +328,23 @@ def test_class_four_group():
     assert p.formula == "I(0,1) → IV(2,3,4,5)"
     t1, t2, b0, b1, o1, o2, *js = g.layout
     assert {t1, t2} == {"T1", "T2"} and {o1, o2} == {"A", "K"} and {b0, b1} == {"b1", "b2"}
+
+
+_CAT = __import__("pathlib").Path(__file__).resolve().parents[1] / "catalogue" / "mechanisms"
+
+
+@pytest.mark.parametrize("stem, formula", [
+    ("knitting_needle_drive", "I(0,1) → II1(2,3) → II1(4,5) → II1(6,7) → II1(8,9)"),   # seed 002 ex. 1
+    ("radial_engine_5cyl", "I(0,1) → II2(2,3) → II2(4,5) → II2(6,7) → II2(8,9) → II2(10,11)"),
+    ("stephenson_3_triad", "I(0,1) → III(2,3,4,5)"),
+])
+def test_catalogue_structure_formulas(stem, formula):
+    from topo.io import load
+    path = _CAT / f"{stem}.toml"
+    if not path.exists():
+        pytest.skip(f"{path.name} not in the catalogue")
+    p = decompose(load(path))
+    assert p.formula == formula
+    if stem == "radial_engine_5cyl":   # all five rods hang off ONE 6-link pin, never broken
+        pins = {j for g in p.groups for j in g.outer_joints if len(load(path).joint(j).links) == 6}
+        assert len(pins) == 1

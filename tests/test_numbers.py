@@ -134,3 +134,31 @@ def test_every_number_invariant_under_relabelling(m, seed):
     for key in ("rigid_subchain", "cut_links", "cut_joints", "name", "warnings"):
         a.pop(key), b.pop(key)
     assert a == b
+
+
+def test_embedding_search_with_and_without_apex_filter_agree():
+    # two routes to the set of planar embeddings of every block: the plain exact-cover
+    # search, and the search restricted to cycles that pass the apex-planarity test
+    import random
+
+    import networkx as nx
+
+    from topo.graphs import incidence_graph
+    from topo.loops import block_embeddings
+    from tests.common import random_joint_lists
+
+    rng = random.Random(11)
+    checked = 0
+    for _ in range(60):
+        m = chain_from_joint_lists(random_joint_lists(rng, rng.randint(5, 10), rng.randint(1, 5), 0.3))
+        g = incidence_graph(m)
+        for block in nx.biconnected_components(g):
+            if len(block) < 3:
+                continue
+            sub = g.subgraph(block)
+            plain = sorted(set(block_embeddings(sub, use_filter=False)))
+            filtered = sorted(set(block_embeddings(sub, use_filter=True)))
+            assert plain == filtered
+            assert bool(plain) == nx.check_planarity(sub)[0]
+            checked += 1
+    assert checked > 50

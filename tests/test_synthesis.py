@@ -176,3 +176,17 @@ def test_mechanism_choices_watt_stephenson_and_by_brute_force():
                     m = m.with_drivers([(f"J{a + 1}", (str(f), str([x for x in j if x != f][0])), None, None)])
                     drivers.add(canonical_form(m, "mechanism"))
         assert len(drivers) == c.n_drivers
+
+
+@needs_nauty
+def test_fast_planarity_equals_networkx():
+    """The reduced-graph shortcuts (K <= 4: only a K3,3 can be non-planar) vs networkx."""
+    import networkx as nx
+
+    for opts in (SynthesisOptions(10, 1), SynthesisOptions(9, 2)):
+        recs = list(iter_chains(opts, loops=False))
+        assert any(not r.planar for r in recs) == (opts.K >= 4)   # K <= 3: always planar
+        for r in recs[::3]:
+            g = nx.Graph()
+            g.add_edges_from((x, r.n + a) for a, j in enumerate(r.joints) for x in j)
+            assert nx.check_planarity(g)[0] == r.planar

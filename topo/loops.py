@@ -89,13 +89,14 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
     (4, 4, 6)
     """
     g = incidence_graph(m)
+    adjacency = {v: list(g[v]) for v in g}
     inner: list[int] = []
     outer_total = 0
     n_emb = 0
     for block in nx.biconnected_components(g):
         if len(block) < 3:           # a bridge: no face of its own
             continue
-        sub = g.subgraph(block)
+        sub = {v: [w for w in adjacency[v] if w in block] for v in block}
         best = _best_block_faces(sub)
         if best is None:
             return LoopAssortment(False, None, None, n_emb)
@@ -118,21 +119,22 @@ def _is_link(v) -> bool:
     return v[0] == "L"
 
 
-def _reduce(block: nx.Graph):
-    """Suppress degree-2 vertices: reduced vertices, edges (u, v, weight) where weight
-    is the number of link vertices strictly inside the path."""
-    deg = dict(block.degree())
+def _reduce(block):
+    """Suppress degree-2 vertices: reduced vertices, edges (u, v, weight, interior)
+    where weight is the number of link vertices strictly inside the path.  ``block``
+    is an adjacency mapping (vertex -> neighbours)."""
+    deg = {v: len(nb) for v, nb in block.items()}
     keep = [v for v in block if deg[v] >= 3]
     keep_set = set(keep)
     edges = []
     seen_paths = set()
     for u in keep:
-        for nb in block.neighbors(u):
+        for nb in block[u]:
             prev, cur, weight, path = u, nb, 0, [u, nb]
             while cur not in keep_set:
                 if _is_link(cur):
                     weight += 1
-                nxt = [w for w in block.neighbors(cur) if w != prev][0]
+                nxt = [w for w in block[cur] if w != prev][0]
                 prev, cur = cur, nxt
                 path.append(cur)
             key = tuple(path) if (path[0], path[1]) < (path[-1], path[-2]) else tuple(reversed(path))
@@ -211,6 +213,8 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
     keeps dense blocks tractable); ``node_budget`` aborts the search with
     ``_BudgetExceeded`` after that many search nodes.
     """
+    if isinstance(block, nx.Graph):
+        block = {v: list(block[v]) for v in block}
     keep, edges = _reduce(block)
     if not keep:   # the block is a single cycle
         s = sum(1 for v in block if _is_link(v))
@@ -219,8 +223,8 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
     n_faces = len(edges) - len(keep) + 2
     kidx = {v: i for i, v in enumerate(keep)}
     idx_edges = [(kidx[u], kidx[v]) for u, v, *_r in edges]
-    if not nx.check_planarity(_reduced_graph(len(keep), idx_edges))[0]:
-        return
+    if len(keep) > 4 and not nx.check_planarity(_reduced_graph(len(keep), idx_edges))[0]:
+        return   # (every graph on at most 4 vertices is planar)
     cycles = _simple_cycles(keep, edges)
     vertex_edges = {v: [] for v in keep}
     for e, (u, v, *_rest) in enumerate(edges):
@@ -302,14 +306,12 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
     # reached along exactly one branch.
     lower = [-1] * n_edges
 
+    cycle_edges = [tuple(e for e in range(n_edges) if (mk >> e) & 1) for mk in masks]
+
     def allowed(c: int, used1: int) -> bool:
-        m = masks[c] & used1
-        e = 0
-        while m:
-            if m & 1 and c <= lower[e]:
+        for e in cycle_edges[c]:
+            if c <= lower[e] and (used1 >> e) & 1:
                 return False
-            m >>= 1
-            e += 1
         return True
 
     nodes = 0
@@ -328,7 +330,9 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
                 yield tuple(sorted(sizes[c] for c in chosen))
             return
         best_e, best_opts = -1, None
-        for e in range(n_edges):
+        once = used1 & ~used2
+        # edges covered once need exactly one more face: most constrained, look there first
+        for e in (range(n_edges) if not once else [e for e in range(n_edges) if (once >> e) & 1]):
             if (used2 >> e) & 1:
                 continue
             opts = [c for c in by_edge[e] if not (masks[c] & used2) and allowed(c, used1)]
@@ -363,7 +367,7 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
 NODE_BUDGET = 2_000
 
 
-def _best_block_faces(block: nx.Graph) -> tuple[list[int], int] | None:
+def _best_block_faces(block) -> tuple[list[int], int] | None:
     """Canonical face sizes of a block and the number of embeddings, or None when the
     block is not planar (tested on the reduced graph first)."""
     try:

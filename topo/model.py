@@ -22,7 +22,6 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Iterable, Sequence
 
 from .errors import InputError, TopologyError, explain
@@ -133,7 +132,8 @@ class Load:
 
     ``value`` is a constant force ``(Fx, Fy)`` in the frame; ``table`` optionally gives
     it against the input as rows ``(input_deg, Fx, Fy)`` (linear interpolation,
-    periodic over 360 deg).  ``moment`` is a constant couple (N m, counter-clockwise).
+    periodic over 360 deg, or over 720 deg when a row lies beyond 360 deg; see
+    ``kin.forces``).  A force without ``at`` acts at the centre of mass.  ``moment`` is a constant couple (N m, counter-clockwise).
     """
 
     link: str

@@ -48,7 +48,7 @@ Dyads (kind numbers are seed 000's "виды" 1–5)
 ---------------------------------------------
 Outer joints attach to known links; the dyad's links are 2 and 3 as in seed 000.
 
-``rrr_position(A, C, l2, l3, sign) -> RRRPosition(B, ok, det)``   kind 1
+``rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition(B, ok, det)``   kind 1
     Link 2 = A–B (length l2), link 3 = C–B (length l3); ``B`` ``(..., 2)``.
     ``sign=+1``: B to the left of directed A→C, ``cross(C-A, B-A) > 0`` (then
     ``det < 0``).  ``det = cross(B-C, B-A) = l2 l3 sin(φ2-φ3)``.
@@ -57,7 +57,7 @@ Outer joints attach to known links; the dyad's links are 2 and 3 as in seed 000.
     ``w2, w3``: angular velocities of links A–B and C–B; ``e2, e3`` their angular
     accelerations.
 
-``rrp_position(A, P, u, l2, h, sign) -> RRPPosition(B, s, ok, det)``   kind 2
+``rrp_position(A, P, u, l2, h=0.0, sign=1.0) -> RRPPosition(B, s, ok, det)``   kind 2
     Link 2 = A–B (length l2); B (on slider link 3) moves on the line
     ``P + s u + h n(u)`` fixed in the known guide link.  Link 3 keeps the guide's
     orientation.  ``sign=+1``: ``(B-A)·u > 0`` (seed's ``s = A_x1 + x2``); ``det =
@@ -66,7 +66,7 @@ Outer joints attach to known links; the dyad's links are 2 and 3 as in seed 000.
 ``rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates(w2, sd, vB, e2, sdd, aB, det, singular)``
     ``sd, sdd``: slide rate/acceleration along ``u`` (relative to the guide link).
 
-``rpr_position(A, C, h, sign) -> RPRPosition(u, s, ok, det)``   kind 3
+``rpr_position(A, C, h=0.0, sign=1.0) -> RPRPosition(u, s, ok, det)``   kind 3
     Block 2 pivoted at A slides on guide link 3 pivoted at C;
     ``A = C + s u + h n(u)``; returns the guide direction ``u`` ``(..., 2)`` of link
     3 (block 2 turns with it) and the slide ``s``.  ``sign=+1``: ``s > 0``;
@@ -81,7 +81,7 @@ Outer joints attach to known links; the dyad's links are 2 and 3 as in seed 000.
 ``prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2, aP1=None, eps1=None, aP2=None, eps2=None)
 -> PRPRates(s1d, s2d, vB, s1dd, s2dd, aB, det, singular)``
 
-``rpp_position(A, P, u, alpha, h) -> RPPPosition(Q, s1, s2, ok, det)``   kind 5
+``rpp_position(A, P, u, alpha, h=0.0) -> RPPPosition(Q, s1, s2, ok, det)``   kind 5
     Link 3 slides on the known guide (P, u): its point ``Q = P + s1 u``; link 2
     (pivoted at known A) slides along link 3 in direction ``w = R(alpha) u``:
     ``A = Q + s2 w + h n(w)``.  Links 2, 3 keep the guide link's orientation.

@@ -10,10 +10,12 @@ Subtracting the first equation from the other two gives two equations linear in
 ``p``; Cramer's rule and substitution into the first give a Laurent polynomial
 ``F(z)`` in ``z = e^{iθ}`` of degree -3..3, so ``z³F(z)`` has degree 6 (at most 6
 real modes, Hunt 1983).  Its coefficients are read exactly by a 16-point DFT of
-``F`` on the unit circle, the roots are the eigenvalues of the companion matrix
-(batched over positions), roots on the unit circle are the real modes; each is
+``F`` on the unit circle.  ``F`` is real on the circle, so ``θ = σ + 2 atan t``
+turns it into a real degree-6 polynomial in ``t``, whose real roots (eigenvalues
+of its companion matrix, batched over positions) are the real modes; each is
 polished by Newton on the three original equations and accepted if its
-residual is ≤ 1e-9 (relative).
+residual is ≤ 1e-9 (relative).  Along a motion, :func:`triad_track` follows one
+mode by guarded continuity.
 
 Seed 000 [1]_ treats dyads only; this group extends its Cramer-rule approach
 (velocities and accelerations by one linear system with the same matrix).
@@ -35,7 +37,7 @@ import numpy as np
 from .base import SINGULAR_RTOL, quiet
 
 __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
-           "triad_rates", "MAX_MODES"]
+           "triad_rates", "follow_modes", "MAX_MODES"]
 
 #: maximum number of real assembly modes of a triad / class IV group.
 MAX_MODES = 6
@@ -87,8 +89,10 @@ def _rot(c, s, v):
 
 
 def _solve3c(m, r):
-    """Component form of :func:`_solve3`: ``m`` 3×3 nested lists of arrays, ``r``
-    3 arrays; returns the list of 3 solution arrays, ``det``, ``singular``."""
+    """Solve stacked 3×3 systems by the adjugate, component-wise (no exception and
+    no warning when singular).  ``m``: 3×3 nested lists of arrays, ``r``: 3 arrays;
+    returns the 3 solution arrays, ``det`` and ``singular`` (``|det| <=
+    SINGULAR_RTOL · product of the row norms``)."""
     (a, b, c), (d, e, f), (g, h, i) = m
     A_ = e * i - f * h
     B_ = f * g - d * i
@@ -210,6 +214,51 @@ def _position_from_angle(A, bc, a, l, th):
     return np.where(np.isfinite(p), p, A[..., 0, :])
 
 
+def _tan_half_basis():
+    """Rows j = 3..-3: ascending coefficients in t of (1+it)^(3+j) (1-it)^(3-j),
+    i.e. ``e^{ijψ}(1+t²)³`` with ``t = tan(ψ/2)``."""
+    from numpy.polynomial import polynomial as npp
+    rows = []
+    for j in range(3, -4, -1):
+        rows.append(npp.polymul(npp.polypow([1, 1j], 3 + j), npp.polypow([1, -1j], 3 - j)))
+    return np.array(rows)                                # (7, 7) complex
+
+
+_BASIS = _tan_half_basis()
+_GRID = np.exp(1j * np.outer(np.arange(3, -4, -1), 2 * np.pi * np.arange(16) / 16))  # (7, 16)
+
+
+def _unit_circle_roots(coef):
+    """Angles of the roots of ``z³F(z)`` on the unit circle (the real modes).
+
+    ``F`` is real on the circle, so with ``θ = σ + ψ`` and ``t = tan(ψ/2)`` the
+    equation becomes a *real* degree-6 polynomial in ``t`` (real companion
+    eigenproblem, cheaper than the complex one).  ``σ`` is chosen per position so
+    that ``ψ = π`` (``t = ∞``) falls on the largest of the 16 samples of ``F``: the
+    leading coefficient is then that sample and no root escapes to infinity.
+    Returns candidate angles (N, 6), the candidate mask (roots within ~1e-3 of
+    the circle) and the per-position ``good`` mask.
+    """
+    N = coef.shape[0]
+    samples = (coef @ _GRID).real                        # F at 2πk/16
+    kmax = np.argmax(np.abs(samples), axis=-1)
+    sigma = 2 * np.pi * kmax / 16 - np.pi
+    shifted = coef * np.exp(1j * np.outer(sigma, np.arange(3, -4, -1)))
+    q = (shifted @ _BASIS).real                          # ascending in t, (N, 7)
+    lead = q[:, 6]
+    good = np.isfinite(q).all(axis=-1) & (np.abs(lead) > 0)
+    comp = np.zeros((N, 6, 6))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        comp[:, 0, :] = -q[:, 5::-1] / lead[:, None]
+    comp[:, np.arange(1, 6), np.arange(5)] = 1.0
+    good &= np.isfinite(comp).all(axis=(1, 2))
+    comp[~good] = np.eye(6) * 10.0
+    t = np.linalg.eigvals(comp)                          # (N, 6) complex
+    cand = np.abs(t.imag) < 0.5 * _ON_CIRCLE * (1.0 + np.abs(t) ** 2)
+    th0 = sigma[:, None] + 2.0 * np.arctan(t.real)
+    return th0, cand & good[:, None], good
+
+
 # --------------------------------------------------------------------------- modes
 @quiet
 def triad_modes(A, b, l) -> TriadModes:
@@ -235,8 +284,10 @@ def triad_modes(A, b, l) -> TriadModes:
 
     Notes
     -----
-    Degree-6 polynomial (``reference/kinematics.md`` §2.3), batched companion
-    eigenvalues (O(N) LAPACK calls of size 6), Newton polish, duplicates merged.
+    Degree-6 polynomial (``reference/kinematics.md`` §2.3) made real by the
+    tangent half-angle substitution, batched real companion eigenvalues (O(N)
+    LAPACK calls of size 6), Newton polish of the near-real roots only,
+    duplicates merged.
     Degenerate cases (the linear 2×2 system singular at a mode, i.e. the
     ternary's two difference vectors parallel there) may lose that mode.
 
@@ -253,21 +304,14 @@ def triad_modes(A, b, l) -> TriadModes:
     N = A.shape[0]
     bb = b - b[0]
     coef, bc, a = _poly_coefficients(A, bb, l)
-    big = np.max(np.abs(coef), axis=-1)
-    lead = coef[:, 0]
-    lead = np.where(np.abs(lead) > 1e-13 * big, lead, 1e-13 * big + 0j)
-    comp = np.zeros((N, 6, 6), dtype=complex)
-    comp[:, 0, :] = -coef[:, 1:] / lead[:, None]
-    comp[:, np.arange(1, 6), np.arange(5)] = 1.0
-    good = np.isfinite(comp).all(axis=(1, 2)) & (big > 0)
-    comp[~good] = np.eye(6) * 10.0                       # no real roots there
-    roots = np.linalg.eigvals(comp)                      # (N, 6)
-    cand = np.abs(np.abs(roots) - 1.0) < _ON_CIRCLE
-    th0 = np.angle(roots)
-    p0 = _position_from_angle(A[:, None], bc, a[:, None], l[:, None], th0)
-    p0 = np.where(np.isfinite(p0), p0, A[:, None, 0, :])
-    P, th, res = _polish(A[:, None], bb, l[:, None], p0, th0)
-    th = _wrap(th)
+    th0, cand, good = _unit_circle_roots(coef)
+    ri, ki = np.nonzero(cand)                            # polish the candidates only
+    p0 = _position_from_angle(A[ri], bc, a[ri], l[ri], th0[ri, ki])
+    Pk, thk, resk = _polish(A[ri], bb, l[ri], p0, th0[ri, ki])
+    P = np.full((N, MAX_MODES, 3, 2), np.nan)
+    th = np.full((N, MAX_MODES), np.nan)
+    res = np.full((N, MAX_MODES), np.inf)
+    P[ri, ki], th[ri, ki], res[ri, ki] = Pk, _wrap(thk), resk
     valid = cand & good[:, None] & (res <= _ACCEPT)
     # merge duplicates (same pose reached from two roots)
     scale = np.max(l, axis=-1)[:, None, None]
