@@ -131,6 +131,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="only up to 10 links")
     ap.add_argument("--budget", type=float, default=60.0, help="seconds before a baseline is extrapolated")
+    ap.add_argument("--with-14", action="store_true",
+                    help="also count the 1-DOF simple-jointed 14-link chains (literature: 318 162)")
     ap.add_argument("--chart", default=str(ROOT / "benchmarks" / "charts" / "atlas_times.png"))
     args = ap.parse_args(argv)
     cases = [("SJ F=1 n=10", SynthesisOptions(10, 1, simple_joints=True), 1.0),
@@ -165,6 +167,11 @@ def main(argv=None) -> int:
               f"{speed:>9}{'' if tl is None else f'{tl:.2f}':>9}{tbs:>11}{'*' if extra else ' '}"
               f"{ratio:>8}{'' if goal is None else f'{goal:.0f}':>8}", flush=True)
         rows.append((name, count, tc, t1, t2, tb, extra))
+    if args.with_14:
+        opts = SynthesisOptions(14, 1, simple_joints=True)
+        tc, count = ours_count(opts)
+        assert count == LITERATURE_SJ_F1[14], count
+        print(f"{'SJ F=1 n=14':<14}{count:>8}{tc:>9.2f}   (count only; literature 318162)", flush=True)
     me, kids = peak_mb()
     print(f"peak memory: this process {me:.0f} MB, largest child {kids:.0f} MB")
     print("* baseline extrapolated from its per-graph rate on a prefix (see --budget); "

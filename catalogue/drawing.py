@@ -286,6 +286,9 @@ def existence_domain_chart(atlas, path, pairs=None) -> dict:
     top = max(cells) if cells else 2
     ax.set_xlim(-0.8, 2 * (top - 1) + 1.8)
     ax.set_ylim(0.4, top + 1)
+    from matplotlib.ticker import MaxNLocator
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("MJ factor V = Σ (j − 1) V_j")
     ax.set_ylabel("largest multiplicity j (1 = simple joints only)")
     ax.set_title("Existence domain j ≤ K, V ≤ 2(K − 1) (seed 002 fig. 10):\ncells occupied by the atlas")
@@ -333,8 +336,9 @@ def invariant_merge_chart(atlas, path, pairs=None) -> dict:
     import matplotlib.pyplot as plt
 
     if pairs is None:
-        pairs = sorted({(r[0], r[1]) for r in atlas.con.execute(
-            "SELECT DISTINCT n, F FROM chains WHERE loops IS NOT NULL OR planar = 0")})
+        pairs = sorted((r[0], r[1]) for r in atlas.con.execute(
+            "SELECT n, F FROM chains WHERE loops IS NOT NULL OR planar = 0 GROUP BY n, F "
+            "HAVING count(*) >= 4"))
     data = {pr: invariant_merges(atlas, *pr) for pr in pairs}
     levels = ["[LA]", "+[MJA]", "+[La]", "+MJ link sets"]
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(pairs) + 2), 4.5))

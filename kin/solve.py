@@ -42,13 +42,16 @@ from topo.errors import (AssemblyError, InputError, SingularityError, Singularit
                          explain)
 from topo.model import JointKind, Mechanism
 
-from .groups.newton import ConstraintSystem, newton, rates, track
+from .groups.newton import ConstraintSystem, rates, track
 from .state import KinematicState
 
 __all__ = ["solve", "compile_plan", "SolvePlan", "StepPlan", "METHODS"]
 
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = 1e-9          # relative determinant below which a position is singular
+#: PRP/RPP: |det| = |sin(angle between the unit guides)| below which the guides count as
+#: parallel; nearer than this the slider positions exceed 1e6 × the offsets (change point)
+_PARALLEL_GUIDES = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,7 +231,6 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     XX = np.vstack([lead, X]) if lead.size else X
     L = lead.shape[0]
     M = XX.shape[0]
-    nl = m.n_links
     # which steps
     needed = list(range(len(sp.steps)))
     if only is not None:
@@ -273,7 +275,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         G = G.tail(L)
     N = M - L
     failed = np.flatnonzero(has_reason[L:])
-    status = np.full(N, "ok", dtype=object)
+    status = np.empty(N, dtype=object)
+    status.fill("ok")                       # (np.full with an object is ~30x slower)
     for n in failed:
         status[n] = reason[int(n) + L]
     solved_links = [i for s in needed for i in sp.steps[s].unknown]
@@ -293,7 +296,15 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         R = np.broadcast_to(rates_in, (N, nd))
         for k in needed:
             st = sp.steps[k]
-            Zd, Zdd = rates(st.system, Z, Zd, R, st.unknown, Zdd, None)
+            if st.solver == "dyad" and kernels and st.step.kind in kernels:
+                _dyad_rates(sp, st, Z, Zd, Zdd)       # closed form (one 2×2 system)
+            elif st.solver == "driver" and _driver_closed_form(st):
+                _driver_rates(sp, st, Z, Zd, Zdd, rates_in)
+            else:
+                Zd, Zdd = rates(st.system, Z, Zd, R, st.unknown, Zdd, None)
+        unsolved = [k for k in range(m.n_links) if k not in set(solved_links) and m.link_names[k] != m.frame]
+        Zd[:, unsolved] = np.nan
+        Zdd[:, unsolved] = np.nan
         bad = ~okm
         Zd[bad] = np.nan
         Zdd[bad] = np.nan
@@ -543,7 +554,8 @@ class _Poses:
     def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
         """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""
         cr, sr = _unit(d_ref)
-        inv = 1.0 / np.hypot(d[:, 0], d[:, 1])
+        dx, dy = d[:, 0], d[:, 1]
+        inv = 1.0 / np.sqrt(dx * dx + dy * dy)
         ca, sa = d[:, 0] * inv, d[:, 1] * inv
         c, s = ca * cr + sa * sr, sa * cr - ca * sr
         self.place_cs(link, P, r_ref, c, s, np.arctan2(s, c))
@@ -631,7 +643,6 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     import kin.groups as K
     g: AssurGroup = st.step
     o1, inner, o2, l1, l2 = g.layout
-    N = G.M
     m = sp.mechanism
     kind = g.kind
     why: dict[int, str] = {}
@@ -645,7 +656,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         sgn0 = float(K.rrr_branch(Aref, Cref, Bref))
         rs = K.rrr_position(A, C, la, lc, sgn0)
         AC = C - A
-        d = np.hypot(AC[:, 0], AC[:, 1])
+        d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
         gap = 2.0 * np.abs(AC[:, 0] * (rs.B[:, 1] - A[:, 1]) - AC[:, 1] * (rs.B[:, 0] - A[:, 0])) / d
         signs, flips, alt = _choose_branch(rs.B, gap, sgn0, rs.ok, scale,
                                            lambda: K.rrr_position(A, C, la, lc, -sgn0).B)
@@ -737,7 +748,8 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         det, rdet = r.det, 1.0
     else:  # pragma: no cover
         raise ValueError(kind)
-    sing = ok & ~(np.abs(det) > 1e-9 * rdet)
+    tol = _PARALLEL_GUIDES if kind in ("PRP", "RPP") else _SINGULAR
+    sing = ok & ~(np.abs(det) > tol * rdet)
     for n in np.flatnonzero(sing):
         why[n] = f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)"
     ok &= ~sing
@@ -805,3 +817,132 @@ def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     G.place_dir(b0, J[:, 0], Jref[0], J[:, 2] - J[:, 0], Jref[2] - Jref[0])
     G.place_dir(b1, J[:, 1], Jref[1], J[:, 3] - J[:, 1], Jref[3] - Jref[1])
     return ok, why, []
+
+
+# ---------------------------------------------------------------------------------
+# closed-form rates of dyads (kernels' Cramer 2×2 systems) on the pose arrays
+def _perp2(v):
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+
+
+class _Rates:
+    """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd."""
+
+    def __init__(self, sp: SolvePlan, Z, Zd, Zdd):
+        self.sp, self.Z, self.Zd, self.Zdd = sp, Z, Zd, Zdd
+        self.idx = {x: i for i, x in enumerate(sp.mechanism.link_names)}
+
+    def point(self, link: str, r):
+        """Position, velocity, acceleration of ``link``'s material point at reference ``r``."""
+        k = self.idx[link]
+        rho = _rotate(np.asarray(r, float) - self.sp.origins[k], self.Z[:, k, 2])
+        w, e = self.Zd[:, k, 2][:, None], self.Zdd[:, k, 2][:, None]
+        pr = _perp2(rho)
+        return (self.Z[:, k, :2] + rho, self.Zd[:, k, :2] + w * pr,
+                self.Zdd[:, k, :2] + e * pr - w * w * rho)
+
+    def direction(self, link: str, v):
+        k = self.idx[link]
+        return _rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], self.Zdd[:, k, 2]
+
+    def set(self, link: str, P, vP, aP, w, e) -> None:
+        """Rates of ``link`` from those of its point at P and its ω, ε."""
+        k = self.idx[link]
+        rho = self.Z[:, k, :2] - P
+        pr = _perp2(rho)
+        w2, e2 = np.asarray(w)[:, None], np.asarray(e)[:, None]
+        self.Zd[:, k, :2] = vP + w2 * pr
+        self.Zd[:, k, 2] = w
+        self.Zdd[:, k, :2] = aP + e2 * pr - w2 * w2 * rho
+        self.Zdd[:, k, 2] = e
+
+
+def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
+    import kin.groups as K
+    g: AssurGroup = st.step
+    o1, inner, o2, l1, l2 = g.layout
+    m = sp.mechanism
+    R = _Rates(sp, Z, Zd, Zdd)
+
+    def at(j):
+        return np.asarray(m.joint(j).at, float)
+
+    if g.kind == "RRR":
+        A, vA, aA = R.point(_known_on(st, o1), at(o1))
+        C, vC, aC = R.point(_known_on(st, o2), at(o2))
+        B = R.point(l1, at(inner))[0]
+        r = K.rrr_rates(A, C, B, vA, vC, aA, aC)
+        R.set(l1, A, vA, aA, r.w2, r.e2)
+        R.set(l2, C, vC, aC, r.w3, r.e3)
+    elif g.kind == "RRP":
+        kp = _known_on(st, o2)
+        A, vA, aA = R.point(_known_on(st, o1), at(o1))
+        P, vP, aP = R.point(kp, at(o2))
+        u, w, e = R.direction(kp, _unit(m.joint(o2).axis))
+        B = R.point(l1, at(inner))[0]
+        r = K.rrp_rates(A, B, P, u, vA, vP, w, aA, aP, e)
+        R.set(l1, A, vA, aA, r.w2, r.e2)
+        R.set(l2, B, r.vB, r.aB, w, e)
+    elif g.kind == "RPR":
+        guide = m.joint(inner).links[0]
+        gx, bx = (o1, o2) if guide == l1 else (o2, o1)
+        blk = l2 if guide == l1 else l1
+        Xp, vX, aX = R.point(_known_on(st, gx), at(gx))
+        Yp, vY, aY = R.point(_known_on(st, bx), at(bx))
+        u = _rotate(_unit(m.joint(inner).axis), Z[:, R.idx[guide], 2])
+        r = K.rpr_rates(Yp, Xp, u, vY, vX, aY, aX)
+        R.set(guide, Xp, vX, aX, r.w3, r.e3)
+        R.set(blk, Yp, vY, aY, r.w3, r.e3)
+    elif g.kind == "PRP":
+        k1, k2 = _known_on(st, o1), _known_on(st, o2)
+        P1, vP1, aP1 = R.point(k1, at(o1))
+        P2, vP2, aP2 = R.point(k2, at(o2))
+        u1, w1, e1 = R.direction(k1, _unit(m.joint(o1).axis))
+        u2, w2, e2 = R.direction(k2, _unit(m.joint(o2).axis))
+        B = R.point(l1, at(inner))[0]
+        r = K.prp_rates(B, P1, u1, P2, u2, vP1, w1, vP2, w2, aP1, e1, aP2, e2)
+        R.set(l1, B, r.vB, r.aB, w1, e1)
+        R.set(l2, B, r.vB, r.aB, w2, e2)
+    elif g.kind == "RPP":
+        kq = _known_on(st, o2)
+        alpha = float(_angle(_unit(m.joint(inner).axis)) - _angle(_unit(m.joint(o2).axis)))
+        A, vA, aA = R.point(_known_on(st, o1), at(o1))
+        P, vP, aP = R.point(kq, at(o2))
+        u, w, e = R.direction(kq, _unit(m.joint(o2).axis))
+        Q = R.point(l2, at(o2))[0]
+        r = K.rpp_rates(A, Q, P, u, alpha, vA, vP, w, aA, aP, e)
+        R.set(l2, Q, r.vQ, r.aQ, w, e)
+        R.set(l1, A, vA, aA, w, e)
+    else:  # pragma: no cover
+        raise ValueError(g.kind)
+
+
+def _driver_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd, rates_in) -> None:
+    """Rates of a one-link driver step: ω = ω_base ± rate (R) or the base's (P)."""
+    m = sp.mechanism
+    cons = st.step.constraints
+    lk = m.link_names[st.unknown[0]]
+    d = next(c for c in cons if c.kind.startswith("drive"))
+    R = _Rates(sp, Z, Zd, Zdd)
+    rate = rates_in[d.driver]
+    if d.kind == "drive_R":
+        p = next(c for c in cons if c.kind == "R")
+        other = d.a if d.b == lk else d.b
+        sgn = 1.0 if d.b == lk else -1.0
+        host = p.a if p.b == lk else p.b
+        P, vP, aP = R.point(host, m.joint(p.joint).at)
+        ko = R.idx[other]
+        R.set(lk, P, vP, aP, Zd[:, ko, 2] + sgn * rate, Zdd[:, ko, 2].copy())
+    else:
+        jt = m.joint(d.joint)
+        other = d.a if d.b == lk else d.b
+        sgn = 1.0 if d.b == lk else -1.0
+        P, vP, aP = R.point(other, jt.at)          # the known link's point at the joint
+        u, w, e = R.direction(other, _unit(jt.axis))
+        # the unknown link's material point at the joint sits at Q = P ± s u
+        Q = R.point(lk, jt.at)[0]
+        rel = Q - P
+        w2 = w[:, None]
+        vQ = vP + w2 * _perp2(rel) + sgn * rate * u
+        aQ = aP + e[:, None] * _perp2(rel) - w2 * w2 * rel + 2.0 * w2 * sgn * rate * _perp2(u)
+        R.set(lk, Q, vQ, aQ, w, e)

@@ -471,17 +471,9 @@ def joint_positions(m: Mechanism, poses: np.ndarray) -> np.ndarray:
                       for j in m.joints] for q in poses])
 
 
-_KIN_SOLVE_KNOWN_FAIL = {
-    # kin.solve batch: "group 1 G3(1,2,3) (driven 3-link group ...): no assembly (continuation
-    # failed)" at the 2nd driver value, although solving that value alone succeeds (reported).
-    "excavator": "kin.solve batch continuation of a cylinder-driven group fails",
-    "excavator_bucket": "kin.solve batch continuation of a cylinder-driven group fails",
-}
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param(x, marks=pytest.mark.xfail(reason=_KIN_SOLVE_KNOWN_FAIL[x], strict=False))
-    if x in _KIN_SOLVE_KNOWN_FAIL else x for x in names()])
+@pytest.mark.parametrize("name", names())
 def test_kin_solve_agrees_with_continuation(name):
     """Cross-check of two independent solvers: kin.solve (closed-form groups, branch from
     the reference) and the Newton continuation above, along the same driver path."""

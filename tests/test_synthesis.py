@@ -190,3 +190,14 @@ def test_fast_planarity_equals_networkx():
             g = nx.Graph()
             g.add_edges_from((x, r.n + a) for a, j in enumerate(r.joints) for x in j)
             assert nx.check_planarity(g)[0] == r.planar
+
+
+@needs_nauty
+@pytest.mark.parametrize("n, expected", [(4, 1), (6, 5), (8, 71), (10, 1834)])
+def test_literature_mechanism_counts(n, expected):
+    """Distinct 1-DOF simple-jointed mechanisms (frame choices): 1, 5, 71, 1834 for
+    4…10 links (Tsai 2001, ch. 4; Mruthyunjaya 2003)."""
+    opts = SynthesisOptions(n, 1, simple_joints=True)
+    total = sum(mechanism_choices(n, [sum(1 << x for x in j) for j in r.joints]).n_frames
+                for r in iter_chains(opts, loops=False))
+    assert total == expected

@@ -48,7 +48,6 @@ References
 """
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import networkx as nx
@@ -317,7 +316,6 @@ def reference_jacobian(m: Mechanism, constraints, columns, joint_at=None, joint_
             rows.append(blk)
         elif c.kind in ("P", "drive_P"):
             u = axis[c.joint]
-            dirs = [_perp(u)] if c.kind == "drive_P" else [_perp(u)]
             dirs = [u] if c.kind == "drive_P" else [_perp(u)]
             blk = np.zeros((1 if c.kind == "drive_P" else 2, 3 * len(columns)))
             if c.kind == "P":   # angle row first
@@ -666,5 +664,3 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
     return AssurGroup(index, cls, order, kind, tuple(links), full, inner_joints, outer_joints,
                       known_links, tuple(cons), numbers, layout, tuple(drv))
 
-
-_ = itertools

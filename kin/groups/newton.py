@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from topo.assur import Constraint, link_origins
+from topo.assur import link_origins
 from topo.model import Mechanism
 
 __all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
@@ -360,7 +360,8 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
                 reason[n] = "no assembly (Newton did not converge)"
                 Z[n, u] = np.nan
         else:
-            zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol)
+            zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol,
+                          known=known)
             if zz is None:
                 reason[n] = "no assembly (continuation failed: out of reach, or a turning point)"
                 Z[n, u] = np.nan
@@ -379,17 +380,44 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
     return TrackResult(Z, ok, reason, rel, iters)
 
 
-def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13):
-    """One continuation step from ``prev`` to the target knowns ``Zn``/inputs ``xn``."""
+def _euler_tangent(sys, Za, xa, Zn, xn, u, known):
+    """First-order (implicit-function) predictor of the unknowns for the whole step:
+    ``J_u dU = −(J_k dK + G dx)`` at the last good position ``Za``; None if singular."""
+    cols = _cols(u)
+    J = sys.jacobian(Za[None])[0]
+    Ju = J[:, cols]
+    dK = Zn[known] - Za[known]
+    dK[:, 2] = (dK[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    rhs = J[:, _cols(known)] @ dK.ravel() if known.size else np.zeros(J.shape[0])
+    rhs = rhs + sys.input_column(xa.shape[0]) @ (xn - xa)
+    try:
+        dU = np.linalg.solve(Ju, -rhs)
+    except np.linalg.LinAlgError:
+        return None
+    return dU.reshape(len(u), 3)
+
+
+def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13, *, known=None):
+    """One continuation step from ``prev`` to the target knowns ``Zn``/inputs ``xn``.
+
+    Predictor: the Euler tangent of the implicit function (``_euler_tangent``), which
+    follows any direction of the step in the group's parameters (several drivers
+    changing out of phase, known links moving); without ``known``, the secant through
+    the two previous positions scaled by the ratio of the input steps."""
     Za, xa = prev
     Zn = Zn.copy()             # known angles: go the short way round (closed forms wrap θ)
     Zn[:, 2] = Za[:, 2] + (Zn[:, 2] - Za[:, 2] + np.pi) % (2 * np.pi) - np.pi
-    tangent = np.zeros_like(Za[u])
-    if prev2 is not None:
+    tangent = _euler_tangent(sys, Za, xa, Zn, xn, u, known) if known is not None else None
+    if tangent is None or not np.all(np.isfinite(tangent)):
+        tangent = np.zeros_like(Za[u])
+    if prev2 is not None and known is None:
         Zb, xb = prev2
-        db2 = float(np.dot(xa - xb, xa - xb))
+        d_prev, d_next = xa - xb, xn - xa
+        db2 = float(np.dot(d_prev, d_prev))
         if db2 > 0:          # secant scaled by the signed ratio of the input steps
-            tangent = (Za[u] - Zb[u]) * (float(np.dot(xn - xa, xa - xb)) / db2)
+            dU = Za[u] - Zb[u]
+            dU[:, 2] = (dU[:, 2] + np.pi) % (2 * np.pi) - np.pi   # angles: the short way
+            tangent = dU * (float(np.dot(d_next, d_prev)) / db2)
     scale = max(1.0, float(np.max(np.abs(Za[:, :2]))))
     t, h, cur = 0.0, 1.0, Za[u].copy()
     halvings = 0
@@ -463,5 +491,3 @@ def rates(sys: ConstraintSystem, Z: np.ndarray, Zd: np.ndarray, input_rates: np.
     Zdd[:, u] = a.reshape(N, len(u), 3)
     return Zd, Zdd
 
-
-_ = Constraint

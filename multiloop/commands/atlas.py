@@ -92,6 +92,9 @@ def run(args) -> int:
                     d["frames"], d["drivers"] = c.n_frames, c.n_drivers
                 items.append(d)
             out["chains"] = items
+            if args.mechanisms:
+                out["mechanisms"] = {"frames": sum(d["frames"] for d in items),
+                                     "drivers": sum(d["drivers"] for d in items)}
             if built is not None:
                 out["build"] = {"tasks_run": built.tasks_run, "tasks_total": built.tasks_total,
                                 "seconds": round(built.seconds, 3)}
@@ -130,6 +133,10 @@ def _print_text(opts, args, count, chains, table, built) -> None:
                   f"{r['chains']:>8}")
         print(f"{sum(1 for r in table if r['realisable'])} of {len(table)} assortments are realisable")
         return
+    if args.mechanisms:
+        cs = [mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints]) for r in chains]
+        print(f"  mechanisms: {sum(c.n_frames for c in cs)} distinct frames, "
+              f"{sum(c.n_drivers for c in cs)} distinct (frame, driver) choices")
     if args.limit is not None or args.query or count <= 50:
         for i, r in enumerate(chains, 1):
             extra = ""

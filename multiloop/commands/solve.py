@@ -238,5 +238,11 @@ def run(args) -> int:
         _atomic_write(path, data)
     print(text)
     if not state.success:
-        print(f"multiloop solve: {state.message}", file=sys.stderr)
+        bad = np.flatnonzero(~state.ok)
+        x0 = doc["input"][int(bad[0])]
+        unit = doc["drivers"][0]["unit"] if doc["drivers"] else ""
+        print(f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
+              f"{x0:g} {unit}: {state.status[bad[0]]}" if not isinstance(x0, list) else
+              f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
+              f"{x0}: {state.status[bad[0]]}", file=sys.stderr)
     return 0
