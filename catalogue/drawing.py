@@ -252,7 +252,7 @@ def draw_chain(ax, n: int, joints: Sequence[Sequence[int]], title: str | None = 
 
 
 # ---------------------------------------------------------------------- atlas charts
-def existence_domain_chart(atlas, path, pairs=None) -> dict:
+def existence_domain_chart(atlas, path, pairs=None, title: str | None = None) -> dict:
     """Seed 002 fig. 10 drawn from an atlas: the (V, j_max) cells that occur for each K.
 
     Every stored chain (or those of ``pairs`` = [(n, F), …]) adds its cell
@@ -291,7 +291,8 @@ def existence_domain_chart(atlas, path, pairs=None) -> dict:
     ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("MJ factor V = Σ (j − 1) V_j")
     ax.set_ylabel("largest multiplicity j (1 = simple joints only)")
-    ax.set_title("Existence domain j ≤ K, V ≤ 2(K − 1) (seed 002 fig. 10):\ncells occupied by the atlas")
+    ax.set_title(title or "Existence domain j ≤ K, V ≤ 2(K − 1) (seed 002 fig. 10):\n"
+                 "cells occupied by the atlas")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()

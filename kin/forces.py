@@ -73,6 +73,7 @@ import numpy as np
 from topo.errors import InputError, MobilityError, SingularityWarning, explain
 from topo.model import JointKind, Mechanism
 
+from .result import BatchStatus
 from .state import KinematicState
 
 __all__ = ["Pair", "PointLoad", "ForceResult", "forces", "link_loads", "solve_batched",
@@ -112,7 +113,7 @@ class PointLoad:
 
 
 @dataclass(frozen=True)
-class ForceResult:
+class ForceResult(BatchStatus):
     """Result of :func:`forces` (frozen).  Leading axis: positions.
 
     Attributes
@@ -160,21 +161,6 @@ class ForceResult:
     blocks: tuple = ()
     notes: tuple = ()
     normal_forces: np.ndarray | None = None
-
-    @property
-    def ok(self) -> np.ndarray:
-        return self.status == "ok"
-
-    @property
-    def success(self) -> bool:
-        return bool(np.all(self.ok))
-
-    @property
-    def message(self) -> str:
-        bad = np.flatnonzero(~self.ok)
-        if not bad.size:
-            return "ok"
-        return f"{bad.size} of {self.n_positions} positions failed; first: #{bad[0]}: {self.status[bad[0]]}"
 
     @property
     def n_positions(self) -> int:

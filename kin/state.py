@@ -26,11 +26,13 @@ import numpy as np
 
 from topo.model import Mechanism
 
+from .result import BatchStatus
+
 __all__ = ["KinematicState"]
 
 
 @dataclass(frozen=True)
-class KinematicState:
+class KinematicState(BatchStatus):
     mechanism: Mechanism
     inputs: np.ndarray                      # (N, n_drivers)
     positions: np.ndarray                   # (N, n_joints, 2)
@@ -51,24 +53,6 @@ class KinematicState:
     poses: np.ndarray | None = None         # (N, n_links, 3): (X, Y, θ) of each link's reference point
     pose_rates: np.ndarray | None = None
     pose_accelerations: np.ndarray | None = None
-
-    @property
-    def ok(self) -> np.ndarray:
-        """Boolean mask of positions that assembled."""
-        return self.status == "ok"
-
-    @property
-    def success(self) -> bool:
-        return bool(np.all(self.ok))
-
-    @property
-    def message(self) -> str:
-        """``"ok"`` or the first failing position's input and reason."""
-        bad = np.flatnonzero(~self.ok)
-        if bad.size == 0:
-            return "ok"
-        n = int(bad[0])
-        return f"{bad.size} of {self.n_positions} positions failed; first at input {self.inputs[n].tolist()}: {self.status[n]}"
 
     def point_index(self, name: str) -> int:
         return self.point_names.index(name)
