@@ -565,7 +565,7 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
     MJA = tuple(mult.count(j) for j in range(2, max(j_max, 1) + 1))
     V = sum((j - 1) for j in mult if j >= 2)
     imax_code = max(K + 1, max(deg))
-    jmax_code = max(K, j_max)
+    jmax_code = max(K, j_max, 2)   # as topo.numbers: at least V2
     la_code = format_counts([deg.count(i) for i in range(2, imax_code + 1)])
     mja_code = format_counts([mult.count(j) for j in range(2, jmax_code + 1)], sep="-")
     cl, cj = _fractionation(n, joints, F)
@@ -756,7 +756,7 @@ class AssortmentRow:
     def code_star(self) -> str:
         from topo.numbers import format_counts
         imax = max(self.K + 1, len(self.LA) + 1)
-        jmax = max(self.K, len(self.MJA) + 1)
+        jmax = max(self.K, len(self.MJA) + 1, 2)
         la = list(self.LA) + [0] * (imax - 1 - len(self.LA))
         mja = list(self.MJA) + [0] * (jmax - 1 - len(self.MJA))
         return f"[{format_counts(la)}]/[{format_counts(mja, sep='-')}]"

@@ -38,7 +38,7 @@ def test_build_count_and_idempotent_rebuild(tmp_path):
         assert atlas.is_complete(SynthesisOptions(8, 1))
 
 
-@pytest.mark.parametrize("n, F", [(8, 1), (7, 2), (8, 3)])
+@pytest.mark.parametrize("n, F", [(4, 1), (6, 3), (8, 1), (7, 2), (8, 3)])
 def test_stored_chains_reanalysed_give_stored_numbers(tmp_path, n, F):
     with Atlas(tmp_path / "a.sqlite") as atlas:
         opts = SynthesisOptions(n, F)
