@@ -83,6 +83,19 @@ def _residual(J, m):
 
 
 @quiet
+def _triad_reduction(O: np.ndarray, r: np.ndarray, m: np.ndarray):
+    """The class IV group seen as a triad in T1's frame: the frame pivots O1O2 become a
+    third binary of length |O1O2|.  Returns (e = O2 − O1, L = |e|, anchors (N, 3, 2),
+    b (3, 2), lengths (N, 3))."""
+    N = O.shape[0]
+    e = O[:, 1] - O[:, 0]
+    L = np.hypot(e[:, 0], e[:, 1])
+    anchors = np.broadcast_to(np.stack([r[0], r[1], np.zeros(2)]), (N, 3, 2))
+    b = np.stack([r[2], r[3], np.zeros(2)])
+    ll = np.stack([np.full(N, m[0]), np.full(N, m[1]), L], axis=-1)
+    return e, L, anchors, b, ll
+
+
 def class4_modes(O, r, m) -> Class4Modes:
     """All real assembly modes of a class IV order 2 group, vectorised.
 
@@ -106,11 +119,7 @@ def class4_modes(O, r, m) -> Class4Modes:
     r = np.asarray(r, dtype=float)
     m = np.asarray(m, dtype=float)
     N = O.shape[0]
-    e = O[:, 1] - O[:, 0]
-    L = np.hypot(e[:, 0], e[:, 1])
-    anchors = np.broadcast_to(np.stack([r[0], r[1], np.zeros(2)]), (N, 3, 2))
-    b = np.stack([r[2], r[3], np.zeros(2)])
-    ll = np.stack([np.full(N, m[0]), np.full(N, m[1]), L], axis=-1)
+    e, L, anchors, b, ll = _triad_reduction(O, r, m)
     t = triad_modes(anchors, b, ll)
     O2l = t.P[..., 2, :]                                  # O2 in T1's frame
     th1 = np.arctan2(e[:, None, 1], e[:, None, 0]) - np.arctan2(O2l[..., 1], O2l[..., 0])
@@ -216,11 +225,7 @@ def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
     r = np.asarray(r, dtype=float)
     m = np.asarray(m, dtype=float)
     N = O.shape[0]
-    e = O[:, 1] - O[:, 0]
-    L = np.hypot(e[:, 0], e[:, 1])
-    anchors = np.broadcast_to(np.stack([r[0], r[1], np.zeros(2)]), (N, 3, 2))
-    b = np.stack([r[2], r[3], np.zeros(2)])
-    ll = np.stack([np.full(N, m[0]), np.full(N, m[1]), L], axis=-1)
+    e, L, anchors, b, ll = _triad_reduction(O, r, m)
     th0 = np.asarray(start, dtype=float)
     J0 = class4_points(O[0], r, th0)
     loc = np.stack([J0[2], J0[3], O[0, 1]]) - O[0, 0]
