@@ -46,6 +46,11 @@ def _link_points(state: KinematicState, n: int) -> dict[str, np.ndarray]:
         p = state.positions[n, i]
         for lk in j.links:
             out[lk].append(p)
+    if state.point_positions is not None:   # a tracer point is drawn on its link's plate
+        for k, name in enumerate(state.point_names):
+            lk = next(pt.link for pt in m.points if pt.name == name)
+            if lk != m.frame:
+                out[lk].append(state.point_positions[n, k])
     return {k: np.array(v) for k, v in out.items() if v}
 
 
