@@ -176,6 +176,10 @@ def engine_from_dict(doc: dict) -> EngineSpec:
     if not isinstance(doc, dict):
         raise InputError(explain("engine file", expected="a table", got=type(doc).__name__))
     unknown = sorted(set(doc) - {"name", "description", "source", "engine", "cylinder", "gas", "notes"})
+    if "engine" not in doc and ({"joint", "joints", "link"} & set(doc)):
+        raise InputError(explain("top level", expected="an [engine] table (an engine file)",
+                                 got="a mechanism file",
+                                 hint="use 'multiloop forces FILE' for the kinetostatics of a mechanism"))
     if unknown:
         raise InputError(explain("top level", expected="keys among name, description, source, [engine], "
                                  "[[cylinder]], [gas]", got=f"unknown key {', '.join(map(repr, unknown))}"))

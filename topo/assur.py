@@ -464,10 +464,18 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
         got = (f"{len(m.drivers)} driver(s) for Chebyshev–Grübler mobility F = 3(n−1) − 2p = "
                f"3·{m.n_links - 1} − 2·{p} = {formula_f}; " + "; ".join(parts))
         if formula_f != len(m.drivers):
+            hint = ("add [[driver]] entries" if formula_f > len(m.drivers) else
+                    "remove drivers, or the chain has redundant links (see 'multiloop analyse')")
+            if m.has_geometry:   # special dimensions: say whether the real geometry moves
+                from .mobility import actual_mobility
+                mob = actual_mobility(m)
+                if mob.actual_F == len(m.drivers) and mob.redundant:
+                    hint = (f"the geometry does move with {mob.actual_F} DOF (special dimensions): "
+                            f"redundant constraint(s) {', '.join(mob.redundant)}; remove the "
+                            "redundant link or joint to solve it")
             raise MobilityError(explain(
                 f"mechanism '{m.name or ''}'", expected=f"{formula_f} driver(s) (one per degree of freedom)",
-                got=got, hint=("add [[driver]] entries" if formula_f > len(m.drivers) else
-                               "remove drivers, or the chain has redundant links (see 'multiloop analyse')")))
+                got=got, hint=hint))
         raise DecompositionError(explain(
             f"mechanism '{m.name or ''}'", expected="a structurally determined system (every part fixed by its joints and drivers)",
             got=got, hint="move a driver into the free part, or remove a surplus link/joint"))

@@ -1,0 +1,75 @@
+"""Error messages across commands: exit code 2, the thing at fault named, no traceback."""
+from __future__ import annotations
+
+import pytest
+
+from multiloop.cli import main
+
+PARALLELOGRAM = """
+name = "parallelogram with a redundant link"
+[[link]]
+name = "frame"
+frame = true
+[[joint]]
+name = "A"
+links = ["frame", "c1"]
+at = [0.0, 0.0]
+[[joint]]
+name = "B"
+links = ["c1", "cp"]
+at = [0.0, 1.0]
+[[joint]]
+name = "C"
+links = ["cp", "c2"]
+at = [2.0, 1.0]
+[[joint]]
+name = "D"
+links = ["c2", "frame"]
+at = [2.0, 0.0]
+[[joint]]
+name = "E"
+links = ["frame", "c3"]
+at = [1.0, 0.0]
+[[joint]]
+name = "F"
+links = ["c3", "cp"]
+at = [1.0, 1.0]
+[[driver]]
+joint = "A"
+"""
+BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return code, err
+
+
+def test_parallelogram_solve_says_it_moves_and_names_the_redundant_pair(tmp_path, capsys):
+    f = tmp_path / "par.toml"
+    f.write_text(PARALLELOGRAM)
+    code, err = _run(capsys, "solve", str(f))
+    assert code == 2
+    assert "F = 3(n−1) − 2p = 3·4 − 2·6 = 0" in err
+    assert "does move with 1 DOF" in err and "c3" in err
+
+
+@pytest.mark.parametrize("command,needle", [
+    ("solve", "expected geometry"),
+    ("decompose", "expected a frame link"),
+    ("forces", "expected at least one driver"),
+    ("engine", "expected an [engine] table"),
+    ("platform", "unknown key 'joints'"),
+])
+def test_bare_chain_rejected_by_every_command_that_needs_more(tmp_path, capsys, command, needle):
+    f = tmp_path / "chain.toml"
+    f.write_text(BARE)
+    code, err = _run(capsys, command, str(f))
+    assert code == 2 and needle in err
+
+
+def test_engine_given_a_mechanism_points_to_forces(capsys):
+    code, err = _run(capsys, "engine", "catalogue/mechanisms/four_bar.toml")
+    assert code == 2 and "multiloop forces" in err
