@@ -171,6 +171,17 @@ def _num(v: Any, where: str) -> float:
     return float(v)
 
 
+def _keyed_table(value, label: str, keys) -> dict:
+    """``value`` as a table whose keys are all among ``keys`` (else InputError naming them)."""
+    if not isinstance(value, dict):
+        raise InputError(explain(label, expected="a table", got=repr(value)[:40]))
+    bad = sorted(set(value) - set(keys))
+    if bad:
+        raise InputError(explain(label, expected=f"keys among {', '.join(sorted(keys))}",
+                                 got=f"unknown key {', '.join(map(repr, bad))}"))
+    return value
+
+
 def engine_from_dict(doc: dict) -> EngineSpec:
     """Parse an engine document (see ``docs/forces.md``); strict about keys."""
     if not isinstance(doc, dict):
@@ -186,13 +197,7 @@ def engine_from_dict(doc: dict) -> EngineSpec:
     if "engine" not in doc:
         raise InputError(explain("[engine]", expected="an [engine] table (bore, crank_radius, rod_length, ...)",
                                  got="nothing", hint="a mechanism file goes to 'multiloop forces'"))
-    eng = doc["engine"]
-    if not isinstance(eng, dict):
-        raise InputError(explain("[engine]", expected="a table", got=repr(eng)[:40]))
-    bad = sorted(set(eng) - _ENGINE_KEYS)
-    if bad:
-        raise InputError(explain("[engine]", expected=f"keys among {', '.join(sorted(_ENGINE_KEYS))}",
-                                 got=f"unknown key {', '.join(map(repr, bad))}"))
+    eng = _keyed_table(doc["engine"], "[engine]", _ENGINE_KEYS)
     for req in ("rod_length", "bore"):
         if req not in eng:
             raise InputError(explain("[engine]", expected=f"key '{req}'", got="nothing"))
@@ -244,13 +249,7 @@ def engine_from_dict(doc: dict) -> EngineSpec:
         raise InputError(explain("[[cylinder]] name", expected="unique names", got=repr([c.name for c in cyls])))
     gas = None
     if "gas" in doc:
-        gd = doc["gas"]
-        if not isinstance(gd, dict):
-            raise InputError(explain("[gas]", expected="a table", got=repr(gd)[:40]))
-        bad = sorted(set(gd) - _GAS_KEYS)
-        if bad:
-            raise InputError(explain("[gas]", expected=f"keys among {', '.join(sorted(_GAS_KEYS))}",
-                                     got=f"unknown key {', '.join(map(repr, bad))}"))
+        gd = _keyed_table(doc["gas"], "[gas]", _GAS_KEYS)
         model = gd.get("model", "indicator")
         if model == "indicator":
             for req in ("compression_ratio", "peak_pressure"):
