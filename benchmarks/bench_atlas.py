@@ -25,7 +25,6 @@ Writes ``benchmarks/charts/atlas_times.png``.
 from __future__ import annotations
 
 import argparse
-import os
 import resource
 import subprocess
 import sys

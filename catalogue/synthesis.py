@@ -60,7 +60,7 @@ from __future__ import annotations
 import itertools
 import shutil
 import subprocess
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Iterable, Iterator, Sequence
 
@@ -350,21 +350,10 @@ def joint_masks_degenerate(masks: np.ndarray, n: int) -> np.ndarray:
 
 
 def _degenerate_by_definition(joints: Sequence[int], n: int) -> bool:
-    """The definition, ``c(S) = Σ_J max(0, |S ∩ J| − 1)`` subset by subset (the
-    independent route; popcounts by table lookup, no transform)."""
-    subsets = np.arange(1 << n)
-    pop = _popcount_table(n)
-    c = np.zeros(1 << n, dtype=np.int64)
-    for jm in joints:
-        c += np.maximum(pop[subsets & int(jm)] - 1, 0)
-    size = pop
-    bad = (3 * (size - 1) - 2 * c <= 0) & (size >= 2) & (size < n)
-    return bool(bad.any())
-
-
-@lru_cache(maxsize=None)
-def _popcount_table(n: int) -> np.ndarray:
-    return np.array([bin(s).count("1") for s in range(1 << n)], dtype=np.int64)
+    """The definition subset by subset (:func:`topo.degeneracy.rigid_subset_mask`): the
+    independent route for :func:`joint_masks_degenerate`."""
+    from topo.degeneracy import rigid_subset_mask
+    return rigid_subset_mask(n, joints) is not None
 
 
 # --------------------------------------------------------------- chain properties
@@ -419,22 +408,10 @@ def _nauty_incidence(n: int, joints: Sequence[int], extra_colours: Sequence[set]
 
 
 def canonical_string(n: int, joints: Sequence[int]) -> str:
-    """The canonical form of :func:`topo.isomorphism.canonical_form` (mode ``chain``)
-    computed straight from joint masks (same colouring, same string)."""
-    m = len(joints)
-    N = n + m
-    lab = pynauty.canon_label(_nauty_incidence(n, joints))
-    pos = {v: i for i, v in enumerate(lab)}
-    nbits = N * (N - 1) // 2
-    value = 0
-    for a, jm in enumerate(joints):
-        u = pos[n + a]
-        for x in _mask_links(jm):
-            i, k = sorted((u, pos[x]))
-            index = i * N - i * (i + 1) // 2 + (k - i - 1)
-            value |= 1 << (nbits - 1 - index)
-    width = (nbits + 3) // 4
-    return f"c{n}.0.{m}.0.0.0.0:{value:0{width}x}"
+    """:func:`topo.isomorphism.canonical_form` (mode ``chain``) of a chain given by
+    joint masks."""
+    from topo.isomorphism import canonical_form_of_joints
+    return canonical_form_of_joints(n, [_mask_links(int(jm)) for jm in joints])
 
 
 def _certificate(n: int, joints: Sequence[int]) -> bytes:
@@ -553,21 +530,11 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
     Planarity always (incidence graph); the loop assortment [La] and ``L0`` via
     :func:`topo.loops.loop_assortment` when ``loops`` (the slow part: ~10 ms a chain).
     """
-    from topo.numbers import format_counts
+    from topo.numbers import structural_codes
 
     joints = sorted(int(j) for j in joints)
-    p = sum(bin(j).count("1") - 1 for j in joints)
-    K = p - n + 1
     deg = [sum(1 for j in joints if j >> x & 1) for x in range(n)]
-    mult = [bin(j).count("1") - 1 for j in joints]
-    j_max = max(mult)
-    LA = tuple(deg.count(i) for i in range(2, max(deg) + 1))
-    MJA = tuple(mult.count(j) for j in range(2, max(j_max, 1) + 1))
-    V = sum((j - 1) for j in mult if j >= 2)
-    imax_code = max(K + 1, max(deg))
-    jmax_code = max(K, j_max, 2)   # as topo.numbers: at least V2
-    la_code = format_counts([deg.count(i) for i in range(2, imax_code + 1)])
-    mja_code = format_counts([mult.count(j) for j in range(2, jmax_code + 1)], sep="-")
+    codes = structural_codes(deg, [bin(j).count("1") - 1 for j in joints])
     cl, cj = _fractionation(n, joints, F)
     tuples = tuple(_mask_links(j) for j in joints)
     La = L0 = None
@@ -578,9 +545,9 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
         planar, La, L0 = la.planar, la.sizes, la.outer
     else:
         planar = _is_planar(n, tuples)
-    return ChainRecord(n=n, F=F, joints=tuples, canonical=canonical_string(n, joints), LA=LA,
-                       MJA=MJA, V=V, K=K, j_max=j_max, code=f"[{la_code}]/{V}",
-                       code_star=f"[{la_code}]/[{mja_code}]", fractionated=bool(cl or cj),
+    return ChainRecord(n=n, F=F, joints=tuples, canonical=canonical_string(n, joints), LA=codes.LA,
+                       MJA=codes.MJA, V=codes.V, K=codes.K, j_max=codes.j_max, code=codes.code,
+                       code_star=codes.code_star, fractionated=bool(cl or cj),
                        planar=planar, La=La, L0=L0)
 
 
@@ -754,12 +721,13 @@ class AssortmentRow:
 
     @property
     def code_star(self) -> str:
-        from topo.numbers import format_counts
-        imax = max(self.K + 1, len(self.LA) + 1)
-        jmax = max(self.K, len(self.MJA) + 1, 2)
-        la = list(self.LA) + [0] * (imax - 1 - len(self.LA))
-        mja = list(self.MJA) + [0] * (jmax - 1 - len(self.MJA))
-        return f"[{format_counts(la)}]/[{format_counts(mja, sep='-')}]"
+        from topo.numbers import structural_codes
+        degrees = [i for i, c in enumerate(self.LA, 2) for _ in range(c)]
+        mult = [j for j, c in enumerate(self.MJA, 2) for _ in range(c)]
+        mult += [1] * (self.n_joints - len(mult))          # the simple joints
+        codes = structural_codes(degrees, mult)
+        assert codes.K == self.K   # the row satisfies the structural equations
+        return codes.code_star
 
     def as_dict(self) -> dict:
         return {"LA": list(self.LA), "MJA": list(self.MJA), "V": self.V, "K": self.K,

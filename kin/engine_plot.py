@@ -38,6 +38,14 @@ def _xaxis(ax):
     ax.grid(True, alpha=0.3)
 
 
+def _save(fig, path):
+    """Lay out, write (PNG, 110 dpi) and close a figure; returns its path."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    _plt().close(fig)
+    return path
+
+
 def engine_plots(res, outdir) -> list[Path]:
     """Write the six PNG diagrams of an :class:`~kin.engine.EngineResult`; returns the paths."""
     plt = _plt()
@@ -65,10 +73,7 @@ def engine_plots(res, outdir) -> list[Path]:
     for ax in axs:
         _xaxis(ax)
         ax.legend(fontsize=7, loc="upper right")
-    fig.tight_layout()
-    paths.append(out / "kinematics.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "kinematics.png"))
 
     fig, axs = plt.subplots(1, 3, figsize=(14, 4.2))
     for j, nm in enumerate(names):
@@ -88,10 +93,7 @@ def engine_plots(res, outdir) -> list[Path]:
     _xaxis(axs[2])
     for ax in axs:
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(out / "pressure.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "pressure.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4))
     ax.plot(phi, res.balancing, label="M_b (on the crank, CCW +)")
@@ -102,10 +104,7 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title(f"∮M_b dφ = {res.cycle_integral:.6g} J, −W_ind = {-res.indicated_work.sum():.6g} J", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    paths.append(out / "balancing.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "balancing.png"))
 
     fig, ax = plt.subplots(figsize=(9, 1.0 + 0.5 * len(names)))
     cyc = res.cyclogram
@@ -123,10 +122,7 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title("four-stroke cyclogram; firing intervals " + "/".join(f"{x:g}" for x in cyc["firing_intervals"])
                  + " deg, order " + "-".join(cyc["firing_order"]), fontsize=9)
     _xaxis(ax)
-    fig.tight_layout()
-    paths.append(out / "cyclogram.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "cyclogram.png"))
 
     fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
     for j, nm in enumerate(names):
@@ -143,10 +139,7 @@ def engine_plots(res, outdir) -> list[Path]:
     _xaxis(axs[1])
     for ax in axs:
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(out / "rod_com.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "rod_com.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4.5))
     rx = res.reactions
@@ -159,10 +152,7 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title("reactions (crank pin A is a multiple joint: one reaction per rod)", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    paths.append(out / "reactions.png")
-    fig.savefig(paths[-1], dpi=110)
-    plt.close(fig)
+    paths.append(_save(fig, out / "reactions.png"))
     return paths
 
 

@@ -89,7 +89,7 @@ def test_seed004_rod_com_formulas_match_closed_form_state():
 
 def test_seed004_rod_com_formulas_match_general_solver():
     """The same formulas against the general solver (kin.solve) on the engine mechanism."""
-    solve = pytest.importorskip("kin.solve").solve
+    from kin.solve import solve
     r, l, o, n = 0.045, 0.16, 0.35, 4200.0
     spec = EngineSpec(r, l, 0.08, (Cylinder("1", 0.0),), rpm=n, rod_mass=1.0, rod_cg=o, rod_inertia=0.01)
     m = engine_mechanism(spec)
@@ -102,7 +102,7 @@ def test_seed004_rod_com_formulas_match_general_solver():
 
 
 def test_general_solver_matches_closed_form_state_for_every_catalogue_engine():
-    solve = pytest.importorskip("kin.solve").solve
+    from kin.solve import solve
     for spec in _specs().values():
         m = engine_mechanism(spec)
         phi = RNG.uniform(0, 4 * np.pi, 40)

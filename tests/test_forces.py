@@ -28,14 +28,6 @@ RNG = np.random.default_rng(4)
 LOADED = Path(str(resources.files("catalogue") / "mechanisms" / "crank_slider_loaded.toml"))
 
 
-def _has_solver() -> bool:
-    try:
-        import kin.solve  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def _massless(m):
     b = MechanismBuilder.from_mechanism(m)
     b.links = [Link(lk.name, lk.is_frame, None, lk.cg, None, lk.color) for lk in b.links]
@@ -108,8 +100,6 @@ def test_reactions_virtual_power_energy_rate_agree(case):
 
 def test_catalogue_mechanisms_with_masses_through_the_general_solver():
     """Every catalogue mechanism file with masses, solved by kin.solve from driver inputs."""
-    if not _has_solver():
-        pytest.skip("kin.solve not available")
     files = sorted(Path(str(resources.files("catalogue") / "mechanisms")).glob("*.toml"))
     done = 0
     for f in files:
@@ -140,8 +130,6 @@ def test_catalogue_mechanisms_with_masses_through_the_general_solver():
 
 
 def test_driver_acceleration_from_the_file_enters_the_inertia_loads():
-    if not _has_solver():
-        pytest.skip("kin.solve not available")
     m = load(LOADED)
     q = RNG.uniform(0, 2 * np.pi, 20)
     fr = forces(m, q, accelerations=[-500.0])
@@ -191,8 +179,6 @@ def test_force_result_is_frozen():
 
 # ----------------------------------------------------------------------------- CLI
 def test_forces_cli_json_and_text(tmp_path, capsys):
-    if not _has_solver():
-        pytest.skip("kin.solve not available")
     assert main(["forces", str(LOADED), "--steps", "12", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert set(doc) >= {"balancing", "reactions", "virtual_power_residual", "input", "status"}
@@ -280,8 +266,6 @@ moment = 3.0
 def test_two_driver_five_bar_with_driver_accelerations():
     """Two drivers with speeds and accelerations from the file: groups = global =
     virtual power = energy rate along q(t) = q0 + ω t + ½ ε t²."""
-    if not _has_solver():
-        pytest.skip("kin.solve not available")
     from kin.solve import solve
     from topo.io import loads
     m = loads(FIVE_BAR)

@@ -104,6 +104,8 @@ def test_existence_domain_violation_reported():
     r = structural_report(m)
     assert r.j_max == 3
     assert r.existence_ok == (r.j_max <= r.K and r.V <= 2 * (r.K - 1))
+    # n = 6, p = 3 + 4 = 7, K = 2 < j = 3: outside the domain (seed 002 fig. 10)
+    assert r.K == 2 and not r.existence_ok
 
 
 def test_dangling_link_gives_nonzero_avc():
@@ -181,3 +183,21 @@ def test_parallelogram_with_redundant_link_is_reported_as_moving():
     r = structural_report(mechanism_from_dict(doc))
     assert r.F == 0 and r.actual_F == 1 and r.rc == 1
     assert r.redundant and any("moves with 1 DOF" in w for w in r.warnings)
+
+
+def test_embedding_search_refuses_to_truncate():
+    # a chain with two planar embeddings of different loop sizes (3-4-5-8 vs 3-5-5-7)
+    # must not get a "canonical" [La] from a truncated enumeration
+    import networkx as nx
+
+    from topo.errors import TopologyError
+    from topo.graphs import incidence_graph
+    from topo.loops import block_embeddings
+
+    m = chain_from_joint_lists([["l6", "l3"], ["l3", "l1"], ["l1", "l0"], ["l0", "l7"], ["l7", "l2"],
+                                ["l2", "l5"], ["l5", "l4"], ["l4", "l6"], ["l1", "l6"], ["l0", "l4"]])
+    g = incidence_graph(m)
+    (block,) = [b for b in nx.biconnected_components(g) if len(b) > 2]
+    assert len(set(block_embeddings(g.subgraph(block)))) == 2
+    with pytest.raises(TopologyError, match="cannot be chosen canonically"):
+        list(block_embeddings(g.subgraph(block), limit=1))

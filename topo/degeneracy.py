@@ -29,7 +29,7 @@ import numpy as np
 from .graphs import incidence_graph
 from .model import Mechanism
 
-__all__ = ["find_rigid_subchain", "is_degenerate", "Fractionation", "fractionation",
+__all__ = ["find_rigid_subchain", "is_degenerate", "rigid_subset_mask", "Fractionation", "fractionation",
            "subchain_deficit"]
 
 
@@ -46,23 +46,36 @@ def _joint_masks(m: Mechanism) -> tuple[list[str], list[int]]:
     return names, [sum(1 << index[x] for x in j.links) for j in m.joints]
 
 
-def _exhaustive(m: Mechanism) -> tuple[str, ...] | None:
-    names, jmasks = _joint_masks(m)
-    n = len(names)
+def rigid_subset_mask(n: int, joint_masks) -> int | None:
+    """The definition, subset by subset: the smallest link subset S (bit mask over links
+    ``0 … n−1``, ties by mask value) with ``2 <= |S| < n`` and ``3(|S| − 1) − 2c(S) <= 0``,
+    where ``c(S) = Σ_J max(0, |S ∩ J| − 1)``; None when there is none (n <= 20).
+
+    Examples
+    --------
+    >>> rigid_subset_mask(5, [0b00011, 0b00110, 0b00101, 0b01001, 0b11000, 0b10100])
+    7
+    """
     if n > 20:
         raise ValueError("exhaustive search is limited to 20 links; use method='mincut'")
     masks = np.arange(1 << n, dtype=np.uint32)
     size = np.bitwise_count(masks).astype(np.int64)
     c = np.zeros(1 << n, dtype=np.int64)
-    for jm in jmasks:
-        c += np.maximum(np.bitwise_count(masks & np.uint32(jm)).astype(np.int64) - 1, 0)
+    for jm in joint_masks:
+        c += np.maximum(np.bitwise_count(masks & np.uint32(int(jm))).astype(np.int64) - 1, 0)
     bad = (3 * (size - 1) - 2 * c <= 0) & (size >= 2) & (size < n)
     idx = np.flatnonzero(bad)
     if idx.size == 0:
         return None
-    # smallest offending subset, ties broken by mask value (deterministic)
-    best = idx[np.lexsort((idx, size[idx]))[0]]
-    return tuple(names[i] for i in range(n) if (int(best) >> i) & 1)
+    return int(idx[np.lexsort((idx, size[idx]))[0]])
+
+
+def _exhaustive(m: Mechanism) -> tuple[str, ...] | None:
+    names, jmasks = _joint_masks(m)
+    best = rigid_subset_mask(len(names), jmasks)
+    if best is None:
+        return None
+    return tuple(names[i] for i in range(len(names)) if (best >> i) & 1)
 
 
 def _mincut_best(m: Mechanism, forced_in: tuple[str, ...], forced_out: tuple[str, ...] = ()):

@@ -41,7 +41,6 @@ def explain(what: str, expected: str | None = None, got: str | None = None,
     ...         hint="a pin must join two or more links")
     "joint 'B': expected at least 2 links, got 1 link ('rod'); hint: a pin must join two or more links"
     """
-    parts = [what]
     body = []
     if expected is not None:
         body.append(f"expected {expected}")
@@ -50,7 +49,6 @@ def explain(what: str, expected: str | None = None, got: str | None = None,
     msg = what + (": " + ", ".join(body) if body else "")
     if hint:
         msg += f"; hint: {hint}"
-    del parts
     return msg
 
 

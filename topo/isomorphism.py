@@ -29,13 +29,14 @@ References
 """
 from __future__ import annotations
 
+from typing import Sequence
+
 import networkx as nx
 import pynauty
 
-from .graphs import incidence_graph
 from .model import JointKind, Mechanism
 
-__all__ = ["canonical_form", "canonical_labelling", "are_isomorphic", "are_isomorphic_vf2",
+__all__ = ["canonical_form", "canonical_form_of_joints", "canonical_labelling", "are_isomorphic", "are_isomorphic_vf2",
            "invariant_signature", "could_be_isomorphic", "automorphism_orbits"]
 
 _MODES = ("chain", "mechanism")
@@ -93,6 +94,29 @@ def canonical_labelling(m: Mechanism, mode: str = "chain") -> list[tuple]:
     return [order[i] for i in lab]
 
 
+def _encode(mode: str, sizes: list[int], adj: dict[int, list[int]]) -> str:
+    """Canonical string of a coloured graph whose colour classes are consecutive vertex
+    ranges of the given sizes: the class sizes, then the upper triangle of the
+    canonically labelled adjacency matrix, row by row, packed into hex."""
+    n = sum(sizes)
+    coloring, start = [], 0
+    for s in sizes:
+        if s:
+            coloring.append(set(range(start, start + s)))
+        start += s
+    lab = pynauty.canon_label(pynauty.Graph(n, directed=False, adjacency_dict=adj,
+                                            vertex_coloring=coloring))
+    pos = {v: i for i, v in enumerate(lab)}
+    nbits = n * (n - 1) // 2
+    value = 0
+    for u, nbs in adj.items():
+        for v in nbs:
+            i, k = sorted((pos[u], pos[v]))
+            value |= 1 << (nbits - 1 - (i * n - i * (i + 1) // 2 + (k - i - 1)))
+    width = (nbits + 3) // 4
+    return f"{mode[0]}{'.'.join(map(str, sizes))}:" + (f"{value:0{width}x}" if width else "")
+
+
 def canonical_form(m: Mechanism, mode: str = "chain") -> str:
     """A string equal for isomorphic chains (mechanisms) and only for them.
 
@@ -108,21 +132,25 @@ def canonical_form(m: Mechanism, mode: str = "chain") -> str:
     >>> canonical_form(a) == canonical_form(b)
     True
     """
-    order, classes, adj = _coloured(m, mode)
-    g = _nauty_graph(order, classes, adj)
-    lab = pynauty.canon_label(g)
-    pos = {v: i for i, v in enumerate(lab)}
-    n = len(order)
-    bits = 0
-    nbits = 0
-    edges = {(min(pos[u], pos[v]), max(pos[u], pos[v])) for u in adj for v in adj[u]}
-    for i in range(n):
-        for k in range(i + 1, n):
-            bits = (bits << 1) | ((i, k) in edges)
-            nbits += 1
-    width = (nbits + 3) // 4
-    sizes = ".".join(str(len(c)) for c in classes)
-    return f"{mode[0]}{sizes}:{bits:0{width}x}" if width else f"{mode[0]}{sizes}:"
+    _, classes, adj = _coloured(m, mode)
+    return _encode(mode, [len(c) for c in classes], adj)
+
+
+def canonical_form_of_joints(n_links: int, joints: Sequence[Sequence[int]]) -> str:
+    """:func:`canonical_form` (mode ``"chain"``) of a bare chain of pins given as link
+    indices ``0 … n_links − 1`` per joint, without building a :class:`Mechanism`
+    (the atlas calls it for every generated chain).
+
+    Examples
+    --------
+    >>> from topo.model import chain_from_joint_lists
+    >>> canonical_form_of_joints(4, [(0, 1), (1, 2), (2, 3), (3, 0)]) == canonical_form(
+    ...     chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]))
+    True
+    """
+    adj = {n_links + a: list(j) for a, j in enumerate(joints)}
+    # chain-mode classes: links, frame, R, driven R, P, driven P, guide markers
+    return _encode("chain", [n_links, 0, len(joints), 0, 0, 0, 0], adj)
 
 
 def are_isomorphic(a: Mechanism, b: Mechanism, mode: str = "chain") -> bool:

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import networkx as nx
 
+from .errors import TopologyError, explain
 from .graphs import incidence_graph
 from .model import Mechanism
 
@@ -61,7 +62,8 @@ class LoopAssortment:
     outer : int or None
         ``L0``, the outer loop (largest face).
     n_embeddings : int
-        Distinct face sets examined over all blocks (1 for a rigidly embedded chain).
+        Distinct face-size lists found over all blocks (1 when every embedding of every
+        block has the same loop sizes, e.g. a rigidly embedded chain).
     rule : str
         The canonical rule used.
     """
@@ -206,9 +208,13 @@ class _BudgetExceeded(Exception):
 
 def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: bool = True,
                      node_budget: int | None = None):
-    """Yield the face-size lists of every planar embedding of a 2-connected block.
+    """Yield the distinct face-size lists of the planar embeddings of a 2-connected block.
 
-    Each yielded value is a sorted tuple of face sizes (in links).  ``use_filter``
+    Raises ``TopologyError`` rather than truncate when the block has more than ``limit``
+    embeddings (a minimum over part of them would not be an invariant).
+
+    Every embedding is enumerated; each yielded value is a sorted tuple of face sizes
+    (in links), and embeddings with the same sizes are yielded once.  ``use_filter``
     applies the apex planarity test to every cycle first (slower per cycle, but it
     keeps dense blocks tractable); ``node_budget`` aborts the search with
     ``_BudgetExceeded`` after that many search nodes.
@@ -318,8 +324,10 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
 
     def search(used1: int, used2: int, chosen: list[int]):
         nonlocal count, nodes
-        if count >= limit:
-            return
+        if count >= limit:   # the minimum over a truncated enumeration is not canonical
+            raise TopologyError(explain(
+                "loop assortment", expected=f"at most {limit} planar embeddings of a block",
+                got="more", hint="[La] cannot be chosen canonically here; use loops=False"))
         nodes += 1
         if node_budget is not None and nodes > node_budget:
             raise _BudgetExceeded

@@ -194,10 +194,16 @@ class Mechanism:
             for j in self.joints)
 
     def link(self, name: str) -> Link:
-        return self._links_by_name[name]
+        for lk in self.links:
+            if lk.name == name:
+                return lk
+        raise KeyError(name)
 
     def joint(self, name: str) -> Joint:
-        return self._joints_by_name[name]
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(name)
 
     def joints_of(self, link: str) -> tuple[Joint, ...]:
         """All joints the link lies on, in file order."""
@@ -206,14 +212,6 @@ class Mechanism:
     def degree(self, link: str) -> int:
         """Number of joints on the link (an *i*-vertex link has degree *i*)."""
         return sum(1 for j in self.joints if link in j.links)
-
-    @property
-    def _links_by_name(self) -> dict[str, Link]:
-        return {link.name: link for link in self.links}
-
-    @property
-    def _joints_by_name(self) -> dict[str, Joint]:
-        return {j.name: j for j in self.joints}
 
     def with_drivers(self, drivers: Sequence[Driver]) -> "Mechanism":
         """A copy with another driver set (validated)."""
@@ -438,7 +436,7 @@ class MechanismBuilder:
             seen_pts.add(p.name)
         for ld in self.loads:
             if ld.link not in links:
-                problems.append(explain(f"[[force]] link", expected="a known link", got=repr(ld.link)))
+                problems.append(explain("[[force]] link", expected="a known link", got=repr(ld.link)))
         for lk in links.values():
             if lk.mass is not None and lk.mass < 0:
                 problems.append(explain(f"link '{lk.name}' mass", expected="a mass >= 0",

@@ -32,6 +32,7 @@ References
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import NamedTuple, Sequence
 
 from .degeneracy import find_rigid_subchain, fractionation
 from .errors import TopologyError, explain
@@ -39,7 +40,8 @@ from .isomorphism import canonical_form
 from .loops import loop_assortment
 from .model import Mechanism
 
-__all__ = ["StructuralReport", "structural_report", "format_counts", "link_assortment",
+__all__ = ["StructuralReport", "structural_report", "StructuralCodes", "structural_codes",
+           "format_counts", "link_assortment",
            "joint_assortment", "spatial_mobility"]
 
 
@@ -76,6 +78,43 @@ def joint_assortment(m: Mechanism, jmax: int | None = None) -> tuple[int, ...]:
     mult = [j.multiplicity for j in m.joints]
     top = max(max(mult), jmax or 0, 1)
     return tuple(sum(1 for x in mult if x == j) for j in range(2, top + 1))
+
+
+class StructuralCodes(NamedTuple):
+    """Assortments and codes of a chain (see :func:`structural_codes`)."""
+
+    LA: tuple[int, ...]
+    MJA: tuple[int, ...]
+    V: int
+    K: int
+    j_max: int
+    code: str
+    code_star: str
+
+
+def structural_codes(degrees: Sequence[int], multiplicities: Sequence[int]) -> StructuralCodes:
+    """[LA], [MJA], V, K and the seed 002 codes from the raw incidence data: the number
+    of joints on every link and the multiplicity ``j = n' − 1`` of every joint.
+
+    The one place where the code formatting rules live (``structural_report``, the
+    atlas and the catalogue listing all call it).
+
+    Examples
+    --------
+    >>> structural_codes([2] * 8 + [3, 4], [1] * 7 + [2, 2, 2]).code_star
+    '[8110]/[3-0-0]'
+    """
+    degrees, mult = list(degrees), list(multiplicities)
+    K = sum(mult) - len(degrees) + 1
+    j_max = max(mult)
+    V = sum(j - 1 for j in mult if j >= 2)
+    LA = tuple(degrees.count(i) for i in range(2, max(degrees) + 1))
+    MJA = tuple(mult.count(j) for j in range(2, max(j_max, 1) + 1))
+    imax_code = max(K + 1, max(degrees))
+    jmax_code = max(K, j_max, 2)   # at least V2, so a chain with K = 1 reads [LA]/[0]
+    la_code = format_counts([degrees.count(i) for i in range(2, imax_code + 1)])
+    mja_code = format_counts([mult.count(j) for j in range(2, jmax_code + 1)], sep="-")
+    return StructuralCodes(LA, MJA, V, K, j_max, f"[{la_code}]/{V}", f"[{la_code}]/[{mja_code}]")
 
 
 def spatial_mobility(m: Mechanism, lam: int = 3) -> int:
@@ -227,15 +266,8 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
     rc_formula = (drivers + V + 3) - (n2 - sum_i4)
     SL = sum(degrees.values())
     SL_formula = 2 * (F1 + 3 * K) - V
-    j_max = max(j.multiplicity for j in m.joints)
-    imax_code = max(K + 1, max(degrees.values()))
-    jmax_code = max(K, j_max, 2)   # at least V2, so a chain with K = 1 reads [LA]/[0]
-    LA = link_assortment(m)
-    MJA = joint_assortment(m)
-    la_code = format_counts(link_assortment(m, imax_code))
-    mja_code = format_counts(joint_assortment(m, jmax_code), sep="-")
-    code = f"[{la_code}]/{V}"
-    code_star = f"[{la_code}]/[{mja_code}]"
+    codes = structural_codes(list(degrees.values()), [j.multiplicity for j in m.joints])
+    LA, MJA, j_max, code, code_star = codes.LA, codes.MJA, codes.j_max, codes.code, codes.code_star
     if loops:
         la = loop_assortment(m)
         La, L0, planar, rule = la.sizes, la.outer, la.planar, la.rule

@@ -11,7 +11,7 @@ import json
 
 from catalogue.named import load_named, names
 from topo.model import Mechanism
-from topo.numbers import format_counts, joint_assortment, link_assortment
+from topo.numbers import structural_codes
 
 
 def add_arguments(p) -> None:
@@ -27,17 +27,13 @@ def summary(name: str) -> dict:
     :func:`topo.numbers.structural_report`.
     """
     m: Mechanism = load_named(name)
-    n = m.n_links
-    p = sum(j.n_pairs for j in m.joints)
-    K = p - n + 1
-    V = sum(j.multiplicity - 1 for j in m.joints if j.multiplicity >= 2)
-    imax = max(K + 1, max(m.degree(x) for x in m.link_names))
+    codes = structural_codes([m.degree(x) for x in m.link_names], [j.multiplicity for j in m.joints])
     return {
         "name": name,
-        "n": n,
-        "F": 3 * (n - 1) - 2 * p,
-        "K": K,
-        "code": f"[{format_counts(link_assortment(m, imax))}]/{V}",
+        "n": m.n_links,
+        "F": m.n_links - 1 - 2 * codes.K,
+        "K": codes.K,
+        "code": codes.code,
         "drivers": len(m.drivers),
         "description": m.description,
         "source": m.source,
