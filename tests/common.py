@@ -53,3 +53,41 @@ def relabel(m: Mechanism, seed: int) -> Mechanism:
     order = list(range(m.n_joints))
     rng.shuffle(order)
     return m.relabelled(link_map, joint_map, order)
+
+
+# A bare chain in the SPEC §1 short form (a triple pin b-c-d).
+BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
+
+# A parallelogram with a redundant link (c3): F = 0 by formula, but it moves (SPEC §2).
+PARALLELOGRAM = """
+name = "parallelogram with a redundant link"
+[[link]]
+name = "frame"
+frame = true
+[[joint]]
+name = "A"
+links = ["frame", "c1"]
+at = [0.0, 0.0]
+[[joint]]
+name = "B"
+links = ["c1", "cp"]
+at = [0.0, 1.0]
+[[joint]]
+name = "C"
+links = ["cp", "c2"]
+at = [2.0, 1.0]
+[[joint]]
+name = "D"
+links = ["c2", "frame"]
+at = [2.0, 0.0]
+[[joint]]
+name = "E"
+links = ["frame", "c3"]
+at = [1.0, 0.0]
+[[joint]]
+name = "F"
+links = ["c3", "cp"]
+at = [1.0, 1.0]
+[[driver]]
+joint = "A"
+"""

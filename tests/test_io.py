@@ -9,6 +9,7 @@ import pytest
 from multiloop.cli import main
 from topo.errors import InputError, TopologyError
 from topo.io import dumps_json, dumps_toml, load, loads, mechanism_from_dict
+from tests.common import BARE
 
 CRANK_SLIDER = '''
 name = "crank-slider"
@@ -49,7 +50,6 @@ name = "G"                  # tracer point fixed on a link
 link = "rod"
 at = [0.1, 0.0]
 '''
-BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
 
 
 def test_spec_examples_accepted_exactly_as_written():

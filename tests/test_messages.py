@@ -4,40 +4,8 @@ from __future__ import annotations
 import pytest
 
 from multiloop.cli import main
+from tests.common import BARE, PARALLELOGRAM
 
-PARALLELOGRAM = """
-name = "parallelogram with a redundant link"
-[[link]]
-name = "frame"
-frame = true
-[[joint]]
-name = "A"
-links = ["frame", "c1"]
-at = [0.0, 0.0]
-[[joint]]
-name = "B"
-links = ["c1", "cp"]
-at = [0.0, 1.0]
-[[joint]]
-name = "C"
-links = ["cp", "c2"]
-at = [2.0, 1.0]
-[[joint]]
-name = "D"
-links = ["c2", "frame"]
-at = [2.0, 0.0]
-[[joint]]
-name = "E"
-links = ["frame", "c3"]
-at = [1.0, 0.0]
-[[joint]]
-name = "F"
-links = ["c3", "cp"]
-at = [1.0, 1.0]
-[[driver]]
-joint = "A"
-"""
-BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
 
 
 def _run(capsys, *argv):

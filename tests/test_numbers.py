@@ -169,18 +169,11 @@ def test_embedding_search_with_and_without_apex_filter_agree():
 def test_parallelogram_with_redundant_link_is_reported_as_moving():
     # SPEC §2: a parallelogram with a redundant link has F = 0 by formula but moves;
     # the report gives the actual mobility from the Jacobian rank and names the pair
-    from topo.io import mechanism_from_dict
+    from topo.io import loads
 
-    doc = {
-        "name": "parallelogram with a redundant link",
-        "link": [{"name": "frame", "frame": True}],
-        "joint": [{"name": n, "links": l, "at": a} for n, l, a in [
-            ("A", ["frame", "c1"], [0.0, 0.0]), ("B", ["c1", "cp"], [0.0, 1.0]),
-            ("C", ["cp", "c2"], [2.0, 1.0]), ("D", ["c2", "frame"], [2.0, 0.0]),
-            ("E", ["frame", "c3"], [1.0, 0.0]), ("F", ["c3", "cp"], [1.0, 1.0])]],
-        "driver": [{"joint": "A"}],
-    }
-    r = structural_report(mechanism_from_dict(doc))
+    from tests.common import PARALLELOGRAM
+
+    r = structural_report(loads(PARALLELOGRAM))
     assert r.F == 0 and r.actual_F == 1 and r.rc == 1
     assert r.redundant and any("moves with 1 DOF" in w for w in r.warnings)
 
