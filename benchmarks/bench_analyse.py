@@ -17,11 +17,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from topo.degeneracy import find_rigid_subchain  # noqa: E402
-from topo.isomorphism import are_isomorphic_vf2, canonical_form  # noqa: E402
-from topo.loops import loop_assortment  # noqa: E402
-from topo.model import chain_from_joint_lists  # noqa: E402
-from topo.numbers import structural_report  # noqa: E402
+from multiloop.topo.degeneracy import find_rigid_subchain  # noqa: E402
+from multiloop.topo.isomorphism import are_isomorphic_vf2, canonical_form  # noqa: E402
+from multiloop.topo.loops import loop_assortment  # noqa: E402
+from multiloop.topo.model import chain_from_joint_lists  # noqa: E402
+from multiloop.topo.numbers import structural_report  # noqa: E402
 
 
 def random_one_dof_chain(rng: random.Random, n: int, multiple: bool):
@@ -63,7 +63,7 @@ def main() -> None:
         "12-link MJ F=1": [random_one_dof_chain(rng, 12, True) for _ in range(args.chains)],
     }
     try:
-        from catalogue.named import load_named
+        from multiloop.catalogue.named import load_named
         sets["24-link (seed 002 fig. 9)"] = [load_named("linkage_24")]
     except Exception as exc:  # noqa: BLE001
         print(f"(24-link catalogue chain unavailable: {exc})")

@@ -35,13 +35,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from catalogue.atlas import Atlas  # noqa: E402
-from catalogue.synthesis import (  # noqa: E402
+from multiloop.catalogue.atlas import Atlas  # noqa: E402
+from multiloop.catalogue.synthesis import (  # noqa: E402
     LITERATURE_SJ_F1, SynthesisOptions, _decode_bipartite, _decode_simple, _tool, count_task,
     plan_tasks,
 )
-from topo.degeneracy import is_degenerate  # noqa: E402
-from topo.model import chain_from_joint_lists  # noqa: E402
+from multiloop.topo.degeneracy import is_degenerate  # noqa: E402
+from multiloop.topo.model import chain_from_joint_lists  # noqa: E402
 
 
 def _baseline_commands(opts: SynthesisOptions):

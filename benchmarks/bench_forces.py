@@ -23,10 +23,10 @@ import time
 
 import numpy as np
 
-from catalogue.engines import v_twin_spec
-from kin.engine import engine_mechanism, engine_reactions, engine_state
-from kin.forces import PointLoad, forces
-from topo.assur import decompose
+from multiloop.catalogue.engines import v_twin_spec
+from multiloop.kin.engine import engine_mechanism, engine_reactions, engine_state
+from multiloop.kin.forces import PointLoad, forces
+from multiloop.topo.assur import decompose
 
 
 def _best(fn, repeat=3):

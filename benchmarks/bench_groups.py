@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from kin.groups.base import SINGULAR_RTOL
-from kin.groups import (prp_position, rpp_position, rpr_position, rrp_position,
+from multiloop.kin.groups.base import SINGULAR_RTOL
+from multiloop.kin.groups import (prp_position, rpp_position, rpr_position, rrp_position,
                         rrr_position, rrr_rates, triad_modes, triad_track)
 
 L2, L3, R = 1.6, 1.2, 0.5

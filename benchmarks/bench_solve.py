@@ -32,8 +32,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from kin.solve import compile_plan, solve  # noqa: E402
-from topo.model import MechanismBuilder  # noqa: E402
+from multiloop.kin.solve import compile_plan, solve  # noqa: E402
+from multiloop.topo.model import MechanismBuilder  # noqa: E402
 
 CHARTS = ROOT / "benchmarks" / "charts"
 
@@ -296,7 +296,7 @@ def chart_speed_accuracy(quick: bool):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from kin.groups.newton import ConstraintSystem, track
+    from multiloop.kin.groups.newton import ConstraintSystem, track
     m = six_bar()
     plan = compile_plan(m)
     N = 20_000 if quick else 100_000
@@ -331,7 +331,7 @@ def chart_speed_accuracy(quick: bool):
         err = np.nanmax(np.abs(fd - an.velocities)) / np.nanmax(np.abs(an.velocities))
         vel_pts.append((f"central FD h={h:g}", 1e6 * (t + t_pos) / len(xv), err))
     # two analytic routes for the velocity: group rates vs whole-mechanism linear system
-    from kin.groups.newton import rates
+    from multiloop.kin.groups.newton import rates
     Zd = np.zeros_like(an.poses)
     Zd, _ = rates(sysm, an.poses, Zd, np.ones((len(xv), 1)), unk)
     J = an.pose_rates
@@ -372,7 +372,7 @@ def chart_singular():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from kin.groups.newton import ConstraintSystem, track
+    from multiloop.kin.groups.newton import ConstraintSystem, track
     A0 = (0.0, 1.5)
     B = _circle(A0, (3.0, 0.0), 2.0, 2.0, -1)
     b = MechanismBuilder(name="non-Grashof four-bar")

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
 
@@ -221,7 +221,7 @@ class Atlas:
 
     Examples
     --------
-    >>> from catalogue.synthesis import SynthesisOptions, nauty_available
+    >>> from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
     >>> with Atlas(":memory:") as atlas:                  # doctest: +SKIP
     ...     atlas.build(SynthesisOptions(8, 1, simple_joints=True), progress=False).count
     16

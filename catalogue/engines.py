@@ -25,8 +25,8 @@ from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
-from kin.engine import Cylinder, EngineSpec, engine_mechanism, load_engine
-from topo.model import Mechanism
+from multiloop.kin.engine import Cylinder, EngineSpec, engine_mechanism, load_engine
+from multiloop.topo.model import Mechanism
 
 __all__ = ["ENGINE_FILES", "engine_path", "single_cylinder", "single_cylinder_spec", "v_twin",
            "v_twin_spec", "radial", "radial_spec"]
@@ -38,7 +38,7 @@ ENGINE_FILES = {"single_cylinder": "single_cylinder.toml", "v_twin": "v_twin.tom
 
 def engine_path(name: str) -> Path:
     """Path of a catalogue engine file (``name`` as in :data:`ENGINE_FILES`)."""
-    return Path(str(resources.files("catalogue") / "engines" / ENGINE_FILES[name]))
+    return Path(str(resources.files("multiloop.catalogue") / "engines" / ENGINE_FILES[name]))
 
 
 def single_cylinder_spec() -> EngineSpec:

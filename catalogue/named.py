@@ -19,13 +19,13 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from topo.errors import InputError, explain
-from topo.io import load
-from topo.model import Mechanism
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.io import load
+from multiloop.topo.model import Mechanism
 
 __all__ = ["names", "path", "load_named"]
 
-_PACKAGE = "catalogue"
+_PACKAGE = "multiloop.catalogue"
 _FOLDER = "mechanisms"
 
 

@@ -67,7 +67,7 @@ from typing import Iterable, Iterator, Sequence
 import numpy as np
 import pynauty
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 __all__ = [
     "SynthesisOptions",
@@ -352,7 +352,7 @@ def joint_masks_degenerate(masks: np.ndarray, n: int) -> np.ndarray:
 def _degenerate_by_definition(joints: Sequence[int], n: int) -> bool:
     """The definition subset by subset (:func:`topo.degeneracy.rigid_subset_mask`): the
     independent route for :func:`joint_masks_degenerate`."""
-    from topo.degeneracy import rigid_subset_mask
+    from multiloop.topo.degeneracy import rigid_subset_mask
     return rigid_subset_mask(n, joints) is not None
 
 
@@ -410,7 +410,7 @@ def _nauty_incidence(n: int, joints: Sequence[int], extra_colours: Sequence[set]
 def canonical_string(n: int, joints: Sequence[int]) -> str:
     """:func:`topo.isomorphism.canonical_form` (mode ``chain``) of a chain given by
     joint masks."""
-    from topo.isomorphism import canonical_form_of_joints
+    from multiloop.topo.isomorphism import canonical_form_of_joints
     return canonical_form_of_joints(n, [_mask_links(int(jm)) for jm in joints])
 
 
@@ -448,7 +448,7 @@ class ChainRecord:
 
     def as_mechanism(self):
         """The chain as a :class:`topo.model.Mechanism` (bare chain)."""
-        from topo.model import chain_from_joint_lists
+        from multiloop.topo.model import chain_from_joint_lists
         return chain_from_joint_lists(self.joint_lists)
 
     def as_dict(self) -> dict:
@@ -530,7 +530,7 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
     Planarity always (incidence graph); the loop assortment [La] and ``L0`` via
     :func:`topo.loops.loop_assortment` when ``loops`` (the slow part: ~10 ms a chain).
     """
-    from topo.numbers import structural_codes
+    from multiloop.topo.numbers import structural_codes
 
     joints = sorted(int(j) for j in joints)
     deg = [sum(1 for j in joints if j >> x & 1) for x in range(n)]
@@ -539,8 +539,8 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
     tuples = tuple(_mask_links(j) for j in joints)
     La = L0 = None
     if loops:
-        from topo.loops import loop_assortment
-        from topo.model import chain_from_joint_lists
+        from multiloop.topo.loops import loop_assortment
+        from multiloop.topo.model import chain_from_joint_lists
         la = loop_assortment(chain_from_joint_lists([[str(x + 1) for x in j] for j in tuples]))
         planar, La, L0 = la.planar, la.sizes, la.outer
     else:
@@ -721,7 +721,7 @@ class AssortmentRow:
 
     @property
     def code_star(self) -> str:
-        from topo.numbers import structural_codes
+        from multiloop.topo.numbers import structural_codes
         degrees = [i for i, c in enumerate(self.LA, 2) for _ in range(c)]
         mult = [j for j, c in enumerate(self.MJA, 2) for _ in range(c)]
         mult += [1] * (self.n_joints - len(mult))          # the simple joints

@@ -1,6 +1,6 @@
 """kin: solvers, kinematics, kinetostatics, engines and spatial screws.
 
-API index.  Functions are imported from their modules (``from kin.solve import solve``;
+API index.  Functions are imported from their modules (``from multiloop.kin.solve import solve``;
 they are not re-exported here because ``kin.solve`` and ``kin.forces`` are module
 names); the value types are re-exported.
 

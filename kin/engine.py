@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from topo.errors import InputError, explain
-from topo.model import Driver, Mechanism, MechanismBuilder
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 
 from .forces import PointLoad, forces
 from .gas import STROKES, IndicatorDiagram, PressureTable
@@ -282,7 +282,7 @@ def engine_from_dict(doc: dict) -> EngineSpec:
 
 def load_engine(path: str | Path) -> EngineSpec:
     """Read an engine TOML/JSON file (see ``docs/forces.md``)."""
-    from topo.io import read_document  # noqa: PLC0415
+    from multiloop.topo.io import read_document  # noqa: PLC0415
     doc = read_document(path)
     try:
         return engine_from_dict(doc)

@@ -70,8 +70,8 @@ from typing import Sequence
 
 import numpy as np
 
-from topo.errors import InputError, MobilityError, SingularityWarning, explain
-from topo.model import JointKind, Mechanism
+from multiloop.topo.errors import InputError, MobilityError, SingularityWarning, explain
+from multiloop.topo.model import JointKind, Mechanism
 
 from .result import BatchStatus
 from .state import KinematicState
@@ -406,7 +406,7 @@ def _plan_order(m: Mechanism, plan=None) -> list[list[str]] | None:
     None when no plan can be made."""
     if plan is None:
         try:
-            from topo.assur import decompose  # noqa: PLC0415
+            from multiloop.topo.assur import decompose  # noqa: PLC0415
         except ImportError:  # pragma: no cover
             return None
         try:
@@ -503,7 +503,7 @@ def forces(mechanism: Mechanism, state_or_inputs, *, speeds=None, accelerations=
 
     Examples
     --------
-    >>> from kin.engine import Cylinder, EngineSpec, engine_mechanism, engine_state
+    >>> from multiloop.kin.engine import Cylinder, EngineSpec, engine_mechanism, engine_state
     >>> spec = EngineSpec(0.05, 0.2, 0.08, (Cylinder("1", 0.0),), rod_mass=1.0, rod_cg=0.3,
     ...                   rod_inertia=0.01, piston_mass=0.5)
     >>> m = engine_mechanism(spec)
@@ -704,7 +704,7 @@ def _solve_state(m: Mechanism, inputs, speeds, accelerations) -> KinematicState:
     ``ω`` (zero input acceleration) plus the first-order analogues times ``ε``.
     """
     try:
-        from kin.solve import solve  # noqa: PLC0415
+        from multiloop.kin.solve import solve  # noqa: PLC0415
     except ImportError as exc:  # pragma: no cover - until kin.solve exists
         raise InputError(explain("forces", expected="a KinematicState (kin.solve is not available)",
                                  got="driver inputs")) from exc

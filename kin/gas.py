@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 __all__ = ["IndicatorDiagram", "PressureTable", "polytropic_work", "STROKES"]
 

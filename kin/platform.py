@@ -56,7 +56,7 @@ from typing import Any, Mapping
 import numpy as np
 import scipy.linalg
 
-from topo.errors import InputError, SingularityError, SingularityWarning, explain
+from multiloop.topo.errors import InputError, SingularityError, SingularityWarning, explain
 
 from .screws import Twist, Wrench, reciprocal_complements, reciprocal_products
 
@@ -867,7 +867,7 @@ def load_platform(path: str | Path) -> Platform:
     InputError
         Missing file, syntax error, unknown key or malformed value (named).
     """
-    from topo.io import read_document
+    from multiloop.topo.io import read_document
 
     doc = read_document(path)
     try:

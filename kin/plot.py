@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
-from topo.model import JointKind  # noqa: E402
+from multiloop.topo.model import JointKind  # noqa: E402
 
 from .state import KinematicState  # noqa: E402
 

@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from topo.errors import InputError, LinkageError, explain
+from multiloop.topo.errors import InputError, LinkageError, explain
 
 __all__ = [
     "Screw",

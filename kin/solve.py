@@ -37,10 +37,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from topo.assur import AssurGroup, AssurPlan, DriverStep, decompose, link_origins
-from topo.errors import (AssemblyError, InputError, SingularityError, SingularityWarning,
+from multiloop.topo.assur import AssurGroup, AssurPlan, DriverStep, decompose, link_origins
+from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, SingularityWarning,
                          explain)
-from topo.model import JointKind, Mechanism
+from multiloop.topo.model import JointKind, Mechanism
 
 from .groups.newton import ConstraintSystem, rates, track
 from .state import KinematicState
@@ -210,7 +210,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
 
     Examples
     --------
-    >>> from topo.model import MechanismBuilder
+    >>> from multiloop.topo.model import MechanismBuilder
     >>> b = MechanismBuilder()
     >>> b.add_link("ground", frame=True)
     >>> for n, lk, at in [("O", ("ground", "crank"), (0, 0)), ("A", ("crank", "rod"), (1, 0)),
@@ -441,7 +441,7 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, branches
 def _kernels():
     """Closed-form group solvers, or None when :mod:`kin.groups` is not importable."""
     try:
-        import kin.groups as K
+        import multiloop.kin.groups as K
     except ImportError:  # pragma: no cover - the kernels are part of the package
         return None
     need = {"RRR": "rrr_position", "RRP": "rrp_position", "RPR": "rpr_position",
@@ -640,7 +640,7 @@ def _choose_branch(cand_s, gap, sgn0, reach_ok, scale, alternate):
 
 
 def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
-    import kin.groups as K
+    import multiloop.kin.groups as K
     g: AssurGroup = st.step
     o1, inner, o2, l1, l2 = g.layout
     m = sp.mechanism
@@ -764,7 +764,7 @@ _TRIAD_STATUS = {1: "no assembly (out of reach)", 2: "assembly modes collide / a
 
 
 def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
-    import kin.groups as K
+    import multiloop.kin.groups as K
     g: AssurGroup = st.step
     tern, bins, outs, inns = g.layout
     Aref = np.array([G.at(o) for o in outs])
@@ -792,7 +792,7 @@ def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
 
 def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     """Class IV order 2 group by the kernel's tracker (mode of the reference)."""
-    import kin.groups as K
+    import multiloop.kin.groups as K
     t1, t2, b0, b1, o1, o2, j1, j2, j3, j4 = st.step.layout
     Oref = np.array([G.at(o1), G.at(o2)])
     Jref = np.array([G.at(j) for j in (j1, j2, j3, j4)])
@@ -858,7 +858,7 @@ class _Rates:
 
 
 def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
-    import kin.groups as K
+    import multiloop.kin.groups as K
     g: AssurGroup = st.step
     o1, inner, o2, l1, l2 = g.layout
     m = sp.mechanism

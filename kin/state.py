@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from topo.model import Mechanism
+from multiloop.topo.model import Mechanism
 
 from .result import BatchStatus
 

@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-from topo.errors import LinkageError
+from multiloop.topo.errors import LinkageError
 
 COMMANDS = {
     "analyse": "structural report of a chain or mechanism (seed 002 numbers)",

@@ -5,7 +5,7 @@ import random
 
 from hypothesis import strategies as st
 
-from topo.model import Mechanism, chain_from_joint_lists
+from multiloop.topo.model import Mechanism, chain_from_joint_lists
 
 
 def random_joint_lists(rng: random.Random, n_links: int, extra: int, p_multiple: float) -> list[list[str]]:

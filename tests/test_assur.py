@@ -10,9 +10,9 @@ import math
 
 import pytest
 
-from topo.assur import AssurGroup, AssurPlan, decompose
-from topo.errors import DecompositionError, MobilityError
-from topo.model import MechanismBuilder
+from multiloop.topo.assur import AssurGroup, AssurPlan, decompose
+from multiloop.topo.errors import DecompositionError, MobilityError
+from multiloop.topo.model import MechanismBuilder
 
 
 # ---------------------------------------------------------------- builders
@@ -277,7 +277,7 @@ def test_rigid_triangle_tied_to_one_pin_passes_matching_but_is_not_rigid():
 
 
 def test_bare_chain_is_rejected():
-    from topo.model import chain_from_joint_lists
+    from multiloop.topo.model import chain_from_joint_lists
     with pytest.raises(DecompositionError, match="frame"):
         decompose(chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]))
 
@@ -339,7 +339,7 @@ _CAT = __import__("pathlib").Path(__file__).resolve().parents[1] / "catalogue" /
     ("stephenson_3_triad", "I(0,1) → III(2,3,4,5)"),
 ])
 def test_catalogue_structure_formulas(stem, formula):
-    from topo.io import load
+    from multiloop.topo.io import load
     m = load(_CAT / f"{stem}.toml")
     p = decompose(m)
     assert p.formula == formula

@@ -10,11 +10,11 @@ import time
 
 import pytest
 
-from catalogue.atlas import Atlas, parse_query
-from catalogue.synthesis import SynthesisOptions, nauty_available
+from multiloop.catalogue.atlas import Atlas, parse_query
+from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
 from multiloop.cli import main
-from topo.errors import InputError
-from topo.numbers import structural_report
+from multiloop.topo.errors import InputError
+from multiloop.topo.numbers import structural_report
 
 pytestmark = pytest.mark.skipif(not nauty_available(),
                                 reason="nauty's geng/genbg not installed (apt-get install nauty)")

@@ -26,9 +26,9 @@ import math
 import numpy as np
 import pytest
 
-from catalogue.named import load_named, names, path
-from topo.model import JointKind, Mechanism
-from topo.numbers import structural_report
+from multiloop.catalogue.named import load_named, names, path
+from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.numbers import structural_report
 
 # ---------------------------------------------------------------------------
 # geometry helpers (pose formulation)
@@ -235,7 +235,7 @@ def test_reconstructions_say_so(name):
 
 
 def test_unknown_name_is_a_clear_error():
-    from topo.errors import InputError
+    from multiloop.topo.errors import InputError
     with pytest.raises(InputError, match="four_bar"):
         path("no_such_mechanism")
 
@@ -449,7 +449,7 @@ def test_cli_catalogue_table(capsys):
     ("dyad_prp", [(2, "PRP")]), ("dyad_rpp", [(2, "RPP")]),
 ])
 def test_assur_groups(name, expected):
-    import topo.assur as assur
+    import multiloop.topo.assur as assur
     plan = assur.decompose(load_named(name))
     got = [(g.cls, g.kind if g.cls == 2 else None) for g in plan.groups]
     assert got == expected
@@ -457,7 +457,7 @@ def test_assur_groups(name, expected):
 
 @pytest.mark.parametrize("name", names())
 def test_mobility_agrees_with_topo_mobility(name):
-    import topo.mobility as mobility
+    import multiloop.topo.mobility as mobility
     m = load_named(name)
     r = mobility.actual_mobility(m)
     assert (r.actual_F, tuple(r.redundant)) == (len(m.drivers), ())
@@ -477,7 +477,7 @@ def joint_positions(m: Mechanism, poses: np.ndarray) -> np.ndarray:
 def test_kin_solve_agrees_with_continuation(name):
     """Cross-check of two independent solvers: kin.solve (closed-form groups, branch from
     the reference) and the Newton continuation above, along the same driver path."""
-    import kin.solve as solve
+    import multiloop.kin.solve as solve
     m = load_named(name)
     values = driver_path(name, m)
     expected = joint_positions(m, continuation(m, values))

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from hypothesis import given
 
-from topo.degeneracy import find_rigid_subchain, fractionation, subchain_deficit
-from topo.model import chain_from_joint_lists
+from multiloop.topo.degeneracy import find_rigid_subchain, fractionation, subchain_deficit
+from multiloop.topo.model import chain_from_joint_lists
 from tests.common import chains
 
 

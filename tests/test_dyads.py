@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from kin.groups import (prp_position, prp_rates, rpp_position, rpp_rates, rpr_branch,
+from multiloop.kin.groups import (prp_position, prp_rates, rpp_position, rpp_rates, rpr_branch,
                         rpr_position, rpr_rates, rrp_branch, rrp_position, rrp_rates,
                         rrr_branch, rrr_position, rrr_rates)
-from topo.errors import SingularityError
+from multiloop.topo.errors import SingularityError
 
 H = 1e-4
 

@@ -14,13 +14,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from catalogue.engines import (ENGINE_FILES, engine_path, radial, radial_spec, single_cylinder_spec,
+from multiloop.catalogue.engines import (ENGINE_FILES, engine_path, radial, radial_spec, single_cylinder_spec,
                                v_twin, v_twin_spec)
-from kin.engine import (Cylinder, EngineSpec, analyse_engine, cyclogram, engine_mechanism,
+from multiloop.kin.engine import (Cylinder, EngineSpec, analyse_engine, cyclogram, engine_mechanism,
                         engine_reactions, engine_state, lambda_approximation, load_engine,
                         piston_kinematics, seed004_rod_com)
-from kin.forces import PointLoad, forces, kinetic_energy, potential_energy
-from kin.gas import IndicatorDiagram
+from multiloop.kin.forces import PointLoad, forces, kinetic_energy, potential_energy
+from multiloop.kin.gas import IndicatorDiagram
 from multiloop.cli import main
 
 RNG = np.random.default_rng(20181116)
@@ -89,7 +89,7 @@ def test_seed004_rod_com_formulas_match_closed_form_state():
 
 def test_seed004_rod_com_formulas_match_general_solver():
     """The same formulas against the general solver (kin.solve) on the engine mechanism."""
-    from kin.solve import solve
+    from multiloop.kin.solve import solve
     r, l, o, n = 0.045, 0.16, 0.35, 4200.0
     spec = EngineSpec(r, l, 0.08, (Cylinder("1", 0.0),), rpm=n, rod_mass=1.0, rod_cg=o, rod_inertia=0.01)
     m = engine_mechanism(spec)
@@ -102,7 +102,7 @@ def test_seed004_rod_com_formulas_match_general_solver():
 
 
 def test_general_solver_matches_closed_form_state_for_every_catalogue_engine():
-    from kin.solve import solve
+    from multiloop.kin.solve import solve
     for spec in _specs().values():
         m = engine_mechanism(spec)
         phi = RNG.uniform(0, 4 * np.pi, 40)
@@ -237,7 +237,7 @@ def test_radial_cyclogram_equal_intervals_and_order():
 
 
 def test_radial_engine_is_seed002_example2():
-    from topo.numbers import structural_report
+    from multiloop.topo.numbers import structural_report
     r = structural_report(radial())
     assert (r.n, tuple(r.LA), tuple(r.MJA), r.V, r.K, r.F, r.SL) == (12, (11, 0, 0, 0, 1), (0, 0, 0, 1), 4, 5, 1, 28)
     assert r.code == "[11.0001]/4"
@@ -274,12 +274,12 @@ def test_dead_centres_regular_when_crank_drives():
 def test_dead_centres_singular_when_piston_drives():
     """Driven by the piston, crank + rod form an RRR dyad that is singular at the dead
     centres: marked in the status, NaN, no exception."""
-    from topo.model import Driver
+    from multiloop.topo.model import Driver
     spec = replace(single_cylinder_spec(), offset=0.0)
     m = engine_mechanism(spec).with_drivers([Driver("S1", ("frame", "piston1"))])
     phi = np.radians([0.0, 45.0, 180.0, 300.0])
     st = engine_state(spec, phi, mechanism=m)
-    from topo.errors import SingularityWarning
+    from multiloop.topo.errors import SingularityWarning
     for method in ("groups", "global"):
         with pytest.warns(SingularityWarning, match="2 singular"):
             fr = forces(m, st, method=method)
@@ -361,7 +361,7 @@ def test_user_pressure_table_cycle_integral():
     psi = np.arange(0.0, 720.0, 0.5)
     # an arbitrary smooth user curve (absolute Pa), periodic over 720 deg
     p = 0.1e6 + 3.0e6 * np.exp(-((psi - 372.0) / 35.0) ** 2)
-    from kin.gas import PressureTable
+    from multiloop.kin.gas import PressureTable
     spec = replace(base, gas=PressureTable(tuple(zip(psi.tolist(), p.tolist()))))
     res = analyse_engine(spec, 5760, check=False)
     W = res.indicated_work.sum()

@@ -14,18 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from catalogue.engines import radial_spec, single_cylinder_spec, v_twin_spec
-from kin.engine import Cylinder, EngineSpec, engine_mechanism, engine_state
-from kin.forces import (ForceResult, PointLoad, forces, kinetic_energy, link_loads, potential_energy,
+from multiloop.catalogue.engines import radial_spec, single_cylinder_spec, v_twin_spec
+from multiloop.kin.engine import Cylinder, EngineSpec, engine_mechanism, engine_state
+from multiloop.kin.forces import (ForceResult, PointLoad, forces, kinetic_energy, link_loads, potential_energy,
                         solve_batched)
-from kin.state import KinematicState
+from multiloop.kin.state import KinematicState
 from multiloop.cli import main
-from topo.errors import MobilityError
-from topo.io import load
-from topo.model import Link, MechanismBuilder
+from multiloop.topo.errors import MobilityError
+from multiloop.topo.io import load
+from multiloop.topo.model import Link, MechanismBuilder
 
 RNG = np.random.default_rng(4)
-LOADED = Path(str(resources.files("catalogue") / "mechanisms" / "crank_slider_loaded.toml"))
+LOADED = Path(str(resources.files("multiloop.catalogue") / "mechanisms" / "crank_slider_loaded.toml"))
 
 
 def _massless(m):
@@ -100,7 +100,7 @@ def test_reactions_virtual_power_energy_rate_agree(case):
 
 def test_catalogue_mechanisms_with_masses_through_the_general_solver():
     """Every catalogue mechanism file with masses, solved by kin.solve from driver inputs."""
-    files = sorted(Path(str(resources.files("catalogue") / "mechanisms")).glob("*.toml"))
+    files = sorted(Path(str(resources.files("multiloop.catalogue") / "mechanisms")).glob("*.toml"))
     done = 0
     for f in files:
         m = load(f)
@@ -109,7 +109,7 @@ def test_catalogue_mechanisms_with_masses_through_the_general_solver():
         nd = len(m.drivers)
         w = np.array([d.speed or 1.0 for d in m.drivers])
         q0 = RNG.uniform(-0.2, 0.2, (12, nd))
-        from kin.solve import solve
+        from multiloop.kin.solve import solve
         fr = forces(m, q0, accelerations=np.zeros(nd))
         ok = fr.ok
         assert ok.sum() >= 6, f.name
@@ -266,8 +266,8 @@ moment = 3.0
 def test_two_driver_five_bar_with_driver_accelerations():
     """Two drivers with speeds and accelerations from the file: groups = global =
     virtual power = energy rate along q(t) = q0 + ω t + ½ ε t²."""
-    from kin.solve import solve
-    from topo.io import loads
+    from multiloop.kin.solve import solve
+    from multiloop.topo.io import loads
     m = loads(FIVE_BAR)
     w, e = np.array([3.0, -2.0]), np.array([2.0, -1.0])
     q0 = RNG.uniform(-0.3, 0.3, (8, 2))

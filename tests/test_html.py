@@ -9,10 +9,10 @@ import subprocess
 import numpy as np
 import pytest
 
-from catalogue.atlas import Atlas
-from catalogue.drawing import _graph, chain_layout, chain_svg, has_crossings
-from catalogue.html import write_gallery
-from catalogue.synthesis import SynthesisOptions, iter_chains, nauty_available
+from multiloop.catalogue.atlas import Atlas
+from multiloop.catalogue.drawing import _graph, chain_layout, chain_svg, has_crossings
+from multiloop.catalogue.html import write_gallery
+from multiloop.catalogue.synthesis import SynthesisOptions, iter_chains, nauty_available
 
 needs_nauty = pytest.mark.skipif(not nauty_available(),
                                  reason="nauty's geng/genbg not installed (apt-get install nauty)")

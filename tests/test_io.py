@@ -7,8 +7,8 @@ import json
 import pytest
 
 from multiloop.cli import main
-from topo.errors import InputError, TopologyError
-from topo.io import dumps_json, dumps_toml, load, loads, mechanism_from_dict
+from multiloop.topo.errors import InputError, TopologyError
+from multiloop.topo.io import dumps_json, dumps_toml, load, loads, mechanism_from_dict
 from tests.common import BARE
 
 CRANK_SLIDER = '''

@@ -5,9 +5,9 @@ import random
 
 from hypothesis import given, strategies as st
 
-from topo.isomorphism import (are_isomorphic, are_isomorphic_vf2, canonical_form,
+from multiloop.topo.isomorphism import (are_isomorphic, are_isomorphic_vf2, canonical_form,
                               could_be_isomorphic, invariant_signature)
-from topo.model import MechanismBuilder, chain_from_joint_lists
+from multiloop.topo.model import MechanismBuilder, chain_from_joint_lists
 from tests.common import chains, random_joint_lists, relabel
 
 

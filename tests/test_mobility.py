@@ -4,9 +4,9 @@ from __future__ import annotations
 import pytest
 
 from test_assur import crank_slider, four_bar, knitting_needle, vtwin
-from topo.errors import InputError
-from topo.mobility import MobilityReport, actual_mobility
-from topo.model import MechanismBuilder, chain_from_joint_lists
+from multiloop.topo.errors import InputError
+from multiloop.topo.mobility import MobilityReport, actual_mobility
+from multiloop.topo.model import MechanismBuilder, chain_from_joint_lists
 
 
 def parallelogram(redundant=True, skew=0.0):

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 from hypothesis import given, strategies as st
 
-from topo.model import chain_from_joint_lists
-from topo.numbers import format_counts, spatial_mobility, structural_report
+from multiloop.topo.model import chain_from_joint_lists
+from multiloop.topo.numbers import format_counts, spatial_mobility, structural_report
 from tests.common import chains, relabel
 
 # Structures of the seed 002 examples, written as bare chains (the catalogue files add
@@ -145,8 +145,8 @@ def test_embedding_search_with_and_without_apex_filter_agree():
 
     import networkx as nx
 
-    from topo.graphs import incidence_graph
-    from topo.loops import block_embeddings
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import block_embeddings
     from tests.common import random_joint_lists
 
     rng = random.Random(11)
@@ -169,7 +169,7 @@ def test_embedding_search_with_and_without_apex_filter_agree():
 def test_parallelogram_with_redundant_link_is_reported_as_moving():
     # SPEC §2: a parallelogram with a redundant link has F = 0 by formula but moves;
     # the report gives the actual mobility from the Jacobian rank and names the pair
-    from topo.io import loads
+    from multiloop.topo.io import loads
 
     from tests.common import PARALLELOGRAM
 
@@ -183,9 +183,9 @@ def test_embedding_search_refuses_to_truncate():
     # must not get a "canonical" [La] from a truncated enumeration
     import networkx as nx
 
-    from topo.errors import TopologyError
-    from topo.graphs import incidence_graph
-    from topo.loops import block_embeddings
+    from multiloop.topo.errors import TopologyError
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import block_embeddings
 
     m = chain_from_joint_lists([["l6", "l3"], ["l3", "l1"], ["l1", "l0"], ["l0", "l7"], ["l7", "l2"],
                                 ["l2", "l5"], ["l5", "l4"], ["l4", "l6"], ["l1", "l6"], ["l0", "l4"]])

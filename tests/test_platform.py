@@ -19,12 +19,12 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from kin.platform import (Platform, PointLoad, RigidBody, SingularStrutsError, Strut, condition_numbers,
+from multiloop.kin.platform import (Platform, PointLoad, RigidBody, SingularStrutsError, Strut, condition_numbers,
                           load_platform, loads_platform, platform_modes, platform_statics, plucker_matrices,
                           strut_forces_equilibrium, strut_forces_screws, symmetric_struts)
-from kin.screws import Twist, reciprocal
+from multiloop.kin.screws import Twist, reciprocal
 from multiloop.cli import main
-from topo.errors import InputError, LinkageError, SingularityError, SingularityWarning
+from multiloop.topo.errors import InputError, LinkageError, SingularityError, SingularityWarning
 
 CATALOGUE = Path(__file__).resolve().parents[1] / "catalogue" / "platforms"
 DORONIN = CATALOGUE / "doronin_platform.toml"

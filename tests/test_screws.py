@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from kin.screws import (Screw, ScrewPairingError, Twist, Wrench, axis_points, moved_about, mutual_moment,
+from multiloop.kin.screws import (Screw, ScrewPairingError, Twist, Wrench, axis_points, moved_about, mutual_moment,
                         pitches, plucker_lines, reciprocal, reciprocal_complements, reciprocal_products)
-from topo.errors import InputError, LinkageError
+from multiloop.topo.errors import InputError, LinkageError
 
 coord = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 vec3 = st.tuples(coord, coord, coord)

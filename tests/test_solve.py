@@ -15,15 +15,15 @@ import warnings
 import numpy as np
 import pytest
 
-from kin.groups.newton import ConstraintSystem, track
-from kin.solve import compile_plan, solve
-from kin.state import KinematicState
+from multiloop.kin.groups.newton import ConstraintSystem, track
+from multiloop.kin.solve import compile_plan, solve
+from multiloop.kin.state import KinematicState
 from test_assur import (class4_mechanism, crank_slider, dyad_mechanism, four_bar, knitting_needle,
                         six_bar_slider, stephenson3_triad, vtwin)
-from topo.assur import Constraint
-from topo.errors import AssemblyError, InputError, SingularityError
-from topo.mobility import pair_constraints
-from topo.model import MechanismBuilder
+from multiloop.topo.assur import Constraint
+from multiloop.topo.errors import AssemblyError, InputError, SingularityError
+from multiloop.topo.mobility import pair_constraints
+from multiloop.topo.model import MechanismBuilder
 
 MECHS = {
     "four_bar": four_bar, "crank_slider": crank_slider, "vtwin": vtwin,
@@ -317,8 +317,8 @@ def _cycle_for(m):
 
 @pytest.mark.parametrize("path", _CAT, ids=[p.stem for p in _CAT])
 def test_every_catalogue_mechanism_decomposes_and_solves_or_reports_its_limit(path):
-    from topo.assur import decompose
-    from topo.io import load
+    from multiloop.topo.assur import decompose
+    from multiloop.topo.io import load
     m = load(path)
     if m.frame is None or not m.drivers or not m.has_geometry:
         pytest.skip("a bare chain / no drivers / no geometry")
@@ -379,7 +379,7 @@ def test_prp_change_point_is_marked_singular_not_far_away():
     # there must be marked singular (before the fix it came back "ok" at 4e5 m)
     import warnings
 
-    from catalogue.named import load_named
+    from multiloop.catalogue.named import load_named
     m = load_named("dyad_prp")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -393,7 +393,7 @@ def test_several_drivers_out_of_phase_continue_without_failure():
     # follow the direction of each step (Euler tangent), not the previous step's
     import warnings
 
-    from catalogue.named import load_named
+    from multiloop.catalogue.named import load_named
     m = load_named("excavator")
     t = np.linspace(0.0, 1.0, 37)[1:]
     vals = np.stack([a * np.sin(2 * np.pi * t + 2.1 * k) for k, a in enumerate((0.35, 0.40, 0.35))], axis=1)

@@ -9,7 +9,7 @@ import pytest
 
 from multiloop.cli import main
 from test_assur import crank_slider, four_bar, knitting_needle, stephenson3_triad
-from topo.io import dumps_toml
+from multiloop.topo.io import dumps_toml
 
 
 @pytest.fixture
@@ -96,7 +96,7 @@ def test_bad_file_exit_2(tmp_path, capsys):
 
 
 def test_degrees_on_the_cli_radians_in_the_api(files, capsys):
-    from kin.solve import solve
+    from multiloop.kin.solve import solve
     assert main(["solve", str(files["fb"]), "--from", "30", "--to", "30", "--steps", "1", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     st = solve(four_bar(), math.radians(30))

@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from catalogue.synthesis import (
+from multiloop.catalogue.synthesis import (
     LITERATURE_SJ_F1, SynthesisOptions, brute_force_chains, canonical_string, count_task,
     iter_chains, joint_masks_degenerate, mechanism_choices, nauty_available, number_synthesis,
     plan_tasks, run_task, universal_table, _degenerate_by_definition, _decode_bipartite,
     _generator_command,
 )
-from topo.degeneracy import fractionation, is_degenerate
-from topo.errors import InputError
-from topo.isomorphism import canonical_form
-from topo.model import chain_from_joint_lists
+from multiloop.topo.degeneracy import fractionation, is_degenerate
+from multiloop.topo.errors import InputError
+from multiloop.topo.isomorphism import canonical_form
+from multiloop.topo.model import chain_from_joint_lists
 
 needs_nauty = pytest.mark.skipif(not nauty_available(),
                                  reason="nauty's geng/genbg not installed (apt-get install nauty)")

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.optimize import root
 
-from kin.groups import (class4_modes, class4_rates, class4_track, triad_modes,
+from multiloop.kin.groups import (class4_modes, class4_rates, class4_track, triad_modes,
                         triad_rates, triad_track)
-from kin.groups.class4 import class4_points
+from multiloop.kin.groups.class4 import class4_points
 
 # reference/kinematics.md §2.3
 A63 = np.array([[0.250191, 0.794428], [0.551371, -0.549586], [-0.399667, 0.747107]])
@@ -288,7 +288,7 @@ def test_every_unit_circle_root_of_the_polynomial_is_an_assembly():
     """Second root finder (numpy.roots on the degree-6 coefficients): each root on
     the unit circle, before any polish, gives a pose with a small residual, and
     their number equals the number of modes returned."""
-    from kin.groups.triad import _poly_coefficients, _position_from_angle
+    from multiloop.kin.groups.triad import _poly_coefficients, _position_from_angle
     rng = np.random.default_rng(11)
     cases = [(A63, B63, L63)] + [random_triad(rng)[:3] for _ in range(15)]
     for A, b, l in cases:

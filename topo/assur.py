@@ -383,7 +383,7 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
 
     Examples
     --------
-    >>> from topo.model import MechanismBuilder
+    >>> from multiloop.topo.model import MechanismBuilder
     >>> b = MechanismBuilder()
     >>> b.add_link("ground", frame=True)
     >>> for n, lk in [("O", ("ground", "crank")), ("A", ("crank", "rod")),

@@ -177,7 +177,7 @@ def find_rigid_subchain(m: Mechanism, method: str = "auto") -> tuple[str, ...] |
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> tri = [["a", "b"], ["b", "c"], ["c", "a"], ["a", "d"], ["d", "e"], ["e", "c"]]
     >>> find_rigid_subchain(chain_from_joint_lists(tri))
     ('a', 'b', 'c')
@@ -213,7 +213,7 @@ def fractionation(m: Mechanism) -> Fractionation:
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> two_loops = [["a", "b"], ["b", "c"], ["c", "a"], ["a", "d"], ["d", "e"], ["e", "a"]]
     >>> fractionation(chain_from_joint_lists(two_loops)).cut_links
     ('a',)

@@ -31,7 +31,7 @@ def incidence_graph(m: Mechanism) -> nx.Graph:
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> g = incidence_graph(chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "a"]]))
     >>> g.number_of_nodes(), g.number_of_edges()
     (6, 6)

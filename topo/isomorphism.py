@@ -126,7 +126,7 @@ def canonical_form(m: Mechanism, mode: str = "chain") -> str:
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> a = chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]])
     >>> b = chain_from_joint_lists([["x", "y"], ["z", "w"], ["y", "z"], ["w", "x"]])
     >>> canonical_form(a) == canonical_form(b)
@@ -143,7 +143,7 @@ def canonical_form_of_joints(n_links: int, joints: Sequence[Sequence[int]]) -> s
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> canonical_form_of_joints(4, [(0, 1), (1, 2), (2, 3), (3, 0)]) == canonical_form(
     ...     chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]))
     True

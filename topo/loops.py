@@ -84,7 +84,7 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> watt = [["a", "b"], ["a", "c"], ["c", "d"], ["d", "b"], ["a", "e"], ["e", "f"],
     ...         ["f", "b"]]
     >>> loop_assortment(chain_from_joint_lists(watt)).sizes

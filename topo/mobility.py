@@ -91,7 +91,7 @@ def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
 
     Examples
     --------
-    >>> from topo.model import MechanismBuilder
+    >>> from multiloop.topo.model import MechanismBuilder
     >>> b = MechanismBuilder()
     >>> b.add_link("g", frame=True)
     >>> for n, lk, at in [("O", ("g", "c1"), (0, 0)), ("A", ("c1", "cp"), (0, 1)),

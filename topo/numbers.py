@@ -241,7 +241,7 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
 
     Examples
     --------
-    >>> from topo.model import chain_from_joint_lists
+    >>> from multiloop.topo.model import chain_from_joint_lists
     >>> r = structural_report(chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]))
     >>> r.K, r.F, r.code, r.La
     (1, 1, '[4]/0', (4, 4))

@@ -18,7 +18,7 @@ import functools
 
 import numpy as np
 
-from topo.errors import SingularityError, explain
+from multiloop.topo.errors import SingularityError, explain
 
 __all__ = ["SINGULAR_RTOL", "REACH_RTOL", "xy", "stack", "cramer", "is_singular",
            "sign_of", "quiet"]

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from topo.assur import link_origins
-from topo.model import Mechanism
+from multiloop.topo.assur import link_origins
+from multiloop.topo.model import Mechanism
 
 __all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
 

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import json
 
-from topo.io import load
-from topo.numbers import structural_report
+from multiloop.topo.io import load
+from multiloop.topo.numbers import structural_report
 
 
 def add_arguments(p) -> None:

@@ -15,7 +15,7 @@ import json
 import sys
 from pathlib import Path
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 
 def add_arguments(p) -> None:
@@ -49,7 +49,7 @@ def add_arguments(p) -> None:
 
 
 def _options(args):
-    from catalogue.synthesis import SynthesisOptions
+    from multiloop.catalogue.synthesis import SynthesisOptions
 
     return SynthesisOptions(args.links, args.dof, simple_joints=args.simple_joints,
                             max_multiplicity=args.max_multiplicity,
@@ -58,8 +58,8 @@ def _options(args):
 
 
 def run(args) -> int:
-    from catalogue.atlas import Atlas
-    from catalogue.synthesis import mechanism_choices, universal_table
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import mechanism_choices, universal_table
 
     if args.links is None and not Path(args.db).exists():
         raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
@@ -103,13 +103,13 @@ def run(args) -> int:
         else:
             _print_text(opts, args, count, chains, out.get("table"), built)
         if args.html:
-            from catalogue.html import write_gallery
+            from multiloop.catalogue.html import write_gallery
 
             pairs = [(opts.n, opts.F)] if opts is not None else None
             paths = write_gallery(atlas, args.html, pairs, args.query, args.html_limit)
             print(f"gallery: {paths[-1]}", file=sys.stderr)
         if args.charts:
-            from catalogue.drawing import existence_domain_chart, invariant_merge_chart
+            from multiloop.catalogue.drawing import existence_domain_chart, invariant_merge_chart
 
             d = Path(args.charts)
             d.mkdir(parents=True, exist_ok=True)
@@ -120,7 +120,7 @@ def run(args) -> int:
 
 
 def _print_text(opts, args, count, chains, table, built) -> None:
-    from catalogue.synthesis import mechanism_choices
+    from multiloop.catalogue.synthesis import mechanism_choices
 
     head = f"n = {opts.n}, F = {opts.F}: " if opts is not None else ""
     print(f"{head}{count} chains" + (f" matching {args.query}" if args.query else ""))

@@ -10,7 +10,7 @@ import runpy
 import sys
 from pathlib import Path
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 BENCH_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
 

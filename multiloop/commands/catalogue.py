@@ -2,16 +2,16 @@
 
 Lists every ``catalogue/mechanisms/*.toml`` with name, n (links), F (mobility),
 K (independent loops), structural code ([LA]/V of seed 002) and source.  The full
-report of one entry is ``multiloop analyse $(python -c "from catalogue.named import
+report of one entry is ``multiloop analyse $(python -c "from multiloop.catalogue.named import
 path; print(path('excavator'))")``, or in Python ``structural_report(load_named(name))``.
 """
 from __future__ import annotations
 
 import json
 
-from catalogue.named import load_named, names
-from topo.model import Mechanism
-from topo.numbers import structural_codes
+from multiloop.catalogue.named import load_named, names
+from multiloop.topo.model import Mechanism
+from multiloop.topo.numbers import structural_codes
 
 
 def add_arguments(p) -> None:

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import json
 
-from topo.assur import decompose
-from topo.io import load
+from multiloop.topo.assur import decompose
+from multiloop.topo.io import load
 
 __all__ = ["add_arguments", "run", "format_plan"]
 

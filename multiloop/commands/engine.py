@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, explain
 
 
 def add_arguments(p) -> None:
@@ -68,14 +68,14 @@ def report_dict(res) -> dict:
 
 
 def run(args) -> int:
-    from kin.engine import analyse_engine, load_engine  # noqa: PLC0415
+    from multiloop.kin.engine import analyse_engine, load_engine  # noqa: PLC0415
     from multiloop.commands.forces import _resolve  # noqa: PLC0415
     if args.steps < 8:
         raise InputError(explain("--steps", expected="at least 8", got=repr(args.steps)))
     spec = load_engine(_resolve(args.file))
     res = analyse_engine(spec, args.steps, check=not args.no_check)
     if args.plot:
-        from kin.engine_plot import engine_plots  # noqa: PLC0415
+        from multiloop.kin.engine_plot import engine_plots  # noqa: PLC0415
         paths = engine_plots(res, args.plot)
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))

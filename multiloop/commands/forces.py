@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from topo.errors import InputError, explain
-from topo.model import JointKind
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind
 
 
 def add_arguments(p) -> None:
@@ -46,7 +46,7 @@ def _resolve(path: str) -> Path:
         return p
     from importlib import resources  # noqa: PLC0415
     for sub in ("mechanisms", "engines"):
-        cand = Path(str(resources.files("catalogue") / sub / f"{path}.toml"))
+        cand = Path(str(resources.files("multiloop.catalogue") / sub / f"{path}.toml"))
         if cand.exists():
             return cand
     return p
@@ -54,12 +54,12 @@ def _resolve(path: str) -> Path:
 
 def load_any(path: str):
     """A mechanism from a mechanism file, or built from an engine file."""
-    from topo.io import load, read_document  # noqa: PLC0415
+    from multiloop.topo.io import load, read_document  # noqa: PLC0415
     p = _resolve(path)
     if p.suffix.lower() in (".toml", ".json") and p.exists():
         doc = read_document(p)
         if isinstance(doc, dict) and "engine" in doc:
-            from kin.engine import engine_from_dict, engine_mechanism  # noqa: PLC0415
+            from multiloop.kin.engine import engine_from_dict, engine_mechanism  # noqa: PLC0415
             try:
                 return engine_mechanism(engine_from_dict(doc), gas_loads=True)
             except InputError as exc:
@@ -137,7 +137,7 @@ def report_dict(fr, inputs_user: np.ndarray) -> dict:
 
 
 def run(args) -> int:
-    from kin.forces import forces  # noqa: PLC0415
+    from multiloop.kin.forces import forces  # noqa: PLC0415
     m = load_any(args.file)
     if not m.drivers:
         raise InputError(explain("[[driver]]", expected="at least one driver", got="none",
@@ -147,7 +147,7 @@ def run(args) -> int:
     kinds = [m.joint(d.joint).kind for d in m.drivers]
     q_user = np.array([[math.degrees(v) if k is JointKind.R else v for v, k in zip(row, kinds)] for row in q])
     if args.plot:
-        from kin.engine_plot import plot_forces  # noqa: PLC0415
+        from multiloop.kin.engine_plot import plot_forces  # noqa: PLC0415
         plot_forces(fr, q_user[:, 0], args.plot)
     if args.json:
         print(json.dumps(report_dict(fr, q_user)))

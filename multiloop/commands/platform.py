@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from kin.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
+from multiloop.kin.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -39,7 +39,7 @@ def _resolve(name: str) -> Path:
     p = Path(name)
     if p.exists() or p.suffix:
         return p
-    bundled = resources.files("catalogue") / "platforms" / f"{name}.toml"
+    bundled = resources.files("multiloop.catalogue") / "platforms" / f"{name}.toml"
     if bundled.is_file():
         return Path(str(bundled))
     return p
@@ -169,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform(_resolve(args.file))
     rep = report(platform, args.modes)
     if args.plot:
-        from kin.platform_plot import plot_platform
+        from multiloop.kin.platform_plot import plot_platform
 
         plot_platform(platform, path=args.plot)
     if args.json:

@@ -39,9 +39,9 @@ from pathlib import Path
 
 import numpy as np
 
-from topo.errors import InputError, explain
-from topo.io import load
-from topo.model import JointKind
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.io import load
+from multiloop.topo.model import JointKind
 
 __all__ = ["add_arguments", "run", "state_to_dict", "input_values"]
 
@@ -190,7 +190,7 @@ def _atomic_write(path: str, data: bytes) -> None:
 def run(args) -> int:
     import warnings
 
-    from kin.solve import compile_plan, solve
+    from multiloop.kin.solve import compile_plan, solve
 
     m = load(args.file)
     for out in (args.plot, args.animate):
@@ -214,7 +214,7 @@ def run(args) -> int:
     if args.plot is not None:
         import matplotlib.pyplot as plt
 
-        from kin.plot import plot_analogues, plot_mechanism
+        from multiloop.kin.plot import plot_analogues, plot_mechanism
         p = Path(args.plot)
         for fig, target in ((plot_mechanism(state), p),
                             (plot_analogues(state), p.with_name(p.stem + "_analogues" + (p.suffix or ".png")))):
@@ -223,7 +223,7 @@ def run(args) -> int:
             plt.close(fig)
             files.append((str(target), buf.getvalue()))
     if args.animate is not None:
-        from kin.plot import animate
+        from multiloop.kin.plot import animate
         with tempfile.TemporaryDirectory() as d:
             tmp = Path(d) / "anim.gif"
             animate(state, tmp)
