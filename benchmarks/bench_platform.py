@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from multiloop.kin.platform import (Platform, PointLoad, Strut, condition_numbers, platform_statics, plucker_matrices,
+from multiloop.kin.spatial.platform import (Platform, PointLoad, Strut, condition_numbers, platform_statics, plucker_matrices,
                           strut_forces_equilibrium, strut_forces_screws, symmetric_struts)
 
 

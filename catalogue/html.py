@@ -12,7 +12,7 @@ import html as _html
 from pathlib import Path
 
 from .atlas import Atlas
-from .drawing import chain_svg
+from multiloop.kin.figures.chains import chain_svg
 from .synthesis import mechanism_choices
 
 __all__ = ["write_gallery", "gallery_page"]

@@ -11,18 +11,17 @@ names); the value types are re-exported.
   systems, the all-modes class III triad and its tracker, the class IV group, and the
   generic Newton group solver (``kin.groups.newton``).
 * ``kin.solve`` — :func:`solve` (whole mechanism along an Assur plan), ``compile_plan``.
-* ``kin.plot`` — mechanism figure, analogue diagrams, animation.
 * ``kin.forces`` — :func:`forces` (kinetostatics group by group, virtual-power check),
   ``ForceResult``.
-* ``kin.engine`` / ``kin.gas`` / ``kin.engine_plot`` — crank–slider engines (single,
-  V-twin, radial): ``EngineSpec``, ``analyse_engine``, ``engine_reactions``,
-  ``engine_mechanism``; indicator diagrams ``IndicatorDiagram``, ``PressureTable``.
-* ``kin.screws`` — ``Screw``, ``Twist``, ``Wrench``, ``reciprocal``.
-* ``kin.platform`` / ``kin.platform_plot`` — six-strut platforms: statics by screws and
-  by equilibrium, vibrations.
+* ``kin.figures`` — every figure: mechanism, analogues, animation, engine diagrams,
+  platform, atlas chain drawings.
+* ``kin.engine`` — crank–slider engines (single, V-twin, radial), an application of the
+  planar pipeline: ``EngineSpec``, ``analyse_engine``, ``engine_mechanism``, gas models.
+* ``kin.spatial`` — six-strut spatial platforms by screw theory (``Screw``, ``Twist``,
+  ``Wrench``, ``reciprocal``, ``Platform``), separate from the planar pipeline.
 """
 from .forces import ForceResult
-from .screws import Screw, Twist, Wrench, reciprocal
+from .spatial.screws import Screw, Twist, Wrench, reciprocal
 from .state import KinematicState
 
 __all__ = ["KinematicState", "ForceResult", "Screw", "Twist", "Wrench", "reciprocal"]

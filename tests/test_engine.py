@@ -1,4 +1,4 @@
-"""Engine module (kin/engine.py, kin/gas.py, catalogue/engines.py, `multiloop engine`).
+"""Engine module (kin/engine/, catalogue/engines.py, `multiloop engine`).
 
 Oracles: reference/kinematics.md §4 (offset stroke 0.100133624 m for e = 0.01 m,
 λ-approximation error 40.5 m/s² = 0.66 % at λ = 0.25 and 3000 rpm, V-twin firing
@@ -20,7 +20,7 @@ from multiloop.kin.engine import (Cylinder, EngineSpec, analyse_engine, cyclogra
                         engine_reactions, engine_state, lambda_approximation, load_engine,
                         piston_kinematics, seed004_rod_com)
 from multiloop.kin.forces import PointLoad, forces, kinetic_energy, potential_energy
-from multiloop.kin.gas import IndicatorDiagram
+from multiloop.kin.engine.gas import IndicatorDiagram
 from multiloop.cli import main
 
 RNG = np.random.default_rng(20181116)
@@ -361,7 +361,7 @@ def test_user_pressure_table_cycle_integral():
     psi = np.arange(0.0, 720.0, 0.5)
     # an arbitrary smooth user curve (absolute Pa), periodic over 720 deg
     p = 0.1e6 + 3.0e6 * np.exp(-((psi - 372.0) / 35.0) ** 2)
-    from multiloop.kin.gas import PressureTable
+    from multiloop.kin.engine.gas import PressureTable
     spec = replace(base, gas=PressureTable(tuple(zip(psi.tolist(), p.tolist()))))
     res = analyse_engine(spec, 5760, check=False)
     W = res.indicated_work.sum()

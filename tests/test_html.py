@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from multiloop.catalogue.atlas import Atlas
-from multiloop.catalogue.drawing import _graph, chain_layout, chain_svg, has_crossings
+from multiloop.kin.figures.chains import _graph, chain_layout, chain_svg, has_crossings
 from multiloop.catalogue.html import write_gallery
 from multiloop.catalogue.synthesis import SynthesisOptions, iter_chains, nauty_available
 

@@ -19,10 +19,10 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from multiloop.kin.platform import (Platform, PointLoad, RigidBody, SingularStrutsError, Strut, condition_numbers,
+from multiloop.kin.spatial.platform import (Platform, PointLoad, RigidBody, SingularStrutsError, Strut, condition_numbers,
                           load_platform, loads_platform, platform_modes, platform_statics, plucker_matrices,
                           strut_forces_equilibrium, strut_forces_screws, symmetric_struts)
-from multiloop.kin.screws import Twist, reciprocal
+from multiloop.kin.spatial.screws import Twist, reciprocal
 from multiloop.cli import main
 from multiloop.topo.errors import InputError, LinkageError, SingularityError, SingularityWarning
 

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from multiloop.kin.screws import (Screw, ScrewPairingError, Twist, Wrench, axis_points, moved_about, mutual_moment,
+from multiloop.kin.spatial.screws import (Screw, ScrewPairingError, Twist, Wrench, axis_points, moved_about, mutual_moment,
                         pitches, plucker_lines, reciprocal, reciprocal_complements, reciprocal_products)
 from multiloop.topo.errors import InputError, LinkageError
 

@@ -109,7 +109,7 @@ def run(args) -> int:
             paths = write_gallery(atlas, args.html, pairs, args.query, args.html_limit)
             print(f"gallery: {paths[-1]}", file=sys.stderr)
         if args.charts:
-            from multiloop.catalogue.drawing import existence_domain_chart, invariant_merge_chart
+            from multiloop.kin.figures.chains import existence_domain_chart, invariant_merge_chart
 
             d = Path(args.charts)
             d.mkdir(parents=True, exist_ok=True)

@@ -75,7 +75,7 @@ def run(args) -> int:
     spec = load_engine(_resolve(args.file))
     res = analyse_engine(spec, args.steps, check=not args.no_check)
     if args.plot:
-        from multiloop.kin.engine_plot import engine_plots  # noqa: PLC0415
+        from multiloop.kin.figures.engine import engine_plots  # noqa: PLC0415
         paths = engine_plots(res, args.plot)
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))

@@ -147,7 +147,7 @@ def run(args) -> int:
     kinds = [m.joint(d.joint).kind for d in m.drivers]
     q_user = np.array([[math.degrees(v) if k is JointKind.R else v for v, k in zip(row, kinds)] for row in q])
     if args.plot:
-        from multiloop.kin.engine_plot import plot_forces  # noqa: PLC0415
+        from multiloop.kin.figures.engine import plot_forces  # noqa: PLC0415
         plot_forces(fr, q_user[:, 0], args.plot)
     if args.json:
         print(json.dumps(report_dict(fr, q_user)))

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from multiloop.kin.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
+from multiloop.kin.spatial.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -169,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform(_resolve(args.file))
     rep = report(platform, args.modes)
     if args.plot:
-        from multiloop.kin.platform_plot import plot_platform
+        from multiloop.kin.figures.platform import plot_platform
 
         plot_platform(platform, path=args.plot)
     if args.json:

@@ -214,7 +214,7 @@ def run(args) -> int:
     if args.plot is not None:
         import matplotlib.pyplot as plt
 
-        from multiloop.kin.plot import plot_analogues, plot_mechanism
+        from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
         p = Path(args.plot)
         for fig, target in ((plot_mechanism(state), p),
                             (plot_analogues(state), p.with_name(p.stem + "_analogues" + (p.suffix or ".png")))):
@@ -223,7 +223,7 @@ def run(args) -> int:
             plt.close(fig)
             files.append((str(target), buf.getvalue()))
     if args.animate is not None:
-        from multiloop.kin.plot import animate
+        from multiloop.kin.figures.mechanism import animate
         with tempfile.TemporaryDirectory() as d:
             tmp = Path(d) / "anim.gif"
             animate(state, tmp)

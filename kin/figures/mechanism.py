@@ -23,7 +23,7 @@ from matplotlib.patches import Polygon  # noqa: E402
 
 from multiloop.topo.model import JointKind  # noqa: E402
 
-from .state import KinematicState  # noqa: E402
+from ..state import KinematicState  # noqa: E402
 
 __all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis"]
 

@@ -42,9 +42,9 @@ import numpy as np
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 
-from .forces import PointLoad, forces
+from ..forces import PointLoad, forces
 from .gas import STROKES, IndicatorDiagram, PressureTable
-from .state import KinematicState
+from ..state import KinematicState
 
 __all__ = ["Cylinder", "EngineSpec", "EngineResult", "load_engine", "engine_from_dict",
            "engine_mechanism", "piston_kinematics", "lambda_approximation", "engine_state",

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .platform import Platform, PlatformStatics, platform_statics
+from ..spatial.platform import Platform, PlatformStatics, platform_statics
 
 __all__ = ["plot_platform"]
 
