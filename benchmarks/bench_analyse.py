@@ -2,7 +2,7 @@
 
 Run: python benchmarks/bench_analyse.py [--chains 1000]
 
-Times the full structural report on the 24-link, 11-loop chain of seed 002 (fig. 9
+Times the full structural report on the 24-link, 11-loop chain of Pozhbelko & Kuts 2020 (fig. 9
 remark; from the catalogue when present) and on random 12-link 1-DOF chains with and
 without multiple joints, with a per-part breakdown (canonical form, [La], degeneracy)
 and the VF2 pairwise alternative for isomorphism, and prints µs per chain.
@@ -64,7 +64,7 @@ def main() -> None:
     }
     try:
         from multiloop.catalogue.named import load_named
-        sets["24-link (seed 002 fig. 9)"] = [load_named("linkage_24")]
+        sets["24-link (Pozhbelko & Kuts 2020 fig. 9)"] = [load_named("linkage_24")]
     except Exception as exc:  # noqa: BLE001
         print(f"(24-link catalogue chain unavailable: {exc})")
     print(f"{'chains':28s} {'report':>10s} {'canonical':>10s} {'[La]':>10s} {'degenerate':>10s}   (µs per chain)")

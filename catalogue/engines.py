@@ -7,17 +7,17 @@ gas model) for :func:`kin.engine.analyse_engine`.
 
 * :func:`single_cylinder` — crank–slider with a 5 mm cylinder offset;
 * :func:`v_twin` — 90° V-twin, both rods on one crank pin (a 3-link multiple joint);
-* :func:`radial` — the five-cylinder radial engine of seed 002 example 2, all rods and
+* :func:`radial` — the five-cylinder radial engine of Pozhbelko & Kuts 2020 example 2, all rods and
   the crank on one 6-link pin (j = 5); ``radial(n)`` builds any N-cylinder radial
   engine with the same dimensions and equal firing intervals (odd N).
 
 Dimensions and masses are illustrative (documented in each file); the radial
-engine's topology is the seed's, its geometry a reconstruction.
+engine's topology is the paper's, its geometry a reconstruction.
 
 References
 ----------
-.. [1] Pozhbelko V., Kuts E. (2020), seed 002, example 2 (radial engine, fig. 7).
-.. [2] Vasilenko V.N. et al. (2018), seed 004 (one/two-cylinder four-stroke engine).
+.. [1] Pozhbelko V., Kuts E. (2020), example 2 (radial engine, fig. 7).
+.. [2] Vasilenko V.N. et al. (2018) (one/two-cylinder four-stroke engine).
 """
 from __future__ import annotations
 
@@ -56,7 +56,7 @@ def v_twin_spec(angle_deg: float | None = None) -> EngineSpec:
 
 
 def radial_spec(n: int = 5) -> EngineSpec:
-    """The seed-002 radial engine; ``n`` cylinders every 360/n deg from the vertical,
+    """The Pozhbelko & Kuts 2020 radial engine; ``n`` cylinders every 360/n deg from the vertical,
     odd cylinders firing on their first TDC and even ones on the second."""
     spec = load_engine(engine_path("radial_5cyl_masses"))
     if n == 5:
@@ -77,6 +77,6 @@ def v_twin(angle_deg: float | None = None) -> Mechanism:
 
 
 def radial(n: int = 5) -> Mechanism:
-    """Radial engine with masses; ``A`` joins the crank and all ``n`` rods (seed 002
+    """Radial engine with masses; ``A`` joins the crank and all ``n`` rods (Pozhbelko & Kuts 2020
     example 2 for n = 5: 12 links, n2 = 11, n6 = 1, V5 = 1, F = 1)."""
     return engine_mechanism(radial_spec(n))

@@ -1,7 +1,7 @@
 """Named mechanisms bundled with multiloop (``catalogue/mechanisms/*.toml``).
 
-Each file is a mechanism in the SPEC §1 format with ``name``, ``description`` and
-``source`` (a citation; reconstructions of the seed 002 examples say so), a frame,
+Each file is a mechanism in the file format of the README with ``name``, ``description`` and
+``source`` (a citation; reconstructions of the Pozhbelko & Kuts 2020 examples say so), a frame,
 drivers and a reference configuration that satisfies closure.  The name of a
 catalogue entry is its file stem (``four_bar``, ``excavator``, ...); the list and
 the reconstruction notes are in ``docs/catalogue.md``.

@@ -4,13 +4,13 @@ A **chain** here is a connected hypergraph on ``n`` links whose hyperedges are t
 joints (a pin on ``n'`` links has multiplicity ``j = n' − 1`` and counts ``n' − 1``
 pairs); every link lies on two or more joints, the mobility is
 ``F = 3(n − 1) − 2p`` and the chain is **non-degenerate**: no link subset ``S``,
-``2 <= |S| < n``, has ``3(|S| − 1) − 2c(S) <= 0`` (SPEC §1–2, seed 002).
+``2 <= |S| < n``, has ``3(|S| − 1) − 2c(S) <= 0`` (the structural definitions (README), Pozhbelko & Kuts 2020).
 
 Number synthesis (:func:`number_synthesis`)
     Every link assortment [LA] = (n2, n3, …) and multiple-joint assortment
     [MJA] = (V2, V3, …) that satisfies the structural equations
     ``Σ n_i = n``, ``Σ i n_i = 2p − V`` (the link corners ``SL``), ``m = p − V`` joints,
-    and the existence domain of seed 002 fig. 10 (``j <= K``, ``V <= 2(K − 1)``),
+    and the existence domain of Pozhbelko & Kuts 2020 fig. 10 (``j <= K``, ``V <= 2(K − 1)``),
     flagged by the number of non-degenerate chains that realise it (the
     "universal structural table").
 
@@ -52,7 +52,7 @@ References
    to Function*, CRC Press, 2001, table 4.x (same counts).
 .. [3] B. D. McKay, A. Piperno, "Practical graph isomorphism, II", J. Symbolic
    Computation 60 (2014) 94–112 (geng, genbg).
-.. [4] V. A. Pozhbelko, E. N. Kuts (2020), seed 002: existence domain (fig. 10) and
+.. [4] V. A. Pozhbelko, E. N. Kuts (2020): existence domain (fig. 10) and
    the universal structural table.
 """
 from __future__ import annotations
@@ -761,7 +761,7 @@ def number_synthesis(opts: SynthesisOptions) -> list[AssortmentRow]:
 
     Equations: ``m = p − V`` joints with ``Σ_j j V_j <= p`` (simple joints take the
     rest), ``Σ n_i = n`` and ``Σ i n_i = 2p − V``; link degrees ``2 <= i <= m``;
-    existence domain ``j <= K`` and ``V <= 2(K − 1)`` (seed 002 fig. 10).
+    existence domain ``j <= K`` and ``V <= 2(K − 1)`` (Pozhbelko & Kuts 2020 fig. 10).
     """
     n, p, K = opts.n, opts.p, opts.K
     jtop = min(opts.j_cap, K)

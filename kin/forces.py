@@ -1,4 +1,4 @@
-"""Kinetostatics of a decomposable planar mechanism (SPEC §4; reference §3.2, §4.5).
+"""Kinetostatics of a decomposable planar mechanism (method: docs/forces.md).
 
 For every position of a :class:`~kin.state.KinematicState` (time derivatives at the
 drivers' actual speeds), :func:`forces` applies d'Alembert's principle: each moving
@@ -13,7 +13,7 @@ Unknowns
   links (a multiple joint) carries ``k − 1`` pairs: one link of the pin is the *host*
   (the frame if it is on the pin, else the link solved first, i.e. the one through
   which the pin's position is known) and every other link of the pin is paired with
-  it (reference §3.2).  The force balance of the pin is then implied.
+  it (docs/forces.md).  The force balance of the pin is then implied.
 * **P pair** (guide ``a``, slider ``b``): a normal force ``N`` along the guide normal
   ``n = rot90(axis)`` (axis turned with the guide) at the joint point (the slider's
   point that sat at the joint's ``at``), plus a couple ``M``; the line of action of
@@ -58,8 +58,8 @@ References
 ----------
 .. [1] Vasilenko V.N., Sidorenko A.S., Veretennikov A.N., Yarygin A.V. Program realization
    of the kinematic and power calculation of a four-stroke engine. *Vestnik VGUIT* 80(4)
-   (2018) 69–74 (seed 004): reactions in every joint and the balancing moment.
-.. [2] Pozhbelko V., Kuts E. (2020), seed 002: a multiple joint of k links counts as
+   (2018) 69–74 (Vasilenko et al. 2018): reactions in every joint and the balancing moment.
+.. [2] Pozhbelko V., Kuts E. (2020): a multiple joint of k links counts as
    k − 1 pairs.
 """
 from __future__ import annotations

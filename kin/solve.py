@@ -27,7 +27,7 @@ Conventions
   or :class:`~topo.errors.SingularityError`.
 * Derivatives (``derivatives=True``) are time derivatives for ``input_rates``
   (default 1 rad/s or 1 m/s per driver, zero input acceleration): for one driver
-  they are the analogues d/dφ and d²/dφ² of seed 000.  They come from one linear
+  they are the analogues d/dφ and d²/dφ² of Vasechkin et al. 2017.  They come from one linear
   system per group (the group's Jacobian), never from finite differences.
 """
 from __future__ import annotations

@@ -14,7 +14,7 @@ Conventions
   counter-clockwise); the frame's is 0.
 * Derivatives are with respect to time for the input rates ``input_rates``
   (default 1 rad/s or 1 m/s for every driver, zero input acceleration), so for one
-  driver they are the seed's analogues d/dφ and d²/dφ² (seed 000).
+  driver they are the paper's analogues d/dφ and d²/dφ² (Vasechkin et al. 2017).
 * ``status[n]`` is ``"ok"`` or the reason position ``n`` failed (which group, why);
   failed rows are NaN.
 """

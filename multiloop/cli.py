@@ -14,11 +14,11 @@ import sys
 from multiloop.topo.errors import LinkageError
 
 COMMANDS = {
-    "analyse": "structural report of a chain or mechanism (seed 002 numbers)",
+    "analyse": "structural report of a chain or mechanism (Pozhbelko & Kuts 2020 numbers)",
     "decompose": "Assur groups in solving order",
     "solve": "positions, velocities, accelerations over the input range",
     "forces": "kinetostatics: reactions and balancing force/moment",
-    "engine": "crank-slider engines: diagrams of seed 004",
+    "engine": "crank-slider engines: diagrams of Vasilenko et al. 2018",
     "platform": "six-strut spatial platform: strut forces, screws, frequencies",
     "atlas": "number/type synthesis: atlases of chains (SQLite, HTML)",
     "catalogue": "list the bundled mechanisms",

@@ -55,10 +55,10 @@ def relabel(m: Mechanism, seed: int) -> Mechanism:
     return m.relabelled(link_map, joint_map, order)
 
 
-# A bare chain in the SPEC §1 short form (a triple pin b-c-d).
+# A bare chain in the the file format (README) short form (a triple pin b-c-d).
 BARE = 'joints = [["a", "b"], ["b", "c", "d"], ["c", "e"], ["d", "e"], ["e", "a"]]\n'
 
-# A parallelogram with a redundant link (c3): F = 0 by formula, but it moves (SPEC §2).
+# A parallelogram with a redundant link (c3): F = 0 by formula, but it moves (the structural numbers (README)).
 PARALLELOGRAM = """
 name = "parallelogram with a redundant link"
 [[link]]

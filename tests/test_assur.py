@@ -74,7 +74,7 @@ def vtwin(r=0.05, l=0.2, gamma=90.0):
 
 
 def knitting_needle():
-    """Seed 002 example 1 shape: crank + four RRR dyads, three 3-link pins
+    """Pozhbelko & Kuts 2020 example 1 shape: crank + four RRR dyads, three 3-link pins
     (A: crank, 2, 4; C: frame, 3, 5; H: 6, 7, 8); n2 = 8, n3 = 1, n4 = 1."""
     b = MechanismBuilder(name="knitting-needle-like")
     b.add_link("frame", frame=True)
@@ -334,7 +334,7 @@ _CAT = __import__("pathlib").Path(__file__).resolve().parents[1] / "catalogue" /
 
 
 @pytest.mark.parametrize("stem, formula", [
-    ("knitting_needle_drive", "I(0,1) → II1(2,3) → II1(4,5) → II1(6,7) → II1(8,9)"),   # seed 002 ex. 1
+    ("knitting_needle_drive", "I(0,1) → II1(2,3) → II1(4,5) → II1(6,7) → II1(8,9)"),   # Pozhbelko & Kuts 2020 ex. 1
     ("radial_engine_5cyl", "I(0,1) → II2(2,3) → II2(4,5) → II2(6,7) → II2(8,9) → II2(10,11)"),
     ("stephenson_3_triad", "I(0,1) → III(2,3,4,5)"),
 ])

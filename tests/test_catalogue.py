@@ -3,7 +3,7 @@
 Three layers:
 
 * every file loads, names itself after its file and cites a source;
-* the reconstructions of seed 002 reproduce every published column of SPEC §2
+* the reconstructions of Pozhbelko & Kuts 2020 reproduce every published column of the structural numbers (README)
   (oracles below, each with its citation), computed by ``topo.numbers.structural_report``;
 * every mechanism with geometry has the intended mobility at its reference
   configuration (rank of the constraint Jacobian: actual DOF = number of drivers,
@@ -231,7 +231,7 @@ def test_file_loads_with_name_source_frame_and_drivers(name):
 def test_reconstructions_say_so(name):
     m = load_named(name)
     assert m.source.startswith("Reconstruction of")
-    assert "seed 002" in m.source and "figure missing" in m.source
+    assert "Pozhbelko & Kuts 2020" in m.source and "figure missing" in m.source
 
 
 def test_unknown_name_is_a_clear_error():
@@ -241,7 +241,7 @@ def test_unknown_name_is_a_clear_error():
 
 
 # ---------------------------------------------------------------------------
-# seed 002: published numbers as oracles (SPEC §2 table)
+# Pozhbelko & Kuts 2020: published numbers as oracles (the structural numbers (README) table)
 
 PUBLISHED = {
     # Pozhbelko & Kuts 2020, example 1 (warp-knitting needle drive, fig. 6)
@@ -269,12 +269,12 @@ def test_seed002_published_numbers(name):
     got = {key: getattr(r, key) for key in PUBLISHED[name]}
     assert got == PUBLISHED[name]
     assert r.consistent and not r.degenerate
-    assert r.N == r.F            # the seed's rc is for N = F drivers: the files have F drivers
+    assert r.N == r.F            # the paper's rc is for N = F drivers: the files have F drivers
 
 
 def test_knitting_drive_structure_formula():
     """Pozhbelko & Kuts 2020, example 1: I(0,1) -> II(2,3) -> II(4,5) -> II(6,7) -> II(8,9):
-    each pair in the seed's order is an RRR dyad whose outer pins lie on known links."""
+    each pair in the paper's order is an RRR dyad whose outer pins lie on known links."""
     m = load_named("knitting_needle_drive")
     known = {"frame", "crank_1"}
     pairs = [("link_2", "rocker_3"), ("rocker_4", "link_5"), ("needle_lever_6", "link_7"),
@@ -358,7 +358,7 @@ def test_stephenson_3_triad_driver_is_the_ternary_link():
 @pytest.mark.parametrize("name,kinds", [("dyad_rrr", "RRR"), ("dyad_rrp", "RRP"), ("dyad_rpr", "RPR"),
                                         ("dyad_prp", "PRP"), ("dyad_rpp", "RPP")])
 def test_dyad_kind(name, kinds):
-    """The dyad (links 2 and 3): pairs outer–inner–outer as in reference/kinematics.md §1."""
+    """The dyad (links 2 and 3): pairs outer–inner–outer as in docs/groups.md"""
     m = load_named(name)
     (l2,) = [x for x in m.link_names if x.endswith("_2")]
     (l3,) = [x for x in m.link_names if x.endswith("_3")]

@@ -1,4 +1,4 @@
-"""Closed-form dyad kernels (kinds 1-5 of seed 000): closure, branches, rates vs
+"""Closed-form dyad kernels (kinds 1-5 of Vasechkin et al. 2017): closure, branches, rates vs
 central differences, a second route (Newton) for positions, failures, and the
 seed's kind-1 acceleration misprint."""
 from __future__ import annotations
@@ -96,7 +96,7 @@ def test_rrr_rates_vs_central_differences(sign):
 
 
 def test_rrr_seed_acceleration_misprint():
-    """Seed 000 prints b2 = a_Cy - a_Ay + a11 ω2² + a12 ω3²: finite differences
+    """Vasechkin et al. 2017 prints b2 = a_Cy - a_Ay + a11 ω2² + a12 ω3²: finite differences
     reject it, our  - a11 ω2² - a12 ω3²  agrees."""
     l2, l3 = 1.1, 0.9
     (A, vA, aA), (C, vC, aC) = rrr_knowns(T)
@@ -118,7 +118,7 @@ def test_rrr_seed_acceleration_misprint():
     close(e2["correct"], e2_fd, 1e-5)
     close(r.e2, e2_fd, 1e-5)
     assert np.max(np.abs(e2["printed"] - e2_fd)) > 1e-2 * np.max(np.abs(e2_fd))
-    close(r.det, det, 1e-13)          # our det is the seed's det
+    close(r.det, det, 1e-13)          # our det is the paper's det
 
 
 def test_rrr_second_route_newton():

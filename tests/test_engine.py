@@ -1,9 +1,9 @@
 """Engine module (kin/engine/, catalogue/engines.py, `multiloop engine`).
 
-Oracles: reference/kinematics.md §4 (offset stroke 0.100133624 m for e = 0.01 m,
+Oracles: docs/forces.md (offset stroke 0.100133624 m for e = 0.01 m,
 λ-approximation error 40.5 m/s² = 0.66 % at λ = 0.25 and 3000 rpm, V-twin firing
-intervals 270/450 and 315/405 deg), seed 002 example 2 (radial engine numbers),
-seed 004 (the program's rod centre-of-mass formulas).
+intervals 270/450 and 315/405 deg), Pozhbelko & Kuts 2020 example 2 (radial engine numbers),
+Vasilenko et al. 2018 (the program's rod centre-of-mass formulas).
 """
 from __future__ import annotations
 
@@ -70,7 +70,7 @@ def test_lambda_approximation_error_reference_case():
 
 
 def test_seed004_rod_com_formulas_match_closed_form_state():
-    """Seed 004's Pascal formulas (reference §4.3) vs the engine state's rod COM."""
+    """Vasilenko et al. 2018's Pascal formulas (reference §4.3) vs the engine state's rod COM."""
     r, l, o, n = 0.045, 0.16, 0.35, 4200.0
     spec = EngineSpec(r, l, 0.08, (Cylinder("1", 0.0),), rpm=n, rod_mass=1.0, rod_cg=o, rod_inertia=0.01)
     f = RNG.uniform(0, 720, 300)

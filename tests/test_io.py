@@ -1,4 +1,4 @@
-"""File formats (SPEC §1) and every kind of malformed input: a message naming the
+"""File formats (the file format (README)) and every kind of malformed input: a message naming the
 table/key at fault, exit code 2, no traceback."""
 from __future__ import annotations
 

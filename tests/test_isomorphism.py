@@ -1,4 +1,4 @@
-"""Canonical form (nauty) vs VF2; relabelling invariance; the seed's cheap invariants."""
+"""Canonical form (nauty) vs VF2; relabelling invariance; the paper's cheap invariants."""
 from __future__ import annotations
 
 import random
@@ -56,7 +56,7 @@ def test_cheap_invariants_are_not_sufficient():
         if other != cf:
             found = True
             break
-    assert found, "expected the seed's invariants to merge some non-isomorphic chains"
+    assert found, "expected the paper's invariants to merge some non-isomorphic chains"
 
 
 def test_multiple_joint_differs_from_two_simple_joints():

@@ -1,4 +1,4 @@
-"""Structural numbers (seed 002): published oracles, cross-checks by two/three routes,
+"""Structural numbers (Pozhbelko & Kuts 2020): published oracles, cross-checks by two/three routes,
 relabelling invariance."""
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ from multiloop.topo.model import chain_from_joint_lists
 from multiloop.topo.numbers import format_counts, spatial_mobility, structural_report
 from tests.common import chains, relabel
 
-# Structures of the seed 002 examples, written as bare chains (the catalogue files add
+# Structures of the Pozhbelko & Kuts 2020 examples, written as bare chains (the catalogue files add
 # geometry; see tests/test_catalogue.py).  Published values: V. A. Pozhbelko,
-# E. N. Kuts (2020), examples 1-4 and the fig. 9 remark (SPEC §2 table).
+# E. N. Kuts (2020), examples 1-4 and the fig. 9 remark (the structural numbers (README) table).
 EXCAVATOR = [["fr", "boom"], ["fr", "c1b"], ["c1b", "c1r"], ["c1r", "boom"], ["boom", "c2b"],
              ["c2b", "c2r"], ["c2r", "st"], ["boom", "st"], ["st", "c3b"], ["c3b", "c3r"],
              ["c3r", "rk", "cl"], ["st", "rk"], ["cl", "bk"], ["st", "bk"]]
@@ -104,7 +104,7 @@ def test_existence_domain_violation_reported():
     r = structural_report(m)
     assert r.j_max == 3
     assert r.existence_ok == (r.j_max <= r.K and r.V <= 2 * (r.K - 1))
-    # n = 6, p = 3 + 4 = 7, K = 2 < j = 3: outside the domain (seed 002 fig. 10)
+    # n = 6, p = 3 + 4 = 7, K = 2 < j = 3: outside the domain (Pozhbelko & Kuts 2020 fig. 10)
     assert r.K == 2 and not r.existence_ok
 
 
@@ -119,7 +119,7 @@ def test_dangling_link_gives_nonzero_avc():
 def test_routes_agree_on_random_chains(m):
     r = structural_report(m)
     # K by the graph and by the seed formula; F by three routes; SL by two routes;
-    # rc by the seed's definition and as N - F
+    # rc by the paper's definition and as N - F
     assert r.K == r.K_formula
     assert r.AVC == 0
     assert r.F_routes[0] == r.F_routes[1] == r.F_routes[2]
@@ -167,7 +167,7 @@ def test_embedding_search_with_and_without_apex_filter_agree():
 
 
 def test_parallelogram_with_redundant_link_is_reported_as_moving():
-    # SPEC §2: a parallelogram with a redundant link has F = 0 by formula but moves;
+    # the structural numbers (README): a parallelogram with a redundant link has F = 0 by formula but moves;
     # the report gives the actual mobility from the Jacobian rank and names the pair
     from multiloop.topo.io import loads
 

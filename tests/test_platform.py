@@ -2,9 +2,9 @@
 
 Published oracles: F. A. Doronin, "Применение теории винтов в статике и динамике
 пространственных механизмов параллельной структуры", Izvestiya PGUPS 2015/3,
-pp. 130-137 (seed 001): strut forces p. 134, frequencies and mode matrix p. 136,
+pp. 130-137 (Doronin 2015): strut forces p. 134, frequencies and mode matrix p. 136,
 Plücker rows pp. 132 and 135, V1-V3 p. 133.  The missing figure's geometry is the
-reconstruction in reference/stewart.md; the bundled file
+reconstruction in docs/platform.md; the bundled file
 catalogue/platforms/doronin_platform.toml encodes it.
 """
 from __future__ import annotations
@@ -30,12 +30,12 @@ CATALOGUE = Path(__file__).resolve().parents[1] / "catalogue" / "platforms"
 DORONIN = CATALOGUE / "doronin_platform.toml"
 GOUGH = CATALOGUE / "gough_stewart.toml"
 
-# --- seed 001, as printed (Doronin 2015) -------------------------------------------
+# --- Doronin 2015, as printed (Doronin 2015) -------------------------------------------
 PUBLISHED_FORCES = (-1550.0, 894.43, -700.0, -721.11, -850.0, 0.0)          # p. 134, N
 PUBLISHED_K = (6.54, 11.35, 16.49, 31.06, 35.84, 62.44)                    # p. 136, "с⁻¹" = rad/s
 PUBLISHED_MASS = dict(m=254.84, Jx=191.34, Jy=340.0, Jz=530.92)            # p. 136
 # mode matrix M, p. 136, rows (x, y, z, φx, φy, φz); columns as printed, which follow
-# k = 62.44, 35.84, 31.06, 6.54, 11.35, 16.49 (reference/stewart.md, "Mode shapes")
+# k = 62.44, 35.84, 31.06, 6.54, 11.35, 16.49 (docs/platform.md, "Mode shapes")
 PUBLISHED_M = np.array([
     [1, 1, 1, 1, 1, 1],
     [75.734, 0.001, -0.856, -3.222, 0.296, 2.095],
@@ -71,7 +71,7 @@ def modes(doronin):
     return platform_modes(doronin)
 
 
-# --- seed 001: statics ------------------------------------------------------------------
+# --- Doronin 2015: statics ------------------------------------------------------------------
 def test_doronin_forces_match_publication(statics):
     np.testing.assert_allclose(statics.forces, PUBLISHED_FORCES, atol=0.01, rtol=0)
     np.testing.assert_allclose(statics.forces_screws, PUBLISHED_FORCES, atol=0.01, rtol=0)
@@ -79,7 +79,7 @@ def test_doronin_forces_match_publication(statics):
 
 
 def test_doronin_forces_closed_form(statics):
-    """Second route: the hand solution of the six equilibrium equations (reference/stewart.md)."""
+    """Second route: the hand solution of the six equilibrium equations (docs/platform.md)."""
     S4 = -P * math.cos(alp) / math.cos(bet)
     S2 = P * c * math.cos(alp) / (b * math.cos(gam))
     S6 = S2 - P * math.sin(alp) / math.cos(gam)
@@ -136,7 +136,7 @@ def test_doronin_printed_kinematic_screws(statics):
     t3 = statics.twists[2].about(STATICS_O)
     assert t3.pitch == pytest.approx(a * sa * ca, abs=1e-12)
     np.testing.assert_allclose(t3.axis_point, (0, 0, -a * b * b / (b * b + c * c)), atol=1e-12)
-    # V4 is a pure translation along y (not printed; reference/stewart.md, misprint 5)
+    # V4 is a pure translation along y (not printed; docs/platform.md, misprint 5)
     assert statics.twists[3].is_infinite_pitch
     np.testing.assert_allclose(np.abs(statics.twists[3].as_array()), (0, 0, 0, 0, 1, 0), atol=1e-12)
     # the sign convention: every removed strut lengthens
@@ -144,7 +144,7 @@ def test_doronin_printed_kinematic_screws(statics):
         assert reciprocal(t, strut.unit_wrench()) < 0
 
 
-# --- seed 001: vibrations ---------------------------------------------------------------
+# --- Doronin 2015: vibrations ---------------------------------------------------------------
 def test_doronin_mass_data(doronin):
     body = doronin.body
     assert round(body.mass, 2) == PUBLISHED_MASS["m"]
@@ -445,5 +445,5 @@ def test_symmetric_table_and_struts_conflict():
 def test_bundled_files_say_where_the_geometry_comes_from():
     for path in (DORONIN, GOUGH):
         text = path.read_text()
-        assert "WHERE THE GEOMETRY COMES FROM" in text and "reference/stewart.md" in text
+        assert "WHERE THE GEOMETRY COMES FROM" in text and "docs/platform.md" in text
         assert load_platform(path).source

@@ -26,7 +26,7 @@ def _rotation(seed: int) -> np.ndarray:
 
 # -- conventions ---------------------------------------------------------------
 def test_line_moment_is_r_cross_d():
-    # strut 3 of seed 001 (A -> A'): printed e3 = (0 0 -1 | b 0 0), b = 3 m
+    # strut 3 of Doronin 2015 (A -> A'): printed e3 = (0 0 -1 | b 0 0), b = 3 m
     s = Screw.from_points((0.0, -3.0, 0.0), (0.0, -3.0, -2.0))
     assert s.as_array().tolist() == [0.0, 0.0, -1.0, 3.0, 0.0, 0.0]
     assert s.pitch == 0.0

@@ -127,7 +127,7 @@ def test_existence_domain_and_universal_table():
 
 @needs_nauty
 def test_existence_domain_fails_for_fractionated_f3():
-    """F = 3, n = 10: a cut joint of multiplicity 4 > K = 3 (outside seed 002 fig. 10)."""
+    """F = 3, n = 10: a cut joint of multiplicity 4 > K = 3 (outside Pozhbelko & Kuts 2020 fig. 10)."""
     opts = SynthesisOptions(10, 3)
     recs = list(iter_chains(opts, loops=False))
     out = [r for r in recs if r.j_max > r.K]

@@ -12,7 +12,7 @@ from multiloop.kin.groups import (class4_modes, class4_rates, class4_track, tria
                         triad_rates, triad_track)
 from multiloop.kin.groups.class4 import class4_points
 
-# reference/kinematics.md §2.3
+# docs/groups.md
 A63 = np.array([[0.250191, 0.794428], [0.551371, -0.549586], [-0.399667, 0.747107]])
 B63 = np.array([[0.0, 0.0], [-0.989469, 0.642457], [0.594139, -0.06413]])
 L63 = np.array([0.593942, 0.561953, 0.53133])

@@ -1,7 +1,7 @@
 """topo: the structural model of planar linkages (graph and structure, no solving).
 
 Modules: ``errors`` (exception tree), ``model`` (frozen Link/Joint/Mechanism + builder),
-``io`` (TOML/JSON), ``graphs`` (incidence graph), ``numbers`` (seed 002 structural
+``io`` (TOML/JSON), ``graphs`` (incidence graph), ``numbers`` (Pozhbelko & Kuts 2020 structural
 numbers), ``loops`` (planar embedding, loop assortment), ``isomorphism`` (canonical
 form, VF2, invariants), ``degeneracy`` (rigid sub-chains, fractionation),
 ``assur`` (decomposition into Assur groups).

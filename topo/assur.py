@@ -13,7 +13,7 @@ Convention (Russian TMM, Artobolevsky; stated because Western texts differ)
   **triad is class III order 3**, a four-link group whose inner pairs close a
   quadrilateral is **class IV order 2**;
 * **order**: the number of outer pairs (pairs joining the group to known links);
-* dyad **kind** (вид, seed 000): ``RRR`` = 1, ``RRP`` = 2, ``RPR`` = 3,
+* dyad **kind** (вид, Vasechkin et al. 2017): ``RRR`` = 1, ``RRP`` = 2, ``RPR`` = 3,
   ``PRP`` = 4, ``RPP`` = 5, read outer–inner–outer (``PRR`` ≡ ``RRP``,
   ``PPR`` ≡ ``RPP``);
 * the **structure formula** numbers the links ``0`` = frame, then ``1, 2, …`` in
@@ -61,7 +61,7 @@ from .model import JointKind, Mechanism
 __all__ = ["Constraint", "DriverStep", "AssurGroup", "AssurPlan", "decompose",
            "DYAD_KINDS", "reference_jacobian", "link_origins"]
 
-#: dyad kind → number (вид) of seed 000
+#: dyad kind → number (вид) of Vasechkin et al. 2017
 DYAD_KINDS = {"RRR": 1, "RRP": 2, "RPR": 3, "PRP": 4, "RPP": 5}
 
 _ROMAN = {1: "I", 2: "II", 3: "III", 4: "IV", 5: "V", 6: "VI", 7: "VII", 8: "VIII"}
@@ -236,7 +236,7 @@ class AssurPlan:
         return tuple(sorted(need))
 
     def as_dict(self) -> dict:
-        """JSON-ready description (SPEC §7 ``decompose --json``)."""
+        """JSON-ready description (the documented JSON keys (README) ``decompose --json``)."""
         m = self.mechanism
         groups = []
         for s in self.groups:

@@ -5,7 +5,7 @@ A chain is **degenerate** when some link subset S with ``2 <= |S| < n`` satisfie
     3(|S| − 1) − 2 c(S) <= 0,
 
 where ``c(S)`` counts the pairs inside S: a pin with m links of S contributes
-``m − 1`` (SPEC §2; seed 002 calls such sub-chains rigid "trusses").  Two exact
+``m − 1`` (the structural numbers (README); Pozhbelko & Kuts 2020 calls such sub-chains rigid "trusses").  Two exact
 routes are provided and cross-checked in the tests:
 
 * :func:`find_rigid_subchain` with ``method="exhaustive"``: every subset as a bit

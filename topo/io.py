@@ -1,6 +1,6 @@
 """Read and write mechanism files (TOML for people, JSON accepted too).
 
-The format is SPEC §1, extended with mass data, loads, gravity and driver speeds.
+The format is the file format (README), extended with mass data, loads, gravity and driver speeds.
 Every malformed input raises :class:`~topo.errors.InputError` naming the table and
 key at fault; nothing is half-read.
 

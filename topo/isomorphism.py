@@ -13,7 +13,7 @@ inversion with the same inputs.
 * :func:`are_isomorphic` — compares canonical forms; :func:`are_isomorphic_vf2`
   is the independent route (networkx VF2 with categorical node matching), used to
   cross-check in the tests.
-* :func:`invariant_signature` — the seed 002 comparison: [LA], [MJA], [La] and the
+* :func:`invariant_signature` — the Pozhbelko & Kuts 2020 comparison: [LA], [MJA], [La] and the
   link degrees of each multiple joint.  **Necessary, not sufficient**: equal
   signatures do NOT guarantee isomorphism (how often they merge non-isomorphic
   chains is measured on the atlas).
@@ -25,7 +25,7 @@ References
 .. [2] L. P. Cordella et al., "A (sub)graph isomorphism algorithm for matching large
    graphs", IEEE TPAMI 26 (2004) 1367–1372.
 .. [3] V. A. Pozhbelko, E. N. Kuts, structural analysis of multi-loop linkages with
-   multiple joints (2020) — seed 002.
+   multiple joints (2020) — Pozhbelko & Kuts 2020.
 """
 from __future__ import annotations
 
@@ -184,7 +184,7 @@ def automorphism_orbits(m: Mechanism, mode: str = "chain") -> dict[tuple, int]:
 
 
 def invariant_signature(m: Mechanism, with_loops: bool = True) -> tuple:
-    """The seed 002 invariants: ([LA], [MJA], [La], multiset of the link-degree
+    """The Pozhbelko & Kuts 2020 invariants: ([LA], [MJA], [La], multiset of the link-degree
     multisets of every multiple joint).
 
     **Necessary, not sufficient**: non-isomorphic chains may share a signature.

@@ -1,4 +1,4 @@
-"""Planar embeddings of a chain and its loop assortment [La] (seed 002).
+"""Planar embeddings of a chain and its loop assortment [La] (Pozhbelko & Kuts 2020).
 
 The faces of a planar embedding of the link–joint incidence graph are the chain's
 loops; a face's **size** is the number of link vertices on its boundary (its number
@@ -19,7 +19,7 @@ Canonical rule (documented in the README and reported by ``analyse``)
 3. ``L0`` is the largest face.  Non-planar chains have no [La].
 
 Every rule above depends only on the graph, so [La] is invariant under relabelling
-(tested).  It reproduces the published assortments of seed 002 (4-4-5-5-5 for
+(tested).  It reproduces the published assortments of Pozhbelko & Kuts 2020 (4-4-5-5-5 for
 example 1, 4-4-4-4-13 for the excavator, 4-4-4-9 for the bucket drive).
 
 Method

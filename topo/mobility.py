@@ -1,4 +1,4 @@
-"""Actual mobility and redundant constraints from the geometry (SPEC §2).
+"""Actual mobility and redundant constraints from the geometry (the structural numbers (README)).
 
 The Chebyshev–Grübler count ``F = 3(n − 1) − 2p`` ignores geometry.  The actual
 mobility at the reference configuration is ``3(n − 1) − rank J``, where ``J`` is

@@ -5,7 +5,7 @@ A :class:`Mechanism` is immutable and hashable; no algorithm ever changes it
 :class:`MechanismBuilder`, whose :meth:`~MechanismBuilder.build` validates the whole
 description and reports *every* problem at once.
 
-Model (SPEC §1, seed 002 notation):
+Model (the file format (README), Pozhbelko & Kuts 2020 notation):
 
 * a **link** is a rigid body; at most one is the **frame** (a bare chain has none);
 * an ``R`` **joint** (pin) joins two or more links; a pin joining ``n'`` links is a
@@ -485,7 +485,7 @@ def _vec2(v: Iterable[float]) -> Vec2:
 
 def chain_from_joint_lists(joint_lists: Sequence[Sequence[str]], name: str | None = None,
                            frame: str | None = None) -> Mechanism:
-    """A bare chain from the SPEC §1 short form ``joints = [["a","b"], ["b","c","d"], ...]``.
+    """A bare chain from the the file format (README) short form ``joints = [["a","b"], ["b","c","d"], ...]``.
 
     Joints are named ``J1, J2, …`` in the order given and are all pins (R).
 

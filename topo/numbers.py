@@ -1,6 +1,6 @@
-"""Structural numbers of a planar linkage with multiple joints (seed 002).
+"""Structural numbers of a planar linkage with multiple joints (Pozhbelko & Kuts 2020).
 
-Notation of Pozhbelko & Kuts (seed 002): ``n_i`` links with i joints (the frame
+Notation of Pozhbelko & Kuts: ``n_i`` links with i joints (the frame
 included), ``n = Σ n_i``; ``V_j`` joints of multiplicity j (a pin on ``n'`` links has
 ``j = n' − 1``); ``p = Σ (n' − 1)`` pairs in simple-joint equivalent.
 
@@ -9,7 +9,7 @@ symbol     formula (every one computed by the routes named; the routes must agre
 =========  ==========================================================================
 V          ``Σ_{j>=2} (j − 1) V_j``
 K          ``p − n + 1`` (cyclomatic number of the incidence graph) **and**
-           ``1 + ½ (V + Σ_{i>=3} (i − 2) n_i)`` (seed 002)
+           ``1 + ½ (V + Σ_{i>=3} (i − 2) n_i)`` (Pozhbelko & Kuts 2020)
 L          ``K + 1``
 AVC        ``2(K − 1) − V − Σ_{i>=3} (i − 2) n_i`` with K from the graph (0 when valid)
 F          ``3(n − 1) − 2p`` = ``(n − 1) − 2K`` = ``n2 − V − 3 − Σ_{i>=4} (i − 3) n_i``
@@ -27,7 +27,7 @@ joined by ``-``.  ``Code = [LA]/V``, ``Code* = [LA]/[MJA]`` (e.g. ``[8110]/3``,
 References
 ----------
 .. [1] V. A. Pozhbelko, E. N. Kuts, "Structural analysis of multi-loop linkages with
-   multiple joints" (2020) — seed 002, eqs. for K, AVC, F, rc, SL and the codes.
+   multiple joints" (2020) — Pozhbelko & Kuts 2020, eqs. for K, AVC, F, rc, SL and the codes.
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ __all__ = ["StructuralReport", "structural_report", "StructuralCodes", "structur
 
 
 def format_counts(counts, sep: str = "") -> str:
-    """Seed 002 formatting of a list of counts.
+    """Pozhbelko & Kuts 2020 formatting of a list of counts.
 
     Examples
     --------
@@ -93,7 +93,7 @@ class StructuralCodes(NamedTuple):
 
 
 def structural_codes(degrees: Sequence[int], multiplicities: Sequence[int]) -> StructuralCodes:
-    """[LA], [MJA], V, K and the seed 002 codes from the raw incidence data: the number
+    """[LA], [MJA], V, K and the Pozhbelko & Kuts 2020 codes from the raw incidence data: the number
     of joints on every link and the multiplicity ``j = n' − 1`` of every joint.
 
     The one place where the code formatting rules live (``structural_report``, the
@@ -127,7 +127,7 @@ def spatial_mobility(m: Mechanism, lam: int = 3) -> int:
 
 @dataclass(frozen=True)
 class StructuralReport:
-    """All structural numbers of a chain or mechanism (seed 002, SPEC §2).
+    """All structural numbers of a chain or mechanism (Pozhbelko & Kuts 2020, the structural numbers (README)).
 
     ``as_dict()`` gives the stable JSON of ``multiloop analyse --json``.
     """
@@ -180,7 +180,7 @@ class StructuralReport:
                 and len(set(self.F_routes)) == 1)
 
     def as_dict(self) -> dict:
-        """The JSON keys of SPEC §7 (and a few more, documented in the README)."""
+        """The JSON keys of the documented JSON keys (README) (and a few more, documented in the README)."""
         d = asdict(self)
         out = {k: d[k] for k in ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc",
                                  "SL", "La", "L0", "code", "code_star", "planar", "degenerate",
@@ -218,7 +218,7 @@ def _intify(x):
 
 def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
                       geometry: bool = True, loops: bool = True) -> StructuralReport:
-    """Compute every structural number of SPEC §2 for a chain or mechanism.
+    """Compute every structural number of the structural numbers (README) for a chain or mechanism.
 
     Parameters
     ----------
@@ -281,12 +281,12 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
     warnings = []
     if dangling:
         warnings.append(f"link(s) {', '.join(dangling)} lie on fewer than two joints: "
-                        "the seed's K formula assumes every link has two or more joints, so AVC != 0")
+                        "the paper's K formula assumes every link has two or more joints, so AVC != 0")
     if K != K_formula or AVC != 0:
         warnings.append(f"inconsistent structure: K from the graph = {K}, seed formula = {K_formula:g}, "
                         f"AVC = {AVC:g} (expected 0)")
     if not existence_ok:
-        warnings.append(f"outside the existence domain of seed 002 fig. 10: j_max = {j_max} "
+        warnings.append(f"outside the existence domain of Pozhbelko & Kuts 2020 fig. 10: j_max = {j_max} "
                         f"(<= K = {K}?), V = {V} (<= 2(K-1) = {2 * (K - 1)}?)")
     actual_F = None
     redundant = None

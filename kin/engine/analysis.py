@@ -1,7 +1,7 @@
 """Crank–slider engines: single cylinder (with offset), V-twin and radial on one crank pin.
 
-Everything here follows ``reference/kinematics.md`` §4 and seed 004 (Vasilenko et al.
-2018).  Conventions (§4.1):
+Everything here follows ``docs/forces.md`` and Vasilenko et al. 2018 (Vasilenko et al.
+2018).  Conventions:
 
 * crank centre O at the origin; the crank turns counter-clockwise, crank angle φ
   measured from cylinder 1's axis, crank pin ``A = r e(γ_1 + φ)``;
@@ -10,16 +10,16 @@ Everything here follows ``reference/kinematics.md`` §4 and seed 004 (Vasilenko 
   ``θ_j = φ + γ_1 − γ_j`` (0 at its top dead centre when the offset is 0);
 * the wrist pin B_j is offset by ``e`` (``offset``) along ``n_j``: ``B_j = x u_j + e n_j``;
 * the rod's centre of mass ``G = A + k (B − A)``, ``k = |AG| / l`` from the crank pin
-  (the seed program's "o"); rod inertia ``J_G`` about G (``m ρ²`` with the seed's radius
+  (the seed program's "o"); rod inertia ``J_G`` about G (``m ρ²`` with the paper's radius
   of inertia ρ);
 * all rods of a V-twin or a radial engine share the crank pin A: one multiple joint
-  (crank + N rods, N pairs; seed 002 example 2 for N = 5);
+  (crank + N rods, N pairs; Pozhbelko & Kuts 2020 example 2 for N = 5);
 * four-stroke cycle angle of cylinder j: ``ψ_j = (φ − δ_j − Δ_j) mod 720`` with the
   lag ``δ_j = (γ_j − γ_1) mod 360`` (the crank reaches cylinder j δ_j after cylinder 1)
-  and ``Δ_j ∈ {0, 360}`` (``firing``); firing TDC at ψ = 360 (§4.7).
+  and ``Δ_j ∈ {0, 360}`` (``firing``); firing TDC at ψ = 360.
 
-Kinematics are exact (offset formulas of §4.2); the λ-approximation is computed only
-to show its error.  Forces: the closed form of §4.5 for every cylinder's RRP dyad
+Kinematics are exact (offset formulas); the λ-approximation is computed only
+to show its error.  Forces: the closed form for every cylinder's RRP dyad
 (rod + piston), then the crank: ``M_b = A × Σ_j R12_j + J_1 ε``.  The general
 kinetostatics (:func:`kin.forces.forces`) on :func:`engine_mechanism` is the second
 route; virtual power and the energy rate are the checks, and over a cycle at constant
@@ -294,7 +294,7 @@ def load_engine(path: str | Path) -> EngineSpec:
 def piston_kinematics(theta, r: float, l: float, e: float = 0.0) -> dict[str, np.ndarray]:
     """Exact wrist-pin and rod motion of one cylinder against its local crank angle.
 
-    ``q = r sinθ − e``, ``R_e = sqrt(l² − q²)`` (reference §4.2, offset cylinder):
+    ``q = r sinθ − e``, ``R_e = sqrt(l² − q²)`` (docs/forces.md, offset cylinder):
     ``x = r cosθ + R_e``; ``x' = −r sinθ − r cosθ q / R_e``;
     ``x'' = −r cosθ − (r² cos²θ − r sinθ q)/R_e − q² r² cos²θ / R_e³``.
     The rod direction relative to the axis is ``α = atan2(−q, R_e)`` (``= −β``),
@@ -326,8 +326,8 @@ def lambda_approximation(theta, r: float, l: float) -> dict[str, np.ndarray]:
 
 
 def seed004_rod_com(f_deg, r: float, l: float, o: float, n_rpm: float) -> dict[str, np.ndarray]:
-    """The seed program's rod centre-of-mass formulas (seed 004, Pascal listing; cleaned in
-    reference §4.3), in-line cylinder, x along the axis:
+    """The seed program's rod centre-of-mass formulas (Vasilenko et al. 2018, Pascal listing; cleaned in
+    docs/forces.md), in-line cylinder, x along the axis:
 
     ``Vx = −S ω − o r² ω sin2f / (2 sqrt(l² − S²))``, ``Vy = (1 − o) C ω``,
     ``Wx = −C ω² − o r² ω² [cos2f / sqrt(l² − S²) + r² sin²2f / (4 (l² − S²)^{3/2})]``,
@@ -521,7 +521,7 @@ def _gas_gauge(spec: EngineSpec, phi, mo: _Motion | None = None) -> tuple[np.nda
 
 
 def engine_reactions(spec: EngineSpec, phi, gauge=None, omega=None, eps=None, mo: _Motion | None = None) -> dict[str, np.ndarray]:
-    """Closed-form reactions and balancing moment (reference §4.5), vectorised.
+    """Closed-form reactions and balancing moment (docs/forces.md), vectorised.
 
     Parameters
     ----------
@@ -572,7 +572,7 @@ def engine_reactions(spec: EngineSpec, phi, gauge=None, omega=None, eps=None, mo
 def cyclogram(spec: EngineSpec) -> dict[str, Any]:
     """Four-stroke cyclogram: per cylinder the crank-angle intervals (deg, in [0, 720))
     of intake/compression/power/exhaust, its firing crank angle, and the firing
-    intervals of the engine in firing order (reference §4.7).
+    intervals of the engine in firing order (docs/forces.md).
 
     Examples
     --------
@@ -649,7 +649,7 @@ def analyse_engine(spec: EngineSpec, steps: int = 720, *, check: bool = True) ->
     Notes
     -----
     ``cycle_integral`` is ``∮ M_b dφ`` by the periodic trapezoid rule; at constant speed
-    it equals ``−Σ indicated_work`` (reference §4.6 check 3) up to the quadrature error.
+    it equals ``−Σ indicated_work`` (docs/forces.md check 3) up to the quadrature error.
     """
     if steps < 8:
         raise InputError(explain("steps", expected="at least 8", got=repr(steps)))

@@ -1,7 +1,6 @@
 """Cylinder-pressure models of a four-stroke engine: an indicator diagram and a table.
 
-The cycle angle ψ of one cylinder runs over ``[0, 720)`` degrees (reference
-``kinematics.md`` §4.7): 0–180 intake, 180–360 compression, firing top dead centre
+The cycle angle ψ of one cylinder runs over ``[0, 720)`` degrees (docs/forces.md): 0–180 intake, 180–360 compression, firing top dead centre
 (TDC) at 360, 360–540 power (expansion), 540–720 exhaust.
 
 Indicator-diagram model (:class:`IndicatorDiagram`)
@@ -24,7 +23,7 @@ of the volume and the cycle work below stays exact).  The cylinder volume is
 ``V = V_c + A_p (x_TDC − x)`` with the clearance volume ``V_c = V_s / (ε − 1)`` from
 the compression ratio ``ε`` and the swept volume ``V_s = A_p · stroke``.
 
-The seed program (Vasilenko et al. 2018, seed 004) takes only the "maximum cylinder
+The seed program (Vasilenko et al. 2018) takes only the "maximum cylinder
 pressure"; it does not say how the curve is built, so this model is ours and is stated
 in full here.  Any measured curve can replace it through :class:`PressureTable`.
 
@@ -66,7 +65,7 @@ class IndicatorDiagram:
     compression_ratio : float
         ``ε = (V_s + V_c) / V_c`` (> 1).
     peak_pressure : float
-        Absolute pressure at the start of expansion, Pa (seed 004: "maximum pressure").
+        Absolute pressure at the start of expansion, Pa (Vasilenko et al. 2018: "maximum pressure").
     n_compression, n_expansion : float
         Polytropic exponents (defaults 1.35 and 1.25, typical spark-ignition values).
     intake_pressure, exhaust_pressure, crankcase_pressure : float

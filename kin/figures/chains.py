@@ -253,7 +253,7 @@ def draw_chain(ax, n: int, joints: Sequence[Sequence[int]], title: str | None = 
 
 # ---------------------------------------------------------------------- atlas charts
 def existence_domain_chart(atlas, path, pairs=None, title: str | None = None) -> dict:
-    """Seed 002 fig. 10 drawn from an atlas: the (V, j_max) cells that occur for each K.
+    """Pozhbelko & Kuts 2020 fig. 10 drawn from an atlas: the (V, j_max) cells that occur for each K.
 
     Every stored chain (or those of ``pairs`` = [(n, F), …]) adds its cell
     ``(V, j_max)`` to the set of its K; the chart draws the existence domain
@@ -291,7 +291,7 @@ def existence_domain_chart(atlas, path, pairs=None, title: str | None = None) ->
     ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("MJ factor V = Σ (j − 1) V_j")
     ax.set_ylabel("largest multiplicity j (1 = simple joints only)")
-    ax.set_title(title or "Existence domain j ≤ K, V ≤ 2(K − 1) (seed 002 fig. 10):\n"
+    ax.set_title(title or "Existence domain j ≤ K, V ≤ 2(K − 1) (Pozhbelko & Kuts 2020 fig. 10):\n"
                  "cells occupied by the atlas")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
@@ -302,7 +302,7 @@ def existence_domain_chart(atlas, path, pairs=None, title: str | None = None) ->
 
 
 def invariant_merges(atlas, n: int, F: int) -> dict[str, tuple[int, int, int]]:
-    """How often the seed's invariants merge non-isomorphic chains of (n, F).
+    """How often the paper's invariants merge non-isomorphic chains of (n, F).
 
     For each signature level — [LA]; [LA]+[MJA]; +[La]; +MJ link sets (the link
     degrees on every multiple joint) — returns ``(chains, classes, merged)``: the
@@ -351,7 +351,7 @@ def invariant_merge_chart(atlas, path, pairs=None) -> dict:
     ax.set_xticks(np.arange(len(pairs)))
     ax.set_xticklabels([f"n={n} F={F}\n({data[(n, F)]['[LA]'][0]})" for n, F in pairs], fontsize=8)
     ax.set_ylabel("% of chains sharing the signature\nwith a non-isomorphic chain")
-    ax.set_title("Seed 002 invariants are not sufficient: wrong merges per signature level")
+    ax.set_title("Pozhbelko & Kuts 2020 invariants are not sufficient: wrong merges per signature level")
     ax.legend(fontsize=8)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()

@@ -1,4 +1,4 @@
-"""Figures of the engine analysis (seed 004 diagrams) and of kinetostatics (PNG, Agg).
+"""Figures of the engine analysis (Vasilenko et al. 2018 diagrams) and of kinetostatics (PNG, Agg).
 
 :func:`engine_plots` writes, into a directory:
 

@@ -28,25 +28,25 @@ Conventions (all kernels)
   ``vP`` / ``aP`` of ``P`` as a point of the guide link.
 * **Batch failures never raise.**  Unreachable positions give ``NaN`` in every
   output and ``ok = False``.  Rates return ``det`` (the determinant of the 2×2 or
-  3×3 matrix, seed 000's sign convention for dyads) and ``singular = |det| <=
+  3×3 matrix, Vasechkin et al. 2017's sign convention for dyads) and ``singular = |det| <=
   1e-8 · scale`` (scale = product of the column/row norms; i.e. within round-off
   of a singular configuration — apply a larger threshold on ``det`` if you want
   an earlier warning); where exactly singular the rates are ``inf``/``NaN`` (no
   exception, no NumPy warning).
 * **Branch sign.**  ``sign`` is ``+1`` / ``-1`` (scalar or ``(...)`` array), read
   from the reference configuration with the ``*_branch`` helpers; ``+1`` is
-  seed 000's "assembly No. 1".  ``*_branch`` raise :class:`topo.errors.SingularityError`
+  Vasechkin et al. 2017's "assembly No. 1".  ``*_branch`` raise :class:`topo.errors.SingularityError`
   when the reference itself is at the branch boundary (sign undefined).
 * **Rates.**  ``*_rates(...)`` solve the velocity system and, if the
   accelerations of the knowns are given (all of them, else ``None``), the
   acceleration system with the same matrix.  Acceleration fields are ``None``
-  when not requested.  Seed 000's *analogues* (d/dφ, d²/dφ²) are the same calls
+  when not requested.  Vasechkin et al. 2017's *analogues* (d/dφ, d²/dφ²) are the same calls
   with input velocities = d/dφ and input accelerations = d²/dφ².
 * Results are ``NamedTuple`` s (unpack or use the field names).
 
-Dyads (kind numbers are seed 000's "виды" 1–5)
+Dyads (kind numbers are Vasechkin et al. 2017's "виды" 1–5)
 ---------------------------------------------
-Outer joints attach to known links; the dyad's links are 2 and 3 as in seed 000.
+Outer joints attach to known links; the dyad's links are 2 and 3 as in Vasechkin et al. 2017.
 
 ``rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition(B, ok, det)``   kind 1
     Link 2 = A–B (length l2), link 3 = C–B (length l3); ``B`` ``(..., 2)``.
@@ -142,7 +142,7 @@ References
 ----------
 .. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
    model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
-   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79 (seed 000).
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79 (Vasechkin et al. 2017).
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Shared helpers of the group kernels: planar vector algebra on ``(..., 2)``
 arrays, Cramer's rule for the 2×2 systems and the singularity threshold.
 
-Notation (seed 000 [1]_ with the OCR noise removed): ``perp(a) = (-a_y, a_x)``
+Notation (Vasechkin et al. 2017 [1]_ with the OCR noise removed): ``perp(a) = (-a_y, a_x)``
 (the left normal, ``n(φ)`` for ``a = e(φ)``), ``cross(a, b) = a_x b_y - a_y b_x``.
 Useful identities: ``cross(perp a, perp b) = cross(a, b)``,
 ``cross(u, perp a) = u·a``.
@@ -58,7 +58,7 @@ def stack(x, y):
 
 
 def cramer(c1x, c1y, c2x, c2y, bx, by):
-    """Solve ``x1 c1 + x2 c2 = b`` by Cramer's rule (seed 000's method).
+    """Solve ``x1 c1 + x2 c2 = b`` by Cramer's rule (Vasechkin et al. 2017's method).
 
     Returns ``x1, x2, det`` with ``det = cross(c1, c2)``; where ``det == 0`` the
     unknowns are ``±inf`` / ``nan`` without a NumPy warning.

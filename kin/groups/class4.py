@@ -3,13 +3,13 @@ J2) and T2 (outer pin O2, inner joints J3, J4) closed into a quadrilateral by
 the binaries J1–J3 and J2–J4.
 
 Both this group and the class III triad come from the 5-link Baranov truss
-(``reference/kinematics.md`` §2.1): seen from T1, the pair of known pins O1–O2
+(docs/groups.md): seen from T1, the pair of known pins O1–O2
 acts as a third binary link of length |O1O2|, T1's joints (J1, J2, O1) are the
 triad's fixed anchors and T2 (J3, J4, O2) is its ternary.  So all modes come from
 the triad's degree-6 polynomial (:func:`kin.groups.triad.triad_modes`), and are
 then rotated into place by the direction of O1→O2.  Velocities and
 accelerations come from one 2×2 system in (θ̇1, θ̇2) solved by Cramer's rule as
-in seed 000 [1]_.
+in Vasechkin et al. 2017 [1]_.
 
 References
 ----------

@@ -1,13 +1,13 @@
 """Kind 4 dyad (PRP): two sliders joined by a pin B, each sliding on a guide line
 of a known link.  Linear: one solution, no branch.
 
-Seed 000 [1]_, figure 4, eqs. (23)-(29).  ``B = P1 + s1 u1 + h1 n(u1) = P2 + s2 u2
+Vasechkin et al. 2017 [1]_, figure 4, eqs. (23)-(29).  ``B = P1 + s1 u1 + h1 n(u1) = P2 + s2 u2
 + h2 n(u2)`` (seed: ``u1 = e(φ2)``, ``u2 = e(φ3)``, ``h1 = l2``, ``h2 = l3``,
 ``s1 = l1``, ``s2 = l4``).  Matrix columns ``c1 = u1``, ``c2 = -u2``;
 ``det = cross(u2, u1) = sin(φ2-φ3)``.
 
 Seed misprints: the second right-hand sides of eqs. (25), (27), (29) lost their
-signs; ours follow from the loop equation (``reference/kinematics.md`` §1.5).
+signs; ours follow from the loop equation (docs/groups.md).
 
 References
 ----------
@@ -68,7 +68,7 @@ def prp_position(P1, u1, h1, P2, u2, h2) -> PRPPosition:
 
     Notes
     -----
-    Seed 000 eqs. (23)-(25): ``s1 u1 - s2 u2 = P2 - P1 + h2 n(u2) - h1 n(u1)``.
+    Vasechkin et al. 2017 eqs. (23)-(25): ``s1 u1 - s2 u2 = P2 - P1 + h2 n(u2) - h1 n(u1)``.
     """
     p1x, p1y = xy(P1)
     u1x, u1y = xy(u1)
@@ -107,7 +107,7 @@ def prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2,
 
     Notes
     -----
-    Seed 000 eqs. (26)-(29):
+    Vasechkin et al. 2017 eqs. (26)-(29):
     ``s1d u1 - s2d u2 = vP2 - vP1 + ω2 perp(B-P2) - ω1 perp(B-P1)``, and for the
     accelerations the difference of ``aPi + εi perp(B-Pi) - ωi²(B-Pi) + 2 ωi sid
     perp(ui)`` (i = 2 minus i = 1).

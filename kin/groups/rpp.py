@@ -1,7 +1,7 @@
 """Kind 5 dyad (RPP): link 2 pivoted at a known pin A slides along link 3, which
 slides along a guide of a known link.  All angles are known; linear.
 
-Seed 000 [1]_, figure 5, eqs. (30)-(36).  ``Q = P + s1 u`` is link 3's point on
+Vasechkin et al. 2017 [1]_, figure 5, eqs. (30)-(36).  ``Q = P + s1 u`` is link 3's point on
 the known guide ``(P, u)``; link 2 slides along ``w = R(alpha) u`` (seed:
 ``β = φ3 + α``) with offset ``h``: ``A = Q + s2 w + h n(w)``.  Matrix columns
 ``u``, ``w``; ``det = cross(u, w) = sin(alpha)`` (alpha = 0, π is a design error).
@@ -77,7 +77,7 @@ def rpp_position(A, P, u, alpha, h=0.0) -> RPPPosition:
 
     Notes
     -----
-    Seed 000 eqs. (30)-(32) (offset corrected): ``s1 u + s2 w = A - P - h n(w)``.
+    Vasechkin et al. 2017 eqs. (30)-(32) (offset corrected): ``s1 u + s2 w = A - P - h n(w)``.
     """
     ax, ay = xy(A)
     px, py = xy(P)
@@ -115,7 +115,7 @@ def rpp_rates(A, Q, P, u, alpha, vA, vP, omega, aA=None, aP=None, eps=None) -> R
 
     Notes
     -----
-    Seed 000 eqs. (33)-(36) in vector form:
+    Vasechkin et al. 2017 eqs. (33)-(36) in vector form:
     ``s1d u + s2d w = vA - vP - ω perp(A-P)``;
     ``s1dd u + s2dd w = aA - aP - ε perp(A-P) + ω²(A-P) - 2ω(s1d perp(u) + s2d perp(w))``.
     """

@@ -1,14 +1,14 @@
 """Kind 3 dyad (RPR, coulisse): block 2 pivoted at a known pin A slides on guide
 link 3 pivoted at a known pin C.
 
-Seed 000 [1]_, figure 3, eqs. (15)-(22).  ``A = C + s u + h n(u)`` with ``u`` the
+Vasechkin et al. 2017 [1]_, figure 3, eqs. (15)-(22).  ``A = C + s u + h n(u)`` with ``u`` the
 guide direction of link 3 (seed: ``h = l2``, ``s = l3``, ``u = e(φ3)``).  Matrix
 columns ``c1 = u``, ``c2 = perp(A-C) = s n(u) - h u``; ``det = s``.
 
 Seed misprints: eq. (17), second line, prints ``l3 sinφ3 - l2 cosφ3``; correct is
 ``l3 sinφ3 + l2 cosφ3 = A_y - C_y``.  Eq. (22) prints
 ``b2 = ... + 2 V3 ω3 a11 + a11 ω3²``; correct is ``- 2 V3 ω3 a11 - a12 ω3²``.
-The seed's ``arctan(l2/l3)`` must be ``atan2`` for the ``s < 0`` branch.
+The paper's ``arctan(l2/l3)`` must be ``atan2`` for the ``s < 0`` branch.
 
 References
 ----------
@@ -69,7 +69,7 @@ def rpr_position(A, C, h=0.0, sign=1.0) -> RPRPosition:
 
     Notes
     -----
-    Seed 000 eqs. (15)-(18) without trigonometry: with ``d = A - C``,
+    Vasechkin et al. 2017 eqs. (15)-(18) without trigonometry: with ``d = A - C``,
     ``s = sign·sqrt(|d|² - h²)`` and ``u = (s d - h perp(d))/|d|²``.
     """
     ax, ay = xy(A)
@@ -121,7 +121,7 @@ def rpr_rates(A, C, u, vA, vC, aA=None, aC=None) -> RPRRates:
 
     Notes
     -----
-    Seed 000 eqs. (19)-(22): ``sd u + w3 perp(A-C) = vA - vC``;
+    Vasechkin et al. 2017 eqs. (19)-(22): ``sd u + w3 perp(A-C) = vA - vC``;
     ``sdd u + e3 perp(A-C) = aA - aC + w3²(A-C) - 2 sd w3 perp(u)``.
     """
     ax, ay = xy(A)

@@ -1,7 +1,7 @@
 """Kind 2 dyad (RRP): link 2 = A–B on a known pin A; B (a pin of slider link 3)
 moves along a guide line fixed in a known link.
 
-Seed 000 [1]_, figure 2, eqs. (9)-(14).  The guide is ``(P, u)`` of the known
+Vasechkin et al. 2017 [1]_, figure 2, eqs. (9)-(14).  The guide is ``(P, u)`` of the known
 link, the track of B is ``P + s u + h n(u)`` (seed: ``h = l3``, ``s = l4``).
 Matrix columns ``c1 = l2 n(φ2) = perp(B-A)``, ``c2 = -u``;
 ``det = (B-A)·u = l2 cos(φ2-φ3)``.
@@ -9,7 +9,7 @@ Matrix columns ``c1 = l2 n(φ2) = perp(B-A)``, ``c2 = -u``;
 Seed misprints: eq. (12) prints ``a12 = l3 sinφ3, a22 = -l3 cosφ3`` (copied from
 kind 1); correct are ``a12 = -cosφ3, a22 = -sinφ3``.  The acceleration right-hand
 side (14) is unreadable; ours is derived from the loop equation (vector form of
-``reference/kinematics.md`` §1.3) and checked against finite differences.
+docs/groups.md) and checked against finite differences.
 
 References
 ----------
@@ -77,7 +77,7 @@ def rrp_position(A, P, u, l2, h=0.0, sign=1.0) -> RRPPosition:
 
     Notes
     -----
-    Seed 000 eqs. (9)-(11): ``A_x1 = (A-P)·u``, ``A_y1 = (A-P)·n(u)``,
+    Vasechkin et al. 2017 eqs. (9)-(11): ``A_x1 = (A-P)·u``, ``A_y1 = (A-P)·n(u)``,
     ``x2 = sqrt(l2² - (h - A_y1)²)``, ``s = A_x1 ± x2``.
     """
     ax, ay = xy(A)
@@ -137,7 +137,7 @@ def rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates
 
     Notes
     -----
-    Seed 000 eqs. (12)-(14) with corrected a12, a22:
+    Vasechkin et al. 2017 eqs. (12)-(14) with corrected a12, a22:
     ``w2 perp(B-A) - sd u = vP - vA + omega perp(B-P)``;
     ``e2 perp(B-A) - sdd u = aP - aA + eps perp(B-P) - omega²(B-P)
     + 2 omega sd perp(u) + w2²(B-A)``.

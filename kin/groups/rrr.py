@@ -1,7 +1,7 @@
 """Kind 1 dyad (RRR): two binary links A–B and C–B on known pins A and C.
 
-Seed 000 [1]_, figure 1, eqs. (1)-(8).  Position by the law of cosines, velocity
-and acceleration from one 2×2 system (Cramer) with the seed's matrix
+Vasechkin et al. 2017 [1]_, figure 1, eqs. (1)-(8).  Position by the law of cosines, velocity
+and acceleration from one 2×2 system (Cramer) with the paper's matrix
 
     a11 = -l2 sinφ2, a12 = l3 sinφ3, a21 = l2 cosφ2, a22 = -l3 cosφ3,
 
@@ -63,7 +63,7 @@ def rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition:
         Lengths |AB| and |CB|.
     sign : {+1, -1} or array_like
         Assembly branch: +1 puts B to the left of directed A→C
-        (``cross(C-A, B-A) > 0``, seed 000's "assembly No. 1"); read it from the
+        (``cross(C-A, B-A) > 0``, Vasechkin et al. 2017's "assembly No. 1"); read it from the
         reference configuration with :func:`rrr_branch`.
 
     Returns
@@ -74,7 +74,7 @@ def rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition:
 
     Notes
     -----
-    Seed 000 eqs. (1)-(3), written without trigonometry:
+    Vasechkin et al. 2017 eqs. (1)-(3), written without trigonometry:
     ``t = (l2² + d² - l3²)/(2d²)``, ``k = sign·sqrt(l2²/d² - t²)``,
     ``B = A + t (C-A) + k perp(C-A)``.  A distance beyond reach by at most
     1e-12 (relative) is clamped to the tangent position.  O(1) per position.
@@ -138,11 +138,11 @@ def rrr_rates(A, C, B, vA, vC, aA=None, aC=None) -> RRRRates:
     -------
     RRRRates
         ``w2, w3`` angular velocities of links A–B and C–B, ``vB``; ``e2, e3, aB``
-        (or ``None``); ``det`` of the seed's matrix and the ``singular`` mask.
+        (or ``None``); ``det`` of the paper's matrix and the ``singular`` mask.
 
     Notes
     -----
-    Seed 000 eqs. (4)-(8), one matrix for both systems:
+    Vasechkin et al. 2017 eqs. (4)-(8), one matrix for both systems:
     ``w2 perp(B-A) - w3 perp(B-C) = vC - vA`` and
     ``e2 perp(B-A) - e3 perp(B-C) = aC - aA + w2²(B-A) - w3²(B-C)``.
     The seed prints the second component of the latter with ``+a11 ω2² + a12 ω3²``;

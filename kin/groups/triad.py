@@ -1,7 +1,7 @@
 """Class III triad: a ternary link P1P2P3 held by three binary links A_i–P_i on
 known pins A_i.  All real assembly modes, mode tracking, and rates.
 
-Position problem (``reference/kinematics.md`` §2.3): unknown pose of the ternary,
+Position problem (docs/groups.md): unknown pose of the ternary,
 ``p = P1``, rotation ``θ``, with ``P_i = p + R(θ)(b_i - b_1)``:
 
     |p + R(θ)(b_i - b_1) - A_i|² = l_i²,   i = 1, 2, 3.
@@ -17,7 +17,7 @@ polished by Newton on the three original equations and accepted if its
 residual is ≤ 1e-9 (relative).  Along a motion, :func:`triad_track` follows one
 mode by guarded continuity.
 
-Seed 000 [1]_ treats dyads only; this group extends its Cramer-rule approach
+Vasechkin et al. 2017 [1]_ treats dyads only; this group extends its Cramer-rule approach
 (velocities and accelerations by one linear system with the same matrix).
 
 References
@@ -186,7 +186,7 @@ def _linear_terms(z, bc, a, l):
 
 def _poly_coefficients(A, bb, l):
     """Coefficients (N, 7), highest first, of ``z³F(z)`` (degree 6), with
-    ``F = N_x² + N_y² - l_1² D²`` (``reference/kinematics.md`` §2.3), read exactly
+    ``F = N_x² + N_y² - l_1² D²`` (docs/groups.md), read exactly
     by a 16-point DFT on the unit circle; also ``b_i``, ``a_i`` as complex."""
     bc = bb[1:, 0] + 1j * bb[1:, 1]                                     # (2,)
     a = (A[:, 1:, 0] - A[:, :1, 0]) + 1j * (A[:, 1:, 1] - A[:, :1, 1])   # (N, 2)
@@ -284,7 +284,7 @@ def triad_modes(A, b, l) -> TriadModes:
 
     Notes
     -----
-    Degree-6 polynomial (``reference/kinematics.md`` §2.3) made real by the
+    Degree-6 polynomial (docs/groups.md) made real by the
     tangent half-angle substitution, batched real companion eigenvalues (O(N)
     LAPACK calls of size 6), Newton polish of the near-real roots only,
     duplicates merged.

@@ -40,8 +40,8 @@ References
 ----------
 .. [1] F. A. Doronin, "Применение теории винтов в статике и динамике
    пространственных механизмов параллельной структуры", *Izvestiya PGUPS* 2015,
-   no. 3, pp. 130–137 (seed 001); geometry reconstructed in
-   ``reference/stewart.md``.
+   no. 3, pp. 130–137 (Doronin 2015); geometry reconstructed in
+   ``docs/platform.md``.
 .. [2] D. Stewart, "A platform with six degrees of freedom", *Proc. IMechE* 180
    (1965); V. E. Gough, discussion, *Proc. Auto. Div. IMechE* (1956–57).
 """

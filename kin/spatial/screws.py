@@ -39,7 +39,7 @@ References
 .. [1] F. A. Doronin, "Применение теории винтов в статике и динамике
    пространственных механизмов параллельной структуры" (Application of the theory
    of screws in the statics and dynamics of spatial mechanisms of parallel
-   structure), *Izvestiya PGUPS* 2015, no. 3, pp. 130–137 (seed 001).
+   structure), *Izvestiya PGUPS* 2015, no. 3, pp. 130–137 (Doronin 2015).
 .. [2] R. S. Ball, *The Theory of Screws*, Dublin, 1876.
 """
 from __future__ import annotations
@@ -250,7 +250,7 @@ class Twist(_ScrewBase):
 
     Examples
     --------
-    Rotation at 1 rad/s about the vertical through A = (0, −3, 0) (seed 001, V6):
+    Rotation at 1 rad/s about the vertical through A = (0, −3, 0) (Doronin 2015, V6):
 
     >>> Twist.from_axis((0, -3, 0), (0, 0, 1)).as_array().tolist()
     [0.0, 0.0, 1.0, -3.0, 0.0, 0.0]

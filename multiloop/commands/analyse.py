@@ -1,4 +1,4 @@
-"""``multiloop analyse FILE [--json]``: the structural report of seed 002."""
+"""``multiloop analyse FILE [--json]``: the structural report of Pozhbelko & Kuts 2020."""
 from __future__ import annotations
 
 import json
@@ -24,7 +24,7 @@ def _row(label: str, value) -> tuple[str, str]:
 
 
 def format_report(r) -> str:
-    """A readable table in the order of seed 002's bullet list."""
+    """A readable table in the order of Pozhbelko & Kuts 2020's bullet list."""
     la = "-".join(map(str, r.La)) if r.La is not None else "— (non-planar)"
     rows = [
         ("name", r.name or "(unnamed)"),

@@ -1,7 +1,7 @@
 """``multiloop catalogue [--json]``: the bundled mechanisms with their basic numbers.
 
 Lists every ``catalogue/mechanisms/*.toml`` with name, n (links), F (mobility),
-K (independent loops), structural code ([LA]/V of seed 002) and source.  The full
+K (independent loops), structural code ([LA]/V of Pozhbelko & Kuts 2020) and source.  The full
 report of one entry is ``multiloop analyse $(python -c "from multiloop.catalogue.named import
 path; print(path('excavator'))")``, or in Python ``structural_report(load_named(name))``.
 """

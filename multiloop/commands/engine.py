@@ -1,4 +1,4 @@
-"""``multiloop engine FILE [--steps N] [--json] [--plot DIR]``: the diagrams of seed 004.
+"""``multiloop engine FILE [--steps N] [--json] [--plot DIR]``: the diagrams of Vasilenko et al. 2018.
 
 FILE is an engine file (``[engine]``, ``[[cylinder]]``, ``[gas]``; docs/forces.md) or
 the name of a bundled one (``single_cylinder``, ``v_twin``, ``radial_5cyl_masses``).

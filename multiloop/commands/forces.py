@@ -1,6 +1,6 @@
 """``multiloop forces FILE [--at ANGLE] [--steps N] [--json] [--plot out.png]``.
 
-Kinetostatics of a mechanism file (SPEC §4): reactions in every pair and the balancing
+Kinetostatics of a mechanism file (the kinetostatics (docs/forces.md)): reactions in every pair and the balancing
 moment/force of every driver, checked by virtual power.  FILE may also name a bundled
 mechanism of ``catalogue/mechanisms`` (e.g. ``crank_slider_loaded``) or an engine file
 (``[engine]`` table: the engine is built as a mechanism with its gas forces as 1° force
