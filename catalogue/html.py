@@ -15,7 +15,7 @@ from .atlas import Atlas
 from multiloop.kin.figures.chains import chain_svg
 from .synthesis import mechanism_choices
 
-__all__ = ["write_gallery", "gallery_page"]
+__all__ = ["write_gallery", "gallery_files", "gallery_page"]
 
 _CSS = """
 body{font-family:system-ui,sans-serif;margin:1.2em;background:#fafafa;color:#222}
@@ -85,25 +85,34 @@ shown: <span id="shown">{len(cards)}</span></p>
 """
 
 
-def write_gallery(atlas: Atlas, directory: str | Path, pairs=None, query: str | None = None,
-                  limit: int | None = 2000) -> list[Path]:
-    """Write ``atlas_n{n}_F{F}.html`` for every (n, F) in the atlas (or ``pairs``) and
-    ``index.html``; returns the paths written."""
-    d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+def gallery_files(atlas: Atlas, pairs=None, query: str | None = None,
+                  limit: int | None = 2000) -> dict[str, str]:
+    """The gallery as ``{file name: HTML text}``: ``atlas_n{n}_F{F}.html`` for every
+    (n, F) in the atlas (or ``pairs``), then ``index.html``."""
+    from .synthesis import SynthesisOptions
+
     if pairs is None:
         pairs = sorted({(r[0], r[1]) for r in atlas.con.execute("SELECT DISTINCT n, F FROM chains")})
-    written = []
+    files: dict[str, str] = {}
     items = []
     for n, F in pairs:
-        path = d / f"atlas_n{n}_F{F}.html"
-        path.write_text(gallery_page(atlas, n, F, query, limit), encoding="utf-8")
-        written.append(path)
-        items.append(f'<li><a href="{path.name}">n = {n}, F = {F}</a>: '
-                     f'{atlas.count(__import__("catalogue.synthesis", fromlist=["x"]).SynthesisOptions(n, F), query)} chains</li>')
-    index = d / "index.html"
-    index.write_text("<!DOCTYPE html><html><head><meta charset='utf-8'><title>multiloop atlas</title>"
-                     f"<style>{_CSS}</style></head><body><h1>multiloop atlas</h1><ul>"
-                     + "".join(items) + "</ul></body></html>", encoding="utf-8")
-    written.append(index)
+        name = f"atlas_n{n}_F{F}.html"
+        files[name] = gallery_page(atlas, n, F, query, limit)
+        items.append(f'<li><a href="{name}">n = {n}, F = {F}</a>: '
+                     f'{atlas.count(SynthesisOptions(n, F), query)} chains</li>')
+    files["index.html"] = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>multiloop atlas</title>"
+                           f"<style>{_CSS}</style></head><body><h1>multiloop atlas</h1><ul>"
+                           + "".join(items) + "</ul></body></html>")
+    return files
+
+
+def write_gallery(atlas: Atlas, directory: str | Path, pairs=None, query: str | None = None,
+                  limit: int | None = 2000) -> list[Path]:
+    """Write :func:`gallery_files` into ``directory`` (created if needed); returns the paths."""
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, text in gallery_files(atlas, pairs, query, limit).items():
+        (d / name).write_text(text, encoding="utf-8")
+        written.append(d / name)
     return written

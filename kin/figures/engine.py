@@ -20,7 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["engine_plots", "plot_forces"]
+from .style import no_mathtext
+
+__all__ = ["engine_figures", "engine_plots", "plot_forces"]
 
 _STROKE_COLOURS = {"intake": "#9ecae1", "compression": "#fdd0a2", "power": "#fc9272", "exhaust": "#bdbdbd"}
 
@@ -38,19 +40,27 @@ def _xaxis(ax):
     ax.grid(True, alpha=0.3)
 
 
-def _save(fig, path):
-    """Lay out, write (PNG, 110 dpi) and close a figure; returns its path."""
+def _save(fig, name):
+    """Lay out a figure; returns ``(name, fig)``."""
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    _plt().close(fig)
-    return path
+    return name, no_mathtext(fig)
 
 
 def engine_plots(res, outdir) -> list[Path]:
-    """Write the six PNG diagrams of an :class:`~kin.engine.EngineResult`; returns the paths."""
-    plt = _plt()
+    """Write the six PNG diagrams of an :class:`~kin.engine.EngineResult` (110 dpi); returns the paths."""
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, fig in engine_figures(res).items():
+        fig.savefig(out / name, dpi=110)
+        _plt().close(fig)
+        paths.append(out / name)
+    return paths
+
+
+def engine_figures(res) -> dict:
+    """The six diagrams of an :class:`~kin.engine.EngineResult`, ``{file name: Figure}``."""
+    plt = _plt()
     spec = res.spec
     phi = res.phi_deg
     names = [c.name for c in spec.cylinders]
@@ -73,7 +83,7 @@ def engine_plots(res, outdir) -> list[Path]:
     for ax in axs:
         _xaxis(ax)
         ax.legend(fontsize=7, loc="upper right")
-    paths.append(_save(fig, out / "kinematics.png"))
+    paths.append(_save(fig, "kinematics.png"))
 
     fig, axs = plt.subplots(1, 3, figsize=(14, 4.2))
     for j, nm in enumerate(names):
@@ -93,7 +103,7 @@ def engine_plots(res, outdir) -> list[Path]:
     _xaxis(axs[2])
     for ax in axs:
         ax.legend(fontsize=7)
-    paths.append(_save(fig, out / "pressure.png"))
+    paths.append(_save(fig, "pressure.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4))
     ax.plot(phi, res.balancing, label="M_b (on the crank, CCW +)")
@@ -104,7 +114,7 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title(f"∮M_b dφ = {res.cycle_integral:.6g} J, −W_ind = {-res.indicated_work.sum():.6g} J", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=8)
-    paths.append(_save(fig, out / "balancing.png"))
+    paths.append(_save(fig, "balancing.png"))
 
     fig, ax = plt.subplots(figsize=(9, 1.0 + 0.5 * len(names)))
     cyc = res.cyclogram
@@ -122,7 +132,7 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title("four-stroke cyclogram; firing intervals " + "/".join(f"{x:g}" for x in cyc["firing_intervals"])
                  + " deg, order " + "-".join(cyc["firing_order"]), fontsize=9)
     _xaxis(ax)
-    paths.append(_save(fig, out / "cyclogram.png"))
+    paths.append(_save(fig, "cyclogram.png"))
 
     fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
     for j, nm in enumerate(names):
@@ -139,7 +149,7 @@ def engine_plots(res, outdir) -> list[Path]:
     _xaxis(axs[1])
     for ax in axs:
         ax.legend(fontsize=7)
-    paths.append(_save(fig, out / "rod_com.png"))
+    paths.append(_save(fig, "rod_com.png"))
 
     fig, ax = plt.subplots(figsize=(9, 4.5))
     rx = res.reactions
@@ -152,12 +162,15 @@ def engine_plots(res, outdir) -> list[Path]:
     ax.set_title("reactions (crank pin A is a multiple joint: one reaction per rod)", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=7, ncol=2)
-    paths.append(_save(fig, out / "reactions.png"))
-    return paths
+    paths.append(_save(fig, "reactions.png"))
+    return dict(paths)
 
 
-def plot_forces(fr, x, out) -> Path:
-    """Balancing moment/force of each driver and |reaction| of each pair against ``x``."""
+def plot_forces(fr, x, out=None):
+    """Balancing moment/force of each driver and |reaction| of each pair against ``x``.
+
+    Writes ``out`` (PNG, 110 dpi) and returns its path; without ``out`` returns the figure.
+    """
     plt = _plt()
     m = fr.mechanism
     fig, axs = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
@@ -175,6 +188,9 @@ def plot_forces(fr, x, out) -> Path:
     axs[0].set_title(f"{m.name or 'mechanism'}: kinetostatics ({fr.method}); "
                      f"max relative virtual-power residual {np.nanmax(fr.relative_residual):.2g}", fontsize=9)
     fig.tight_layout()
+    no_mathtext(fig)
+    if out is None:
+        return fig
     p = Path(out)
     p.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(p, dpi=110)

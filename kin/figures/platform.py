@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..spatial.platform import Platform, PlatformStatics, platform_statics
+from .style import no_mathtext
 
 __all__ = ["plot_platform"]
 
@@ -126,6 +127,7 @@ def plot_platform(platform: Platform, path: str | Path | None = None,
     ax.set_zlabel("z (m)")
     ax.set_title(f"{platform.name}\nstruts coloured by force; dashed: screw axes with strut i removed", fontsize=9)
     ax.legend(fontsize=7, loc="upper left")
+    no_mathtext(fig)
     if path is not None:
         fig.savefig(path, dpi=120)
         plt.close(fig)

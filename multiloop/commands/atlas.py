@@ -11,10 +11,12 @@ Examples::
 """
 from __future__ import annotations
 
+import io
 import json
 import sys
 from pathlib import Path
 
+from multiloop.outputs import Outputs, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -65,6 +67,10 @@ def run(args) -> int:
         raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
                                  got=repr(args.db)))
     opts = _options(args) if args.links is not None else None
+    outs = Outputs("multiloop atlas")
+    for d in (args.html, args.charts):
+        if d is not None:
+            outs.directory(d, "--html" if d is args.html else "--charts")
     with Atlas(args.db) as atlas:
         built = None
         if opts is not None:
@@ -102,20 +108,27 @@ def run(args) -> int:
             sys.stdout.write("\n")
         else:
             _print_text(opts, args, count, chains, out.get("table"), built)
-        if args.html:
-            from multiloop.catalogue.html import write_gallery
+        if args.html is not None:
+            from multiloop.catalogue.html import gallery_files
 
             pairs = [(opts.n, opts.F)] if opts is not None else None
-            paths = write_gallery(atlas, args.html, pairs, args.query, args.html_limit)
-            print(f"gallery: {paths[-1]}", file=sys.stderr)
-        if args.charts:
+            for name, text in gallery_files(atlas, pairs, args.query, args.html_limit).items():
+                outs.add(Path(args.html) / name, text, "--html")
+        if args.charts is not None:
             from multiloop.kin.figures.chains import existence_domain_chart, invariant_merge_chart
 
             d = Path(args.charts)
-            d.mkdir(parents=True, exist_ok=True)
-            existence_domain_chart(atlas, d / "atlas_existence_domain.png")
-            invariant_merge_chart(atlas, d / "atlas_invariant_merges.png")
-            print(f"charts: {d}", file=sys.stderr)
+            for name, chart in (("atlas_existence_domain.png", existence_domain_chart),
+                                ("atlas_invariant_merges.png", invariant_merge_chart)):
+                buf = io.BytesIO()
+                with quiet_warnings("multiloop atlas"):
+                    chart(atlas, buf)
+                outs.add(d / name, buf.getvalue(), "--charts")
+        outs.commit()
+        if args.html is not None:
+            print(f"gallery: {Path(args.html) / 'index.html'}", file=sys.stderr)
+        if args.charts is not None:
+            print(f"charts: {args.charts}", file=sys.stderr)
     return 0
 
 

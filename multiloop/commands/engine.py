@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
+from multiloop.outputs import Outputs, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -72,11 +74,17 @@ def run(args) -> int:
     from multiloop.commands.forces import _resolve  # noqa: PLC0415
     if args.steps < 8:
         raise InputError(explain("--steps", expected="at least 8", got=repr(args.steps)))
+    outs = Outputs("multiloop engine")
+    if args.plot is not None:
+        outs.directory(args.plot, "--plot")
     spec = load_engine(_resolve(args.file))
     res = analyse_engine(spec, args.steps, check=not args.no_check)
-    if args.plot:
-        from multiloop.kin.figures.engine import engine_plots  # noqa: PLC0415
-        paths = engine_plots(res, args.plot)
+    if args.plot is not None:
+        from multiloop.kin.figures.engine import engine_figures  # noqa: PLC0415
+        with quiet_warnings("multiloop engine"):
+            for name, fig in engine_figures(res).items():
+                outs.add_figure(Path(args.plot) / name, fig, dpi=110)
+        paths = outs.commit()
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))
     if args.json:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
@@ -138,6 +139,9 @@ def report_dict(fr, inputs_user: np.ndarray) -> dict:
 
 def run(args) -> int:
     from multiloop.kin.forces import forces  # noqa: PLC0415
+    outs = Outputs("multiloop forces")
+    if args.plot is not None:
+        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
     m = load_any(args.file)
     if not m.drivers:
         raise InputError(explain("[[driver]]", expected="at least one driver", got="none",
@@ -146,9 +150,11 @@ def run(args) -> int:
     fr = forces(m, q, method=args.method)
     kinds = [m.joint(d.joint).kind for d in m.drivers]
     q_user = np.array([[math.degrees(v) if k is JointKind.R else v for v, k in zip(row, kinds)] for row in q])
-    if args.plot:
+    if args.plot is not None:
         from multiloop.kin.figures.engine import plot_forces  # noqa: PLC0415
-        plot_forces(fr, q_user[:, 0], args.plot)
+        with quiet_warnings("multiloop forces"):
+            outs.add_figure(args.plot, plot_forces(fr, q_user[:, 0]), dpi=110)
+        outs.commit()
     if args.json:
         print(json.dumps(report_dict(fr, q_user)))
         return 0

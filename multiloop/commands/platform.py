@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.kin.spatial.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
+from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 
 __all__ = ["add_arguments", "run", "report"]
 
@@ -166,12 +167,17 @@ def _text(rep: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    outs = Outputs("multiloop platform")
+    if args.plot is not None:
+        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
     platform = load_platform(_resolve(args.file))
     rep = report(platform, args.modes)
-    if args.plot:
+    if args.plot is not None:
         from multiloop.kin.figures.platform import plot_platform
 
-        plot_platform(platform, path=args.plot)
+        with quiet_warnings("multiloop platform"):
+            outs.add_figure(args.plot, plot_platform(platform), dpi=120)
+        outs.commit()
     if args.json:
         print(json.dumps(rep, indent=2, ensure_ascii=False, allow_nan=False))
     else:

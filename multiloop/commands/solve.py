@@ -32,13 +32,12 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.io import load
 from multiloop.topo.model import JointKind
@@ -176,27 +175,17 @@ def _table(doc: dict) -> str:
     return "\n".join(lines)
 
 
-def _atomic_write(path: str, data: bytes) -> None:
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=str(p.parent if str(p.parent) else "."), suffix=p.suffix)
-    with os.fdopen(fd, "wb") as f:
-        f.write(data)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, p)
-
-
 def run(args) -> int:
     import warnings
 
     from multiloop.kin.solve import compile_plan, solve
 
     m = load(args.file)
-    for out in (args.plot, args.animate):
-        if out is not None and not Path(out).resolve().parent.is_dir():
-            raise InputError(explain(f"output '{out}'", expected="a file in an existing directory",
-                                     got="a missing directory"))
+    outs = Outputs("multiloop solve")
+    if args.plot is not None:
+        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    if args.animate is not None:
+        outs.target(args.animate, "--animate", formats=("gif",))
     plan = compile_plan(m)
     x_cli = input_values(m, args.steps, args.start, args.stop)
     want_der = args.derivatives or args.plot is not None
@@ -210,32 +199,22 @@ def run(args) -> int:
                                 notes=state.notes, poses=state.poses)
     doc = state_to_dict(doc_state, plan.assur)
     # render every file in memory first: nothing is written half-way
-    files: list[tuple[str, bytes]] = []
     if args.plot is not None:
-        import matplotlib.pyplot as plt
-
         from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
         p = Path(args.plot)
-        for fig, target in ((plot_mechanism(state), p),
-                            (plot_analogues(state), p.with_name(p.stem + "_analogues" + (p.suffix or ".png")))):
-            buf = io.BytesIO()
-            fig.savefig(buf, format=(target.suffix.lstrip(".") or "png"))
-            plt.close(fig)
-            files.append((str(target), buf.getvalue()))
+        with quiet_warnings("multiloop solve"):
+            outs.add_figure(p, plot_mechanism(state))
+            outs.add_figure(p.with_name(p.stem + "_analogues" + (p.suffix or ".png")), plot_analogues(state))
     if args.animate is not None:
         from multiloop.kin.figures.mechanism import animate
-        with tempfile.TemporaryDirectory() as d:
-            tmp = Path(d) / "anim.gif"
-            animate(state, tmp)
-            files.append((args.animate, tmp.read_bytes()))
+        outs.add_rendered(args.animate, lambda tmp: animate(state, tmp), "--animate")
     if args.json:
         text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
     elif args.csv:
         text = _csv(doc)
     else:
         text = _table(doc)
-    for path, data in files:
-        _atomic_write(path, data)
+    outs.commit()
     print(text)
     if not state.success:
         bad = np.flatnonzero(~state.ok)
