@@ -219,7 +219,8 @@ def test_dollar_names_plot(tmp_path):
     text = Path(FOUR_BAR).read_text().replace('name = "four_bar"', 'name = "cost $5 or $x_{1"', 1)
     src = tmp_path / "m.toml"
     src.write_text(text)
-    assert main(["solve", str(src), "--steps", "6", "--plot", str(tmp_path / "d.png")]) == 0
+    assert main(["solve", str(src), "--steps", "6", "--plot", str(tmp_path / "d.png"),
+                 "--animate", str(tmp_path / "d.gif")]) == 0
     assert (tmp_path / "d.png").read_bytes().startswith(PNG)
 
 

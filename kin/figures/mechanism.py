@@ -24,6 +24,7 @@ from matplotlib.patches import Polygon  # noqa: E402
 from multiloop.topo.model import JointKind  # noqa: E402
 
 from ..state import KinematicState  # noqa: E402
+from .style import no_mathtext  # noqa: E402
 
 __all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis"]
 
@@ -141,7 +142,7 @@ def plot_mechanism(state: KinematicState, index: int = 0, ax=None, title: str | 
     bad = int(np.count_nonzero(~state.ok))
     ax.set_title(title or f"{m.name or 'mechanism'}: position {index}"
                  + (f" ({bad} positions failed)" if bad else ""))
-    return fig
+    return no_mathtext(fig)
 
 
 def plot_analogues(state: KinematicState):
@@ -180,7 +181,7 @@ def plot_analogues(state: KinematicState):
         a.set_xlabel(label)
     fig.suptitle(f"{m.name or 'mechanism'}: analogues (driver at unit rate)")
     fig.tight_layout()
-    return fig
+    return no_mathtext(fig)
 
 
 def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -> None:
@@ -204,5 +205,6 @@ def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -
             ax.set_aspect("equal")
             ax.set_title(f"{state.mechanism.name or ''}  input {input_axis(state)[0][n]:.4g}  {state.status[n][:40]}",
                          fontsize=9)
+            no_mathtext(fig)
             writer.grab_frame()
     plt.close(fig)

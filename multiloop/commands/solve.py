@@ -64,6 +64,9 @@ def add_arguments(p) -> None:
                    help="mechanism in its reference position with tracer paths; "
                         "the analogues go to OUT_analogues.png")
     p.add_argument("--animate", metavar="OUT.gif", default=None, help="one cycle as a GIF")
+    p.add_argument("--svg", metavar="OUT.svg", default=None,
+                   help="CAD drawing at the first position: layers LINKS, FRAME, PINS, PATHS, LABELS (mm)")
+    p.add_argument("--dxf", metavar="OUT.dxf", default=None, help="the same drawing as DXF (ezdxf, mm)")
 
 
 def input_values(m, steps: int | None, start: float | None, stop: float | None) -> np.ndarray:
@@ -186,6 +189,9 @@ def run(args) -> int:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
     if args.animate is not None:
         outs.target(args.animate, "--animate", formats=("gif",))
+    for flag, path in (("--svg", args.svg), ("--dxf", args.dxf)):
+        if path is not None:
+            outs.target(path, flag, formats=(flag[2:],))
     plan = compile_plan(m)
     x_cli = input_values(m, args.steps, args.start, args.stop)
     want_der = args.derivatives or args.plot is not None
@@ -208,6 +214,12 @@ def run(args) -> int:
     if args.animate is not None:
         from multiloop.kin.figures.mechanism import animate
         outs.add_rendered(args.animate, lambda tmp: animate(state, tmp), "--animate")
+    if args.svg is not None or args.dxf is not None:
+        from multiloop.kin.figures.cad import mechanism_dxf, mechanism_svg
+        if args.svg is not None:
+            outs.add(args.svg, mechanism_svg(state), "--svg")
+        if args.dxf is not None:
+            outs.add(args.dxf, mechanism_dxf(state), "--dxf")
     if args.json:
         text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
     elif args.csv:
