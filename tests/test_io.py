@@ -149,3 +149,35 @@ def test_analyse_json_keys(tmp_path, capsys):
                 "code", "code_star", "planar", "degenerate", "fractionated", "canonical"):
         assert key in d
     assert d["LA"] == [4, 1] and d["MJA"] == [1] and d["La"] == sorted(d["La"])
+
+
+# ---- the shared typed readers (used by every document parser) ---------------------
+def test_typed_readers_accept_and_name_the_fault():
+    from multiloop.topo.io import (read_bool, read_names, read_number, read_string, read_table,
+                                   read_tables, read_vector, table_label)
+    assert read_number(3, "x") == 3.0 and isinstance(read_number(3, "x"), float)
+    assert read_vector([1, 2], "at") == (1.0, 2.0)
+    assert read_vector([1, 2, 3], "p", 3) == (1.0, 2.0, 3.0)
+    assert read_string("a", "s") == "a" and read_string("", "s", allow_empty=True) == ""
+    assert read_bool(False, "f") is False
+    assert read_names(["a", "b"], "links") == ("a", "b")
+    assert read_tables({"link": {"name": "a"}}, "link") == [{"name": "a"}]
+    assert table_label("link", 2, {"name": "crank"}) == "[[link]] #2 ('crank')"
+    bad = [
+        (lambda: read_number(True, "mass"), "mass: expected a number, got True"),
+        (lambda: read_number(float("nan"), "mass"), "mass: expected a finite number"),
+        (lambda: read_number(0, "rpm", positive=True, unit="1/min"), "rpm: expected a positive number (1/min), got 0"),
+        (lambda: read_number(-1e-3, "inertia", non_negative=True), "inertia: expected a number >= 0"),
+        (lambda: read_vector([1], "at"), "at: expected a pair of numbers [x, y]"),
+        (lambda: read_vector([1, 2], "p", 3), "p: expected 3 numbers [x, y, z]"),
+        (lambda: read_string("", "name"), "name: expected a non-empty string"),
+        (lambda: read_bool(1, "frame"), "frame: expected true or false, got 1"),
+        (lambda: read_table([], "[engine]"), "[engine]: expected a table"),
+        (lambda: read_table({"a": 1, "zz": 2}, "[t]", {"a"}), "[t]: expected keys among a, got unknown key 'zz'"),
+        (lambda: read_table({"a": 1}, "[t]", {"a", "b"}, required=("b",)), "[t]: expected key 'b', got nothing"),
+        (lambda: read_tables({"link": 3}, "link"), "[[link]]: expected an array of tables"),
+    ]
+    for call, needle in bad:
+        with pytest.raises(InputError) as exc:
+            call()
+        assert needle in str(exc.value)

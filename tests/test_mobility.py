@@ -53,3 +53,68 @@ def test_flat_four_bar_is_instantaneously_more_mobile():
 def test_needs_geometry():
     with pytest.raises(InputError, match="geometry"):
         actual_mobility(chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "a"]]))
+
+
+# ---- the one home of pin pairs and of the constraint Jacobian ---------------------
+def test_pin_pairs_k_links_give_k_minus_1_pairs_around_the_host():
+    from multiloop.topo.graphs import n_pairs, pin_pairs
+    assert pin_pairs(("a", "b")) == (("a", "b"),)
+    assert pin_pairs(("a", "b", "c", "d")) == (("a", "b"), ("a", "c"), ("a", "d"))
+    order = {"a": 2, "b": 0, "c": 1}
+    assert pin_pairs(("a", "b", "c"), key=order.get) == (("b", "c"), ("b", "a"))
+    # Pozhbelko & Kuts 2020: a multiple joint of multiplicity j counts j pairs
+    m = chain_from_joint_lists([["a", "b", "c", "d"], ["b", "c"], ["c", "d"], ["d", "a"]])
+    assert n_pairs(m) == 3 + 1 + 1 + 1
+
+
+def _residual_by_hand(m, cons, Z):
+    """Pin, slider and driver equations written out point by point (a second route)."""
+    import numpy as np
+    from multiloop.topo.constraints import link_origins
+    idx = {x: i for i, x in enumerate(m.link_names)}
+    org = link_origins(m)
+
+    def point(link, r):
+        X, Y, th = Z[idx[link]]
+        v = np.asarray(r, float) - org[link]
+        return np.array([X + np.cos(th) * v[0] - np.sin(th) * v[1], Y + np.sin(th) * v[0] + np.cos(th) * v[1]])
+
+    out = []
+    for c in cons:
+        jt = m.joint(c.joint)
+        ta, tb = Z[idx[c.a], 2], Z[idx[c.b], 2]
+        if c.kind == "R":
+            out += list(point(c.a, jt.at) - point(c.b, jt.at))
+        elif c.kind == "drive_R":
+            out += [tb - ta]
+        else:
+            u = np.asarray(jt.axis, float) / np.hypot(*jt.axis)
+            d = point(c.b, jt.at) - point(c.a, jt.at)
+            ca, sa = np.cos(ta), np.sin(ta)
+            ug = np.array([ca * u[0] - sa * u[1], sa * u[0] + ca * u[1]])
+            n = np.array([-ug[1], ug[0]])
+            if c.kind == "P":
+                out += [tb - ta, n @ d]
+            else:
+                out += [ug @ d]
+    return np.array(out)
+
+
+@pytest.mark.parametrize("make", [four_bar, crank_slider, vtwin])
+def test_constraint_jacobian_equals_finite_differences(make):
+    import numpy as np
+    from multiloop.topo.assur import decompose
+    from multiloop.topo.constraints import PairEquations
+    m = make()
+    cons = [c for s in decompose(m).steps for c in s.constraints]
+    rng = np.random.default_rng(7)
+    Z = rng.uniform(-1, 1, (m.n_links, 3))
+    J = PairEquations.compile(m, cons).jacobian(Z[None])[0]
+    h = 1e-6
+    fd = np.zeros_like(J)
+    for k in range(Z.size):
+        dz = np.zeros(Z.size)
+        dz[k] = h
+        fd[:, k] = (_residual_by_hand(m, cons, Z + dz.reshape(Z.shape))
+                    - _residual_by_hand(m, cons, Z - dz.reshape(Z.shape))) / (2 * h)
+    assert np.allclose(J, fd, atol=1e-7)

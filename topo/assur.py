@@ -55,45 +55,22 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
+from .constraints import Constraint, link_origins, reference_jacobian
 from .errors import DecompositionError, MobilityError, explain
+from .graphs import n_pairs, pin_pairs
+from .mobility import actual_mobility
 from .model import JointKind, Mechanism
 
-__all__ = ["Constraint", "DriverStep", "AssurGroup", "AssurPlan", "decompose",
-           "DYAD_KINDS", "reference_jacobian", "link_origins"]
+__all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS"]
+
+# Constraint, link_origins and reference_jacobian live in topo.constraints; the names
+# stay importable from here for existing callers.
+_ = link_origins
 
 #: dyad kind → number (вид) of Vasechkin et al. 2017
 DYAD_KINDS = {"RRR": 1, "RRP": 2, "RPR": 3, "PRP": 4, "RPP": 5}
 
 _ROMAN = {1: "I", 2: "II", 3: "III", 4: "IV", 5: "V", 6: "VI", 7: "VII", 8: "VIII"}
-
-
-@dataclass(frozen=True, slots=True)
-class Constraint:
-    """One block of scalar equations between two links (pair form).
-
-    Attributes
-    ----------
-    kind : str
-        ``"R"`` (2 equations: the joint's point on ``a`` equals its point on ``b``),
-        ``"P"`` (2 equations: ``b`` keeps its angle to guide ``a`` and stays on the
-        guide line), ``"drive_R"`` (1 equation: ``θ_b − θ_a = input``),
-        ``"drive_P"`` (1 equation: slide of ``b`` along ``a``'s guide = input).
-    joint : str
-    a, b : str
-        Links (``a`` = host/guide, ``b`` = the other/slider).
-    driver : int
-        Index of the driver for ``drive_*`` constraints, else -1.
-    """
-
-    kind: str
-    joint: str
-    a: str
-    b: str
-    driver: int = -1
-
-    @property
-    def n_equations(self) -> int:
-        return 1 if self.kind.startswith("drive") else 2
 
 
 @dataclass(frozen=True, slots=True)
@@ -258,94 +235,6 @@ class AssurPlan:
                 "link_numbers": dict(self.link_numbers)}
 
 
-# ---------------------------------------------------------------------------------
-# geometry helpers shared with topo.mobility and kin (reference configuration)
-def link_origins(m: Mechanism) -> dict[str, np.ndarray]:
-    """Reference point of every link: its first joint's ``at`` (origin for the frame).
-
-    The pose of a link is the current position of this point and the rotation from
-    the reference configuration, so every pose is ``(c, 0)`` at the reference.
-    """
-    out = {}
-    for lk in m.links:
-        js = m.joints_of(lk.name)
-        out[lk.name] = (np.zeros(2) if lk.is_frame or not js or js[0].at is None
-                        else np.asarray(js[0].at, float))
-    return out
-
-
-def _perp(v):
-    return np.array([-v[1], v[0]])
-
-
-def reference_jacobian(m: Mechanism, constraints, columns, joint_at=None, joint_axis=None,
-                       origins=None) -> np.ndarray:
-    """Jacobian of pair constraints at the reference configuration.
-
-    Parameters
-    ----------
-    m : Mechanism
-    constraints : sequence of Constraint
-    columns : sequence of str
-        Links whose poses ``(x, y, θ)`` are the unknowns (3 columns each).
-    joint_at, joint_axis : dict, optional
-        Geometry overrides (a random realisation for generic rank); default the
-        mechanism's own ``at``/``axis``.
-    origins : dict, optional
-        Link reference points (default :func:`link_origins`).
-
-    Returns
-    -------
-    ndarray, shape (n_equations, 3 * len(columns))
-    """
-    col = {x: 3 * i for i, x in enumerate(columns)}
-    at = joint_at or {j.name: np.asarray(j.at, float) for j in m.joints}
-    axis = joint_axis or {j.name: np.asarray(j.axis, float) / np.hypot(*j.axis)
-                          for j in m.joints if j.axis is not None}
-    org = origins or {x: np.zeros(2) for x in m.link_names}
-    rows = []
-    for c in constraints:
-        r = at[c.joint]
-        if c.kind == "R":
-            blk = np.zeros((2, 3 * len(columns)))
-            for link, sgn in ((c.a, 1.0), (c.b, -1.0)):
-                if link in col:
-                    k = col[link]
-                    blk[:, k:k + 2] += sgn * np.eye(2)
-                    blk[:, k + 2] += sgn * _perp(r - org[link])
-            rows.append(blk)
-        elif c.kind in ("P", "drive_P"):
-            u = axis[c.joint]
-            dirs = [u] if c.kind == "drive_P" else [_perp(u)]
-            blk = np.zeros((1 if c.kind == "drive_P" else 2, 3 * len(columns)))
-            if c.kind == "P":   # angle row first
-                if c.b in col:
-                    blk[0, col[c.b] + 2] += 1.0
-                if c.a in col:
-                    blk[0, col[c.a] + 2] -= 1.0
-            d = dirs[0]
-            row = blk.shape[0] - 1
-            if c.b in col:
-                k = col[c.b]
-                blk[row, k:k + 2] += d
-                blk[row, k + 2] += d @ _perp(r - org[c.b])
-            if c.a in col:
-                k = col[c.a]
-                blk[row, k:k + 2] -= d
-                blk[row, k + 2] -= d @ _perp(r - org[c.a])
-            rows.append(blk)
-        elif c.kind == "drive_R":
-            blk = np.zeros((1, 3 * len(columns)))
-            if c.b in col:
-                blk[0, col[c.b] + 2] += 1.0
-            if c.a in col:
-                blk[0, col[c.a] + 2] -= 1.0
-            rows.append(blk)
-        else:  # pragma: no cover
-            raise ValueError(c.kind)
-    return np.vstack(rows) if rows else np.zeros((0, 3 * len(columns)))
-
-
 def _random_realisation(m: Mechanism, seed: int):
     rng = np.random.default_rng(seed)
     at = {j.name: rng.uniform(-1.0, 1.0, 2) for j in m.joints}
@@ -440,7 +329,7 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
         row_info.append(("D", d.joint, i))
     n_rows, n_cols = len(rows), len(col_entity)
     # ---- counting first (mobility)
-    p = sum(len(j.links) - 1 for j in m.joints)
+    p = n_pairs(m)
     formula_f = 3 * (m.n_links - 1) - 2 * p
     data = [(r, c) for r, cs in enumerate(rows) for c in cs]
     S = csr_matrix((np.ones(len(data)), ([d[0] for d in data], [d[1] for d in data])),
@@ -467,7 +356,6 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
             hint = ("add [[driver]] entries" if formula_f > len(m.drivers) else
                     "remove drivers, or the chain has redundant links (see 'multiloop analyse')")
             if m.has_geometry:   # special dimensions: say whether the real geometry moves
-                from .mobility import actual_mobility
                 mob = actual_mobility(m)
                 if mob.actual_F == len(m.drivers) and mob.redundant:
                     hint = (f"the geometry does move with {mob.actual_F} DOF (special dimensions): "
@@ -588,12 +476,10 @@ def _pair_constraints(m: Mechanism, links: list[str], known: set[str]) -> list[C
         if not on_b:
             continue
         if j.kind is JointKind.R:
-            kn = [x for x in j.links if x in known]
-            kn.sort(key=lambda x: x != frame)
-            host = kn[0] if kn else on_b[0]
-            for x in on_b:
-                if x != host:
-                    out.append(Constraint("R", j.name, host, x))
+            # host: a known link (the frame first), else the block's first link on the pin
+            here = [x for x in j.links if x in B or x in known]
+            out += [Constraint("R", j.name, host, x) for host, x in
+                    pin_pairs(here, key=lambda x: (x not in known, x != frame)) if x in B]
         else:
             g, s = j.links
             if (g in B or g in known) and (s in B or s in known):

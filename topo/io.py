@@ -21,7 +21,9 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterable
+
+import numpy as np
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -32,7 +34,8 @@ from .errors import InputError, explain
 from .model import Driver, Joint, JointKind, Link, Load, Mechanism, MechanismBuilder, TracerPoint
 
 __all__ = ["load", "loads", "mechanism_from_dict", "mechanism_to_dict", "dumps_toml",
-           "dumps_json", "read_document"]
+           "dumps_json", "read_document", "read_number", "read_vector", "read_string", "read_bool",
+           "read_names", "read_table", "read_tables", "table_label"]
 
 _TOP_KEYS = {"name", "description", "source", "joints", "link", "joint", "driver", "point",
              "force", "gravity", "reconstruction", "notes"}
@@ -108,49 +111,116 @@ def loads(text: str, fmt: str = "toml") -> Mechanism:
     return mechanism_from_dict(doc)
 
 
-def _num(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(explain(where, expected="a number", got=repr(value)))
+# ---------------------------------------------------------------------------------
+# typed readers: every parser of a TOML/JSON document (mechanisms, engines,
+# platforms) reads its values through these, so every message has the same form.
+def read_number(value: Any, where: str, *, positive: bool = False, non_negative: bool = False,
+                unit: str | None = None) -> float:
+    """A finite number (``bool`` is not a number), optionally ``> 0`` or ``>= 0``.
+
+    Raises
+    ------
+    InputError
+        Naming ``where``, e.g. ``"[[link]] #2 ('crank') mass: expected a number >= 0, got -1"``.
+
+    Examples
+    --------
+    >>> read_number(2, "mass")
+    2.0
+    >>> read_number(-1, "mass", non_negative=True, unit="kg")
+    Traceback (most recent call last):
+    ...
+    multiloop.topo.errors.InputError: mass: expected a number >= 0 (kg), got -1
+    """
+    noun = "a positive number" if positive else ("a number >= 0" if non_negative else "a number")
+    noun += f" ({unit})" if unit else ""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(explain(where, expected=noun, got=repr(value)[:60]))
     f = float(value)
     if not math.isfinite(f):
-        raise InputError(explain(where, expected="a finite number", got=repr(value)))
+        raise InputError(explain(where, expected=noun.replace("a ", "a finite ", 1), got=repr(value)[:60]))
+    if (positive and f <= 0) or (non_negative and f < 0):
+        raise InputError(explain(where, expected=noun, got=repr(value)[:60]))
     return f
 
 
-def _vec(value: Any, where: str) -> tuple[float, float]:
-    if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise InputError(explain(where, expected="a pair of numbers [x, y]", got=repr(value)))
-    return (_num(value[0], where), _num(value[1], where))
+_VECTOR_NOUNS = {2: "a pair of numbers [x, y]", 3: "3 numbers [x, y, z]"}
 
 
-def _str(value: Any, where: str) -> str:
-    if not isinstance(value, str) or not value:
-        raise InputError(explain(where, expected="a non-empty string", got=repr(value)))
+def read_vector(value: Any, where: str, n: int = 2) -> tuple[float, ...]:
+    """``n`` finite numbers given as a list (default a pair ``[x, y]``).
+
+    Examples
+    --------
+    >>> read_vector([1, 2.5], "at")
+    (1.0, 2.5)
+    """
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        raise InputError(explain(where, expected=_VECTOR_NOUNS.get(n, f"{n} numbers"),
+                                 got=repr(value)[:60]))
+    return tuple(read_number(v, where) for v in value)
+
+
+def read_string(value: Any, where: str, *, allow_empty: bool = False) -> str:
+    """A string (non-empty unless ``allow_empty``)."""
+    if not isinstance(value, str) or not (value or allow_empty):
+        raise InputError(explain(where, expected="a string" if allow_empty else "a non-empty string",
+                                 got=repr(value)[:60]))
     return value
 
 
-def _names(value: Any, where: str) -> tuple[str, ...]:
+def read_bool(value: Any, where: str) -> bool:
+    """``true`` or ``false`` (not 0/1)."""
+    if not isinstance(value, bool):
+        raise InputError(explain(where, expected="true or false", got=repr(value)[:60]))
+    return value
+
+
+def read_names(value: Any, where: str) -> tuple[str, ...]:
+    """A list of non-empty names."""
     if not isinstance(value, (list, tuple)):
-        raise InputError(explain(where, expected="a list of link names", got=repr(value)))
-    return tuple(_str(v, where) for v in value)
+        raise InputError(explain(where, expected="a list of link names", got=repr(value)[:60]))
+    return tuple(read_string(v, where) for v in value)
 
 
-def _tables(doc: dict, key: str) -> list[dict]:
+def read_table(value: Any, label: str, keys: Iterable[str] | None = None,
+               required: Iterable[str] = (), hint: str | None = None) -> dict:
+    """A table whose keys are all among ``keys`` (when given) and include ``required``."""
+    if not isinstance(value, dict):
+        raise InputError(explain(label, expected="a table", got=repr(value)[:60]))
+    if keys is not None:
+        allowed = set(keys)
+        unknown = sorted(set(value) - allowed)
+        if unknown:
+            raise InputError(explain(label, expected=f"keys among {', '.join(sorted(allowed))}",
+                                     got=f"unknown key {', '.join(repr(u) for u in unknown)}", hint=hint))
+    for key in required:
+        if key not in value:
+            raise InputError(explain(label, expected=f"key '{key}'", got="nothing"))
+    return value
+
+
+def read_tables(doc: dict, key: str) -> list[dict]:
+    """The array of tables ``[[key]]`` of a document (a single table is accepted)."""
     raw = doc.get(key, [])
     if isinstance(raw, dict):
         raw = [raw]
     if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
         raise InputError(explain(f"[[{key}]]", expected="an array of tables", got=repr(raw)[:60]))
+    return raw
+
+
+def table_label(key: str, i: int, t: dict) -> str:
+    """``[[key]] #i ('name')``: how messages name the i-th (1-based) table."""
+    name = t.get("name")
+    return f"[[{key}]] #{i}" + (f" ('{name}')" if isinstance(name, str) and name else "")
+
+
+def _tables(doc: dict, key: str) -> list[tuple[str, dict]]:
     out = []
-    for i, t in enumerate(raw, 1):
-        label = f"[[{key}]] #{i}" + (f" ('{t['name']}')" if isinstance(t.get("name"), str) else "")
-        unknown = sorted(set(t) - _TABLE_KEYS[key])
-        if unknown:
-            raise InputError(explain(f"{label}", expected=f"keys among {', '.join(sorted(_TABLE_KEYS[key]))}",
-                                     got=f"unknown key {', '.join(repr(u) for u in unknown)}"))
-        for req in _REQUIRED[key]:
-            if req not in t:
-                raise InputError(explain(f"{label}", expected=f"key '{req}'", got="nothing"))
+    for i, t in enumerate(read_tables(doc, key), 1):
+        label = table_label(key, i, t)
+        read_table(t, label, _TABLE_KEYS[key], _REQUIRED[key])
         out.append((label, t))
     return out
 
@@ -167,9 +237,9 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
     b = MechanismBuilder()
     for key in ("name", "description", "source"):
         if key in doc:
-            setattr(b, key, _str(doc[key], f"top-level key '{key}'"))
+            setattr(b, key, read_string(doc[key], f"top-level key '{key}'"))
     if "gravity" in doc:
-        b.gravity = _vec(doc["gravity"], "top-level key 'gravity'")
+        b.gravity = read_vector(doc["gravity"], "top-level key 'gravity'")
     if "joints" in doc:
         if "joint" in doc:
             raise InputError(explain("top level", expected="either 'joints' (bare chain) or [[joint]] tables",
@@ -178,33 +248,31 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
         if not isinstance(jl, list) or not jl:
             raise InputError(explain("key 'joints'", expected="a non-empty list of link-name lists", got=repr(jl)[:60]))
         for i, lks in enumerate(jl, 1):
-            b.add_joint(f"J{i}", "R", _names(lks, f"joints[{i - 1}]"))
+            b.add_joint(f"J{i}", "R", read_names(lks, f"joints[{i - 1}]"))
     for label, t in _tables(doc, "link"):
-        frame = t.get("frame", False)
-        if not isinstance(frame, bool):
-            raise InputError(explain(f"{label} frame", expected="true or false", got=repr(frame)))
+        frame = read_bool(t.get("frame", False), f"{label} frame")
         b.links.append(Link(
-            _str(t["name"], f"{label} name"), frame,
-            _num(t["mass"], f"{label} mass") if "mass" in t else None,
-            _vec(t["cg"], f"{label} cg") if "cg" in t else None,
-            _num(t["inertia"], f"{label} inertia") if "inertia" in t else None,
-            _str(t["color"], f"{label} color") if "color" in t else None))
+            read_string(t["name"], f"{label} name"), frame,
+            read_number(t["mass"], f"{label} mass") if "mass" in t else None,
+            read_vector(t["cg"], f"{label} cg") if "cg" in t else None,
+            read_number(t["inertia"], f"{label} inertia") if "inertia" in t else None,
+            read_string(t["color"], f"{label} color") if "color" in t else None))
     for label, t in _tables(doc, "joint"):
         kind = t.get("kind", "R")
         if kind not in ("R", "P"):
             raise InputError(explain(f"{label} kind", expected="'R' or 'P'", got=repr(kind)))
         b.joints.append(Joint(
-            _str(t["name"], f"{label} name"), JointKind(kind), _names(t["links"], f"{label} links"),
-            _vec(t["at"], f"{label} at") if "at" in t else None,
-            _vec(t["axis"], f"{label} axis") if "axis" in t else None))
+            read_string(t["name"], f"{label} name"), JointKind(kind), read_names(t["links"], f"{label} links"),
+            read_vector(t["at"], f"{label} at") if "at" in t else None,
+            read_vector(t["axis"], f"{label} axis") if "axis" in t else None))
     for label, t in _tables(doc, "driver"):
-        links = _names(t["links"], f"{label} links") if "links" in t else None
-        b.add_driver(_str(t["joint"], f"{label} joint"), links,
-                     _num(t["speed"], f"{label} speed") if "speed" in t else None,
-                     _num(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None)
+        links = read_names(t["links"], f"{label} links") if "links" in t else None
+        b.add_driver(read_string(t["joint"], f"{label} joint"), links,
+                     read_number(t["speed"], f"{label} speed") if "speed" in t else None,
+                     read_number(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None)
     for label, t in _tables(doc, "point"):
-        b.points.append(TracerPoint(_str(t["name"], f"{label} name"), _str(t["link"], f"{label} link"),
-                                    _vec(t["at"], f"{label} at")))
+        b.points.append(TracerPoint(read_string(t["name"], f"{label} name"), read_string(t["link"], f"{label} link"),
+                                    read_vector(t["at"], f"{label} at")))
     for label, t in _tables(doc, "force"):
         table = None
         if "table" in t:
@@ -215,13 +283,13 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
             for r, row in enumerate(rows):
                 if not isinstance(row, list) or len(row) != 3:
                     raise InputError(explain(f"{label} table row {r}", expected="[input_deg, Fx, Fy]", got=repr(row)))
-                table.append(tuple(_num(x, f"{label} table row {r}") for x in row))
+                table.append(tuple(read_number(x, f"{label} table row {r}") for x in row))
             table = tuple(table)
-        b.loads.append(Load(_str(t["link"], f"{label} link"),
-                            _vec(t["at"], f"{label} at") if "at" in t else None,
-                            _vec(t["value"], f"{label} value") if "value" in t else (0.0, 0.0),
-                            table, _num(t["moment"], f"{label} moment") if "moment" in t else 0.0,
-                            _str(t["name"], f"{label} name") if "name" in t else None))
+        b.loads.append(Load(read_string(t["link"], f"{label} link"),
+                            read_vector(t["at"], f"{label} at") if "at" in t else None,
+                            read_vector(t["value"], f"{label} value") if "value" in t else (0.0, 0.0),
+                            table, read_number(t["moment"], f"{label} moment") if "moment" in t else 0.0,
+                            read_string(t["name"], f"{label} name") if "name" in t else None))
     return b.build()
 
 

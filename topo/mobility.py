@@ -3,7 +3,7 @@
 The Chebyshev–Grübler count ``F = 3(n − 1) − 2p`` ignores geometry.  The actual
 mobility at the reference configuration is ``3(n − 1) − rank J``, where ``J`` is
 the Jacobian of all pair constraints (a pin of k links is k − 1 pairs, host = its
-first link; a P joint keeps the relative angle and the guide line) with respect to
+first link, :func:`multiloop.topo.graphs.pin_pairs`; a P joint keeps the relative angle and the guide line) with respect to
 the poses ``(x, y, θ)`` of the moving links.  The number of redundant constraints
 is ``2p − rank J = actual_F − formula_F``.
 
@@ -21,8 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .assur import Constraint, link_origins, reference_jacobian
+from .constraints import Constraint, link_origins, reference_jacobian
 from .errors import InputError, explain
+from .graphs import n_pairs, pin_pairs
 from .model import JointKind, Mechanism
 
 __all__ = ["MobilityReport", "actual_mobility", "pair_constraints"]
@@ -61,8 +62,7 @@ def pair_constraints(m: Mechanism) -> list[Constraint]:
     out = []
     for j in m.joints:
         if j.kind is JointKind.R:
-            host = j.links[0]
-            out += [Constraint("R", j.name, host, x) for x in j.links[1:]]
+            out += [Constraint("R", j.name, host, x) for host, x in pin_pairs(j.links)]
         else:
             out.append(Constraint("P", j.name, j.links[0], j.links[1]))
     return out
@@ -112,7 +112,7 @@ def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
     J = reference_jacobian(m, cons, moving, origins=org)
     scale = max(1.0, float(np.abs(J).max())) if J.size else 1.0
     rank = int(np.linalg.matrix_rank(J, tol=tol * scale)) if J.size else 0
-    p = sum(len(j.links) - 1 for j in m.joints)
+    p = n_pairs(m)
     formula = 3 * len(moving) - 2 * p
     redundant = []
     r0, row = 0, 0

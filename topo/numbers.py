@@ -38,6 +38,7 @@ from .degeneracy import find_rigid_subchain, fractionation
 from .errors import TopologyError, explain
 from .isomorphism import canonical_form
 from .loops import loop_assortment
+from .mobility import actual_mobility
 from .model import Mechanism
 
 __all__ = ["StructuralReport", "structural_report", "StructuralCodes", "structural_codes",
@@ -291,18 +292,13 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
     actual_F = None
     redundant = None
     if geometry and m.has_geometry and m.frame is not None:
-        try:
-            from .mobility import actual_mobility  # written with the decomposition
-        except ImportError:  # pragma: no cover
-            actual_mobility = None
-        if actual_mobility is not None:
-            mob = actual_mobility(m)
-            actual_F = int(mob.actual_F)
-            redundant = tuple(mob.redundant)
-            if actual_F != F1:
-                warnings.append(f"the geometry moves with {actual_F} DOF although the formula "
-                                f"gives F = {F1}: special dimensions (redundant constraints: "
-                                f"{', '.join(redundant) or 'see decompose'})")
+        mob = actual_mobility(m)
+        actual_F = int(mob.actual_F)
+        redundant = tuple(mob.redundant)
+        if actual_F != F1:
+            warnings.append(f"the geometry moves with {actual_F} DOF although the formula "
+                            f"gives F = {F1}: special dimensions (redundant constraints: "
+                            f"{', '.join(redundant) or 'see decompose'})")
     rc_space = (actual_F if actual_F is not None else F1) - F_space
     return StructuralReport(
         name=m.name, n=n, p=p, n_joints=m.n_joints, LA=LA, MJA=MJA, V=V, K=K,
