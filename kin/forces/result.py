@@ -1,0 +1,178 @@
+"""The result of the kinetostatics, :class:`ForceResult`, and its JSON form."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.model import JointKind, Mechanism
+
+from ..result import BatchStatus
+from ..state import KinematicState
+from .plan import Pair
+
+__all__ = ["ForceResult", "VP_TOL", "json_list"]
+
+#: relative virtual-power residual above which a position is not ``ok``
+VP_TOL = 1e-6
+
+
+def json_list(a) -> list:
+    """A nested list of floats with every non-finite value as ``None`` (JSON null)."""
+    a = np.asarray(a, float)
+    if a.ndim == 0:
+        v = float(a)
+        return v if math.isfinite(v) else None
+    return [json_list(x) if a.ndim > 1 else (float(x) if math.isfinite(x) else None) for x in a]
+
+
+@dataclass(frozen=True)
+class ForceResult(BatchStatus):
+    """Result of :func:`~kin.forces.forces` (frozen; the arrays are read-only).
+
+    Leading axis: positions.
+
+    Attributes
+    ----------
+    pairs : tuple of Pair
+    reactions : ndarray (N, n_pairs, 2)
+        Force of ``pair.a`` on ``pair.b`` (N), frame axes.
+    pair_moments : ndarray (N, n_pairs)
+        Couple of ``a`` on ``b`` (N m); non-zero only for P pairs.
+    balancing : ndarray (N, n_drivers)
+        Balancing moment (R driver, N m, on ``links[1]`` by ``links[0]``, CCW +) or force
+        (P driver, N, along the axis).
+    driver_rates : ndarray (N, n_drivers)
+        Relative speed of each driver (rad/s or m/s) taken from the state.
+    load_power : ndarray (N,)
+        Power of applied, gravity and inertia loads (W).
+    virtual_power_residual : ndarray (N,)
+        ``Σ balancing·rate + load_power`` (W); zero to round-off.
+    power_scale : ndarray (N,)
+        Sum of the magnitudes of all power terms (W), for a relative residual.
+    status : ndarray (N,) of str
+        ``"ok"`` or the reason (kinematic failure, singular block, virtual-power
+        residual above ``VP_TOL``).
+    method : str
+        ``"groups"`` or ``"global"`` (the route actually used).
+    blocks : tuple of tuple of str
+        Link sets solved together, in the order solved.
+    normal_forces : ndarray (N, n_pairs)
+        Signed normal force ``N`` of each P pair along ``rot90(axis)`` (0 for R pairs).
+    """
+
+    mechanism: Mechanism
+    state: KinematicState
+    pairs: tuple[Pair, ...]
+    reactions: np.ndarray
+    pair_moments: np.ndarray
+    balancing: np.ndarray
+    driver_rates: np.ndarray
+    inertia_forces: np.ndarray
+    inertia_moments: np.ndarray
+    load_power: np.ndarray
+    virtual_power_residual: np.ndarray
+    power_scale: np.ndarray
+    status: np.ndarray
+    method: str
+    blocks: tuple = ()
+    notes: tuple = ()
+    normal_forces: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("reactions", "pair_moments", "balancing", "driver_rates", "inertia_forces",
+                     "inertia_moments", "load_power", "virtual_power_residual", "power_scale", "status",
+                     "normal_forces"):
+            a = getattr(self, name)
+            if isinstance(a, np.ndarray) and a.flags.writeable:
+                a = a.copy() if a.base is not None else a
+                a.flags.writeable = False
+                object.__setattr__(self, name, a)
+
+    @property
+    def n_positions(self) -> int:
+        return self.reactions.shape[0]
+
+    @property
+    def relative_residual(self) -> np.ndarray:
+        """``|residual| / max(scale, 1e-12 · max scale over the batch)`` (a position
+        where every load vanishes, e.g. a dead centre without gravity, has scale 0)."""
+        ref = np.nanmax(self.power_scale) if np.any(self.power_scale > 0) else 1.0
+        s = np.maximum(self.power_scale, 1e-12 * ref)
+        return np.abs(self.virtual_power_residual) / s
+
+    def pair_index(self, name: str) -> int:
+        for i, p in enumerate(self.pairs):
+            if p.name == name:
+                return i
+        raise KeyError(name)
+
+    def reaction(self, joint: str, a: str | None = None, b: str | None = None) -> np.ndarray:
+        """Reaction ``(N, 2)`` of the pair on ``joint`` (between ``a`` and ``b``, either
+        order; the sign follows the requested order ``a`` on ``b``)."""
+        for i, p in enumerate(self.pairs):
+            if p.joint != joint:
+                continue
+            if a is None and b is None:
+                return self.reactions[:, i]
+            if (p.a, p.b) == (a, b) or (b is None and p.a == a) or (a is None and p.b == b):
+                return self.reactions[:, i]
+            if (p.b, p.a) == (a, b):
+                return -self.reactions[:, i]
+        raise KeyError(f"no pair on joint {joint!r} between {a!r} and {b!r}")
+
+    def line_of_action(self, name: str) -> np.ndarray:
+        """Offset (m) along the guide axis of a P pair's normal force from the joint
+        point, ``M / N`` (NaN where ``N`` is 0)."""
+        i = self.pair_index(name)
+        n = self.normal_forces[:, i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(n != 0, self.pair_moments[:, i] / n, np.nan)
+
+    @property
+    def inputs_user(self) -> np.ndarray:
+        """Driver inputs per position in the user's units: deg (R) or m (P)."""
+        m = self.mechanism
+        q = np.array(self.state.inputs, float)
+        for k, d in enumerate(m.drivers):
+            if m.joint(d.joint).kind is JointKind.R:
+                q[:, k] = np.degrees(q[:, k])
+        return q
+
+    def _drivers_dict(self) -> list[dict]:
+        m = self.mechanism
+        out = []
+        for d in m.drivers:
+            kind = m.joint(d.joint).kind
+            out.append({"joint": d.joint, "links": list(d.links), "kind": kind.value,
+                        "speed": float(d.speed) if d.speed is not None else 1.0,
+                        "acceleration": float(d.acceleration) if d.acceleration is not None else 0.0,
+                        "unit": "N m" if kind is JointKind.R else "N"})
+        return out
+
+    def _reactions_dict(self) -> dict:
+        out = {}
+        for i, p in enumerate(self.pairs):
+            entry = {"joint": p.joint, "kind": p.kind, "from": p.a, "on": p.b,
+                     "Fx": json_list(self.reactions[:, i, 0]), "Fy": json_list(self.reactions[:, i, 1])}
+            if p.kind == "P":
+                entry["normal"] = json_list(self.normal_forces[:, i])
+                entry["moment"] = json_list(self.pair_moments[:, i])
+                entry["offset"] = json_list(self.line_of_action(p.name))
+            out[p.name] = entry
+        return out
+
+    def as_dict(self) -> dict:
+        """The JSON-ready report (keys documented in docs/forces.md)."""
+        m = self.mechanism
+        bal = {}
+        for i, d in enumerate(m.drivers):
+            key = d.joint if sum(x.joint == d.joint for x in m.drivers) == 1 else f"{d.joint}:{d.links[0]}->{d.links[1]}"
+            bal[key] = json_list(self.balancing[:, i])
+        return {"mechanism": m.name, "method": self.method, "blocks": [list(b) for b in self.blocks],
+                "notes": list(self.notes), "drivers": self._drivers_dict(), "input": json_list(self.inputs_user),
+                "status": [str(s) for s in self.status], "balancing": bal, "reactions": self._reactions_dict(),
+                "virtual_power_residual": json_list(self.virtual_power_residual),
+                "relative_residual": json_list(self.relative_residual),
+                "virtual_power_tolerance": VP_TOL}
