@@ -296,3 +296,86 @@ def test_check_false_gives_the_same_numbers_on_regular_positions():
     assert np.all(np.isnan(det)) and np.all(x == 1.0)
     x, det = solve_batched(np.zeros((2, 2, 2)), np.ones((2, 2)), check=False)   # exactly singular: checked path
     assert np.all(det == 0.0) and np.all(np.isnan(x))
+
+
+# ----------------------------------------------------------------------------- issue 9/10/11 regressions
+def test_sparse_elimination_equals_lapack_on_random_sparse_tables():
+    """Two routes for the same batched solve: the sparse table elimination and LAPACK."""
+    from multiloop.kin.forces.linsolve import dense, solve_sparse
+    rng = np.random.default_rng(11)
+    N = 400
+    for _ in range(20):
+        E = [[None if rng.random() < 0.3 else (float(rng.choice([-1.0, 1.0, 2.5])) if rng.random() < 0.3
+                                                else rng.normal(size=N)) for _ in range(6)] for _ in range(6)]
+        b = [rng.normal(size=N) for _ in range(6)]
+        x1, d1 = solve_batched(dense(E, N), np.stack(b, axis=-1))
+        x2, d2 = solve_sparse(E, b, N)
+        ok = np.isfinite(x1).all(axis=1)
+        np.testing.assert_array_equal(ok, np.isfinite(x2).all(axis=1))
+        np.testing.assert_allclose(x2[ok], x1[ok], rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(d2, d1, rtol=1e-7, atol=1e-13)
+
+
+def test_virtual_power_residual_feeds_the_status():
+    """Velocities inconsistent with the accelerations: reactions balance the inertia
+    loads but the virtual power does not vanish, so the position is not ok."""
+    st = _loaded_state(np.radians([30.0, 60.0, 100.0]))
+    bad = dataclasses.replace(st, velocities=st.velocities * np.array([1.0, 1.5, 1.0])[:, None, None])
+    fr = forces(st.mechanism, bad)
+    assert list(fr.ok) == [True, False, True]
+    assert "virtual power" in fr.status[1] and "1e-06" in fr.status[1]
+    assert fr.relative_residual[1] > 1e-6 and np.isnan(fr.balancing[1]).all()
+    assert forces(st.mechanism, st).success
+
+
+def test_force_result_arrays_are_read_only_and_as_dict_is_json():
+    fr = forces(load(LOADED), np.radians([10.0, 50.0]))
+    for a in (fr.reactions, fr.balancing, fr.virtual_power_residual, fr.status):
+        with pytest.raises(ValueError):
+            a[0] = 0
+    doc = json.loads(json.dumps(fr.as_dict(), allow_nan=False))
+    assert doc["input"] == [[10.0], [50.0]] and doc["virtual_power_tolerance"] == 1e-6
+
+
+def test_forces_at_huge_angle_is_reduced_and_capped(capsys):
+    import time
+    t0 = time.perf_counter()
+    assert main(["forces", "crank_slider_loaded", "--at", "1e9", "--json"]) == 0
+    assert time.perf_counter() - t0 < 20
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["input"][0][0] == pytest.approx(1e9 % 720.0)    # the gas table spans 720 deg
+    ref = forces(load(LOADED), np.radians([1e9 % 720.0]))
+    assert doc["balancing"]["O"][0] == pytest.approx(float(ref.balancing[0, 0]), rel=1e-9)
+    for bad in ("1e300", "inf", "nan"):
+        assert main(["forces", "crank_slider_loaded", "--at", bad]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and ("at most 1e+09 deg" in err or "finite" in err)
+    assert main(["forces", "crank_slider_loaded", "--steps", "100000000"]) == 2
+    assert "from 1 to 100000" in capsys.readouterr().err
+
+
+def test_meaningless_mass_data_rejected(tmp_path, capsys):
+    text = LOADED.read_text()
+    f = tmp_path / "neg.toml"
+    f.write_text(text.replace("inertia = ", "inertia = -", 1))
+    assert main(["forces", str(f), "--at", "30"]) == 2
+    assert "inertia" in capsys.readouterr().err
+    m = load(LOADED)
+    b = MechanismBuilder.from_mechanism(m)
+    b.loads = [dataclasses.replace(ld, table=ld.table + (ld.table[0],)) if ld.table else ld for ld in b.loads]
+    with pytest.raises(Exception, match="distinct input angles"):
+        forces(b.build(), np.radians([30.0]))
+
+
+def test_p_driver_default_sweep_is_the_solve_commands(capsys):
+    from multiloop.commands.solve import input_values
+    m = load(Path(str(resources.files("multiloop.catalogue") / "mechanisms" / "excavator_bucket.toml")))
+    assert main(["forces", "excavator_bucket", "--steps", "5", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    want = input_values(m, 5, None, None)
+    np.testing.assert_allclose(np.array(doc["input"]), np.repeat(want[:, None], len(m.drivers), axis=1))
+
+
+def test_forces_plot_without_loads_says_so(tmp_path, capsys):
+    assert main(["forces", "four_bar", "--steps", "8", "--plot", str(tmp_path / "f.png")]) == 0
+    assert "no loads" in capsys.readouterr().out and (tmp_path / "f.png").exists()

@@ -25,7 +25,7 @@ from multiloop.topo.model import Mechanism
 from ..state import KinematicState
 
 __all__ = ["PointLoad", "LinkLoads", "LoadColumns", "StateColumns", "link_loads", "load_columns", "kinetic_energy", "potential_energy",
-           "driver_speeds", "cg_ref", "check_mass_data", "table_period"]
+           "driver_speeds", "cg_ref", "check_mass_data", "table_period", "has_loads"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +93,12 @@ def check_mass_data(m: Mechanism) -> None:
             raise InputError(explain(f"[[force]] #{i} on '{ld.link}' table", expected="distinct input angles",
                                      got=f"{', '.join(f'{a:g}' for a in dup)} deg more than once",
                                      hint="a table gives one force per angle"))
+
+
+def has_loads(m: Mechanism) -> bool:
+    """True when the mechanism carries any load: a link mass or a ``[[force]]``
+    (without them every reaction and balancing moment is zero)."""
+    return bool(m.loads) or any(lk.mass for lk in m.links if not lk.is_frame)
 
 
 def table_period(m: Mechanism) -> float:

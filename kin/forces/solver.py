@@ -19,11 +19,11 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
-from .loads import LoadColumns, PointLoad, StateColumns, check_mass_data, driver_speeds, load_columns
+from .loads import LoadColumns, PointLoad, StateColumns, check_mass_data, driver_speeds, load_columns, table_period
 from .plan import Column, ForcePlan, compile_forces
 from .result import VP_TOL, ForceResult
 
-__all__ = ["forces"]
+__all__ = ["forces", "reduce_inputs", "MAX_ANGLE_DEG", "MAX_SLIDE_SIZES"]
 
 
 @dataclass(frozen=True)
@@ -323,17 +323,66 @@ def _sing_mask(sol: _Solved, n: int) -> np.ndarray:
     return np.any([mk for mk, _ in sol.singular], axis=0) if sol.singular else np.zeros(n, bool)
 
 
+#: largest |R input| accepted (deg): beyond it a float has no sub-microdegree resolution
+MAX_ANGLE_DEG = 1e9
+#: largest |P input| accepted, in units of the mechanism's size (the solver's lead-in
+#: walks it in steps of 1 % of the size)
+MAX_SLIDE_SIZES = 100.0
+
+
+def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
+    """Driver inputs ``(N, n_drivers)``; an R input beyond one load period ``p``
+    (360 deg, or 720 deg when a force table spans two turns) is reduced modulo ``p``
+    into ``[0, p)``.  ``degrees``: R inputs are given in degrees (reduced exactly
+    before the conversion); the result is in radians and metres.
+
+    Positions, velocities and loads are periodic in an R input, so the reduction
+    changes nothing but the solver's lead-in from the reference (which would otherwise
+    walk 2 deg steps all the way: 5·10⁸ of them for 1e9 deg).
+
+    Raises
+    ------
+    InputError
+        A non-finite input, an R input beyond ``MAX_ANGLE_DEG``, or a P input beyond
+        ``MAX_SLIDE_SIZES`` × the mechanism's size (the limits are stated).
+    """
+    q = np.array(inputs, float)
+    if q.ndim == 1:
+        q = q[:, None] if len(m.drivers) == 1 else q[None, :]
+    if not np.all(np.isfinite(q)):
+        raise InputError(explain("driver inputs", expected="finite numbers", got="NaN or infinity"))
+    period = table_period(m) if degrees else np.radians(table_period(m))
+    limit = MAX_ANGLE_DEG if degrees else np.radians(MAX_ANGLE_DEG)
+    xy = np.array([j.at for j in m.joints], float)
+    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    for k, d in enumerate(m.drivers):
+        col = q[:, k]
+        if m.joint(d.joint).kind is JointKind.R:
+            if np.any(np.abs(col) > limit):
+                big = np.max(np.abs(col)) * (1.0 if degrees else 180.0 / np.pi)
+                raise InputError(explain(f"input of driver {d.joint!r}", expected=f"at most {MAX_ANGLE_DEG:g} deg in magnitude",
+                                         got=f"{big:.6g} deg"))
+            q[:, k] = np.where(np.abs(col) > period, np.mod(col, period), col)
+            if degrees:
+                q[:, k] = np.radians(q[:, k])
+        elif np.any(np.abs(col) > MAX_SLIDE_SIZES * size):
+            raise InputError(explain(f"input of driver {d.joint!r}",
+                                     expected=f"at most {MAX_SLIDE_SIZES:g} x the mechanism's size = {MAX_SLIDE_SIZES * size:.6g} m",
+                                     got=f"{np.max(np.abs(col)):.6g} m",
+                                     hint="the solver walks from the reference in steps of 1 % of the size"))
+    return q
+
+
 def _solve_state(m: Mechanism, inputs, speeds, accelerations) -> KinematicState:
-    """Kinematics at the drivers' speeds and accelerations through :mod:`kin.solve`.
+    """Kinematics at the drivers' speeds and accelerations through :mod:`kin.solve`,
+    at the inputs reduced by :func:`reduce_inputs`.
 
     Accelerations: ``q̈ = Σ q_ij ω_i ω_j + Σ q_i ε_i``: the state solved at input rates
     ``ω`` (zero input acceleration) plus the first-order analogues times ``ε``.
     """
     from multiloop.kin.solve import solve  # noqa: PLC0415 - kin.solve imports the groups lazily
     w, e = driver_speeds(m, speeds, accelerations)
-    q = np.asarray(inputs, float)
-    if q.ndim == 1:
-        q = q[:, None] if len(m.drivers) == 1 else q[None, :]
+    q = reduce_inputs(m, inputs)
     st = solve(m, q, derivatives=True, input_rates=w)
     if not np.any(e):
         return st

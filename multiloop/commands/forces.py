@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from multiloop.commands.solve import input_values
+from multiloop.kin.forces import forces, has_loads, reduce_inputs, table_period
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
@@ -68,7 +70,12 @@ def load_any(path: str):
     return load(p)
 
 
+#: most positions a run computes (--steps)
+MAX_STEPS = 100_000
+
+
 def _inputs(m, at: str | None, steps: int) -> np.ndarray:
+    """Driver inputs in API units (rad, m), shape (N, n_drivers)."""
     nd = len(m.drivers)
     kinds = [m.joint(d.joint).kind for d in m.drivers]
     if at is not None:
@@ -79,66 +86,21 @@ def _inputs(m, at: str | None, steps: int) -> np.ndarray:
                                      got=repr(at))) from None
         if len(vals) != nd:
             raise InputError(explain("--at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"))
-        q = [math.radians(v) if k is JointKind.R else v for v, k in zip(vals, kinds)]
-        return np.array([q], float)
-    if steps < 1:
-        raise InputError(explain("--steps", expected="a positive integer", got=repr(steps)))
-    period = 360.0
-    for ld in m.loads:
-        if ld.table is not None and max(r[0] for r in ld.table) > 360.0:
-            period = 720.0
+        return reduce_inputs(m, [vals], degrees=True)
+    if not 1 <= steps <= MAX_STEPS:
+        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=repr(steps)))
     q = np.zeros((steps, nd))
     if kinds[0] is JointKind.R:
-        q[:, 0] = np.radians(np.arange(steps) * period / steps)
+        q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
+    elif set(kinds) == {JointKind.P}:
+        q[:] = input_values(m, steps, None, None)[:, None]   # the solve command's default stroke
     else:
-        q[:, 0] = np.linspace(0.0, 0.1, steps)  # a P driver: 0.1 m of travel
+        raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
+                                 got="no default sweep"))
     return q
 
 
-def _clean(a) -> list:
-    a = np.asarray(a, float)
-    out = np.where(np.isfinite(a), a, np.nan).tolist()
-
-    def fix(x):
-        if isinstance(x, list):
-            return [fix(y) for y in x]
-        return None if x != x else x
-    return fix(out)
-
-
-def report_dict(fr, inputs_user: np.ndarray) -> dict:
-    """The JSON-ready dict of a :class:`~kin.forces.ForceResult` (docs/forces.md)."""
-    m = fr.mechanism
-    drivers = []
-    for i, d in enumerate(m.drivers):
-        kind = m.joint(d.joint).kind
-        drivers.append({"joint": d.joint, "links": list(d.links), "kind": kind.value,
-                        "speed": float(d.speed) if d.speed is not None else 1.0,
-                        "acceleration": float(d.acceleration) if d.acceleration is not None else 0.0,
-                        "unit": "N m" if kind is JointKind.R else "N"})
-    reactions = {}
-    for i, p in enumerate(fr.pairs):
-        entry = {"joint": p.joint, "kind": p.kind, "from": p.a, "on": p.b,
-                 "Fx": _clean(fr.reactions[:, i, 0]), "Fy": _clean(fr.reactions[:, i, 1])}
-        if p.kind == "P":
-            entry["normal"] = _clean(fr.normal_forces[:, i])
-            entry["moment"] = _clean(fr.pair_moments[:, i])
-            with np.errstate(all="ignore"):
-                entry["offset"] = _clean(fr.line_of_action(p.name))
-        reactions[p.name] = entry
-    bal = {}
-    for i, d in enumerate(m.drivers):
-        key = d.joint if sum(x.joint == d.joint for x in m.drivers) == 1 else f"{d.joint}:{d.links[0]}->{d.links[1]}"
-        bal[key] = _clean(fr.balancing[:, i])
-    return {"mechanism": m.name, "method": fr.method, "blocks": [list(b) for b in fr.blocks],
-            "notes": list(fr.notes), "drivers": drivers, "input": _clean(inputs_user),
-            "status": [str(s) for s in fr.status], "balancing": bal, "reactions": reactions,
-            "virtual_power_residual": _clean(fr.virtual_power_residual),
-            "relative_residual": _clean(fr.relative_residual)}
-
-
 def run(args) -> int:
-    from multiloop.kin.forces import forces  # noqa: PLC0415
     outs = Outputs("multiloop forces")
     if args.plot is not None:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
@@ -149,17 +111,25 @@ def run(args) -> int:
     q = _inputs(m, args.at, args.steps)
     fr = forces(m, q, method=args.method)
     kinds = [m.joint(d.joint).kind for d in m.drivers]
-    q_user = np.array([[math.degrees(v) if k is JointKind.R else v for v, k in zip(row, kinds)] for row in q])
+    q_user = fr.inputs_user
+    note = None if has_loads(m) else "no loads (no link mass, no [[force]]): every reaction and balancing value is 0"
     if args.plot is not None:
         from multiloop.kin.figures.engine import plot_forces  # noqa: PLC0415
         with quiet_warnings("multiloop forces"):
-            outs.add_figure(args.plot, plot_forces(fr, q_user[:, 0]), dpi=110)
+            fig = plot_forces(fr, q_user[:, 0])
+            if note:
+                fig.suptitle(note, color="tab:red", fontsize=9, y=0.995)
+            outs.add_figure(args.plot, fig, dpi=110)
         outs.commit()
     if args.json:
-        print(json.dumps(report_dict(fr, q_user)))
+        print(json.dumps(fr.as_dict()))
         return 0
     print(f"{m.name or 'mechanism'}: kinetostatics, {fr.n_positions} position(s), method {fr.method}"
           + (f" ({'; '.join(fr.notes)})" if fr.notes else ""))
+    if note:
+        print(f"  note: {note}")
+    if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):
+        print("  note: R inputs reduced modulo 360 deg (720 with two-turn force tables)")
     print("  blocks solved: " + " <- ".join("{" + ", ".join(b) + "}" for b in fr.blocks))
     heads = ["input"] + [f"Mb[{d.joint}]" if k is JointKind.R else f"Fb[{d.joint}]" for d, k in zip(m.drivers, kinds)] \
         + ["VP residual", "status"]
