@@ -20,7 +20,6 @@ and driver), ``status``, ``balancing`` (driver joint → list), ``reactions`` (p
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
