@@ -2,12 +2,12 @@
 
 Coordinates are body poses: link ``k`` has ``Z[..., k, :] = (X, Y, θ)``, where
 ``(X, Y)`` is the current position of the link's reference point ``c_k`` (its
-first joint's reference position, :func:`topo.assur.link_origins`) and ``θ`` its
+first joint's reference position, :func:`topo.constraints.link_origins`) and ``θ`` its
 rotation from the reference configuration.  The material point that sat at ``r``
 in the reference configuration is at ``X + R(θ)(r − c_k)``, so the reference
 configuration is ``Z = (c, 0)`` for every link.
 
-The equations are those of :class:`topo.assur.Constraint` (pins, sliders,
+The equations are those of :class:`topo.constraints.Constraint` (pins, sliders,
 drivers).  :class:`ConstraintSystem` compiles a list of them once into index
 arrays; residual, Jacobian and the acceleration term ``γ = (dJ/dt) ż`` are NumPy
 expressions over a leading batch axis.  Velocities and accelerations of the
@@ -26,112 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.assur import link_origins
-from multiloop.topo.model import Mechanism
+from multiloop.topo.constraints import PairEquations
 
 __all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
 
 
-def _rot(th):
-    return np.cos(th), np.sin(th)
-
-
-@dataclass(frozen=True, eq=False)
-class ConstraintSystem:
-    """Compiled equations of a set of constraints.
-
-    Attributes
-    ----------
-    n_links : int
-        Number of links of the mechanism (columns ``3 * n_links``).
-    n_eq : int
-    R_a, R_b : ndarray of int
-        Link indices of pin constraints; ``R_ra, R_rb`` their local vectors
-        ``r − c`` (shape (nR, 2)); ``R_row`` first row of each.
-    P_* : arrays for slider / slide-driver constraints (``P_dir`` the local
-        direction: normal for a slider, axis for a slide driver).
-    A_* : arrays for angle equations (slider angle, rotation driver).
-    drv : ndarray (n_eq,) of int
-        Driver index acting on each row (-1 none), ``Φ_φ = -1`` there.
-    """
-
-    n_links: int
-    n_eq: int
-    R_a: np.ndarray
-    R_b: np.ndarray
-    R_ra: np.ndarray
-    R_rb: np.ndarray
-    R_row: np.ndarray
-    P_a: np.ndarray
-    P_b: np.ndarray
-    P_ra: np.ndarray
-    P_rb: np.ndarray
-    P_dir: np.ndarray
-    P_row: np.ndarray
-    A_a: np.ndarray
-    A_b: np.ndarray
-    A_row: np.ndarray
-    drv: np.ndarray
-    labels: tuple[str, ...]
-
-    @classmethod
-    def compile(cls, m: Mechanism, constraints) -> "ConstraintSystem":
-        """Compile constraints of ``m`` (see :class:`topo.assur.Constraint`)."""
-        names = m.link_names
-        idx = {x: i for i, x in enumerate(names)}
-        org = link_origins(m)
-        R, P, A, drv, labels = [], [], [], [], []
-        row = 0
-        for c in constraints:
-            jt = m.joint(c.joint)
-            r = np.asarray(jt.at, float)
-            if c.kind == "R":
-                R.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], row))
-                drv += [-1, -1]
-                labels += [f"{c.joint}:{c.a}-{c.b}:x", f"{c.joint}:{c.a}-{c.b}:y"]
-                row += 2
-            elif c.kind == "P":
-                u = np.asarray(jt.axis, float)
-                u = u / np.hypot(*u)
-                A.append((idx[c.a], idx[c.b], row))
-                P.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], np.array([-u[1], u[0]]), row + 1))
-                drv += [-1, -1]
-                labels += [f"{c.joint}:angle", f"{c.joint}:line"]
-                row += 2
-            elif c.kind == "drive_P":
-                u = np.asarray(jt.axis, float)
-                u = u / np.hypot(*u)
-                P.append((idx[c.a], idx[c.b], r - org[c.a], r - org[c.b], u, row))
-                drv.append(c.driver)
-                labels.append(f"{c.joint}:slide")
-                row += 1
-            elif c.kind == "drive_R":
-                A.append((idx[c.a], idx[c.b], row))
-                drv.append(c.driver)
-                labels.append(f"{c.joint}:rotation")
-                row += 1
-            else:  # pragma: no cover
-                raise ValueError(c.kind)
-
-        def arr(lst, k, shape):
-            return np.array([t[k] for t in lst]).reshape(shape) if lst else np.zeros(shape)
-
-        nR, nP, nA = len(R), len(P), len(A)
-        return cls(len(names), row,
-                   arr(R, 0, (nR,)).astype(int), arr(R, 1, (nR,)).astype(int),
-                   arr(R, 2, (nR, 2)), arr(R, 3, (nR, 2)), arr(R, 4, (nR,)).astype(int),
-                   arr(P, 0, (nP,)).astype(int), arr(P, 1, (nP,)).astype(int),
-                   arr(P, 2, (nP, 2)), arr(P, 3, (nP, 2)), arr(P, 4, (nP, 2)),
-                   arr(P, 5, (nP,)).astype(int),
-                   arr(A, 0, (nA,)).astype(int), arr(A, 1, (nA,)).astype(int),
-                   arr(A, 2, (nA,)).astype(int), np.array(drv, int), tuple(labels))
-
-    # -- kinematic primitives ---------------------------------------------------
-    @staticmethod
-    def _rho(Z, k, r):
-        """Rotated local vectors R(θ_k) r, shape (N, n, 2)."""
-        c, s = _rot(Z[:, k, 2])
-        return np.stack([c * r[:, 0] - s * r[:, 1], c * r[:, 1] + s * r[:, 0]], axis=-1)
+class ConstraintSystem(PairEquations):
+    """Compiled equations of a set of constraints (:class:`topo.constraints.PairEquations`,
+    which also owns the Jacobian), with the residual and the acceleration term."""
 
     def residual(self, Z: np.ndarray, inputs: np.ndarray) -> np.ndarray:
         """Φ(Z, inputs), shape (N, n_eq).  ``inputs`` is (N, n_drivers)."""
@@ -154,41 +56,6 @@ class ConstraintSystem:
         if rows.size:
             out[:, rows] -= inputs[:, self.drv[rows]]
         return out
-
-    def jacobian(self, Z: np.ndarray) -> np.ndarray:
-        """∂Φ/∂Z, shape (N, n_eq, 3 n_links)."""
-        N = Z.shape[0]
-        J = np.zeros((N, self.n_eq, 3 * self.n_links))
-        if self.R_a.size:
-            ra = self._rho(Z, self.R_a, self.R_ra)
-            rb = self._rho(Z, self.R_b, self.R_rb)
-            for k in range(self.R_a.size):
-                r0, a, b = self.R_row[k], 3 * self.R_a[k], 3 * self.R_b[k]
-                J[:, r0, a] += 1.0
-                J[:, r0 + 1, a + 1] += 1.0
-                J[:, r0, a + 2] += -ra[:, k, 1]
-                J[:, r0 + 1, a + 2] += ra[:, k, 0]
-                J[:, r0, b] -= 1.0
-                J[:, r0 + 1, b + 1] -= 1.0
-                J[:, r0, b + 2] -= -rb[:, k, 1]
-                J[:, r0 + 1, b + 2] -= rb[:, k, 0]
-        if self.P_a.size:
-            ra = self._rho(Z, self.P_a, self.P_ra)
-            rb = self._rho(Z, self.P_b, self.P_rb)
-            n = self._rho(Z, self.P_a, self.P_dir)
-            d = Z[:, self.P_b, :2] + rb - Z[:, self.P_a, :2] - ra
-            for k in range(self.P_a.size):
-                r0, a, b = self.P_row[k], 3 * self.P_a[k], 3 * self.P_b[k]
-                nk = n[:, k]
-                J[:, r0, b:b + 2] += nk
-                J[:, r0, b + 2] += nk[:, 0] * -rb[:, k, 1] + nk[:, 1] * rb[:, k, 0]
-                J[:, r0, a:a + 2] -= nk
-                J[:, r0, a + 2] += (-nk[:, 1] * d[:, k, 0] + nk[:, 0] * d[:, k, 1]
-                                    - (nk[:, 0] * -ra[:, k, 1] + nk[:, 1] * ra[:, k, 0]))
-        for k in range(self.A_a.size):
-            J[:, self.A_row[k], 3 * self.A_b[k] + 2] += 1.0
-            J[:, self.A_row[k], 3 * self.A_a[k] + 2] -= 1.0
-        return J
 
     def gamma(self, Z: np.ndarray, Zd: np.ndarray) -> np.ndarray:
         """``γ = (dJ/dt) ż``: the acceleration terms not in ``J z̈``, shape (N, n_eq)."""
