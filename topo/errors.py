@@ -13,7 +13,9 @@ Tree::
     ├── MobilityError     (ValueError)  drivers do not fit the mobility
     ├── DecompositionError(ValueError)  not decomposable into Assur groups
     ├── AssemblyError     (ValueError)  the mechanism cannot assemble at an input value
-    └── SingularityError  (ValueError)  a singular position met in a single-position query
+    ├── SingularityError  (ValueError)  a singular position met in a single-position query
+    │   └── SingularStrutsError         six platform struts on a linear complex
+    └── ScrewPairingError (TypeError)   a twist paired with a twist (or a wrench with a wrench)
     SingularityWarning (UserWarning)    dead-centre / toggle positions in batches
 """
 from __future__ import annotations
@@ -27,6 +29,8 @@ __all__ = [
     "AssemblyError",
     "SingularityError",
     "SingularityWarning",
+    "SingularStrutsError",
+    "ScrewPairingError",
     "explain",
 ]
 
@@ -78,6 +82,25 @@ class AssemblyError(LinkageError, ValueError):
 
 class SingularityError(LinkageError, ValueError):
     """A single-position query hit a singular (dead-centre / toggle) position."""
+
+
+class SingularStrutsError(SingularityError):
+    """The six strut lines of a platform are (numerically) linearly dependent: they
+    belong to a linear complex and the platform can move (Doronin 2015).
+
+    Attributes
+    ----------
+    condition_number : float
+        Condition number of the dimensionless Plücker matrix.
+    """
+
+    def __init__(self, message: str, condition_number: float):
+        super().__init__(message)
+        self.condition_number = condition_number
+
+
+class ScrewPairingError(LinkageError, TypeError):
+    """Two screws of kinds that cannot be paired (e.g. a twist with a twist)."""
 
 
 class SingularityWarning(UserWarning):

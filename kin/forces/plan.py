@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from multiloop.topo.errors import InputError, LinkageError, MobilityError, explain
+from multiloop.topo.graphs import pin_pairs
 from multiloop.topo.model import JointKind, Mechanism
 
 __all__ = ["Pair", "Column", "Block", "ForcePlan", "compile_forces", "plan_order"]
@@ -102,9 +103,7 @@ def _pin_pairs(m: Mechanism, rank: dict[str, float]) -> list[Pair]:
         if j.kind is JointKind.P:
             pairs.append(Pair(j.name, "P", j.links[0], j.links[1]))
             continue
-        order = sorted(range(len(j.links)), key=lambda i: (rank[j.links[i]], i))
-        host = j.links[order[0]]
-        pairs.extend(Pair(j.name, "R", host, j.links[i]) for i in order[1:])
+        pairs.extend(Pair(j.name, "R", host, other) for host, other in pin_pairs(j.links, key=rank.__getitem__))
     return pairs
 
 

@@ -56,7 +56,7 @@ from typing import Any, Mapping
 import numpy as np
 import scipy.linalg
 
-from multiloop.topo.errors import InputError, SingularityError, SingularityWarning, explain
+from multiloop.topo.errors import InputError, SingularityWarning, SingularStrutsError, explain
 
 from .screws import Twist, Wrench, reciprocal_complements, reciprocal_products
 
@@ -88,20 +88,6 @@ COORDINATES = ("x", "y", "z", "phi_x", "phi_y", "phi_z")
 SINGULAR_CONDITION = 1e10
 
 _OTHERS = np.array([[j for j in range(6) if j != i] for i in range(6)])
-
-
-class SingularStrutsError(SingularityError):
-    """The six strut lines are (numerically) linearly dependent: a linear complex.
-
-    Attributes
-    ----------
-    condition_number : float
-        Condition number of the dimensionless Plücker matrix.
-    """
-
-    def __init__(self, message: str, condition_number: float):
-        super().__init__(message)
-        self.condition_number = condition_number
 
 
 # ---------------------------------------------------------------------------

@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, LinkageError, explain
+from multiloop.topo.errors import InputError, ScrewPairingError, explain
 
 __all__ = [
     "Screw",
@@ -69,10 +69,6 @@ __all__ = [
 
 #: relative tolerance under which a direction part counts as zero (infinite pitch)
 _ZERO = 1e-12
-
-
-class ScrewPairingError(LinkageError, TypeError):
-    """Two screws of kinds that cannot be paired (e.g. twist with twist)."""
 
 
 def _vec3(value: Any, what: str) -> tuple[float, float, float]:
