@@ -23,6 +23,7 @@ COMMANDS = {
     "atlas": "number/type synthesis: atlases of chains (SQLite, HTML)",
     "catalogue": "list the bundled mechanisms",
     "bench": "run the benchmarks and print ratios",
+    "synthesise": "dimensional synthesis: path, function and motion generation",
 }
 
 

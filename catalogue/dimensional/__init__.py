@@ -2,8 +2,14 @@
 
 The start mechanism's Assur plan is compiled once into a batched evaluator
 (:mod:`.evaluator`) whose design variables are every joint coordinate, guide and
-tracer point; the optimiser evaluates whole populations × positions in one call.
+tracer point; the optimiser (:mod:`.optimise`) scores whole populations ×
+positions in one call; :func:`synthesise` is the entry point.
 """
 from .evaluator import DesignSpace, Evaluator, design_space
+from .objective import Constraints, Problem, transmission_angles
+from .synthesise import SynthesisResult, function_target, motion_target, path_target, synthesise
+from .targets import FunctionTarget, MotionTarget, PathTarget, read_table
 
-__all__ = ["DesignSpace", "Evaluator", "design_space"]
+__all__ = ["DesignSpace", "Evaluator", "design_space", "Constraints", "Problem", "transmission_angles",
+           "SynthesisResult", "synthesise", "path_target", "function_target", "motion_target",
+           "PathTarget", "FunctionTarget", "MotionTarget", "read_table"]

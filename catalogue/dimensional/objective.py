@@ -1,0 +1,362 @@
+"""Objectives of the three synthesis tasks over whole populations, with penalties.
+
+One :class:`Problem` wraps an :class:`~.evaluator.Evaluator` and a target.  Its
+:meth:`Problem.batch` scores a population ``(P, n)`` in one evaluator call on a
+grid of driver values: the grid is walked from the reference configuration in
+both directions until a group fails to assemble (so every configuration used is
+reached by continuous motion, with each dyad on its reference branch), and with
+free timing the targets are matched to the curve in driver order by dynamic
+programming (a monotone assignment: cost ``D[i, k] = d(i, k) + min_{k' <= k}
+D[i-1, k']``).  :meth:`Problem.residuals` is the smooth form for the local polish:
+the design plus one driver value per target.
+
+Constraints are penalties added to the relative RMS error: full rotation of the
+driver, a minimum transmission angle of every RRR dyad (the angle at the inner
+pin between the lines to the two outer pins, folded to [0°, 90°]; Hartenberg &
+Denavit 1964, ch. 3), bounds on the link lengths and on the ratio of the longest
+to the shortest.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind
+
+from .evaluator import Evaluator, Poses
+from .targets import FunctionTarget, MotionTarget, PathTarget
+
+__all__ = ["Constraints", "Problem", "transmission_angles"]
+
+_FAIL = 1e3          # objective of a candidate that cannot reach the targets at all
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Design constraints (penalties): see the module docstring."""
+
+    full_rotation: bool = False
+    min_transmission: float | None = None      # degrees
+    length_bounds: tuple[float, float] | None = None
+    max_ratio: float | None = None
+    weight: float = 10.0
+
+
+def transmission_angles(ev: Evaluator, X: np.ndarray, st: Poses) -> np.ndarray:
+    """Smallest folded transmission angle (deg, in [0, 90]) over the RRR dyads, ``(P, N)``.
+
+    The angle μ at the inner pin B between B→A and B→C (A, C the outer pins) is
+    folded to ``min(μ, 180° − μ)``; 90° is ideal.  ``inf`` when there is no RRR dyad.
+    """
+    out = np.full(st.ok.shape, np.inf)
+    for g in ev.plan.groups:
+        if g.kind != "RRR":
+            continue
+        o1, inner, o2, l1, l2 = g.layout
+        k1, k2 = ev.links[l1], ev.links[l2]
+        A, B = st.world(k1, ev.at(X, o1)), st.world(k1, ev.at(X, inner))
+        C = st.world(k2, ev.at(X, o2))
+        u, v = A - B, C - B
+        cos = np.sum(u * v, -1) / (np.linalg.norm(u, axis=-1) * np.linalg.norm(v, axis=-1))
+        mu = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+        out = np.fmin(out, np.minimum(mu, 180.0 - mu))
+    return out
+
+
+def _wrap(a):
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+class Problem:
+    """The objective of one task (path, function or motion) on one evaluator.
+
+    Parameters
+    ----------
+    ev : Evaluator
+    target : PathTarget, FunctionTarget or MotionTarget
+    constraints : Constraints
+    grid : int
+        Driver samples over one turn (R driver) or over ±2 mechanism sizes (P driver).
+    """
+
+    def __init__(self, ev: Evaluator, target, constraints: Constraints = Constraints(), grid: int = 96):
+        self.ev, self.target, self.cons = ev, target, constraints
+        m = ev.mechanism
+        if len(m.drivers) != 1:
+            raise InputError(explain(f"mechanism '{m.name or ''}'", expected="one driver", got=f"{len(m.drivers)}"))
+        self.rotary = m.joint(m.drivers[0].joint).kind is JointKind.R
+        sp = ev.space
+        self.nx = sp.size
+        names, x0, lo, hi = list(sp.names), list(sp.x0), list(sp.lower), list(sp.upper)
+        size = float(np.max(np.ptp(np.array([j.at for j in m.joints]), axis=0))) or 1.0
+        self.mech_size = size
+        if isinstance(target, MotionTarget):
+            lk = target.link
+            if lk not in ev.links:
+                raise InputError(explain(f"link {lk!r}", expected="a link of the start", got="an unknown name",
+                                         hint=", ".join(m.link_names)))
+            c = np.mean([j.at for j in m.joints if lk in j.links], axis=0)
+            names += ["frame.x", "frame.y", "frame.angle"]
+            x0 += [c[0], c[1], 0.0]
+            xs = [n for n in sp.names if n.endswith(".x")]
+            ys = [n for n in sp.names if n.endswith(".y")]
+            lo += [min(sp.lower[sp.index(n)] for n in xs), min(sp.lower[sp.index(n)] for n in ys), -np.pi]
+            hi += [max(sp.upper[sp.index(n)] for n in xs), max(sp.upper[sp.index(n)] for n in ys), np.pi]
+        if isinstance(target, PathTarget) and target.shape_only:
+            names += ["shape.log_scale", "shape.angle", "shape.dx", "shape.dy"]
+            s = target.size
+            x0 += [0.0, 0.0, 0.0, 0.0]
+            lo += [np.log(0.25), -np.pi, -2 * s, -2 * s]
+            hi += [np.log(4.0), np.pi, 2 * s, 2 * s]
+        self.names = tuple(names)
+        self.x0, self.lower, self.upper = (np.array(v, float) for v in (x0, lo, hi))
+        self.free_timing = isinstance(target, MotionTarget) or (
+            isinstance(target, PathTarget) and target.timing is None)
+        self.M = int(grid)
+        if self.rotary:
+            self.delta = 2.0 * np.pi / self.M
+            self.grid = self.delta * np.arange(self.M)
+        else:
+            half = self.M // 2
+            self.delta = 2.0 * size / half
+            self.grid = np.concatenate([self.delta * np.arange(half), -self.delta * np.arange(1, half + 1)])
+        self.n_targets = len(self.target_values())
+
+    # -- targets and features --------------------------------------------------
+    def target_values(self) -> np.ndarray:
+        t = self.target
+        if isinstance(t, PathTarget):
+            return t.points
+        if isinstance(t, MotionTarget):
+            return t.poses
+        return t.outputs[:, None] - t.outputs[0]
+
+    def timing(self) -> np.ndarray | None:
+        t = self.target
+        if isinstance(t, FunctionTarget):
+            return t.inputs - t.inputs[0]
+        if isinstance(t, PathTarget) and t.timing is not None:
+            return t.timing
+        return None
+
+    def targets_for(self, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Targets ``(P, N, c)`` (transformed for shape-only) and their size ``(P,)``."""
+        T = self.target_values()
+        P = Z.shape[0]
+        t = self.target
+        if isinstance(t, PathTarget) and t.shape_only:
+            e = Z[:, self.nx:]
+            s, a = np.exp(e[:, 0]), e[:, 1]
+            c0 = T.mean(axis=0)
+            d = T - c0
+            cs, sn = np.cos(a)[:, None], np.sin(a)[:, None]
+            x = s[:, None] * (cs * d[:, 0] - sn * d[:, 1]) + c0[0] + e[:, 2:3]
+            y = s[:, None] * (sn * d[:, 0] + cs * d[:, 1]) + c0[1] + e[:, 3:4]
+            return np.stack([x, y], axis=-1), s * t.size
+        size = t.size if t.size > 0 else 1.0
+        return np.broadcast_to(T, (P,) + T.shape), np.full(P, size)
+
+    def features(self, Z: np.ndarray, st: Poses) -> np.ndarray:
+        """What is compared with the targets, ``(P, N, c)``, from poses ``st``."""
+        ev, t = self.ev, self.target
+        X = Z[:, :self.nx]
+        if isinstance(t, PathTarget):
+            k = ev.links[next(p.link for p in ev.mechanism.points if p.name == t.point)]
+            return st.world(k, ev.at(X, t.point))
+        if isinstance(t, MotionTarget):
+            k = ev.links[t.link]
+            e = Z[:, self.nx:]
+            xy = st.world(k, e[:, :2])
+            return np.concatenate([xy, (st.th[k] + e[:, 2:3])[..., None]], axis=-1)
+        j = ev.mechanism.joint(t.joint)
+        ka, kb = ev.links[j.links[0]], ev.links[j.links[1]]
+        if j.kind is JointKind.R:
+            return (st.th[kb] - st.th[ka])[..., None]
+        r = ev.at(X, j.name)
+        u = ev.axis(X, j.name)
+        ua = np.stack([np.cos(st.th[ka]) * u[:, 0:1] - np.sin(st.th[ka]) * u[:, 1:2],
+                       np.sin(st.th[ka]) * u[:, 0:1] + np.cos(st.th[ka]) * u[:, 1:2]], axis=-1)
+        return np.sum((st.world(kb, r) - st.world(ka, r)) * ua, axis=-1)[..., None]
+
+    def diff(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """Relative differences; ``F`` (P, K, c), ``T`` (P, N, c) → (P, N, K, c)."""
+        D = F[:, None, :, :] - T[:, :, None, :]
+        if isinstance(self.target, MotionTarget):
+            D = np.concatenate([D[..., :2] / size[:, None, None, None], _wrap(D[..., 2:])], axis=-1)
+        elif isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(
+                self.target.joint).kind is JointKind.R:
+            D = _wrap(D) / size[:, None, None, None]
+        else:
+            D = D / size[:, None, None, None]
+        return D
+
+    # -- the reachable curve ---------------------------------------------------
+    def curve(self, ok: np.ndarray):
+        """Order of the grid samples reached continuously from the reference.
+
+        Returns ``idx`` (P, K) into the grid, ``valid`` (P, K), driver values
+        ``phi`` (P, K) in driver order, and ``full`` (P,) (full rotation).
+        """
+        P = ok.shape[0]
+        M = self.M
+        if self.rotary:
+            f = np.where(ok.all(1), M, np.argmin(ok, axis=1))
+            rev = ok[:, :0:-1]
+            b = np.where(rev.all(1), M - 1, np.argmin(rev, axis=1))
+            b = np.where(f == M, 0, b)
+            full = f == M
+            K = 2 * M
+            k = np.arange(K)[None, :]
+            idx = np.where(full[:, None], k % M, (k - b[:, None]) % M)
+            valid = full[:, None] | (k < (b + f)[:, None])
+            phi = np.where(full[:, None], k, k - b[:, None]) * self.delta
+            return idx, valid, phi, full
+        half = M // 2
+        fw, bw = ok[:, :half], ok[:, half:]
+        f = np.where(fw.all(1), half, np.argmin(fw, axis=1))
+        b = np.where(bw.all(1), half, np.argmin(bw, axis=1))
+        K = M
+        k = np.arange(K)[None, :]
+        idx = np.where(k < b[:, None], half + (b[:, None] - 1 - k), k - b[:, None])
+        valid = k < (b + f)[:, None]
+        idx = np.where(valid, idx, 0)
+        phi = (k - b[:, None]) * self.delta
+        return idx, valid, phi, np.zeros(P, bool)
+
+    # -- global objective ------------------------------------------------------
+    def batch(self, Z: np.ndarray) -> np.ndarray:
+        """Objective of a population ``Z`` ``(P, n)`` (lower is better)."""
+        Z = np.atleast_2d(Z)
+        X = Z[:, :self.nx]
+        tim = self.timing()
+        phi = self.grid if tim is None else np.concatenate([self.grid, tim])
+        st = self.ev.poses(X, phi)
+        idx, valid, cphi, full = self.curve(st.ok[:, :self.M])
+        T, size = self.targets_for(Z)
+        F = self.features(Z, st)
+        if tim is None:
+            Fc = np.take_along_axis(F[:, :self.M], idx[..., None], axis=1)
+            d2 = np.sum(np.square(self.diff(Fc, T, size)), axis=-1)
+            d2 = np.where(valid[:, None, :], d2, np.inf)
+            cost = np.full(Z.shape[0], np.inf)
+            for a, b in self.windows():
+                w = d2[:, :, a:b]
+                cost = np.minimum(cost, np.minimum(_dp(w), _dp(w[:, :, ::-1])))
+        else:
+            d2 = np.sum(np.square(self.diff(F[:, self.M:], T, size)), axis=-1)
+            cost = np.sum(np.diagonal(d2, axis1=1, axis2=2), axis=1)
+            lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
+            inside = full[:, None] | ((tim[None, :] >= lo[:, None] - 1e-12) & (tim[None, :] <= hi[:, None] + 1e-12))
+            cost = np.where(inside.all(1), cost, np.inf)
+        f = np.sqrt(cost / self.n_targets)
+        f = f + self.cons.weight * self.violation(X, st, full)
+        return np.where(np.isfinite(f), f, _FAIL)
+
+    def violation(self, X: np.ndarray, st: Poses, full: np.ndarray) -> np.ndarray:
+        """Sum of the relative constraint violations ``(P,)``."""
+        c = self.cons
+        v = np.zeros(X.shape[0])
+        if c.full_rotation:
+            v += np.where(full, 0.0, 1.0 - np.mean(st.ok[:, :self.M], axis=1))
+        if c.min_transmission:
+            mu = transmission_angles(self.ev, X, st)[:, :self.M]
+            mu = np.where(st.ok[:, :self.M], mu, np.inf).min(axis=1)
+            v += np.maximum(0.0, c.min_transmission - mu) / c.min_transmission
+        if c.length_bounds or c.max_ratio:
+            L = self.lengths(X)
+            if c.length_bounds:
+                a, b = c.length_bounds
+                v += np.sum(np.maximum(0.0, a - L) / a + np.maximum(0.0, L - b) / b, axis=1)
+            if c.max_ratio:
+                r = L.max(1) / np.maximum(L.min(1), 1e-300)
+                v += np.maximum(0.0, r / c.max_ratio - 1.0)
+        return v
+
+    def lengths(self, X: np.ndarray) -> np.ndarray:
+        """Distances between the joints of each link ``(P, n_lengths)`` (the frame's too)."""
+        m, ev = self.ev.mechanism, self.ev
+        out = []
+        for lk in m.link_names:
+            js = [j.name for j in m.joints_of(lk) if j.kind is JointKind.R]
+            for a in range(len(js)):
+                for b in range(a + 1, len(js)):
+                    out.append(np.hypot(*(ev.at(X, js[a]) - ev.at(X, js[b])).T))
+        return np.stack(out, axis=1) if out else np.ones((X.shape[0], 1))
+
+    # -- matching and local residuals ------------------------------------------
+    def match(self, z: np.ndarray) -> np.ndarray:
+        """Driver values ``(N,)`` at which design ``z`` best meets the targets, in order."""
+        tim = self.timing()
+        if tim is not None:
+            return np.asarray(tim, float)
+        Z = z[None, :]
+        st = self.ev.poses(Z[:, :self.nx], self.grid)
+        idx, valid, cphi, _ = self.curve(st.ok)
+        T, size = self.targets_for(Z)
+        Fc = np.take_along_axis(self.features(Z, st), idx[..., None], axis=1)
+        d2 = np.where(valid[:, None, :], np.sum(np.square(self.diff(Fc, T, size)), axis=-1), np.inf)[0]
+        best = None
+        for a, b in self.windows():
+            for rev in (False, True):
+                dd = d2[:, a:b][:, ::-1] if rev else d2[:, a:b]
+                path, cost = _dp_path(dd)
+                ks = [a + ((dd.shape[1] - 1 - k) if rev else k) for k in path]
+                if best is None or cost < best[0]:
+                    best = (cost, cphi[0, ks])
+        return best[1]
+
+    def windows(self) -> list[tuple[int, int]]:
+        """Slices of the curve searched for the targets: for a rotary driver, eight
+        one-turn windows of the two-turn curve (so the targets of a fully rotating
+        driver are met within one turn, any start), else the whole curve."""
+        if not self.rotary:
+            return [(0, self.M)]
+        return [(o, o + self.M) for o in range(0, self.M, self.M // 8)]
+
+    def residuals(self, z: np.ndarray, phi: np.ndarray) -> np.ndarray:
+        """Relative residuals ``(N·c,)`` of design ``z`` at driver values ``phi``."""
+        return self.residuals_batch(z[None, :], np.asarray(phi, float)[None, :])[0]
+
+    def residuals_batch(self, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
+        """Residuals ``(P, N·c)`` of designs ``Z`` (P, n), each at its own ``PHI`` (P, N)."""
+        st = self.ev.poses(Z[:, :self.nx], PHI)
+        T, size = self.targets_for(Z)
+        F = self.features(Z, st)
+        D = self.diff(F, T, size)                             # (P, N, N, c)
+        n = np.arange(D.shape[1])
+        return D[:, n, n, :].reshape(Z.shape[0], -1)
+
+
+def _dp(d2: np.ndarray) -> np.ndarray:
+    """Cheapest monotone assignment cost of N targets to K ordered samples, ``(P,)``."""
+    acc = d2[:, 0]
+    for i in range(1, d2.shape[1]):
+        acc = d2[:, i] + np.minimum.accumulate(acc, axis=1)
+    return acc.min(axis=1)
+
+
+def _dp_path(d2: np.ndarray) -> tuple[list[int], float]:
+    """The assignment itself for one candidate ``d2`` (N, K): sample index per target."""
+    N, K = d2.shape
+    acc = d2[0].copy()
+    back = []
+    for i in range(1, N):
+        arg = _prefix_argmin(acc)
+        back.append(arg)
+        acc = d2[i] + acc[arg]
+    k = int(np.argmin(acc))
+    cost = float(acc[k])
+    path = [k]
+    for arg in reversed(back):
+        k = int(arg[k])
+        path.append(k)
+    return path[::-1], cost
+
+
+def _prefix_argmin(a: np.ndarray) -> np.ndarray:
+    """``out[k] = argmin(a[:k + 1])`` (first index of the running minimum)."""
+    run = np.minimum.accumulate(a)
+    is_new = np.concatenate([[True], run[1:] < run[:-1]])
+    return np.maximum.accumulate(np.where(is_new, np.arange(len(a)), 0))

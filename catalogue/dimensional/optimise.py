@@ -1,0 +1,159 @@
+"""Global search (differential evolution or CMA-ES) and the local polish.
+
+Both global methods see the design in the unit box and score whole populations
+in one call of :meth:`~.objective.Problem.batch`:
+
+* ``"de"``: :func:`scipy.optimize.differential_evolution` (Storn & Price 1997)
+  with ``vectorized=True`` (deferred updating, one call per generation);
+* ``"cmaes"``: the ``cma`` package's CMA-ES (Hansen & Ostermeier 2001), one
+  ``ask``/``tell`` per generation.
+
+Both stop at the time budget or when the best objective reaches the tolerance.
+The polish is :func:`scipy.optimize.least_squares` (trust-region reflective) on
+the design plus one driver value per target, with the forward-difference
+Jacobian computed as one batched call (all perturbed designs together).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .objective import Problem
+
+__all__ = ["SearchResult", "global_search", "polish", "METHODS"]
+
+METHODS = ("de", "cmaes")
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Best design, its objective, evaluations, seconds, and the history
+    ``[(seconds, best objective, evaluations), ...]`` per generation."""
+
+    z: np.ndarray
+    fun: float
+    evaluations: int
+    seconds: float
+    history: tuple = field(default_factory=tuple)
+    stopped: str = ""
+
+
+class _Counter:
+    """The objective in unit-box coordinates; counts evaluations, keeps the best."""
+
+    def __init__(self, problem: Problem, budget: float, tol: float, progress=None):
+        self.p, self.budget, self.tol, self.progress = problem, budget, tol, progress
+        self.lo, self.span = problem.lower, problem.upper - problem.lower
+        self.n = 0
+        self.best_f, self.best_z = np.inf, problem.x0.copy()
+        self.t0 = time.perf_counter()
+        self.history: list[tuple[float, float, int]] = []
+
+    def __call__(self, U: np.ndarray) -> np.ndarray:
+        Z = self.lo + np.atleast_2d(U) * self.span
+        f = self.p.batch(Z)
+        self.n += Z.shape[0]
+        k = int(np.argmin(f))
+        if f[k] < self.best_f:
+            self.best_f, self.best_z = float(f[k]), Z[k].copy()
+        return f
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t0
+
+    def generation(self) -> bool:
+        """Record one generation; True when the search should stop."""
+        t = self.elapsed()
+        self.history.append((t, self.best_f, self.n))
+        if self.progress is not None:
+            self.progress(min(t / self.budget, 1.0), self.best_f)
+        return self.best_f <= self.tol or t >= self.budget
+
+
+def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget: float = 10.0,
+                  tol: float = 1e-4, popsize: int = 15, progress=None) -> SearchResult:
+    """Minimise ``problem.batch`` over its bounds within ``budget`` seconds.
+
+    ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
+    the same population.  The start design is always in the first population.
+    """
+    c = _Counter(problem, budget, tol, progress)
+    u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
+    c(u0[None, :])
+    stopped = "tolerance"
+    if c.best_f > tol:
+        if method == "de":
+            _de(c, u0, seed, popsize)
+        else:
+            _cmaes(c, u0, seed, popsize)
+        stopped = "tolerance" if c.best_f <= tol else "budget" if c.elapsed() >= budget else "converged"
+    return SearchResult(c.best_z, c.best_f, c.n, c.elapsed(), tuple(c.history), stopped)
+
+
+def _de(c: _Counter, u0: np.ndarray, seed: int, popsize: int) -> None:
+    from scipy.optimize import differential_evolution
+    n = len(u0)
+    differential_evolution(lambda U: c(U.T), [(0.0, 1.0)] * n, vectorized=True, updating="deferred",
+                           x0=u0, rng=np.random.default_rng(seed), popsize=popsize, maxiter=10**7,
+                           tol=0.0, atol=0.0, polish=False, mutation=(0.5, 1.0), recombination=0.9,
+                           callback=lambda intermediate_result: c.generation())
+
+
+def _cmaes(c: _Counter, u0: np.ndarray, seed: int, popsize: int) -> None:
+    import cma
+    n = len(u0)
+    restart = 0
+    while c.elapsed() < c.budget and c.best_f > c.tol:
+        x0 = u0 if restart == 0 else np.random.default_rng(seed + restart).random(n)
+        opts = {"bounds": [0.0, 1.0], "seed": int(seed) * 1000 + restart + 1, "verbose": -9,
+                "popsize": max(8, popsize * n // 2 ** min(restart, 3))}
+        es = cma.CMAEvolutionStrategy(x0, 0.25, opts)
+        while not es.stop():
+            U = np.asarray(es.ask())
+            es.tell(list(U), list(c(U)))
+            if c.generation():
+                return
+        restart += 1
+
+
+def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 60) -> tuple[np.ndarray, np.ndarray, int]:
+    """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
+
+    Returns the refined ``(z, phi)`` and the number of designs evaluated.
+    """
+    from scipy.optimize import least_squares
+    nz = len(z)
+    free = problem.free_timing
+    w0 = np.concatenate([z, phi]) if free else np.asarray(z, float)
+    lo = np.concatenate([problem.lower, np.full(len(phi), -np.inf)]) if free else problem.lower
+    hi = np.concatenate([problem.upper, np.full(len(phi), np.inf)]) if free else problem.upper
+    w0 = np.clip(w0, lo, hi)
+    count = [0]
+
+    def split(W):
+        W = np.atleast_2d(W)
+        PHI = W[:, nz:] if free else np.broadcast_to(phi, (W.shape[0], len(phi)))
+        return W[:, :nz], PHI
+
+    def fun(w):
+        Z, PHI = split(w)
+        count[0] += 1
+        r = problem.residuals_batch(Z, PHI)[0]
+        return np.where(np.isfinite(r), r, 1.0)
+
+    def jac(w):
+        h = 1e-7 * np.maximum(1.0, np.abs(w))
+        h = np.where(w + h > hi, -h, h)
+        W = np.vstack([w, w + np.diag(h)])
+        Z, PHI = split(W)
+        count[0] += W.shape[0]
+        R = problem.residuals_batch(Z, PHI)
+        R = np.where(np.isfinite(R), R, 1.0)
+        return ((R[1:] - R[0]) / h[:, None]).T
+
+    r = least_squares(fun, w0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev, x_scale="jac",
+                      xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    Z, PHI = split(r.x)
+    return Z[0].copy(), PHI[0].copy(), count[0]

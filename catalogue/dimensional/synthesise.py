@@ -1,0 +1,266 @@
+"""The public entry point :func:`synthesise` and its frozen :class:`SynthesisResult`."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .evaluator import Evaluator, design_space
+from .objective import Constraints, Problem
+from .optimise import METHODS, global_search, polish
+from .targets import FunctionTarget, MotionTarget, PathTarget, check_rows, read_table
+
+__all__ = ["SynthesisResult", "synthesise", "path_target", "function_target", "motion_target"]
+
+
+@dataclass(frozen=True)
+class SynthesisResult:
+    """The synthesised mechanism and how well it meets the target.
+
+    ``error_max`` / ``error_rms`` are distances to the targets relative to the
+    target's size (position error for path and motion, output error over the
+    output range for function generation); ``angle_error_max`` (deg) is the pose
+    angle error of motion generation.  ``inputs`` are the driver values (rad or m
+    from the reference) at which the targets are met, in driver order.
+    """
+
+    mechanism: Mechanism
+    task: str
+    error_max: float
+    error_rms: float
+    evaluations: int
+    seconds: float
+    method: str
+    seed: int
+    inputs: np.ndarray
+    achieved: np.ndarray
+    target: np.ndarray
+    design: dict
+    stopped: str
+    angle_error_max: float | None = None
+    history: tuple = field(default_factory=tuple, repr=False)
+    notes: tuple[str, ...] = ()
+
+    def inputs_cli(self) -> np.ndarray:
+        """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
+        m = self.mechanism
+        rot = m.joint(m.drivers[0].joint).kind is JointKind.R
+        return np.degrees(self.inputs) if rot else np.asarray(self.inputs, float)
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary (the mechanism by name; write it with ``topo.io``)."""
+        return {"task": self.task, "mechanism": self.mechanism.name, "error_max": self.error_max,
+                "error_rms": self.error_rms, "angle_error_max_deg": self.angle_error_max,
+                "evaluations": self.evaluations, "seconds": round(self.seconds, 4),
+                "evaluations_per_second": self.evaluations / self.seconds if self.seconds > 0 else None,
+                "method": self.method, "seed": self.seed, "stopped": self.stopped,
+                "inputs": [float(x) for x in self.inputs_cli()],
+                "achieved": np.asarray(self.achieved).tolist(), "target": np.asarray(self.target).tolist(),
+                "design": dict(self.design),
+                "notes": list(self.notes)}
+
+
+def _table(value, cols, what):
+    if isinstance(value, (str, Path)):
+        return read_table(value, cols, what), Path(value).name
+    a = np.asarray(value, float)
+    if a.ndim != 2 or a.shape[1] not in cols:
+        raise InputError(explain(f"{what} target", expected=f"an array of shape (N, {' or '.join(map(str, cols))})",
+                                 got=f"shape {a.shape}"))
+    return check_rows(a, what, f"{what} target"), f"a {what} table of {len(a)} rows"
+
+
+def _driver_is_rotary(m: Mechanism) -> bool:
+    return m.joint(m.drivers[0].joint).kind is JointKind.R
+
+
+def path_target(m: Mechanism, path, point: str | None, *, shape_only=False) -> PathTarget:
+    """A :class:`PathTarget` from an (N, 2|3) array or CSV file (third column: driver
+    value in degrees, or m for a slider input)."""
+    a, src = _table(path, (2, 3), "path")
+    names = [p.name for p in m.points]
+    if point is None and len(names) == 1:
+        point = names[0]
+    if point not in names:
+        raise InputError(explain(f"tracer point {point!r}", expected="a [[point]] of the start mechanism",
+                                 got="no such point", hint=f"points: {', '.join(names) or 'none'}"))
+    timing = None
+    if a.shape[1] == 3:
+        timing = np.radians(a[:, 2]) if _driver_is_rotary(m) else a[:, 2].copy()
+    return PathTarget(a[:, :2].copy(), point, timing, shape_only, src)
+
+
+def function_target(m: Mechanism, function, output: str) -> FunctionTarget:
+    """A :class:`FunctionTarget` from rows (driver value, output value): degrees for R
+    joints, m for P joints; the first row is the reference configuration."""
+    a, src = _table(function, (2,), "function")
+    if output not in m.joint_names:
+        raise InputError(explain(f"output joint {output!r}", expected="a joint of the start mechanism",
+                                 got="no such joint", hint=f"joints: {', '.join(m.joint_names)}"))
+    x = np.radians(a[:, 0]) if _driver_is_rotary(m) else a[:, 0]
+    y = np.radians(a[:, 1]) if m.joint(output).kind is JointKind.R else a[:, 1]
+    if np.ptp(y) == 0:
+        raise InputError(explain(src, expected="output values that vary", got="a constant output"))
+    return FunctionTarget(x, y, output, src)
+
+
+def motion_target(m: Mechanism, motion, link: str) -> MotionTarget:
+    """A :class:`MotionTarget` from rows (x, y, angle in degrees)."""
+    a, src = _table(motion, (3,), "motion")
+    if link not in m.link_names or link == m.frame:
+        raise InputError(explain(f"link {link!r}", expected="a moving link of the start mechanism",
+                                 got="no such link" if link not in m.link_names else "the frame",
+                                 hint=f"links: {', '.join(m.link_names)}"))
+    return MotionTarget(np.column_stack([a[:, :2], np.radians(a[:, 2])]), link, src)
+
+
+def _check_start(m: Mechanism, budget: float, method: str) -> None:
+    from multiloop.kin.solve import solve
+    if not budget or not np.isfinite(budget) or budget <= 0:
+        raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
+    if method not in METHODS:
+        raise InputError(explain("method", expected=" or ".join(map(repr, METHODS)), got=repr(method)))
+    if not m.has_geometry or len(m.drivers) != 1:
+        raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="geometry and exactly one driver",
+                                 got=f"{len(m.drivers)} drivers" if m.has_geometry else "no geometry"))
+    solve(m, 0.0)           # raises AssemblyError / SingularityError when the start does not assemble
+
+
+def _target(m, path, point, shape_only, function, output, motion, link):
+    given = [x is not None for x in (path, function, motion)]
+    if sum(given) != 1:
+        raise InputError(explain("synthesis task", expected="exactly one of path, function, motion",
+                                 got=f"{sum(given)} given"))
+    if path is not None:
+        return "path", path_target(m, path, point, shape_only=shape_only)
+    if function is not None:
+        if output is None:
+            raise InputError(explain("function generation", expected="an output joint", got="none"))
+        return "function", function_target(m, function, output)
+    if link is None:
+        raise InputError(explain("motion generation", expected="a link", got="none"))
+    return "motion", motion_target(m, motion, link)
+
+
+def _assess(problem: Problem, z: np.ndarray, phi: np.ndarray):
+    """Errors of design ``z`` at driver values ``phi`` and whether the motion from the
+    reference reaches them continuously, in order: ``(rel (N,), ang (N,)|None, ok)``."""
+    Z = z[None, :]
+    st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, phi]))
+    _, valid, cphi, full = problem.curve(st.ok[:, :problem.M])
+    lo, hi = cphi[valid].min(), cphi[valid].max()
+    d = np.diff(phi)
+    ordered = bool(np.all(d >= -1e-12) or np.all(d <= 1e-12))
+    inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
+    ok = ordered and inside and bool(st.ok[0, problem.M:].all())
+    r = problem.residuals(z, phi).reshape(len(phi), -1)
+    ang = None
+    if isinstance(problem.target, MotionTarget):
+        ang = np.degrees(np.abs(r[:, 2]))
+        r = r[:, :2]
+    rel = np.sqrt(np.sum(np.square(r), axis=1))
+    return np.where(np.isfinite(rel), rel, np.inf), ang, ok
+
+
+def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_only: bool = False,
+               function=None, output: str | None = None, motion=None, link: str | None = None,
+               seed: int = 0, budget: float = 10.0, method: str = "de", tol: float = 1e-6,
+               bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
+               length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
+               popsize: int = 15, grid: int = 96, progress=None) -> SynthesisResult:
+    """Dimensional synthesis of ``start``: path, function or motion generation.
+
+    Parameters
+    ----------
+    start : Mechanism
+        Topology, names, one driver and a starting geometry (it must assemble).
+    path : array (N, 2|3) or CSV path, optional
+        Points the tracer ``point`` meets in driver order (free timing), or with a
+        third column the driver value (deg, m for a slider input).  ``shape_only``:
+        the target may be scaled, rotated and translated.
+    function, output : optional
+        Rows (driver value, output value), deg for R joints / m for P joints, and the
+        output joint (relative rotation of its ``links[1]`` w.r.t. ``links[0]``, or
+        slide); the first row is the reference configuration.
+    motion, link : optional
+        Poses (x, y, angle deg) of a frame attached to ``link``, met in order.
+    seed, budget, method, tol, popsize, grid
+        Reproducible seed, time budget (s), ``"de"`` or ``"cmaes"``, early stop on
+        the relative RMS error, population per variable, driver samples per turn.
+    bounds : dict, optional
+        ``{"J.x": (low, high), ...}`` by design-variable name (default: the box
+        around the start and the target widened by its size).
+    full_rotation, min_transmission, length_bounds, max_ratio
+        Constraints (penalties), see :class:`~.objective.Constraints`.
+    progress : callable(fraction, best), optional
+
+    Returns
+    -------
+    SynthesisResult
+
+    Raises
+    ------
+    InputError
+        Too few targets, NaN, unknown point/joint/link, budget <= 0, unknown method.
+    AssemblyError, SingularityError
+        The start does not assemble in its reference configuration.
+    """
+    m = start
+    _check_start(m, budget, method)
+    task, target = _target(m, path, point, shape_only, function, output, motion, link)
+    region = target.points if task == "path" else target.poses[:, :2] if task == "motion" else None
+    pts = [target.point] if task == "path" else []
+    space = design_space(m, pts, region=region, bounds=bounds)
+    ev = Evaluator(m, space)
+    cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio)
+    problem = Problem(ev, target, cons, grid)
+    if not ev.poses(space.x0[None, :], [0.0]).ok.all():
+        raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="a reference configuration that assembles",
+                                 got="a group out of reach at the reference"))
+    t0 = time.perf_counter()
+    res = global_search(problem, method=method, seed=seed, budget=budget, tol=tol, popsize=popsize,
+                        progress=progress)
+    z, phi = res.z, problem.match(res.z)
+    best = (_assess(problem, z, phi), z, phi)
+    z2, phi2, n2 = polish(problem, z, phi)
+    a2 = _assess(problem, z2, phi2)
+    notes = []
+    if a2[2] and (not best[0][2] or np.sqrt(np.mean(a2[0] ** 2)) <= np.sqrt(np.mean(best[0][0] ** 2))):
+        best = (a2, z2, phi2)
+    elif not a2[2]:
+        notes.append("the local polish left the continuous branch; kept the global result")
+    (rel, ang, ok), z, phi = best
+    if not ok:
+        notes.append("the targets are not all reached by continuous motion from the reference")
+    out = ev.with_design(z[:problem.nx])
+    src = (f"dimensional synthesis ({task} generation) by multiloop synthesise: {target.source}; "
+           f"method {method}, seed {seed}")
+    out = replace(out, source=src, description=(m.description or "") + (
+        f" Dimensions synthesised for {target.source}." if m.description else f"Dimensions synthesised for {target.source}."))
+    achieved, wanted = _achieved(problem, z, phi)
+    return SynthesisResult(out, task, float(np.max(rel)), float(np.sqrt(np.mean(rel ** 2))), res.evaluations + n2,
+                           time.perf_counter() - t0, method, seed, phi, achieved, wanted,
+                           dict(zip(problem.names, map(float, z))), res.stopped,
+                           None if ang is None else float(np.max(ang)), res.history, tuple(notes))
+
+
+def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """What design ``z`` does at ``phi`` and the target, in user units: points (N, 2),
+    poses (N, 3; angle deg) or outputs (N,; deg or m)."""
+    Z = z[None, :]
+    st = problem.ev.poses(Z[:, :problem.nx], phi)
+    F = problem.features(Z, st)[0]
+    T = problem.targets_for(Z)[0][0]
+    t = problem.target
+    if isinstance(t, MotionTarget):
+        return np.column_stack([F[:, :2], np.degrees(F[:, 2])]), np.column_stack([T[:, :2], np.degrees(T[:, 2])])
+    if isinstance(t, FunctionTarget):
+        rot = problem.ev.mechanism.joint(t.joint).kind is JointKind.R
+        y = F[:, 0] + t.outputs[0]
+        return (np.degrees(y), np.degrees(t.outputs)) if rot else (y, t.outputs.copy())
+    return F, np.asarray(T)

@@ -1,0 +1,125 @@
+"""``multiloop synthesise START.toml (--path T.csv --point NAME | --function F.csv --output JOINT |
+--motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes]
+[--json] [--plot P]``: dimensional synthesis.
+
+``START.toml`` gives the topology, names, one driver and a starting geometry.
+Tables are CSV with an optional header line:
+
+* ``--path``: rows ``x,y`` (m) met in this order with free timing, or ``x,y,input``
+  with the driver value (deg, m for a slider input) from the reference;
+  ``--shape-only`` lets the target be scaled, rotated and translated;
+* ``--function``: rows ``input,output`` (deg for R joints, m for P joints), the first
+  row being the reference configuration; the output is the relative rotation (or
+  slide) of ``--output``'s ``links[1]`` w.r.t. ``links[0]``;
+* ``--motion``: rows ``x,y,angle`` (m, m, deg) of a frame attached to ``--link``.
+
+``OUT.toml`` is a normal mechanism file (the start's topology and names, the new
+dimensions, ``source`` citing the target).  The report gives the error (max and RMS
+distance to the targets relative to the target's size), the evaluations and the time;
+``--json`` prints it as JSON.  ``--plot`` draws the target against the achieved
+curve and the mechanism.  Nothing is written unless the whole run succeeds.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.io import dumps_toml, load
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(p) -> None:
+    p.add_argument("start", help="start mechanism (.toml or .json): topology, one driver, a geometry")
+    task = p.add_mutually_exclusive_group(required=True)
+    task.add_argument("--path", metavar="TARGET.csv", help="path generation: rows x,y[,input]")
+    task.add_argument("--function", metavar="TABLE.csv", help="function generation: rows input,output")
+    task.add_argument("--motion", metavar="POSES.csv", help="motion generation: rows x,y,angle")
+    p.add_argument("--point", metavar="NAME", help="tracer point of --path (default: the only one)")
+    p.add_argument("--shape-only", action="store_true", help="--path: the target may be scaled, rotated, moved")
+    p.add_argument("--output", metavar="JOINT", help="output joint of --function")
+    p.add_argument("--link", metavar="NAME", help="link of --motion")
+    p.add_argument("--out", metavar="OUT.toml", required=True, help="the synthesised mechanism")
+    p.add_argument("--seed", type=int, default=0, help="random seed (reproducible runs)")
+    p.add_argument("--budget", type=float, default=10.0, metavar="S", help="time budget in seconds (default 10)")
+    p.add_argument("--method", choices=("de", "cmaes"), default="de", help="global search (default de)")
+    p.add_argument("--tol", type=float, default=1e-6, help="stop when the relative RMS error is below this")
+    p.add_argument("--full-rotation", action="store_true", help="require a fully rotating driver")
+    p.add_argument("--min-transmission", type=float, default=None, metavar="DEG",
+                   help="minimum transmission angle of every RRR dyad")
+    p.add_argument("--max-ratio", type=float, default=None, help="longest / shortest link length at most this")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
+
+
+def _progress(enabled: bool):
+    if not enabled:
+        return None, None
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    bar = Progress(TextColumn("synthesis"), BarColumn(), TextColumn("best {task.fields[best]:.3g}"),
+                   TimeElapsedColumn(), transient=True, console=None)
+    task = bar.add_task("s", total=1.0, best=float("inf"))
+    return bar, (lambda frac, best: bar.update(task, completed=frac, best=best))
+
+
+def run(args) -> int:
+    from multiloop.catalogue.dimensional import synthesise
+
+    m = load(args.start)
+    outs = Outputs("multiloop synthesise")
+    outs.target(args.out, "--out", formats=("toml", "json"))
+    if args.plot is not None:
+        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    if args.budget is None or not args.budget > 0:
+        raise InputError(explain("--budget", expected="a positive number of seconds", got=str(args.budget)))
+    bar, cb = _progress(sys.stderr.isatty() and not args.json)
+    kw = dict(seed=args.seed, budget=args.budget, method=args.method, tol=args.tol,
+              full_rotation=args.full_rotation, min_transmission=args.min_transmission,
+              max_ratio=args.max_ratio, progress=cb)
+    if args.path:
+        kw.update(path=args.path, point=args.point, shape_only=args.shape_only)
+    elif args.function:
+        if not args.output:
+            raise InputError(explain("--function", expected="--output JOINT", got="none"))
+        kw.update(function=args.function, output=args.output)
+    else:
+        if not args.link:
+            raise InputError(explain("--motion", expected="--link NAME", got="none"))
+        kw.update(motion=args.motion, link=args.link)
+    if bar is not None:
+        with bar:
+            res = synthesise(m, **kw)
+    else:
+        res = synthesise(m, **kw)
+    out = res.mechanism
+    if Path(args.out).suffix.lower() == ".json":
+        from multiloop.topo.io import dumps_json
+        outs.add(args.out, dumps_json(out), "--out")
+    else:
+        outs.add(args.out, dumps_toml(out), "--out")
+    if args.plot is not None:
+        from multiloop.catalogue.dimensional.figure import plot_synthesis
+        with quiet_warnings("multiloop synthesise"):
+            outs.add_figure(args.plot, plot_synthesis(res))
+    outs.commit()
+    doc = res.as_dict()
+    doc["out"] = str(args.out)
+    if args.json:
+        print(json.dumps(doc, indent=1, ensure_ascii=False))
+    else:
+        print(_text(doc))
+    return 0
+
+
+def _text(doc: dict) -> str:
+    lines = [f"{doc['task']} generation: wrote {doc['out']}",
+             f"error (relative to the target size): max {doc['error_max']:.3g}, RMS {doc['error_rms']:.3g}"]
+    if doc.get("angle_error_max_deg") is not None:
+        lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
+    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s "
+                 f"({doc['method']}, seed {doc['seed']}, stopped: {doc['stopped']})")
+    lines += [f"note: {n}" for n in doc["notes"]]
+    return "\n".join(lines)
