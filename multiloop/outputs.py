@@ -53,17 +53,13 @@ import threading
 import warnings
 from pathlib import Path
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import OutputError, explain
 
 __all__ = ["OutputError", "Outputs", "check_target", "check_directory", "figure_formats",
            "quiet_warnings"]
 
 #: matplotlib's warnings that say nothing the user can act on
 _BENIGN = ("Glyph", "missing from font", "tight_layout", "Tight layout", "constrained_layout")
-
-
-class OutputError(InputError):
-    """An output target is unusable or refused the bytes (the CLI exits 2)."""
 
 
 def _err(what: str, path, expected: str, got: str, hint: str | None = None) -> OutputError:

@@ -5,10 +5,11 @@ and, when the input is at fault, also from :class:`ValueError`.  Messages follow
 the pattern *expected / got / hint*, built by :func:`explain`, so the CLI can print
 them as they are (exit code 2, no traceback).
 
-Tree::
+Tree (the one home of every multiloop exception; a new error class goes here)::
 
     LinkageError
     ├── InputError        (ValueError)  malformed file, unknown key, bad value
+    │   └── OutputError                 an output target is unusable (multiloop.outputs)
     ├── TopologyError     (ValueError)  graph-level problem (disconnected, unknown link, ...)
     ├── MobilityError     (ValueError)  drivers do not fit the mobility
     ├── DecompositionError(ValueError)  not decomposable into Assur groups
@@ -17,6 +18,9 @@ Tree::
     │   └── SingularStrutsError         six platform struts on a linear complex
     └── ScrewPairingError (TypeError)   a twist paired with a twist (or a wrench with a wrench)
     SingularityWarning (UserWarning)    dead-centre / toggle positions in batches
+
+The command line turns every :class:`LinkageError` into exit code 2 with its
+message and no traceback; anything else is an internal error (exit 1).
 """
 from __future__ import annotations
 
@@ -28,9 +32,10 @@ __all__ = [
     "DecompositionError",
     "AssemblyError",
     "SingularityError",
-    "SingularityWarning",
     "SingularStrutsError",
     "ScrewPairingError",
+    "OutputError",
+    "SingularityWarning",
     "explain",
 ]
 
@@ -101,6 +106,10 @@ class SingularStrutsError(SingularityError):
 
 class ScrewPairingError(LinkageError, TypeError):
     """Two screws of kinds that cannot be paired (e.g. a twist with a twist)."""
+
+
+class OutputError(InputError):
+    """An output target is unusable or refused the bytes (the CLI exits 2)."""
 
 
 class SingularityWarning(UserWarning):

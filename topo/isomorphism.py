@@ -34,6 +34,7 @@ from typing import Sequence
 import networkx as nx
 import pynauty
 
+from .errors import InputError, explain
 from .model import JointKind, Mechanism
 
 __all__ = ["canonical_form", "canonical_form_of_joints", "canonical_labelling", "are_isomorphic", "are_isomorphic_vf2",
@@ -45,7 +46,7 @@ _MODES = ("chain", "mechanism")
 def _coloured(m: Mechanism, mode: str):
     """Vertices in colour order, colour classes, adjacency (vertex indices)."""
     if mode not in _MODES:
-        raise ValueError(f"mode: expected 'chain' or 'mechanism', got {mode!r}")
+        raise InputError(explain("mode", expected="'chain' or 'mechanism'", got=repr(mode)))
     mech = mode == "mechanism"
     driven = {d.joint for d in m.drivers} if mech else set()
     frame = m.frame if mech else None
