@@ -334,6 +334,14 @@ BAD = [
     ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\n[[cylinder]]\nbank = 0\nfiring = 90\n", "firing"),
     ("[engine]\nbore = 'big'\nrod_length = 0.2\ncrank_radius = 0.05\n", "bore"),
     ("name = 'no engine table'\n", "[engine]"),
+    # physically meaningless values (issue 10)
+    ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\nrpm = 0\n", "rpm"),
+    ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\nrpm = -3000\n", "rpm"),
+    ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\nrod_mass = 1\nrod_inertia = -0.01\n",
+     "rod_inertia"),
+    ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\ncrank_inertia = -1\n", "crank_inertia"),
+    ("[engine]\nbore = 0.08\nrod_length = 0.2\ncrank_radius = 0.05\n[gas]\nmodel = 'table'\n"
+     "table = [[0, 1e5], [90, 2e5], [90, 3e5]]\n", "distinct cycle angles"),
 ]
 
 
@@ -344,6 +352,25 @@ def test_bad_engine_files_exit_2_naming_the_key(tmp_path, capsys, text, key):
     assert main(["engine", str(f)]) == 2
     err = capsys.readouterr().err
     assert key in err and "Traceback" not in err
+
+
+def test_engine_steps_capped_with_exit_2(capsys):
+    import time
+    t0 = time.perf_counter()
+    assert main(["engine", "single_cylinder", "--steps", "100000000"]) == 2
+    assert "from 8 to 100000" in capsys.readouterr().err and time.perf_counter() - t0 < 10
+    with pytest.raises(Exception, match="from 8 to 100000"):
+        analyse_engine(single_cylinder_spec(), 10 ** 8)
+
+
+def test_engine_result_is_read_only_and_as_dict_is_json():
+    res = analyse_engine(single_cylinder_spec(), 16)
+    with pytest.raises(ValueError):
+        res.balancing[0] = 0.0
+    with pytest.raises(ValueError):
+        res.reactions["R12"][0] = 0.0
+    doc = json.loads(json.dumps(res.as_dict(), allow_nan=False))
+    assert len(doc["phi"]) == 16 and doc["cylinders"][0]["name"] == res.spec.cylinders[0].name
 
 
 def test_engine_mechanism_with_gas_tables_matches_closed_form_on_the_table_grid():

@@ -2,11 +2,12 @@
 
 API index:
 
-* ``analysis`` — :class:`EngineSpec` (geometry, masses, speed, gas model; read from an
-  engine file by :func:`load_engine`), exact piston kinematics and the λ-approximation,
+* ``model`` — :class:`Cylinder`, :class:`EngineSpec` (geometry, masses, speed, gas model);
+* ``files`` — :func:`load_engine`, :func:`engine_from_dict` (engine files, strict);
+* ``analysis`` — exact piston kinematics and the λ-approximation,
   :func:`engine_mechanism` (the spec as a :class:`~multiloop.topo.model.Mechanism`),
   :func:`analyse_engine` → :class:`EngineResult` (diagrams, cyclogram, reactions,
-  balancing moment).
+  balancing moment; ``as_dict`` for JSON).
 * ``gas`` — cylinder pressure: :class:`IndicatorDiagram` (idealised Otto cycle) and
   :class:`PressureTable` (user data).
 

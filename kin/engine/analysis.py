@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -43,251 +42,15 @@ from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 
 from ..forces import PointLoad, forces
-from .gas import STROKES, IndicatorDiagram, PressureTable
+from ..forces.result import json_list
+from .files import engine_from_dict, load_engine
+from .gas import STROKES, IndicatorDiagram
+from .model import Cylinder, EngineSpec
 from ..state import KinematicState
 
 __all__ = ["Cylinder", "EngineSpec", "EngineResult", "load_engine", "engine_from_dict",
            "engine_mechanism", "piston_kinematics", "lambda_approximation", "engine_state",
-           "engine_reactions", "analyse_engine", "seed004_rod_com", "cyclogram"]
-
-
-# --------------------------------------------------------------------------- model
-@dataclass(frozen=True, slots=True)
-class Cylinder:
-    """One cylinder: ``bank`` = axis angle γ (deg, CCW from x, towards the head);
-    ``firing`` = Δ ∈ {0, 360}: the TDC (local crank angle 360 + Δ) that fires."""
-
-    name: str
-    bank: float
-    firing: float = 0.0
-
-
-@dataclass(frozen=True)
-class EngineSpec:
-    """A crank–slider engine with every cylinder's rod on one crank pin (SI units)."""
-
-    crank_radius: float
-    rod_length: float
-    bore: float
-    cylinders: tuple[Cylinder, ...]
-    offset: float = 0.0
-    rpm: float = 3000.0
-    crank_acceleration: float = 0.0
-    rod_mass: float = 0.0
-    rod_cg: float = 0.0
-    rod_inertia: float = 0.0
-    piston_mass: float = 0.0
-    crank_mass: float = 0.0
-    crank_inertia: float = 0.0
-    gravity: tuple[float, float] = (0.0, 0.0)
-    gas: IndicatorDiagram | PressureTable | None = None
-    name: str = "engine"
-    description: str | None = None
-    source: str | None = None
-
-    @property
-    def omega(self) -> float:
-        """Crank speed (rad/s) = π n / 30."""
-        return self.rpm * math.pi / 30.0
-
-    @property
-    def lam(self) -> float:
-        """λ = r / l."""
-        return self.crank_radius / self.rod_length
-
-    @property
-    def piston_area(self) -> float:
-        return math.pi * self.bore ** 2 / 4.0
-
-    @property
-    def x_tdc(self) -> float:
-        """Wrist-pin distance along the axis at TDC: ``sqrt((l + r)² − e²)``."""
-        return math.sqrt((self.rod_length + self.crank_radius) ** 2 - self.offset ** 2)
-
-    @property
-    def x_bdc(self) -> float:
-        return math.sqrt((self.rod_length - self.crank_radius) ** 2 - self.offset ** 2)
-
-    @property
-    def stroke(self) -> float:
-        """Exact stroke (slightly more than 2r with an offset)."""
-        return self.x_tdc - self.x_bdc
-
-    @property
-    def swept_volume(self) -> float:
-        return self.piston_area * self.stroke
-
-    @property
-    def compression_ratio(self) -> float:
-        cr = getattr(self.gas, "compression_ratio", None)
-        return float(cr) if cr else 10.0
-
-    @property
-    def clearance_volume(self) -> float:
-        return self.swept_volume / (self.compression_ratio - 1.0)
-
-    @property
-    def n_cylinders(self) -> int:
-        return len(self.cylinders)
-
-    def banks(self) -> np.ndarray:
-        return np.radians([c.bank for c in self.cylinders])
-
-    def validate(self) -> None:
-        r, l, e = self.crank_radius, self.rod_length, self.offset
-        for key in ("crank_radius", "rod_length", "bore"):
-            if not getattr(self, key) > 0:
-                raise InputError(explain(f"[engine] {key}", expected="a length > 0 (m)",
-                                         got=repr(getattr(self, key))))
-        if not r + abs(e) < l:
-            raise InputError(explain("[engine] rod_length", expected=f"> crank_radius + |offset| = {r + abs(e):g} m "
-                                     "(the crank must turn fully)", got=repr(l)))
-        if not 0.0 <= self.rod_cg <= 1.0:
-            raise InputError(explain("[engine] rod_cg", expected="|AG|/l between 0 and 1 (from the crank pin)",
-                                     got=repr(self.rod_cg)))
-        for key in ("rod_mass", "rod_inertia", "piston_mass", "crank_mass", "crank_inertia"):
-            if getattr(self, key) < 0:
-                raise InputError(explain(f"[engine] {key}", expected="a value >= 0", got=repr(getattr(self, key))))
-        if not self.cylinders:
-            raise InputError(explain("[[cylinder]]", expected="at least one cylinder", got="none"))
-        for c in self.cylinders:
-            if c.firing not in (0.0, 360.0):
-                raise InputError(explain(f"[[cylinder]] '{c.name}' firing", expected="0 or 360", got=repr(c.firing)))
-        if self.gas is not None:
-            self.gas.validate()
-
-
-_ENGINE_KEYS = {"crank_radius", "stroke", "rod_length", "bore", "offset", "rpm", "crank_acceleration",
-                "rod_mass", "rod_cg", "rod_inertia", "rod_radius_of_gyration", "piston_mass",
-                "crank_mass", "crank_inertia", "gravity"}
-_GAS_KEYS = {"model", "compression_ratio", "peak_pressure", "n_compression", "n_expansion",
-             "intake_pressure", "exhaust_pressure", "crankcase_pressure", "table"}
-_CYL_KEYS = {"name", "bank", "firing"}
-
-
-def _num(v: Any, where: str) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-        raise InputError(explain(where, expected="a finite number", got=repr(v)))
-    return float(v)
-
-
-def _keyed_table(value, label: str, keys) -> dict:
-    """``value`` as a table whose keys are all among ``keys`` (else InputError naming them)."""
-    if not isinstance(value, dict):
-        raise InputError(explain(label, expected="a table", got=repr(value)[:40]))
-    bad = sorted(set(value) - set(keys))
-    if bad:
-        raise InputError(explain(label, expected=f"keys among {', '.join(sorted(keys))}",
-                                 got=f"unknown key {', '.join(map(repr, bad))}"))
-    return value
-
-
-def engine_from_dict(doc: dict) -> EngineSpec:
-    """Parse an engine document (see ``docs/forces.md``); strict about keys."""
-    if not isinstance(doc, dict):
-        raise InputError(explain("engine file", expected="a table", got=type(doc).__name__))
-    unknown = sorted(set(doc) - {"name", "description", "source", "engine", "cylinder", "gas", "notes"})
-    if "engine" not in doc and ({"joint", "joints", "link"} & set(doc)):
-        raise InputError(explain("top level", expected="an [engine] table (an engine file)",
-                                 got="a mechanism file",
-                                 hint="use 'multiloop forces FILE' for the kinetostatics of a mechanism"))
-    if unknown:
-        raise InputError(explain("top level", expected="keys among name, description, source, [engine], "
-                                 "[[cylinder]], [gas]", got=f"unknown key {', '.join(map(repr, unknown))}"))
-    if "engine" not in doc:
-        raise InputError(explain("[engine]", expected="an [engine] table (bore, crank_radius, rod_length, ...)",
-                                 got="nothing", hint="a mechanism file goes to 'multiloop forces'"))
-    eng = _keyed_table(doc["engine"], "[engine]", _ENGINE_KEYS)
-    for req in ("rod_length", "bore"):
-        if req not in eng:
-            raise InputError(explain("[engine]", expected=f"key '{req}'", got="nothing"))
-    if ("crank_radius" in eng) == ("stroke" in eng):
-        raise InputError(explain("[engine] crank_radius", expected="exactly one of 'crank_radius' and 'stroke'",
-                                 got="both" if "crank_radius" in eng else "neither"))
-    r = _num(eng["crank_radius"], "[engine] crank_radius") if "crank_radius" in eng \
-        else _num(eng["stroke"], "[engine] stroke") / 2.0
-    kw: dict[str, Any] = {}
-    for key in ("offset", "rpm", "crank_acceleration", "rod_mass", "rod_cg", "piston_mass",
-                "crank_mass", "crank_inertia"):
-        if key in eng:
-            kw[key] = _num(eng[key], f"[engine] {key}")
-    if "rod_inertia" in eng and "rod_radius_of_gyration" in eng:
-        raise InputError(explain("[engine] rod_inertia", expected="either rod_inertia or rod_radius_of_gyration",
-                                 got="both"))
-    if "rod_inertia" in eng:
-        kw["rod_inertia"] = _num(eng["rod_inertia"], "[engine] rod_inertia")
-    elif "rod_radius_of_gyration" in eng:
-        rho = _num(eng["rod_radius_of_gyration"], "[engine] rod_radius_of_gyration")
-        kw["rod_inertia"] = kw.get("rod_mass", 0.0) * rho * rho
-    if "gravity" in eng:
-        g = eng["gravity"]
-        if not isinstance(g, list) or len(g) != 2:
-            raise InputError(explain("[engine] gravity", expected="[gx, gy]", got=repr(g)))
-        kw["gravity"] = (_num(g[0], "[engine] gravity"), _num(g[1], "[engine] gravity"))
-    cyls_raw = doc.get("cylinder", [{"name": "1", "bank": 90.0}])
-    if isinstance(cyls_raw, dict):
-        cyls_raw = [cyls_raw]
-    if not isinstance(cyls_raw, list) or not cyls_raw:
-        raise InputError(explain("[[cylinder]]", expected="an array of tables", got=repr(cyls_raw)[:40]))
-    cyls = []
-    for i, c in enumerate(cyls_raw, 1):
-        where = f"[[cylinder]] #{i}"
-        if not isinstance(c, dict):
-            raise InputError(explain(where, expected="a table", got=repr(c)[:40]))
-        bad = sorted(set(c) - _CYL_KEYS)
-        if bad:
-            raise InputError(explain(where, expected="keys among bank, firing, name",
-                                     got=f"unknown key {', '.join(map(repr, bad))}"))
-        if "bank" not in c:
-            raise InputError(explain(where, expected="key 'bank' (deg)", got="nothing"))
-        name = c.get("name", str(i))
-        if not isinstance(name, str) or not name:
-            raise InputError(explain(f"{where} name", expected="a non-empty string", got=repr(name)))
-        firing = _num(c["firing"], f"{where} firing") if "firing" in c else (0.0 if i % 2 else 360.0)
-        cyls.append(Cylinder(name, _num(c["bank"], f"{where} bank"), firing))
-    if len({c.name for c in cyls}) != len(cyls):
-        raise InputError(explain("[[cylinder]] name", expected="unique names", got=repr([c.name for c in cyls])))
-    gas = None
-    if "gas" in doc:
-        gd = _keyed_table(doc["gas"], "[gas]", _GAS_KEYS)
-        model = gd.get("model", "indicator")
-        if model == "indicator":
-            for req in ("compression_ratio", "peak_pressure"):
-                if req not in gd:
-                    raise InputError(explain("[gas]", expected=f"key '{req}' for model = 'indicator'", got="nothing"))
-            gk = {k: _num(gd[k], f"[gas] {k}") for k in _GAS_KEYS - {"model", "table"} if k in gd}
-            gas = IndicatorDiagram(**gk)
-        elif model == "table":
-            rows = gd.get("table")
-            if not isinstance(rows, list):
-                raise InputError(explain("[gas] table", expected="rows [psi_deg, p_Pa] for model = 'table'",
-                                         got=repr(rows)[:40]))
-            out = []
-            for k, row in enumerate(rows):
-                if not isinstance(row, list) or len(row) != 2:
-                    raise InputError(explain(f"[gas] table row {k}", expected="[psi_deg, p_Pa]", got=repr(row)))
-                out.append((_num(row[0], f"[gas] table row {k}"), _num(row[1], f"[gas] table row {k}")))
-            gas = PressureTable(tuple(out), _num(gd.get("crankcase_pressure", 0.1e6), "[gas] crankcase_pressure"))
-        elif model != "none":
-            raise InputError(explain("[gas] model", expected="'indicator', 'table' or 'none'", got=repr(model)))
-    for key in ("name", "description", "source"):
-        if key in doc and not isinstance(doc[key], str):
-            raise InputError(explain(f"top-level key '{key}'", expected="a string", got=repr(doc[key])))
-    spec = EngineSpec(r, _num(eng["rod_length"], "[engine] rod_length"), _num(eng["bore"], "[engine] bore"),
-                      tuple(cyls), gas=gas, name=doc.get("name", "engine"),
-                      description=doc.get("description"), source=doc.get("source"), **kw)
-    spec.validate()
-    return spec
-
-
-def load_engine(path: str | Path) -> EngineSpec:
-    """Read an engine TOML/JSON file (see ``docs/forces.md``)."""
-    from multiloop.topo.io import read_document  # noqa: PLC0415
-    doc = read_document(path)
-    try:
-        return engine_from_dict(doc)
-    except InputError as exc:
-        raise InputError(f"{path}: {exc}") from None
+           "engine_reactions", "analyse_engine", "seed004_rod_com", "cyclogram", "MAX_STEPS"]
 
 
 # --------------------------------------------------------------------------- kinematics
@@ -627,9 +390,108 @@ class EngineResult:
     general_check: dict = field(default_factory=dict)
     status: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        for name, a in vars(self).items():
+            if isinstance(a, np.ndarray):
+                a.flags.writeable = False
+        for d in (self.approx, self.reactions):
+            for a in d.values():
+                a.flags.writeable = False
+
     @property
     def success(self) -> bool:
         return self.status is None or bool(np.all(self.status == "ok"))
+
+    def _cylinder_dicts(self) -> list[dict]:
+        out = []
+        for j, c in enumerate(self.spec.cylinders):
+            out.append({"name": c.name, "bank": c.bank, "firing": c.firing,
+                        "displacement": json_list(self.displacement[:, j]), "velocity": json_list(self.velocity[:, j]),
+                        "acceleration": json_list(self.acceleration[:, j]),
+                        "acceleration_approx": json_list(self.approx["a"][:, j]),
+                        "psi": json_list(self.psi_deg[:, j]), "volume": json_list(self.volume[:, j]),
+                        "pressure": json_list(self.pressure[:, j]), "gas_force": json_list(self.gas_force[:, j]),
+                        "rod_com_x": json_list(self.rod_com[:, j, 0]), "rod_com_y": json_list(self.rod_com[:, j, 1]),
+                        "rod_com_radius": json_list(self.rod_com_radius[:, j]),
+                        "indicated_work": float(self.indicated_work[j])})
+        return out
+
+    def _reaction_dicts(self) -> dict:
+        rx = self.reactions
+        out = {"O:frame->crank": {"Fx": json_list(rx["R01"][:, 0]), "Fy": json_list(rx["R01"][:, 1])}}
+        for j in range(self.spec.n_cylinders):
+            out[f"A:crank->rod{j + 1}"] = {"Fx": json_list(rx["R12"][:, j, 0]), "Fy": json_list(rx["R12"][:, j, 1])}
+            out[f"B{j + 1}:rod{j + 1}->piston{j + 1}"] = {"Fx": json_list(rx["R23"][:, j, 0]),
+                                                         "Fy": json_list(rx["R23"][:, j, 1])}
+            out[f"S{j + 1}:frame->piston{j + 1}"] = {"normal": json_list(rx["N"][:, j])}
+        return out
+
+    def as_dict(self) -> dict:
+        """The JSON-ready report (keys documented in docs/forces.md)."""
+        s = self.spec
+        return {"name": s.name, "rpm": s.rpm, "omega": s.omega, "lambda": s.lam, "stroke": s.stroke,
+                "swept_volume": s.swept_volume, "compression_ratio": s.compression_ratio,
+                "phi": json_list(self.phi_deg), "cylinders": self._cylinder_dicts(),
+                "balancing": json_list(self.balancing), "reactions": self._reaction_dicts(),
+                "virtual_power_residual": json_list(self.virtual_power_residual),
+                "approx_error": self.approx_error, "cyclogram": self.cyclogram,
+                "indicated_work": float(self.indicated_work.sum()), "cycle_integral": self.cycle_integral,
+                "general_check": self.general_check}
+
+
+#: most crank positions :func:`analyse_engine` computes
+MAX_STEPS = 100_000
+
+
+def _approximation(spec: EngineSpec, mo: "_Motion", s, v, a) -> tuple[dict, dict]:
+    """λ-approximation arrays (s, v, a) and their largest errors against the exact motion."""
+    ap = lambda_approximation(mo.theta, spec.crank_radius, spec.rod_length)
+    w = mo.omega[:, None]
+    approx = {"s": ap["s"], "v": ap["s1"] * w, "a": ap["s2"] * w * w}
+    err = {}
+    for key, exact in (("s", s), ("v", v), ("a", a)):
+        d = np.abs(approx[key] - exact)
+        err[key] = {"max_abs": float(d.max()), "max_rel": float(d.max() / max(np.abs(exact).max(), 1e-300))}
+    return approx, err
+
+
+def _indicated_work(spec: EngineSpec, psi, vol, p_abs) -> np.ndarray:
+    """∮ p dV per cylinder: closed form for the indicator diagram, else the trapezoid
+    rule on the p–V polygon of the table."""
+    r, l, e = spec.crank_radius, spec.rod_length, spec.offset
+    Vc, Ap = spec.clearance_volume, spec.piston_area
+    W = np.zeros(spec.n_cylinders)
+    if spec.gas is None:
+        return W
+    for j in range(spec.n_cylinders):
+        if isinstance(spec.gas, IndicatorDiagram):
+            vols = [Vc + Ap * (spec.x_tdc - float(piston_kinematics(math.radians(t), r, l, e)["x"]))
+                    for t in (0.0, 180.0, 360.0, 540.0)]
+            W[j] = spec.gas.indicated_work(*vols)
+            continue
+        order = np.argsort(psi[:, j])
+        pj = np.append(p_abs[order, j], p_abs[order[0], j])
+        vj = np.append(vol[order, j], vol[order[0], j])
+        W[j] = float(np.sum(0.5 * (pj[1:] + pj[:-1]) * np.diff(vj)))
+    return W
+
+
+def _general_check(spec: EngineSpec, phi, rx: dict) -> tuple[dict, np.ndarray]:
+    """The general kinetostatics on :func:`engine_mechanism` against the closed form."""
+    m = engine_mechanism(spec)
+    st = engine_state(spec, phi, mechanism=m)
+    rods, pistons, bs, _ = _names(spec)
+    loads = [PointLoad(pistons[j], rx["Fg"][:, j], at=m.joint(bs[j]).at, name=f"gas{j + 1}")
+             for j in range(spec.n_cylinders)]
+    fr = forces(m, st, extra_loads=loads)
+    dMb = np.abs(fr.balancing[:, 0] - rx["Mb"])
+    scale = max(np.abs(rx["Mb"]).max(), 1e-300)
+    dR = max(float(np.nanmax(np.abs(fr.reaction("A", "crank", rods[j]) - rx["R12"][:, j])))
+             for j in range(spec.n_cylinders))
+    return ({"method": fr.method, "max_balancing_difference": float(np.nanmax(dMb)),
+             "relative_balancing_difference": float(np.nanmax(dMb) / scale),
+             "max_rod_reaction_difference": dR,
+             "max_relative_virtual_power_residual": float(np.nanmax(fr.relative_residual))}, fr.status)
 
 
 def analyse_engine(spec: EngineSpec, steps: int = 720, *, check: bool = True) -> EngineResult:
@@ -639,8 +501,9 @@ def analyse_engine(spec: EngineSpec, steps: int = 720, *, check: bool = True) ->
     ----------
     spec : EngineSpec
     steps : int
-        Crank positions, uniform over [0, 720) deg (include the dead centres when
-        ``steps`` is a multiple of 4 × the bank spacing in degrees).
+        Crank positions, uniform over [0, 720) deg, from 8 to ``MAX_STEPS``
+        (include the dead centres when ``steps`` is a multiple of 4 × the bank spacing
+        in degrees).
     check : bool
         Also run the general kinetostatics (:func:`kin.forces.forces`, group by group)
         on :func:`engine_mechanism` and report its largest difference from the closed
@@ -651,66 +514,23 @@ def analyse_engine(spec: EngineSpec, steps: int = 720, *, check: bool = True) ->
     ``cycle_integral`` is ``∮ M_b dφ`` by the periodic trapezoid rule; at constant speed
     it equals ``−Σ indicated_work`` (docs/forces.md check 3) up to the quadrature error.
     """
-    if steps < 8:
-        raise InputError(explain("steps", expected="at least 8", got=repr(steps)))
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or not 8 <= steps <= MAX_STEPS:
+        raise InputError(explain("steps", expected=f"an integer from 8 to {MAX_STEPS}", got=repr(steps)))
     spec.validate()
     phi_deg = np.arange(steps) * (720.0 / steps)
     phi = np.radians(phi_deg)
     mo = _motion(spec, phi)
     psi, vol, p_abs, gauge = _gas_gauge(spec, phi, mo)
     rx = engine_reactions(spec, phi, gauge, mo=mo)
-    r, l, e = spec.crank_radius, spec.rod_length, spec.offset
-    s = spec.x_tdc - mo.x
-    v = -mo.xd
-    a = -mo.xdd
-    ap = lambda_approximation(mo.theta, r, l)
-    w = mo.omega[:, None]
-    approx = {"s": ap["s"], "v": ap["s1"] * w, "a": ap["s2"] * w * w}
-    err = {}
-    for key, exact in (("s", s), ("v", v), ("a", a)):
-        d = np.abs(approx[key] - exact)
-        err[key] = {"max_abs": float(d.max()), "max_rel": float(d.max() / max(np.abs(exact).max(), 1e-300))}
+    s, v, a = spec.x_tdc - mo.x, -mo.xd, -mo.xdd
+    approx, err = _approximation(spec, mo, s, v, a)
     cross = np.abs(_cross(mo.vG, mo.aG))
     speed = np.linalg.norm(mo.vG, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = np.where(cross > 0, speed ** 3 / cross, np.inf)
-    # indicated work per cylinder
-    Vc, Ap = spec.clearance_volume, spec.piston_area
-    W = np.zeros(spec.n_cylinders)
-    for j in range(spec.n_cylinders):
-        if spec.gas is None:
-            continue
-        if isinstance(spec.gas, IndicatorDiagram):
-            vols = [Vc + Ap * (spec.x_tdc - float(piston_kinematics(math.radians(t), r, l, e)["x"]))
-                    for t in (0.0, 180.0, 360.0, 540.0)]
-            W[j] = spec.gas.indicated_work(*vols)
-        else:  # table: ∮ p dV by the trapezoid rule on the p-V polygon
-            order = np.argsort(psi[:, j])
-            pj, vj = p_abs[order, j], vol[order, j]
-            pj = np.append(pj, pj[0])
-            vj = np.append(vj, vj[0])
-            W[j] = float(np.sum(0.5 * (pj[1:] + pj[:-1]) * np.diff(vj)))
-    dphi = math.radians(720.0 / steps)
-    cyc = float(np.sum(rx["Mb"]) * dphi)
-    status = np.full(steps, "ok", dtype=object)
-    check_out: dict[str, Any] = {}
-    if check:
-        m = engine_mechanism(spec)
-        st = engine_state(spec, phi, mechanism=m)
-        rods, pistons, bs, _ = _names(spec)
-        loads = [PointLoad(pistons[j], rx["Fg"][:, j], at=m.joint(bs[j]).at, name=f"gas{j + 1}")
-                 for j in range(spec.n_cylinders)]
-        fr = forces(m, st, extra_loads=loads)
-        dMb = np.abs(fr.balancing[:, 0] - rx["Mb"])
-        scale = max(np.abs(rx["Mb"]).max(), 1e-300)
-        dR = max(float(np.nanmax(np.abs(fr.reaction("A", "crank", rods[j]) - rx["R12"][:, j])))
-                 for j in range(spec.n_cylinders))
-        check_out = {"method": fr.method, "max_balancing_difference": float(np.nanmax(dMb)),
-                     "relative_balancing_difference": float(np.nanmax(dMb) / scale),
-                     "max_rod_reaction_difference": dR,
-                     "max_relative_virtual_power_residual": float(np.nanmax(fr.relative_residual))}
-        status = fr.status
+    cyc = float(np.sum(rx["Mb"]) * math.radians(720.0 / steps))
+    check_out, status = _general_check(spec, phi, rx) if check else ({}, np.full(steps, "ok", dtype=object))
     return EngineResult(spec, phi_deg, np.degrees(mo.theta), s, v, a, approx, err, psi, vol, p_abs,
                         gauge * spec.piston_area * -1.0, mo.G, mo.vG, mo.aG, rho,
                         {k: rx[k] for k in ("R01", "R12", "R23", "N")}, rx["Mb"], rx["residual"],
-                        rx["scale"], W, cyc, cyclogram(spec), check_out, status)
+                        rx["scale"], _indicated_work(spec, psi, vol, p_abs), cyc, cyclogram(spec), check_out, status)

@@ -10,11 +10,11 @@ kinematics, pressure, balancing, cyclogram, rod_com and reactions PNGs.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
+from multiloop.kin.engine import MAX_STEPS, analyse_engine, load_engine
 from multiloop.outputs import Outputs, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
@@ -28,52 +28,10 @@ def add_arguments(p) -> None:
     p.add_argument("--no-check", action="store_true", help="skip the general kinetostatics cross-check")
 
 
-def _clean(a):
-    a = np.asarray(a, float)
-    lst = a.tolist()
-
-    def fix(x):
-        if isinstance(x, list):
-            return [fix(y) for y in x]
-        return x if math.isfinite(x) else None
-    return fix(lst)
-
-
-def report_dict(res) -> dict:
-    """JSON-ready dict of an :class:`~kin.engine.EngineResult` (docs/forces.md)."""
-    s = res.spec
-    cyl = []
-    for j, c in enumerate(s.cylinders):
-        cyl.append({"name": c.name, "bank": c.bank, "firing": c.firing,
-                    "displacement": _clean(res.displacement[:, j]), "velocity": _clean(res.velocity[:, j]),
-                    "acceleration": _clean(res.acceleration[:, j]),
-                    "acceleration_approx": _clean(res.approx["a"][:, j]),
-                    "psi": _clean(res.psi_deg[:, j]), "volume": _clean(res.volume[:, j]),
-                    "pressure": _clean(res.pressure[:, j]), "gas_force": _clean(res.gas_force[:, j]),
-                    "rod_com_x": _clean(res.rod_com[:, j, 0]), "rod_com_y": _clean(res.rod_com[:, j, 1]),
-                    "rod_com_radius": _clean(res.rod_com_radius[:, j]),
-                    "indicated_work": float(res.indicated_work[j])})
-    rx = res.reactions
-    reactions = {"O:frame->crank": {"Fx": _clean(rx["R01"][:, 0]), "Fy": _clean(rx["R01"][:, 1])}}
-    for j in range(s.n_cylinders):
-        reactions[f"A:crank->rod{j + 1}"] = {"Fx": _clean(rx["R12"][:, j, 0]), "Fy": _clean(rx["R12"][:, j, 1])}
-        reactions[f"B{j + 1}:rod{j + 1}->piston{j + 1}"] = {"Fx": _clean(rx["R23"][:, j, 0]),
-                                                             "Fy": _clean(rx["R23"][:, j, 1])}
-        reactions[f"S{j + 1}:frame->piston{j + 1}"] = {"normal": _clean(rx["N"][:, j])}
-    return {"name": s.name, "rpm": s.rpm, "omega": s.omega, "lambda": s.lam, "stroke": s.stroke,
-            "swept_volume": s.swept_volume, "compression_ratio": s.compression_ratio,
-            "phi": _clean(res.phi_deg), "cylinders": cyl, "balancing": _clean(res.balancing),
-            "reactions": reactions, "virtual_power_residual": _clean(res.virtual_power_residual),
-            "approx_error": res.approx_error, "cyclogram": res.cyclogram,
-            "indicated_work": float(res.indicated_work.sum()), "cycle_integral": res.cycle_integral,
-            "general_check": res.general_check}
-
-
 def run(args) -> int:
-    from multiloop.kin.engine import analyse_engine, load_engine  # noqa: PLC0415
     from multiloop.commands.forces import _resolve  # noqa: PLC0415
-    if args.steps < 8:
-        raise InputError(explain("--steps", expected="at least 8", got=repr(args.steps)))
+    if not 8 <= args.steps <= MAX_STEPS:
+        raise InputError(explain("--steps", expected=f"an integer from 8 to {MAX_STEPS}", got=repr(args.steps)))
     outs = Outputs("multiloop engine")
     if args.plot is not None:
         outs.directory(args.plot, "--plot")
@@ -88,7 +46,7 @@ def run(args) -> int:
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))
     if args.json:
-        print(json.dumps(report_dict(res)))
+        print(json.dumps(res.as_dict()))
         return 0
     cyc = res.cyclogram
     W = res.indicated_work.sum()
