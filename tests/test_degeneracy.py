@@ -36,3 +36,24 @@ def test_cut_joint_found():
                                 ["x", "y"], ["y", "z"], ["z", "w"], ["w", "x"]])
     fr = fractionation(m)
     assert fr.is_fractionated and fr.cut_joints == ("J1",) and fr.cut_links == ("x",)
+
+
+@given(chains(min_links=3, max_links=10, multiple=False))
+def test_mincut_pair_pruning_is_exact(m):
+    # the min-cut route decides existence on the pairs with a non-plain link only
+    # (topo.degeneracy._link_pairs); the full pair set and the definition must agree
+    from multiloop.topo.degeneracy import _cut_network, _link_pairs, _mincut_search
+
+    net = _cut_network(m)
+    pruned = _mincut_search(m, _link_pairs(m, skip_plain=True), net)
+    full = _mincut_search(m, _link_pairs(m, skip_plain=False), net)
+    assert (pruned is None) == (full is None) == (find_rigid_subchain(m, "exhaustive") is None)
+
+
+def test_long_ring_and_ring_with_triangle():
+    # a 40-link single loop has no rigid sub-chain; a triangle hung on it is one
+    ring = [[f"l{i}", f"l{(i + 1) % 40}"] for i in range(40)]
+    assert find_rigid_subchain(chain_from_joint_lists(ring)) is None
+    tri = ring + [["l0", "t1"], ["t1", "t2"], ["t2", "l0"], ["l0", "t2"]]
+    found = find_rigid_subchain(chain_from_joint_lists(tri))
+    assert found is not None and subchain_deficit(chain_from_joint_lists(tri), found) <= 0

@@ -25,6 +25,8 @@ from itertools import combinations
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from .graphs import incidence_graph
 from .model import Mechanism
@@ -78,70 +80,125 @@ def _exhaustive(m: Mechanism) -> tuple[str, ...] | None:
     return tuple(names[i] for i in range(len(names)) if (best >> i) & 1)
 
 
-def _mincut_best(m: Mechanism, forced_in: tuple[str, ...], forced_out: tuple[str, ...] = ()):
-    """Maximise 2c(S) − 3|S| over S ⊇ forced_in, S ∩ forced_out = ∅ by a minimum cut.
+@dataclass(frozen=True, slots=True)
+class _CutNetwork:
+    """The s–t network of the min-cut route, as integer COO arrays.
 
-    With binary s_l (link chosen) and y_J (joint active), minimise the submodular
-    ``E = Σ_l 3 s_l + Σ_J (2 − 2|J|) y_J + 2 Σ_J Σ_{l∈J} y_J (1 − s_l)``, whose minimum
-    over y is ``3|S| − 2c(S)``: source side = value 1; edge J→l (capacity 2) is cut
-    when the joint is active and its link is not; unary costs go to the terminals.
-    Returns (max value, chosen links).
+    Vertices: source 0, sink 1, links ``2 … n+1``, joints after them.  With binary
+    ``s_l`` (link chosen) and ``y_J`` (joint active), the submodular energy
+    ``E = Σ_l 3 s_l + Σ_J (2 − 2|J|) y_J + 2 Σ_J Σ_{l∈J} y_J (1 − s_l)`` has minimum
+    over y equal to ``3|S| − 2c(S)``: source side = value 1; edge J→l (capacity 2) is
+    cut when the joint is active and its link is not; unary costs go to the
+    terminals (a negative one becomes a source edge plus the constant ``const``).
     """
-    g = nx.DiGraph()
-    src, snk = "__s", "__t"
-    big = 10 ** 6
-    # variables: link nodes ("l", x), joint nodes ("j", name); source side = value 1.
-    # objective to minimise: Σ_l 3 s_l + Σ_J 2 y_J − 2 Σ_J Σ_{l∈J} y_J s_l
-    # rewrite −2 y s = 2 y (1 − s) − 2 y  → cost 2 when y=1, s=0 (edge y→s cap 2),
-    # and the −2 y term per incidence is a unary reward on y.
-    unary: dict = {}
-    for lk in m.link_names:
-        unary[("l", lk)] = 3.0
-    for j in m.joints:
-        unary[("j", j.name)] = 2.0 - 2.0 * len(j.links)
+
+    n_vertices: int
+    rows: np.ndarray
+    cols: np.ndarray
+    caps: np.ndarray
+    const: int
+    link_index: dict
+
+
+def _cut_network(m: Mechanism) -> _CutNetwork:
+    link_index = {x: 2 + i for i, x in enumerate(m.link_names)}
+    n_links = len(link_index)
+    rows, cols, caps = [], [], []
+    const = 0
+    for x, v in link_index.items():          # cost 3 when chosen: edge l→t
+        rows.append(v), cols.append(1), caps.append(3)
+    for k, j in enumerate(m.joints):
+        jv = 2 + n_links + k
         for x in j.links:
-            g.add_edge(("j", j.name), ("l", x), capacity=2.0)
-    const = 0.0
-    for v, w in unary.items():
-        g.add_node(v)
-        if w >= 0:   # cost w when v = 1 (source side): edge v→t
-            g.add_edge(v, snk, capacity=w)
-        else:        # cost −w when v = 0: edge s→v; constant w
-            g.add_edge(src, v, capacity=-w)
-            const += w
-    for x in forced_in:
-        g.add_edge(src, ("l", x), capacity=big)
-    for x in forced_out:
-        g.add_edge(("l", x), snk, capacity=big)
-    g.add_node(src)
-    g.add_node(snk)
-    cut, (side_s, _) = nx.minimum_cut(g, src, snk)
-    chosen = tuple(x for x in m.link_names if ("l", x) in side_s)
-    value = -(cut + const)   # = max 2c(S) − 3|S|
-    return value, chosen
+            rows.append(jv), cols.append(link_index[x]), caps.append(2)
+        w = 2 - 2 * len(j.links)             # <= −2: reward when active: edge s→J
+        rows.append(0), cols.append(jv), caps.append(-w)
+        const += w
+    return _CutNetwork(2 + n_links + m.n_joints, np.array(rows, np.int32), np.array(cols, np.int32),
+                       np.array(caps, np.int32), const, link_index)
 
 
-def _mincut(m: Mechanism) -> tuple[str, ...] | None:
-    n = m.n_links
+def _mincut_best(m: Mechanism, forced_in: tuple[str, ...], forced_out: tuple[str, ...] = (),
+                 net: _CutNetwork | None = None):
+    """Maximise 2c(S) − 3|S| over S ⊇ forced_in, S ∩ forced_out = ∅ by a minimum cut
+    (the network of :class:`_CutNetwork`; SciPy's compiled Dinic max-flow, the source
+    side read off the residual graph).  Returns (max value, chosen links)."""
+    net = _cut_network(m) if net is None else net
+    big = 10 ** 6
+    extra = [(0, net.link_index[x]) for x in forced_in] + [(net.link_index[x], 1) for x in forced_out]
+    rows = np.concatenate([net.rows, np.array([r for r, _ in extra], np.int32)])
+    cols = np.concatenate([net.cols, np.array([c for _, c in extra], np.int32)])
+    caps = np.concatenate([net.caps, np.full(len(extra), big, np.int32)])
+    nv = net.n_vertices
+    cap = csr_array((caps, (rows, cols)), shape=(nv, nv))
+    cap.sum_duplicates()
+    res = maximum_flow(cap, 0, 1)
+    residual = (cap - res.flow).tocsr()
+    residual.data[residual.data < 0] = 0
+    residual.eliminate_zeros()
+    side_s = set(breadth_first_order(residual, 0, directed=True, return_predecessors=False).tolist())
+    chosen = tuple(x for x, v in net.link_index.items() if v in side_s)
+    return -(int(res.flow_value) + net.const), chosen   # = max 2c(S) − 3|S|
+
+
+def _plain_links(m: Mechanism) -> set[str]:
+    """Binary links whose two joints are simple."""
+    deg: dict[str, int] = {}
+    on_multiple: set[str] = set()
+    for j in m.joints:
+        for x in j.links:
+            deg[x] = deg.get(x, 0) + 1
+        if len(j.links) > 2:
+            on_multiple.update(j.links)
+    return {x for x in m.link_names if deg.get(x, 0) == 2 and x not in on_multiple}
+
+
+def _link_pairs(m: Mechanism, skip_plain: bool) -> list[tuple[str, str]]:
+    """Pairs of links on a common joint, sorted; ``skip_plain`` drops the pairs of two
+    plain links (binary, on simple joints).
+
+    Why that is exact for the existence of a rigid sub-chain: in an inclusion-minimal
+    rigid S every link carries at least two of its pairs (removing a link that carries
+    d pairs changes ``3(|S| − 1) − 2c(S)`` by ``2d − 3``); with ``|S| >= 4`` the
+    average is ``2c/|S| >= 3 − 3/|S| > 2``, so S holds a link with three pairs, not a
+    plain one; with ``|S| <= 3`` and only plain links, S is a 2- or 3-link loop whose
+    links have no other joint, i.e. the whole (connected) chain, which is not proper.
+    A minimal S is connected, so it holds a joint pair with a non-plain link.
+    """
+    plain = _plain_links(m) if skip_plain else set()
     pairs = set()
     for j in m.joints:
         for a, b in combinations(sorted(j.links), 2):
-            pairs.add((a, b))
+            if not (a in plain and b in plain):
+                pairs.add((a, b))
+    return sorted(pairs)
+
+
+def _mincut_search(m: Mechanism, pairs, net: _CutNetwork) -> tuple[str, ...] | None:
+    """The smallest rigid set over the min cuts forced through each pair."""
+    n = m.n_links
     best = None
-    for a, b in sorted(pairs):
-        value, chosen = _mincut_best(m, (a, b))
+    for a, b in pairs:
+        value, chosen = _mincut_best(m, (a, b), net=net)
         if value + 3 < 0:      # no subset containing a and b is rigid
             continue
         candidates = [(value, chosen)]
         if len(chosen) == n:   # the whole chain qualifies (F <= 0): force one link out
-            candidates = [_mincut_best(m, (a, b), (c,)) for c in m.link_names if c not in (a, b)]
+            candidates = [_mincut_best(m, (a, b), (c,), net=net) for c in m.link_names if c not in (a, b)]
         for value, chosen in candidates:
             if value + 3 >= 0 and 2 <= len(chosen) < n:
                 if best is None or (len(chosen), chosen) < (len(best), best):
                     best = chosen
-    if best is None:
+    return best
+
+
+def _mincut(m: Mechanism) -> tuple[str, ...] | None:
+    """Existence over the pairs with a non-plain link (:func:`_link_pairs`); when a rigid
+    set exists, the search over every pair names the same set as before the pruning."""
+    net = _cut_network(m)
+    if _mincut_search(m, _link_pairs(m, skip_plain=True), net) is None:
         return None
-    return _minimise(m, best)
+    return _minimise(m, _mincut_search(m, _link_pairs(m, skip_plain=False), net))
 
 
 def _minimise(m: Mechanism, subset: tuple[str, ...]) -> tuple[str, ...]:

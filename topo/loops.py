@@ -37,11 +37,12 @@ completes it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from operator import itemgetter
 
 import networkx as nx
+import rustworkx as rx
 
 from .errors import TopologyError, explain
-from .graphs import incidence_graph
 from .model import Mechanism
 
 __all__ = ["LoopAssortment", "loop_assortment", "block_embeddings"]
@@ -82,6 +83,9 @@ class LoopAssortment:
 def loop_assortment(m: Mechanism) -> LoopAssortment:
     """Loop assortment [La] of a chain under the canonical rule (module docstring).
 
+    A chain without a cycle (``K = 0``, e.g. two links on one joint) has no loops:
+    ``sizes == ()`` and ``outer is None``.
+
     Examples
     --------
     >>> from multiloop.topo.model import chain_from_joint_lists
@@ -89,15 +93,18 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
     ...         ["f", "b"]]
     >>> loop_assortment(chain_from_joint_lists(watt)).sizes
     (4, 4, 6)
+    >>> la = loop_assortment(chain_from_joint_lists([["a", "b"]]))
+    >>> la.sizes, la.outer
+    ((), None)
     """
-    g = incidence_graph(m)
-    adjacency = {v: list(g[v]) for v in g}
+    adjacency = _incidence_adjacency(m)
+    blocks = _blocks(adjacency)
+    if not blocks:                   # a tree: no loop at all
+        return LoopAssortment(True, (), None, 0)
     inner: list[int] = []
     outer_total = 0
     n_emb = 0
-    for block in nx.biconnected_components(g):
-        if len(block) < 3:           # a bridge: no face of its own
-            continue
+    for block in blocks:
         sub = {v: [w for w in adjacency[v] if w in block] for v in block}
         best = _best_block_faces(sub)
         if best is None:
@@ -108,17 +115,68 @@ def loop_assortment(m: Mechanism) -> LoopAssortment:
         outer_total += faces[-1]
         inner.extend(faces[:-1])
     # bridges (dangling links) add their link corners to the outer face
-    corners_in_blocks = sum(inner) + outer_total
-    total_corners = sum(1 for u, v in g.edges())  # every incidence is one link corner
-    outer_total += total_corners - corners_in_blocks
-    if outer_total == 0 and not inner:
-        return LoopAssortment(True, (), None, n_emb)
+    total_corners = sum(len(j.links) for j in m.joints)   # every incidence is one link corner
+    outer_total += total_corners - (sum(inner) + outer_total)
     sizes = tuple(sorted(inner + [outer_total]))
     return LoopAssortment(True, sizes, max(sizes), n_emb)
 
 
+def _incidence_adjacency(m: Mechanism) -> dict[tuple, list[tuple]]:
+    """The link–joint incidence graph (:func:`topo.graphs.incidence_graph`) as a plain
+    adjacency mapping (no attributes: the search only needs the structure)."""
+    adj: dict[tuple, list[tuple]] = {("L", x): [] for x in m.link_names}
+    for j in m.joints:
+        jv = ("J", j.name)
+        adj[jv] = [("L", x) for x in j.links]
+        for x in j.links:
+            adj[("L", x)].append(jv)
+    return adj
+
+
+def _blocks(adjacency) -> list[set]:
+    """Vertex sets of the 2-connected blocks with a cycle (three or more vertices)."""
+    index = {v: i for i, v in enumerate(adjacency)}
+    order = list(adjacency)
+    g = rx.PyGraph(multigraph=False)
+    g.add_nodes_from(range(len(order)))
+    g.add_edges_from_no_data([(index[u], index[v]) for u in adjacency for v in adjacency[u]
+                              if index[u] < index[v]])
+    comps: dict[int, set] = {}
+    for (a, b), c in rx.biconnected_components(g).items():
+        comps.setdefault(c, set()).update((order[a], order[b]))
+    return [b for _, b in sorted(comps.items()) if len(b) >= 3]
+
+
+def _planar(n: int, edges) -> bool:
+    """Planarity of a (multi)graph on vertices ``0 … n−1`` (rustworkx's compiled
+    left-right test; the same answer as networkx's ``check_planarity``)."""
+    g = rx.PyGraph()
+    g.add_nodes_from(range(n))
+    g.add_edges_from_no_data(list(edges))
+    return rx.is_planar(g)
+
+
 def _is_link(v) -> bool:
     return v[0] == "L"
+
+
+@dataclass(frozen=True, slots=True)
+class _ReducedBlock:
+    """A block with its degree-2 vertices suppressed.
+
+    ``keep`` are the vertices of degree >= 3; ``edges[e] = (u, v, weight, interior)``
+    with ``weight`` the number of link vertices strictly inside the suppressed path;
+    ``pairs[e]`` is the same edge between indices into ``keep``.
+    """
+
+    keep: tuple
+    edges: tuple
+    pairs: tuple[tuple[int, int], ...]
+
+    @property
+    def n_faces(self) -> int:
+        """Faces of every embedding (Euler): ``E − V + 2``."""
+        return len(self.edges) - len(self.keep) + 2
 
 
 def _reduce(block):
@@ -145,6 +203,12 @@ def _reduce(block):
             seen_paths.add(key)
             edges.append((u, cur, weight, tuple(path[1:-1])))
     return keep, edges
+
+
+def _reduced_block(block) -> _ReducedBlock:
+    keep, edges = _reduce(block)
+    kidx = {v: i for i, v in enumerate(keep)}
+    return _ReducedBlock(tuple(keep), tuple(edges), tuple((kidx[u], kidx[v]) for u, v, *_r in edges))
 
 
 def _simple_cycles(vertices, edges):
@@ -177,36 +241,188 @@ def _simple_cycles(vertices, edges):
     return list(unique.items())
 
 
-def _reduced_graph(n_keep: int, edges, subdivide: int = 0) -> nx.Graph:
-    """The reduced block as a simple graph (planarity is unchanged by suppressing
-    degree-2 vertices and merging parallel paths); reduced edges in the bit mask
-    ``subdivide`` keep one subdivision vertex so that they stay distinct."""
-    g = nx.Graph()
-    g.add_nodes_from(range(n_keep))
-    for e, (u, v, *_r) in enumerate(edges):
-        if (subdivide >> e) & 1:
-            g.add_edge(u, ("s", e))
-            g.add_edge(("s", e), v)
-        else:
-            g.add_edge(u, v)
-    return g
-
-
-def _can_be_face(n_keep: int, edges, mask: int, path) -> bool:
+def _can_be_face(n_keep: int, pairs, mask: int, path) -> bool:
     """Cycle C is a face of some planar embedding iff the graph plus an apex joined to
-    every vertex of C is planar (the apex sits inside the face)."""
-    g = _reduced_graph(n_keep, edges, mask)
-    apex = ("apex",)
-    g.add_edges_from((apex, v) for v in path)
-    g.add_edges_from((apex, ("s", e)) for e in range(len(edges)) if (mask >> e) & 1)
-    return nx.check_planarity(g)[0]
+    every vertex of C is planar (the apex sits inside the face).  Reduced edges of C
+    keep one subdivision vertex (``n_keep + e``) so that parallel edges stay apart."""
+    apex = n_keep + len(pairs)
+    edges = []
+    for e, (u, v) in enumerate(pairs):
+        if (mask >> e) & 1:
+            edges += [(u, n_keep + e), (n_keep + e, v), (apex, n_keep + e)]
+        else:
+            edges.append((u, v))
+    edges += [(apex, v) for v in path]
+    return _planar(apex + 1, edges)
+
+
+@dataclass(frozen=True, slots=True)
+class _FaceCandidates:
+    """The cycles that may be faces, with what the exact-cover search needs.
+
+    ``sizes[c]`` is the cycle's size in links; ``masks[c]`` its reduced edges as a bit
+    mask and ``cycle_edges[c]`` the same as a tuple; ``by_edge[e]`` the cycles through
+    edge ``e`` (smallest first); ``corners[c]`` the ``(vertex, edge in, edge out)``
+    corners of the cycle at the reduced vertices.
+    """
+
+    sizes: tuple[int, ...]
+    masks: tuple[int, ...]
+    cycle_edges: tuple[tuple[int, ...], ...]
+    by_edge: tuple[tuple[int, ...], ...]
+    corners: tuple[tuple[tuple[int, int, int], ...], ...]
+
+
+def _face_candidates(rb: _ReducedBlock, use_filter: bool) -> _FaceCandidates:
+    """Every simple cycle of the reduced block (that passes the apex test when
+    ``use_filter``), with its size in links and its corners."""
+    keep, edges = rb.keep, rb.edges
+    n_edges = len(edges)
+    vertex_edges: dict = {v: [] for v in keep}
+    for e, (u, v, *_rest) in enumerate(edges):
+        vertex_edges[u].append(e)
+        vertex_edges[v].append(e)
+    sizes, masks, corners = [], [], []
+    for mask, path in _simple_cycles(keep, edges):
+        if use_filter and not _can_be_face(len(keep), rb.pairs, mask, path):
+            continue
+        # interior link vertices of its edges + link vertices of the cycle
+        w = sum(edges[e][2] for e in range(n_edges) if (mask >> e) & 1)
+        sizes.append(w + sum(1 for v in path if _is_link(keep[v])))
+        masks.append(mask)
+        cs = []
+        for v_idx in path:
+            pair = [e for e in vertex_edges[keep[v_idx]] if (mask >> e) & 1]
+            # (two parallel edges closing a 2-cycle both sit at v: pair has 2 entries)
+            cs.append((v_idx, pair[0], pair[-1]))
+        corners.append(tuple(cs))
+    cycle_edges = tuple(tuple(e for e in range(n_edges) if (mk >> e) & 1) for mk in masks)
+    by_edge = tuple(tuple(sorted((c for c in range(len(masks)) if (masks[c] >> e) & 1),
+                                 key=sizes.__getitem__)) for e in range(n_edges))
+    return _FaceCandidates(tuple(sizes), tuple(masks), cycle_edges, by_edge, tuple(corners))
 
 
 class _BudgetExceeded(Exception):
     pass
 
 
-def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: bool = True,
+class _FaceSearch:
+    """Exact-cover search over the candidate faces of a reduced block.
+
+    A face set is an embedding when it covers every reduced edge exactly twice, has
+    ``E − V + 2`` faces, and at every vertex the corners close into one wheel (the
+    rotation).  ``partner[v][e]`` holds the edges joined to ``e`` by the corners chosen
+    so far at ``v``; ``lower[e]`` is the first face chosen *for* edge ``e`` while it was
+    uncovered: the other face through ``e`` must come later in the candidate order,
+    so every face set is reached along exactly one branch.
+    """
+
+    def __init__(self, rb: _ReducedBlock, cand: _FaceCandidates, limit: int,
+                 node_budget: int | None):
+        self.cand, self.limit, self.node_budget = cand, limit, node_budget
+        self.n_faces, self.n_edges = rb.n_faces, len(rb.edges)
+        self.full = (1 << self.n_edges) - 1
+        self.degree = [0] * len(rb.keep)
+        for u, v in rb.pairs:
+            self.degree[u] += 1
+            self.degree[v] += 1
+        self.partner: list[dict[int, list[int]]] = [{} for _ in rb.keep]
+        for e, (u, v) in enumerate(rb.pairs):
+            self.partner[u][e] = []
+            self.partner[v][e] = []
+        self.lower = [-1] * self.n_edges
+        self._lower_of = [itemgetter(*edges, edges[0]) for edges in cand.cycle_edges]
+        self.count = 0
+        self.nodes = 0
+
+    def _path_end(self, v_idx: int, start: int) -> tuple[int, int]:
+        """Follow corners from edge ``start`` at vertex v; return (end edge, edges seen)."""
+        links = self.partner[v_idx]
+        prev, cur, seen = -1, start, 1
+        while True:
+            nxt = [e for e in links[cur] if e != prev]
+            if not nxt:
+                return cur, seen
+            prev, cur = cur, nxt[0]
+            seen += 1
+            if cur == start:
+                return cur, seen - 1
+
+    def _corners_ok(self, c: int) -> bool:
+        """Adding cycle c must not close a wheel early at any vertex."""
+        for v_idx, e1, e2 in self.cand.corners[c]:
+            if self.degree[v_idx] < 3:
+                continue
+            end, seen = self._path_end(v_idx, e1)
+            if end == e2 and seen < self.degree[v_idx]:
+                return False
+        return True
+
+    def _toggle(self, c: int, on: bool) -> None:
+        for v_idx, e1, e2 in self.cand.corners[c]:
+            links = self.partner[v_idx]
+            if on:
+                links[e1].append(e2)
+                links[e2].append(e1)
+            else:
+                links[e1].remove(e2)
+                links[e2].remove(e1)
+
+    def _allowed(self, c: int) -> bool:
+        # lower[e] >= 0 only for edges already covered once, so no test of used1 is needed
+        return max(self._lower_of[c](self.lower)) < c
+
+    def _branch_edge(self, used1: int, used2: int) -> tuple[int, list[int]]:
+        """The uncovered edge with the fewest candidate faces (edges covered once need
+        exactly one more face: most constrained, looked at first)."""
+        masks, by_edge = self.cand.masks, self.cand.by_edge
+        best_e, best_opts = -1, None
+        once = used1 & ~used2
+        for e in (range(self.n_edges) if not once else [e for e in range(self.n_edges) if (once >> e) & 1]):
+            if (used2 >> e) & 1:
+                continue
+            opts = [c for c in by_edge[e] if not (masks[c] & used2) and self._allowed(c)]
+            if best_opts is None or len(opts) < len(best_opts):
+                best_e, best_opts = e, opts
+                if len(opts) <= 1:
+                    break
+        return best_e, best_opts or []
+
+    def _tick(self) -> None:
+        if self.count >= self.limit:   # the minimum over a truncated enumeration is not canonical
+            raise TopologyError(explain(
+                "loop assortment", expected=f"at most {self.limit} planar embeddings of a block",
+                got="more", hint="[La] cannot be chosen canonically here; use loops=False"))
+        self.nodes += 1
+        if self.node_budget is not None and self.nodes > self.node_budget:
+            raise _BudgetExceeded
+
+    def search(self, used1: int = 0, used2: int = 0, chosen: list[int] | None = None):
+        """Yield the sorted face sizes of every embedding below this node."""
+        chosen = [] if chosen is None else chosen
+        self._tick()
+        if used2 == self.full or len(chosen) == self.n_faces:
+            # every edge twice and no wheel closed early: each rotation is one cycle
+            if used2 == self.full and len(chosen) == self.n_faces:
+                self.count += 1
+                yield tuple(sorted(self.cand.sizes[c] for c in chosen))
+            return
+        e, opts = self._branch_edge(used1, used2)
+        uncovered = not (used1 >> e) & 1
+        for c in [c for c in opts if self._corners_ok(c)]:
+            mask = self.cand.masks[c]
+            chosen.append(c)
+            self._toggle(c, True)
+            if uncovered:
+                self.lower[e] = c
+            yield from self.search(used1 | mask, used2 | (mask & used1), chosen)
+            if uncovered:
+                self.lower[e] = -1
+            self._toggle(c, False)
+            chosen.pop()
+
+
+def block_embeddings(block, limit: int = MAX_EMBEDDINGS, use_filter: bool = True,
                      node_budget: int | None = None):
     """Yield the distinct face-size lists of the planar embeddings of a 2-connected block.
 
@@ -217,155 +433,25 @@ def block_embeddings(block: nx.Graph, limit: int = MAX_EMBEDDINGS, use_filter: b
     (in links), and embeddings with the same sizes are yielded once.  ``use_filter``
     applies the apex planarity test to every cycle first (slower per cycle, but it
     keeps dense blocks tractable); ``node_budget`` aborts the search with
-    ``_BudgetExceeded`` after that many search nodes.
+    ``_BudgetExceeded`` after that many search nodes.  ``block`` is a networkx graph
+    or an adjacency mapping.
+
+    Phases: reduce (suppress degree-2 vertices, :class:`_ReducedBlock`) → planarity
+    of the reduced graph → candidate faces (:class:`_FaceCandidates`) → exact-cover
+    search (:class:`_FaceSearch`).
     """
     if isinstance(block, nx.Graph):
         block = {v: list(block[v]) for v in block}
-    keep, edges = _reduce(block)
-    if not keep:   # the block is a single cycle
+    rb = _reduced_block(block)
+    if not rb.keep:   # the block is a single cycle
         s = sum(1 for v in block if _is_link(v))
         yield (s, s)
         return
-    n_faces = len(edges) - len(keep) + 2
-    kidx = {v: i for i, v in enumerate(keep)}
-    idx_edges = [(kidx[u], kidx[v]) for u, v, *_r in edges]
-    if len(keep) > 4 and not nx.check_planarity(_reduced_graph(len(keep), idx_edges))[0]:
+    if len(rb.keep) > 4 and not _planar(len(rb.keep), rb.pairs):
         return   # (every graph on at most 4 vertices is planar)
-    cycles = _simple_cycles(keep, edges)
-    vertex_edges = {v: [] for v in keep}
-    for e, (u, v, *_rest) in enumerate(edges):
-        vertex_edges[u].append(e)
-        vertex_edges[v].append(e)
-    # size of a cycle in links: interior link vertices of its edges + link vertices of the cycle
-    sizes = []
-    masks = []
-    verts = []
-    for mask, path in cycles:
-        if use_filter and not _can_be_face(len(keep), idx_edges, mask, path):
-            continue
-        w = sum(edges[e][2] for e in range(len(edges)) if (mask >> e) & 1)
-        w += sum(1 for v in path if _is_link(keep[v]))
-        sizes.append(w)
-        masks.append(mask)
-        verts.append(path)
-    n_edges = len(edges)
-    by_edge: list[list[int]] = [[] for _ in range(n_edges)]
-    for c, mask in enumerate(masks):
-        for e in range(n_edges):
-            if (mask >> e) & 1:
-                by_edge[e].append(c)
-    for lst in by_edge:
-        lst.sort(key=lambda c: sizes[c])
-    count = 0
-    # corners of every cycle: (vertex, edge in, edge out) at each reduced vertex
-    cycle_corners = []
-    for c, path in enumerate(verts):
-        mask = masks[c]
-        cs = []
-        for v_idx in path:
-            v = keep[v_idx]
-            pair = [e for e in vertex_edges[v] if (mask >> e) & 1]
-            if len(pair) == 2:
-                cs.append((v_idx, pair[0], pair[1]))
-            else:   # two parallel edges closing a 2-cycle both sit at v: pair has 2 entries
-                cs.append((v_idx, pair[0], pair[-1]))
-        cycle_corners.append(cs)
-    degree = [len(vertex_edges[v]) for v in keep]
-    # partner[v][e] = edges joined to e by corners chosen so far at v
-    partner: list[dict[int, list[int]]] = [{e: [] for e in vertex_edges[v]} for v in keep]
-
-    def path_end(v_idx: int, start: int) -> tuple[int, int]:
-        """Follow corners from edge ``start`` at vertex v; return (end edge, edges seen)."""
-        prev, cur, seen = -1, start, 1
-        while True:
-            nxt = [e for e in partner[v_idx][cur] if e != prev]
-            if not nxt:
-                return cur, seen
-            prev, cur = cur, nxt[0]
-            seen += 1
-            if cur == start:
-                return cur, seen - 1
-
-    def corners_ok(c: int) -> bool:
-        """Adding cycle c must not close a wheel early at any vertex."""
-        for v_idx, e1, e2 in cycle_corners[c]:
-            if degree[v_idx] < 3:
-                continue
-            end, seen = path_end(v_idx, e1)
-            if end == e2 and seen < degree[v_idx]:
-                return False
-        return True
-
-    def add(c: int) -> None:
-        for v_idx, e1, e2 in cycle_corners[c]:
-            partner[v_idx][e1].append(e2)
-            partner[v_idx][e2].append(e1)
-
-    def remove(c: int) -> None:
-        for v_idx, e1, e2 in cycle_corners[c]:
-            partner[v_idx][e1].remove(e2)
-            partner[v_idx][e2].remove(e1)
-
-    full = (1 << n_edges) - 1
-    # lower[e] = index of the first face chosen *for* edge e while e was uncovered:
-    # the other face through e must have a larger index, so every face set is
-    # reached along exactly one branch.
-    lower = [-1] * n_edges
-
-    cycle_edges = [tuple(e for e in range(n_edges) if (mk >> e) & 1) for mk in masks]
-
-    def allowed(c: int, used1: int) -> bool:
-        for e in cycle_edges[c]:
-            if c <= lower[e] and (used1 >> e) & 1:
-                return False
-        return True
-
-    nodes = 0
-
-    def search(used1: int, used2: int, chosen: list[int]):
-        nonlocal count, nodes
-        if count >= limit:   # the minimum over a truncated enumeration is not canonical
-            raise TopologyError(explain(
-                "loop assortment", expected=f"at most {limit} planar embeddings of a block",
-                got="more", hint="[La] cannot be chosen canonically here; use loops=False"))
-        nodes += 1
-        if node_budget is not None and nodes > node_budget:
-            raise _BudgetExceeded
-        if used2 == full or len(chosen) == n_faces:
-            # every edge twice and no wheel closed early: each rotation is one cycle
-            if used2 == full and len(chosen) == n_faces:
-                count += 1
-                yield tuple(sorted(sizes[c] for c in chosen))
-            return
-        best_e, best_opts = -1, None
-        once = used1 & ~used2
-        # edges covered once need exactly one more face: most constrained, look there first
-        for e in (range(n_edges) if not once else [e for e in range(n_edges) if (once >> e) & 1]):
-            if (used2 >> e) & 1:
-                continue
-            opts = [c for c in by_edge[e] if not (masks[c] & used2) and allowed(c, used1)]
-            if best_opts is None or len(opts) < len(best_opts):
-                best_e, best_opts = e, opts
-                if len(opts) <= 1:
-                    break
-        if not best_opts:
-            return
-        best_opts = [c for c in best_opts if corners_ok(c)]
-        uncovered = not (used1 >> best_e) & 1
-        for c in best_opts:
-            mask = masks[c]
-            chosen.append(c)
-            add(c)
-            if uncovered:
-                lower[best_e] = c
-            yield from search(used1 | mask, used2 | (mask & used1), chosen)
-            if uncovered:
-                lower[best_e] = -1
-            remove(c)
-            chosen.pop()
-
+    search = _FaceSearch(rb, _face_candidates(rb, use_filter), limit, node_budget)
     seen = set()
-    for faces in search(0, 0, []):
+    for faces in search.search():
         if faces not in seen:
             seen.add(faces)
             yield faces
