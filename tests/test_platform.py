@@ -447,3 +447,18 @@ def test_bundled_files_say_where_the_geometry_comes_from():
         text = path.read_text()
         assert "WHERE THE GEOMETRY COMES FROM" in text and "docs/platform.md" in text
         assert load_platform(path).source
+
+
+def test_statics_and_modes_own_their_json_and_are_read_only():
+    """Issue 9: the results serialise themselves; the CLI only formats."""
+    from multiloop.kin.spatial.report import platform_report
+    p = Platform(symmetric_struts(1.0, 0.5, 10.0, 10.0, 1.0, stiffness=1e6),
+                 (PointLoad((0, 0, 0.3), (0, 0, -1200.0)),),
+                 RigidBody(100.0, (0.0, 0.0, 0.1), (5.0, 5.0, 8.0)))
+    st = platform_statics(p)
+    with pytest.raises(ValueError):
+        st.forces[0] = 0.0
+    doc = json.loads(json.dumps(platform_report(p, "mass"), allow_nan=False))
+    assert doc["forces"] == pytest.approx(st.forces.tolist())
+    assert [s["strut"] for s in doc["screws"]] == [s.name for s in p.struts]
+    assert len(doc["modes"]) == 6 and doc["modes_normalisation"] == "mass"

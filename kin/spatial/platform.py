@@ -58,6 +58,9 @@ import scipy.linalg
 
 from multiloop.topo.errors import InputError, SingularityWarning, SingularStrutsError, explain
 
+from multiloop.topo.io import (read_document, read_number, read_string, read_table, read_tables, read_vector,
+                               table_label)
+
 from .screws import Twist, Wrench, reciprocal_complements, reciprocal_products
 
 __all__ = [
@@ -90,30 +93,23 @@ SINGULAR_CONDITION = 1e10
 _OTHERS = np.array([[j for j in range(6) if j != i] for i in range(6)])
 
 
+def _snap(a, scale: float = 1.0) -> list[float]:
+    """Floats with round-off (``|x| <= 1e-9 scale``) shown as 0 (display only)."""
+    return [0.0 if abs(v) <= 1e-9 * scale else float(v) for v in np.asarray(a, dtype=float).ravel()]
+
+
 # ---------------------------------------------------------------------------
 # value objects
 # ---------------------------------------------------------------------------
 def _point(value: Any, what: str) -> tuple[float, float, float]:
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 3:
+    """Three finite numbers (a list, tuple or array) as a tuple."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
         raise InputError(explain(what, expected="3 numbers [x, y, z]", got=repr(value)[:60]))
-    out = []
-    for v in value:
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-            raise InputError(explain(what, expected="3 numbers [x, y, z]", got=repr(value)[:60]))
-        f = float(v)
-        if not math.isfinite(f):
-            raise InputError(explain(what, expected="finite numbers", got=repr(value)[:60]))
-        out.append(f)
-    return (out[0], out[1], out[2])
+    return read_vector(list(value), what, 3)
 
 
 def _positive(value: Any, what: str, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError(explain(what, expected=f"a positive number ({unit})", got=repr(value)[:60]))
-    f = float(value)
-    if not (math.isfinite(f) and f > 0):
-        raise InputError(explain(what, expected=f"a positive number ({unit})", got=repr(value)[:60]))
-    return f
+    return read_number(value, what, positive=True, unit=unit)
 
 
 @dataclass(frozen=True, slots=True)
@@ -487,6 +483,28 @@ class PlatformStatics:
     success: bool = True
     status: str = "ok"
     message: str = "strut forces by virtual velocities and by equilibrium agree"
+    strut_names: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        for a in (self.forces, self.forces_screws):
+            a.flags.writeable = False
+
+    def as_dict(self) -> dict:
+        """JSON-ready statics (keys in docs/platform.md); round-off below 1e-9 of the
+        largest force (or of 1 for screws) is shown as 0."""
+        fscale = max(1.0, float(np.max(np.abs(self.forces))))
+        names = self.strut_names or tuple(str(i + 1) for i in range(6))
+        screws = []
+        for name, tw in zip(names, self.twists):
+            translation = tw.is_infinite_pitch
+            screws.append({"strut": name, "twist": _snap(tw.as_array()),
+                           "pitch": None if translation else _snap(tw.pitch)[0], "translation": translation,
+                           "axis_point": None if translation else _snap(tw.axis_point),
+                           "axis_direction": _snap(tw.axis_direction)})
+        return {"forces": _snap(self.forces, fscale), "forces_screws": _snap(self.forces_screws, fscale),
+                "discrepancy": self.discrepancy, "residual": self.residual,
+                "condition_number": self.condition_number, "singular": False,
+                "wrench": _snap(self.wrench.as_array()), "screws": screws}
 
     @property
     def pitches(self) -> np.ndarray:
@@ -550,7 +568,7 @@ def platform_statics(platform: Platform, *, tol: float = 1e-6) -> PlatformStatic
         forces=S_eq, forces_screws=S,
         twists=tuple(Twist.from_array(v) for v in V), wrench=Wrench.from_array(W),
         condition_number=cond, discrepancy=disc, residual=residual,
-        success=ok, status="ok" if ok else "methods disagree",
+        strut_names=tuple(st.name for st in platform.struts), success=ok, status="ok" if ok else "methods disagree",
         message=("strut forces by virtual velocities and by equilibrium agree" if ok else
                  f"the two methods differ by {disc:.3g} N (ill-conditioned, condition number {cond:.3g})"))
 
@@ -576,6 +594,22 @@ class PlatformModes:
     stiffness_matrix: np.ndarray
     inertia_matrix: np.ndarray
     plucker: np.ndarray
+
+    def __post_init__(self) -> None:
+        for a in (self.frequencies, self.modes, self.stiffness_matrix, self.inertia_matrix, self.plucker):
+            a.flags.writeable = False
+
+    def as_dict(self, normalise: str = "first") -> dict:
+        """JSON-ready modes (keys in docs/platform.md): ``shape`` mass-normalised,
+        ``shape_x1`` with x = 1 (Doronin 2015), ``shape_printed`` as ``normalise``."""
+        first, chosen = self.shapes("first"), self.shapes(normalise)
+        return {"modes_normalisation": normalise, "frequencies": _snap(self.frequencies),
+                "frequencies_hz": _snap(self.frequencies_hz),
+                "modes": [{"frequency": float(self.frequencies[j]), "label": self.labels[j],
+                           "dominant": self.dominant[j], "shape": _snap(self.modes[:, j]),
+                           "shape_x1": None if np.isnan(first[0, j]) else _snap(first[:, j]),
+                           "shape_printed": None if np.isnan(chosen[0, j]) else _snap(chosen[:, j])}
+                          for j in range(6)]}
 
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -697,50 +731,114 @@ _KEYS = {
     "symmetric": {"base_radius", "platform_radius", "base_half_angle", "platform_half_angle",
                   "height", "stiffness"},
 }
+_HINT = "check the spelling (docs/platform.md lists the format)"
 
 
-def _check_keys(table: Mapping, kind: str, label: str) -> None:
-    unknown = sorted(set(table) - _KEYS[kind])
-    if unknown:
-        raise InputError(explain(label, expected=f"keys among {', '.join(sorted(_KEYS[kind]))}",
-                                 got=f"unknown key {', '.join(repr(u) for u in unknown)}",
-                                 hint="check the spelling (docs/platform.md lists the format)"))
+def _symmetric(doc: Mapping) -> tuple[Strut, ...]:
+    """Struts of a ``[symmetric]`` table (:func:`symmetric_struts`)."""
+    sym = read_table(doc["symmetric"], "[symmetric]", _KEYS["symmetric"], hint=_HINT,
+                     required=("base_radius", "platform_radius", "base_half_angle", "platform_half_angle", "height"))
+    args = {k: read_number(sym[k], f"[symmetric] key '{k}'")
+            for k in ("base_radius", "platform_radius", "base_half_angle", "platform_half_angle", "height")}
+    stiff = sym.get("stiffness")
+    if stiff is not None:
+        stiff = read_number(stiff, "[symmetric] key 'stiffness'", positive=True, unit="N/m")
+    return symmetric_struts(**args, stiffness=stiff)
 
 
-def _table_list(doc: Mapping, key: str) -> list[dict]:
-    raw = doc.get(key, [])
-    if isinstance(raw, dict):
-        raw = [raw]
-    if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
-        raise InputError(explain(f"[[{key}]]", expected="an array of tables", got=repr(raw)[:60]))
-    return raw
+def _explicit_struts(raw: list[dict]) -> tuple[Strut, ...]:
+    """Six ``[[strut]]`` tables, with a stiffness on all of them or on none."""
+    struts = []
+    for i, t in enumerate(raw, 1):
+        label = table_label("strut", i, t)
+        read_table(t, label, _KEYS["strut"], required=("platform", "base"), hint=_HINT)
+        p = read_vector(t["platform"], f"{label} key 'platform'", 3)
+        b = read_vector(t["base"], f"{label} key 'base'", 3)
+        c = t.get("stiffness")
+        if c is not None:
+            c = read_number(c, f"{label} key 'stiffness'", positive=True, unit="N/m")
+        if p == b:
+            raise InputError(explain(f"{label} keys 'platform' and 'base'", expected="two distinct hinges",
+                                     got=f"both {list(p)}"))
+        struts.append(Strut(p, b, c, read_string(t.get("name", str(i)), f"{label} key 'name'")))
+    if len(struts) != 6:
+        raise InputError(explain("[[strut]]", expected="exactly six [[strut]] tables", got=f"{len(struts)}",
+                                 hint="a rigid platform is held by six struts"))
+    given = [s.stiffness is not None for s in struts]
+    if any(given) and not all(given):
+        missing = [i + 1 for i, g in enumerate(given) if not g]
+        raise InputError(explain("[[strut]] key 'stiffness'", expected="on all six struts or on none",
+                                 got=f"missing on strut(s) {missing}"))
+    return tuple(struts)
 
 
-def _label(kind: str, i: int, t: Mapping) -> str:
-    name = t.get("name")
-    return f"[[{kind}]] #{i}" + (f" ({name!r})" if isinstance(name, str) and name else "")
+def _struts(doc: Mapping) -> tuple[Strut, ...]:
+    raw = read_tables(doc, "strut")
+    if "symmetric" not in doc:
+        return _explicit_struts(raw)
+    if raw:
+        raise InputError(explain("top level", expected="either [[strut]] tables or a [symmetric] table", got="both"))
+    return _symmetric(doc)
 
 
-def _req(t: Mapping, key: str, label: str) -> Any:
-    if key not in t:
-        raise InputError(explain(label, expected=f"key '{key}'", got="nothing"))
-    return t[key]
+def _loads(doc: Mapping) -> tuple[PointLoad, ...]:
+    loads = []
+    zero = [0.0, 0.0, 0.0]
+    for i, t in enumerate(read_tables(doc, "load"), 1):
+        label = table_label("load", i, t)
+        read_table(t, label, _KEYS["load"], hint=_HINT)
+        if "force" not in t and "moment" not in t:
+            raise InputError(explain(label, expected="key 'force' (with 'at') or 'moment'", got="neither"))
+        if "force" in t and "at" not in t:
+            raise InputError(explain(label, expected="key 'at'", got="nothing"))
+        loads.append(PointLoad(read_vector(t.get("at", zero), f"{label} key 'at'", 3),
+                               read_vector(t.get("force", zero), f"{label} key 'force'", 3),
+                               read_vector(t.get("moment", zero), f"{label} key 'moment'", 3),
+                               read_string(t.get("name", str(i)), f"{label} key 'name'")))
+    return tuple(loads)
 
 
-def _string(value: Any, what: str) -> str:
-    if not isinstance(value, str):
-        raise InputError(explain(what, expected="a string", got=repr(value)[:60]))
-    return value
+def _body_mass(bt: Mapping) -> float:
+    if ("mass" in bt) == ("weight" in bt):
+        raise InputError(explain("[body]", expected="exactly one of 'mass' (kg) or 'weight' (N, with 'g')",
+                                 got="both" if "mass" in bt else "neither"))
+    if "mass" in bt:
+        if "g" in bt:
+            raise InputError(explain("[body] key 'g'", expected="only together with 'weight'", got="'g' with 'mass'"))
+        return read_number(bt["mass"], "[body] key 'mass'", positive=True, unit="kg")
+    weight = read_number(bt["weight"], "[body] key 'weight'", positive=True, unit="N")
+    read_table(bt, "[body] (with 'weight')", required=("g",))
+    return weight / read_number(bt["g"], "[body] key 'g'", positive=True, unit="m/s²")
 
 
-def _num(value: Any, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
-        raise InputError(explain(what, expected="a finite number", got=repr(value)[:60]))
-    return float(value)
+def _body(doc: Mapping) -> RigidBody | None:
+    if "body" not in doc:
+        return None
+    bt = read_table(doc["body"], "[body]", _KEYS["body"], required=("center",), hint=_HINT)
+    mass = _body_mass(bt)
+    center = read_vector(bt["center"], "[body] key 'center'", 3)
+    if ("inertia" in bt) == ("box" in bt):
+        raise InputError(explain("[body]", expected="exactly one of 'inertia' (kg·m²) or 'box' ([lx, ly, lz], m)",
+                                 got="both" if "inertia" in bt else "neither"))
+    if "box" in bt:
+        return RigidBody.from_box(mass, read_vector(bt["box"], "[body] key 'box'", 3), center)
+    J = bt["inertia"]
+    ok = isinstance(J, list) and len(J) == 3 and (
+        all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in J)
+        or all(isinstance(r, list) and len(r) == 3 for r in J))
+    if not ok:
+        raise InputError(explain("[body] key 'inertia'", expected="3 principal moments or a 3×3 matrix", got=repr(J)[:60]))
+    try:
+        return RigidBody(mass, center, J)
+    except InputError as exc:
+        raise InputError(str(exc).replace("body inertia", "[body] key 'inertia'", 1)) from None
 
 
 def platform_from_dict(doc: Mapping[str, Any]) -> Platform:
     """Build a :class:`Platform` from a parsed TOML/JSON document (format: docs/platform.md).
+
+    Phases: top level, struts (``[[strut]]`` or ``[symmetric]``), loads, body; each
+    value is read with the typed readers of :mod:`topo.io`.
 
     Raises
     ------
@@ -749,100 +847,11 @@ def platform_from_dict(doc: Mapping[str, Any]) -> Platform:
     """
     if not isinstance(doc, Mapping):
         raise InputError(explain("platform document", expected="a table", got=type(doc).__name__))
-    unknown = sorted(set(doc) - _TOP_KEYS)
-    if unknown:
-        raise InputError(explain("top level", expected=f"keys among {', '.join(sorted(_TOP_KEYS))}",
-                                 got=f"unknown key {', '.join(repr(u) for u in unknown)}"))
-    name = _string(doc.get("name", "platform"), "key 'name'")
-    description = _string(doc.get("description", ""), "key 'description'")
-    source = _string(doc.get("source", ""), "key 'source'")
-
-    raw_struts = _table_list(doc, "strut")
-    if "symmetric" in doc:
-        if raw_struts:
-            raise InputError(explain("top level", expected="either [[strut]] tables or a [symmetric] table",
-                                     got="both"))
-        sym = doc["symmetric"]
-        if not isinstance(sym, dict):
-            raise InputError(explain("[symmetric]", expected="a table", got=repr(sym)[:60]))
-        _check_keys(sym, "symmetric", "[symmetric]")
-        args = {k: _num(_req(sym, k, "[symmetric]"), f"[symmetric] key '{k}'")
-                for k in ("base_radius", "platform_radius", "base_half_angle", "platform_half_angle", "height")}
-        stiff = sym.get("stiffness")
-        if stiff is not None:
-            stiff = _positive(stiff, "[symmetric] key 'stiffness'", "N/m")
-        struts = symmetric_struts(**args, stiffness=stiff)
-    else:
-        struts = []
-        for i, t in enumerate(raw_struts, 1):
-            label = _label("strut", i, t)
-            _check_keys(t, "strut", label)
-            p = _point(_req(t, "platform", label), f"{label} key 'platform'")
-            b = _point(_req(t, "base", label), f"{label} key 'base'")
-            c = t.get("stiffness")
-            if c is not None:
-                c = _positive(c, f"{label} key 'stiffness'", "N/m")
-            nm = _string(t.get("name", str(i)), f"{label} key 'name'")
-            if p == b:
-                raise InputError(explain(f"{label} keys 'platform' and 'base'", expected="two distinct hinges",
-                                         got=f"both {list(p)}"))
-            struts.append(Strut(p, b, c, nm))
-        if len(struts) != 6:
-            raise InputError(explain("[[strut]]", expected="exactly six [[strut]] tables", got=f"{len(struts)}",
-                                     hint="a rigid platform is held by six struts"))
-        given = [s.stiffness is not None for s in struts]
-        if any(given) and not all(given):
-            missing = [i + 1 for i, g in enumerate(given) if not g]
-            raise InputError(explain("[[strut]] key 'stiffness'", expected="on all six struts or on none",
-                                     got=f"missing on strut(s) {missing}"))
-
-    loads = []
-    for i, t in enumerate(_table_list(doc, "load"), 1):
-        label = _label("load", i, t)
-        _check_keys(t, "load", label)
-        if "force" not in t and "moment" not in t:
-            raise InputError(explain(label, expected="key 'force' (with 'at') or 'moment'", got="neither"))
-        force = _point(t.get("force", [0.0, 0.0, 0.0]), f"{label} key 'force'")
-        at = _point(_req(t, "at", label) if "force" in t else t.get("at", [0.0, 0.0, 0.0]), f"{label} key 'at'")
-        mom = _point(t.get("moment", [0.0, 0.0, 0.0]), f"{label} key 'moment'")
-        loads.append(PointLoad(at, force, mom, _string(t.get("name", str(i)), f"{label} key 'name'")))
-
-    body = None
-    if "body" in doc:
-        bt = doc["body"]
-        if not isinstance(bt, dict):
-            raise InputError(explain("[body]", expected="a table", got=repr(bt)[:60]))
-        _check_keys(bt, "body", "[body]")
-        if ("mass" in bt) == ("weight" in bt):
-            raise InputError(explain("[body]", expected="exactly one of 'mass' (kg) or 'weight' (N, with 'g')",
-                                     got="both" if "mass" in bt else "neither"))
-        if "mass" in bt:
-            if "g" in bt:
-                raise InputError(explain("[body] key 'g'", expected="only together with 'weight'", got="'g' with 'mass'"))
-            mass = _positive(bt["mass"], "[body] key 'mass'", "kg")
-        else:
-            weight = _positive(bt["weight"], "[body] key 'weight'", "N")
-            g = _positive(_req(bt, "g", "[body] (with 'weight')"), "[body] key 'g'", "m/s²")
-            mass = weight / g
-        center = _point(_req(bt, "center", "[body]"), "[body] key 'center'")
-        if ("inertia" in bt) == ("box" in bt):
-            raise InputError(explain("[body]", expected="exactly one of 'inertia' (kg·m²) or 'box' ([lx, ly, lz], m)",
-                                     got="both" if "inertia" in bt else "neither"))
-        if "box" in bt:
-            body = RigidBody.from_box(mass, _point(bt["box"], "[body] key 'box'"), center)
-        else:
-            J = bt["inertia"]
-            ok = isinstance(J, list) and (
-                (len(J) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in J))
-                or (len(J) == 3 and all(isinstance(r, list) and len(r) == 3 for r in J)))
-            if not ok:
-                raise InputError(explain("[body] key 'inertia'", expected="3 principal moments or a 3×3 matrix",
-                                         got=repr(J)[:60]))
-            try:
-                body = RigidBody(mass, center, J)
-            except InputError as exc:
-                raise InputError(str(exc).replace("body inertia", "[body] key 'inertia'", 1)) from None
-    return Platform(tuple(struts), tuple(loads), body, name, description, source)
+    read_table(dict(doc), "top level", _TOP_KEYS)
+    name = read_string(doc.get("name", "platform"), "key 'name'", allow_empty=True)
+    description = read_string(doc.get("description", ""), "key 'description'", allow_empty=True)
+    source = read_string(doc.get("source", ""), "key 'source'", allow_empty=True)
+    return Platform(_struts(doc), _loads(doc), _body(doc), name, description, source)
 
 
 def load_platform(path: str | Path) -> Platform:
@@ -853,8 +862,6 @@ def load_platform(path: str | Path) -> Platform:
     InputError
         Missing file, syntax error, unknown key or malformed value (named).
     """
-    from multiloop.topo.io import read_document
-
     doc = read_document(path)
     try:
         return platform_from_dict(doc)

@@ -17,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from multiloop.kin.spatial.platform import (COORDINATES, Platform, load_platform, platform_modes, platform_statics)
+from multiloop.kin.spatial.platform import load_platform
+from multiloop.kin.spatial.report import platform_report
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 
-__all__ = ["add_arguments", "run", "report"]
+__all__ = ["add_arguments", "run"]
 
 _SYMBOL = {"x": "x", "y": "y", "z": "z", "phi_x": "φx", "phi_y": "φy", "phi_z": "φz"}
 
@@ -44,74 +45,6 @@ def _resolve(name: str) -> Path:
     if bundled.is_file():
         return Path(str(bundled))
     return p
-
-
-def _clean(x: float, scale: float) -> float:
-    """Snap round-off to zero (display only)."""
-    return 0.0 if abs(x) <= 1e-9 * scale else float(x)
-
-
-def _list(a, scale: float = 1.0) -> list:
-    return [_clean(float(v), scale) for v in np.asarray(a, dtype=float).ravel()]
-
-
-def report(platform: Platform, normalise: str = "first") -> dict:
-    """The JSON-ready report of a platform (statics always, vibrations when possible)."""
-    st = platform_statics(platform)
-    fscale = max(1.0, float(np.max(np.abs(st.forces))))
-    screws = []
-    for strut, tw in zip(platform.struts, st.twists):
-        arr = tw.as_array()
-        translation = tw.is_infinite_pitch
-        screws.append({
-            "strut": strut.name,
-            "twist": _list(arr),
-            "pitch": None if translation else _clean(tw.pitch, 1.0),
-            "translation": translation,
-            "axis_point": None if translation else _list(tw.axis_point),
-            "axis_direction": _list(tw.axis_direction),
-        })
-    out = {
-        "name": platform.name,
-        "source": platform.source,
-        "conventions": {
-            "forces": "N, tension positive: strut i pulls the platform hinge towards the base hinge; "
-                      "'forces' from the six equilibrium equations, 'forces_screws' by virtual velocities",
-            "strut_direction": "e_i = unit vector from the platform hinge to the base hinge",
-            "screws": "Plücker (direction; moment about the file's origin), moment = r x d",
-            "twist": "(omega; v_O), unit |omega| = 1 (|v| = 1 for a translation), signed so strut i lengthens",
-            "frequencies": "rad/s, ascending",
-            "modes": "q = (x, y, z, phi_x, phi_y, phi_z) of the centre of mass",
-        },
-        "forces": _list(st.forces, fscale),
-        "forces_screws": _list(st.forces_screws, fscale),
-        "discrepancy": st.discrepancy,
-        "residual": st.residual,
-        "condition_number": st.condition_number,
-        "singular": False,
-        "wrench": _list(st.wrench.as_array()),
-        "screws": screws,
-        "coordinates": list(COORDINATES),
-        "frequencies": None,
-        "frequencies_hz": None,
-        "modes": None,
-    }
-    if platform.has_vibration_data:
-        md = platform_modes(platform)
-        first = md.shapes("first")
-        chosen = md.shapes(normalise)
-        out["modes_normalisation"] = normalise
-        out["frequencies"] = _list(md.frequencies)
-        out["frequencies_hz"] = _list(md.frequencies_hz)
-        out["modes"] = [{
-            "frequency": float(md.frequencies[j]),
-            "label": md.labels[j],
-            "dominant": md.dominant[j],
-            "shape": _list(md.modes[:, j]),
-            "shape_x1": None if np.isnan(first[0, j]) else _list(first[:, j]),
-            "shape_printed": None if np.isnan(chosen[0, j]) else _list(chosen[:, j]),
-        } for j in range(6)]
-    return out
 
 
 def _fmt(v, width=10, prec=4) -> str:
@@ -171,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
     platform = load_platform(_resolve(args.file))
-    rep = report(platform, args.modes)
+    rep = platform_report(platform, args.modes)
     if args.plot is not None:
         from multiloop.kin.figures.platform import plot_platform
 
