@@ -135,3 +135,158 @@ def test_cli_bad_input_exit_2(tmp_path, capsys, case):
     assert rc == 2, err
     assert "error" in err and "Traceback" not in err
     assert not out.exists()
+
+
+# ---------------------------------------------------------------------------------
+# closed forms: Freudenstein 1955 (three precision pairs), Burmester 1888 (three poses)
+from multiloop.catalogue.dimensional.closedform import (burmester_four_bar, burmester_points,  # noqa: E402
+                                                        centre_point, circle_point_curve, concyclic,
+                                                        freudenstein, freudenstein_four_bar, pose_positions)
+
+
+def _angle(v):
+    return np.arctan2(v[..., 1], v[..., 0])
+
+
+def test_freudenstein_recovers_the_catalogue_four_bar():
+    """Two routes: lengths from the catalogue's coordinates, and Freudenstein's equation
+    solved on three (φ, ψ) pairs that kin.solve reads off the same four-bar."""
+    m = load_named("four_bar")
+    st = solve(m, np.radians([0.0, 40.0, 80.0]))
+    J = {n: st.positions[:, i] for i, n in enumerate(m.joint_names)}
+    phi, psi = _angle(J["A"] - J["O2"]), _angle(J["B"] - J["O4"])
+    at = {j.name: np.asarray(j.at) for j in m.joints}
+    a, b, c = freudenstein(phi, psi, d=np.hypot(*(at["O4"] - at["O2"])))
+    assert a == pytest.approx(np.hypot(*(at["A"] - at["O2"])), abs=1e-12)
+    assert b == pytest.approx(np.hypot(*(at["B"] - at["A"])), abs=1e-12)
+    assert c == pytest.approx(np.hypot(*(at["B"] - at["O4"])), abs=1e-12)
+
+
+def test_freudenstein_four_bar_meets_its_three_points_exactly():
+    phi = np.radians([30.0, 60.0, 90.0])
+    psi = np.radians([70.0, 85.0, 105.0])
+    fb = freudenstein_four_bar(phi, psi, d=1.0)
+    st = solve(fb, phi - phi[0])
+    assert (st.status == "ok").all()
+    k = fb.link_names.index("rocker")
+    np.testing.assert_allclose(st.angles[:, k], psi - psi[0], atol=1e-9)
+
+
+def test_burmester_three_poses_exact():
+    poses = np.array([[0.0, 0.0, 0.0], [0.05, 0.02, 0.3], [0.09, 0.01, 0.7]])
+    m1, m2 = (0.0, -0.03), (0.04, -0.02)
+    fb = burmester_four_bar(poses, m1, m2)
+    O1 = np.asarray(fb.joint("O1").at)
+    A = pose_positions(poses, m1)
+    ang = _angle(A - O1)
+    st = solve(fb, ang - ang[0])
+    assert (st.status == "ok").all()
+    np.testing.assert_allclose(st.point_positions[:, 0], poses[:, :2], atol=1e-9)
+    np.testing.assert_allclose(st.angles[:, fb.link_names.index("coupler")], poses[:, 2], atol=1e-9)
+    # the centre point is equidistant from the three positions (two routes)
+    c = centre_point(A)
+    assert np.ptp(np.hypot(*(A - c).T)) < 1e-12
+
+
+def test_circle_point_curve_and_burmester_points():
+    poses = np.array([[0.0, 0.0, 0.0], [0.05, 0.02, 0.3], [0.09, 0.01, 0.7], [0.1, -0.02, 1.0],
+                      [0.08, -0.05, 1.3]])
+    pts = circle_point_curve(poses[:4], ((-0.1, -0.1), (0.1, 0.1)), n=40)
+    assert len(pts) > 20
+    for q in pts:     # the four positions of a circle point lie on one circle
+        X = pose_positions(poses[:4], q)
+        c = centre_point(X[:3])
+        r0 = np.hypot(*(X[0] - c))
+        assert abs(np.hypot(*(X[3] - c)) - r0) < 1e-8 * max(r0, 1.0)
+    bp = burmester_points(poses, ((-0.2, -0.2), (0.2, 0.2)), n=12)
+    assert len(bp) >= 1
+    for q in bp:      # all five positions on one circle
+        X = pose_positions(poses, q)
+        r = np.hypot(*(X - centre_point(X[:3])).T)
+        assert np.ptp(r) < 1e-9
+        assert abs(concyclic(X[:4])) < 1e-12
+
+
+# ---------------------------------------------------------------------------------
+# every design variable reaches the solver; function, motion, timing, shape, CMA-ES
+from multiloop.catalogue.dimensional import function_target, motion_target  # noqa: E402
+
+
+@pytest.mark.parametrize("name,link", [("four_bar", "coupler"), ("watt_1", "link_5"), ("crank_slider", "rod"),
+                                       ("stephenson_3_triad", "T2")])
+def test_every_design_variable_changes_the_objective(name, link):
+    m, pt = _with_point(load_named(name), link)
+    st = solve(m, np.radians(np.arange(5.0, 60.0, 6.0)))
+    ok = st.status == "ok"
+    target = st.point_positions[ok, st.point_index(pt)] + 1e-3
+    t = path_target(m, target, pt)
+    sp = design_space(m, [pt], region=target)
+    pr = Problem(Evaluator(m, sp), t)
+    z0 = pr.x0
+    phi = pr.match(z0)
+    r0 = pr.residuals(z0, phi)
+    for i, n in enumerate(pr.names):
+        z = z0.copy()
+        z[i] += 1e-4 * (1.0 + abs(z[i]))
+        assert np.max(np.abs(pr.residuals(z, phi) - r0)) > 1e-9, n
+
+
+def test_function_generation_freudenstein_start_is_exact():
+    m = load_named("four_bar")
+    table = np.array([[0.0, 0.0], [30.0, 15.0], [60.0, 30.0]])
+    res = synthesise(m, function=table, output="O4", budget=1.0)
+    assert res.error_max < 1e-9
+    assert any("Freudenstein" in n for n in res.notes)
+    out = res.mechanism
+    st = solve(out, np.radians(table[:, 0]))
+    j = out.joint("O4")
+    rel = st.angles[:, out.link_names.index(j.links[1])] - st.angles[:, out.link_names.index(j.links[0])]
+    np.testing.assert_allclose(np.degrees(rel), table[:, 1], atol=1e-7)
+
+
+def test_function_generation_of_a_known_four_bar():
+    """The output of a known four-bar is met again from a perturbed start (7 points)."""
+    m = load_named("four_bar")
+    x = np.arange(0.0, 91.0, 15.0)
+    st = solve(m, np.radians(x))
+    j = m.joint("O4")
+    y = np.degrees(st.angles[:, m.link_names.index(j.links[1])] - st.angles[:, m.link_names.index(j.links[0])])
+    res = synthesise(_perturbed(m, 0.03), function=np.column_stack([x, y]), output="O4", budget=1.5)
+    assert res.error_max < 1e-3
+
+
+def test_motion_generation_of_a_known_coupler():
+    m = load_named("four_bar")
+    deg = np.arange(10.0, 300.0, 40.0)
+    st = solve(m, np.radians(deg))
+    k = m.link_names.index("coupler")
+    poses = np.column_stack([st.point_positions[:, 0], np.degrees(st.angles[:, k])])
+    res = synthesise(_perturbed(m, 0.02), motion=poses, link="coupler", budget=1.5)
+    assert res.error_max < 1e-3 and res.angle_error_max < 0.06
+
+
+def test_prescribed_timing_and_shape_only():
+    m = load_named("four_bar")
+    deg = np.arange(10.0, 300.0, 40.0)
+    P = solve(m, np.radians(deg)).point_positions[:, 0]
+    res = synthesise(_perturbed(m, 0.02), path=np.column_stack([P, deg]), point="P", budget=1.5)
+    assert res.error_max < 1e-3
+    np.testing.assert_allclose(res.inputs, np.radians(deg))
+    # shape only: a scaled, rotated, shifted copy of the curve is met by a similar mechanism
+    c, s = np.cos(0.4), np.sin(0.4)
+    Q = 1.7 * P @ np.array([[c, s], [-s, c]]) + [0.3, -0.2]
+    res2 = synthesise(_perturbed(m, 0.01), path=Q, point="P", shape_only=True, budget=2.0)
+    assert res2.error_max < 1e-3
+
+
+def test_cmaes_and_seed_reproducible():
+    m = load_named("four_bar")
+    P = solve(m, np.radians(np.arange(7.0, 360.0, 33.0))).point_positions[:, 0]
+    start = _perturbed(m, 0.05, seed=3)
+    a = synthesise(start, path=P, point="P", budget=1.0, method="cmaes", seed=4, tol=0.0)
+    assert a.error_max < 1e-3
+    kw = dict(path=P, point="P", method="de", seed=5, tol=0.0, popsize=5)
+    r1, r2 = (synthesise(start, budget=0.3, **kw) for _ in range(2))
+    # same seed, same history of best values per generation (the budget cuts at a time)
+    n = min(len(r1.history), len(r2.history))
+    assert n > 0 and [h[1] for h in r1.history[:n]] == [h[1] for h in r2.history[:n]]

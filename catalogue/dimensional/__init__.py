@@ -8,8 +8,12 @@ positions in one call; :func:`synthesise` is the entry point.
 from .evaluator import DesignSpace, Evaluator, design_space
 from .objective import Constraints, Problem, transmission_angles
 from .synthesise import SynthesisResult, function_target, motion_target, path_target, synthesise
+from .closedform import (burmester_four_bar, burmester_points, centre_point, circle_point_curve, freudenstein,
+                         freudenstein_four_bar, pose_positions)
 from .targets import FunctionTarget, MotionTarget, PathTarget, read_table
 
 __all__ = ["DesignSpace", "Evaluator", "design_space", "Constraints", "Problem", "transmission_angles",
            "SynthesisResult", "synthesise", "path_target", "function_target", "motion_target",
-           "PathTarget", "FunctionTarget", "MotionTarget", "read_table"]
+           "PathTarget", "FunctionTarget", "MotionTarget", "read_table",
+           "freudenstein", "freudenstein_four_bar", "burmester_four_bar", "burmester_points", "centre_point",
+           "circle_point_curve", "pose_positions"]

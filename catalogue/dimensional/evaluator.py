@@ -1,9 +1,9 @@
 """A mechanism's Assur plan compiled once into a batched, parameterised evaluator.
 
-The design variables are the reference coordinates of every joint (frame pivots
-included), the guide angle and normal offset of every prismatic joint, and the
-tracer points asked for; every link length, offset and pivot of the mechanism
-follows from them.  :meth:`Evaluator.poses` solves a whole population ×
+The design variables are the reference coordinates of every R joint (frame
+pivots included), the guide angle of every prismatic joint, and the tracer
+points asked for; every link length, offset and pivot of the mechanism follows
+from them.  :meth:`Evaluator.poses` solves a whole population ×
 positions in one vectorised pass over the plan: each dyad is one call of its
 closed-form kernel of :mod:`multiloop.kin.groups` (Vasechkin et al. 2017,
 eqs. 1-18) with the dimensions as arrays of shape ``(population, 1)``; a triad
@@ -34,8 +34,11 @@ _CLOSED = ("RRR", "RRP", "RPR")
 class DesignSpace:
     """Names, start values and bounds of the design variables.
 
-    ``names`` are ``"J.x"``, ``"J.y"`` for a joint or tracer point, ``"J.angle"``
-    (rad) and ``"J.offset"`` (m, along the guide's normal) for a P joint.
+    ``names`` are ``"J.x"``, ``"J.y"`` for an R joint or tracer point and
+    ``"J.angle"`` (rad) for the guide direction of a P joint.  A P joint's point
+    is not a variable: the slider's track runs through the slider's own joints
+    parallel to the guide, so moving the joint's reference point along the guide's
+    normal changes no motion (a variable that never reaches the solver).
     """
 
     names: tuple[str, ...]
@@ -63,8 +66,8 @@ def design_space(m: Mechanism, points=(), *, margin: float = 1.0, region=None,
     pts = [p for p in m.points if p.name in set(points)]
     for j in m.joints:
         if j.kind is JointKind.P:
-            names += [f"{j.name}.offset", f"{j.name}.angle"]
-            x0 += [0.0, float(np.arctan2(j.axis[1], j.axis[0]))]
+            names += [f"{j.name}.angle"]
+            x0 += [float(np.arctan2(j.axis[1], j.axis[0]))]
         else:
             names += [f"{j.name}.x", f"{j.name}.y"]
             x0 += list(j.at)
@@ -83,8 +86,6 @@ def design_space(m: Mechanism, points=(), *, margin: float = 1.0, region=None,
         kind = n.rsplit(".", 1)[1]
         if kind == "angle":
             lo[i], hi[i] = x0[i] - np.pi, x0[i] + np.pi
-        elif kind == "offset":
-            lo[i], hi[i] = -margin * size, margin * size
         else:
             k = 0 if kind == "x" else 1
             lo[i], hi[i] = lo_box[k], hi_box[k]
@@ -148,8 +149,6 @@ class Evaluator:
             raise InputError(explain(f"mechanism '{m.name or ''}'", expected="dyads RRR, RRP, RPR and triads",
                                      got=", ".join(self.slow), hint="these groups have no batched kernel yet"))
         self._cols = {n: i for i, n in enumerate(space.names)}
-        self._ref_axis = {j.name: np.asarray(j.axis, float) / np.hypot(*j.axis)
-                          for j in m.joints if j.kind is JointKind.P}
 
     # -- decoding --------------------------------------------------------------
     def at(self, X: np.ndarray, name: str) -> np.ndarray:
@@ -159,8 +158,7 @@ class Evaluator:
             return X[:, [c[f"{name}.x"], c[f"{name}.y"]]]
         j = self.mechanism.joint(name)
         if j.kind is JointKind.P:
-            n0 = _nrm(self._ref_axis[name])
-            return np.asarray(j.at, float)[None, :] + X[:, [c[f"{name}.offset"]]] * n0[None, :]
+            return np.broadcast_to(np.asarray(j.at, float), (X.shape[0], 2))
         raise KeyError(name)
 
     def axis(self, X: np.ndarray, name: str) -> np.ndarray:

@@ -124,6 +124,52 @@ class Problem:
             self.grid = np.concatenate([self.delta * np.arange(half), -self.delta * np.arange(1, half + 1)])
         self.n_targets = len(self.target_values())
 
+    def init_motion_frame(self) -> None:
+        """Motion generation: the frame on the link that meets pose 0 exactly at the
+        best grid position of the start design (all grid positions scored in one call)."""
+        t = self.target
+        if not isinstance(t, MotionTarget):
+            return
+        X = self.x0[None, :self.nx]
+        st = self.ev.poses(X, self.grid)
+        k = self.ev.links[t.link]
+        th, tx, ty = st.th[k][0], st.tx[k][0], st.ty[k][0]
+        good = np.isfinite(th)
+        if not good.any():
+            return
+        p0 = t.poses[0]
+        dx, dy = p0[0] - tx[good], p0[1] - ty[good]
+        c, s = np.cos(th[good]), np.sin(th[good])
+        Z = np.repeat(self.x0[None, :], int(good.sum()), axis=0)
+        Z[:, self.nx] = c * dx + s * dy            # R(θ)ᵀ (p0 − t)
+        Z[:, self.nx + 1] = -s * dx + c * dy
+        Z[:, self.nx + 2] = _wrap(p0[2] - th[good])
+        Z = np.clip(Z, self.lower, self.upper)
+        self.x0 = Z[int(np.argmin(self.batch(Z)))]
+
+    def init_shape(self, n_angles: int = 24) -> None:
+        """Shape-only paths: the similarity that puts the target's centroid and RMS radius
+        on those of the start's curve, at the best of ``n_angles`` rotations (one call)."""
+        t = self.target
+        if not (isinstance(t, PathTarget) and t.shape_only):
+            return
+        Z0 = self.x0[None, :]
+        st = self.ev.poses(Z0[:, :self.nx], self.grid)
+        F = self.features(Z0, st)[0][st.ok[0]]
+        if len(F) < 3:
+            return
+        T = t.points
+        c0 = T.mean(axis=0)
+        s = np.sqrt(np.mean(np.sum((F - F.mean(0)) ** 2, 1)) / np.mean(np.sum((T - c0) ** 2, 1)))
+        Z = np.repeat(self.x0[None, :], n_angles, axis=0)
+        Z[:, self.nx] = np.log(s)
+        Z[:, self.nx + 1] = np.linspace(-np.pi, np.pi, n_angles, endpoint=False)
+        Z[:, self.nx + 2:self.nx + 4] = F.mean(0) - c0
+        lo, hi = self.lower.copy(), self.upper.copy()
+        lo[self.nx:], hi[self.nx:] = np.minimum(lo[self.nx:], Z.min(0)[self.nx:]), np.maximum(hi[self.nx:], Z.max(0)[self.nx:])
+        self.lower, self.upper = lo, hi
+        self.x0 = Z[int(np.argmin(self.batch(Z)))]
+
     # -- targets and features --------------------------------------------------
     def target_values(self) -> np.ndarray:
         t = self.target

@@ -43,8 +43,9 @@ class SearchResult:
 class _Counter:
     """The objective in unit-box coordinates; counts evaluations, keeps the best."""
 
-    def __init__(self, problem: Problem, budget: float, tol: float, progress=None):
-        self.p, self.budget, self.tol, self.progress = problem, budget, tol, progress
+    def __init__(self, problem: Problem, budget: float, tol: float, progress=None, probe=None):
+        self.p, self.budget, self.tol, self.progress, self.probe = problem, budget, tol, progress, probe
+        self.probed_f, self.probed_t, self.done = np.inf, 0.0, False
         self.lo, self.span = problem.lower, problem.upper - problem.lower
         self.n = 0
         self.best_f, self.best_z = np.inf, problem.x0.copy()
@@ -69,17 +70,24 @@ class _Counter:
         self.history.append((t, self.best_f, self.n))
         if self.progress is not None:
             self.progress(min(t / self.budget, 1.0), self.best_f)
-        return self.best_f <= self.tol or t >= self.budget
+        if self.probe is not None and self.best_f < self.probed_f and t - self.probed_t >= 0.05 * self.budget:
+            # the grid objective cannot reach the tolerance (sampling); ask the polish
+            self.probed_f, self.probed_t = self.best_f, t
+            self.done = bool(self.probe(self.best_z))
+        return self.done or self.best_f <= self.tol or t >= self.budget
 
 
 def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget: float = 10.0,
-                  tol: float = 1e-4, popsize: int = 15, progress=None) -> SearchResult:
+                  tol: float = 1e-4, popsize: int = 15, progress=None, probe=None) -> SearchResult:
     """Minimise ``problem.batch`` over its bounds within ``budget`` seconds.
 
     ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
     the same population.  The start design is always in the first population.
+    ``probe(z) -> bool``, called when the best design improved (at most every 5 %
+    of the budget), stops the search when it returns True (e.g. the polished
+    design meets the tolerance).
     """
-    c = _Counter(problem, budget, tol, progress)
+    c = _Counter(problem, budget, tol, progress, probe)
     u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
     c(u0[None, :])
     stopped = "tolerance"
@@ -88,7 +96,7 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget
             _de(c, u0, seed, popsize)
         else:
             _cmaes(c, u0, seed, popsize)
-        stopped = "tolerance" if c.best_f <= tol else "budget" if c.elapsed() >= budget else "converged"
+        stopped = "tolerance" if c.best_f <= tol or c.done else "budget" if c.elapsed() >= budget else "converged"
     return SearchResult(c.best_z, c.best_f, c.n, c.elapsed(), tuple(c.history), stopped)
 
 

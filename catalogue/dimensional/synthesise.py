@@ -219,34 +219,76 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     ev = Evaluator(m, space)
     cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio)
     problem = Problem(ev, target, cons, grid)
+    problem.init_motion_frame()
+    problem.init_shape()
     if not ev.poses(space.x0[None, :], [0.0]).ok.all():
         raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="a reference configuration that assembles",
                                  got="a group out of reach at the reference"))
     t0 = time.perf_counter()
+    start_note = _closed_form(problem)
+    polished: list = []
+
+    def probe(z):
+        phi = problem.match(z)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=30)
+        a = _assess(problem, z2, phi2)
+        polished.append((a, z2, phi2, n))
+        return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol
+
     res = global_search(problem, method=method, seed=seed, budget=budget, tol=tol, popsize=popsize,
-                        progress=progress)
-    z, phi = res.z, problem.match(res.z)
-    best = (_assess(problem, z, phi), z, phi)
-    z2, phi2, n2 = polish(problem, z, phi)
-    a2 = _assess(problem, z2, phi2)
-    notes = []
-    if a2[2] and (not best[0][2] or np.sqrt(np.mean(a2[0] ** 2)) <= np.sqrt(np.mean(best[0][0] ** 2))):
-        best = (a2, z2, phi2)
-    elif not a2[2]:
-        notes.append("the local polish left the continuous branch; kept the global result")
-    (rel, ang, ok), z, phi = best
-    if not ok:
-        notes.append("the targets are not all reached by continuous motion from the reference")
-    out = ev.with_design(z[:problem.nx])
-    src = (f"dimensional synthesis ({task} generation) by multiloop synthesise: {target.source}; "
-           f"method {method}, seed {seed}")
-    out = replace(out, source=src, description=(m.description or "") + (
-        f" Dimensions synthesised for {target.source}." if m.description else f"Dimensions synthesised for {target.source}."))
+                        progress=progress, probe=probe)
+    (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance")
+    notes = ([start_note] if start_note else []) + notes
+    out = _output(ev, z[:problem.nx], task, target, method, seed)
     achieved, wanted = _achieved(problem, z, phi)
     return SynthesisResult(out, task, float(np.max(rel)), float(np.sqrt(np.mean(rel ** 2))), res.evaluations + n2,
                            time.perf_counter() - t0, method, seed, phi, achieved, wanted,
                            dict(zip(problem.names, map(float, z))), res.stopped,
                            None if ang is None else float(np.max(ang)), res.history, tuple(notes))
+
+
+def _output(ev: Evaluator, x: np.ndarray, task: str, target, method: str, seed: int) -> Mechanism:
+    """The start with design ``x``: names kept, ``source`` citing the target."""
+    m = ev.mechanism
+    src = (f"dimensional synthesis ({task} generation) by multiloop synthesise: {target.source}; "
+           f"method {method}, seed {seed}")
+    what = f"Dimensions synthesised for {target.source}."
+    return replace(ev.with_design(x), source=src,
+                   description=f"{m.description} {what}" if m.description else what)
+
+
+def _closed_form(problem: Problem) -> str | None:
+    """Replace the start design by the closed-form four-bar one when it scores better."""
+    from .starts import closed_form_start
+    cf = closed_form_start(problem)
+    if cf is None:
+        return None
+    z, what = cf
+    f = problem.batch(np.vstack([problem.x0, z]))
+    if f[1] < f[0]:
+        problem.x0 = z
+        return f"{what} used (objective {f[1]:.3g} against {f[0]:.3g} for the given start)"
+    return None
+
+
+def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False):
+    """The best of the global design, its polish and the probes' polished designs:
+    a design meeting the targets on the continuous branch beats one that does not."""
+    phi = problem.match(z)
+    cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
+    notes = []
+    if not skip:
+        z2, phi2, n = polish(problem, z, phi)
+        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
+        if not cands[-1][0][2]:
+            notes.append("the local polish left the continuous branch")
+
+    def key(c):
+        return (not c[0][2], float(np.sqrt(np.mean(c[0][0] ** 2))))
+    a, zb, phib, _ = min(cands, key=key)
+    if not a[2]:
+        notes.append("the targets are not all reached by continuous motion from the reference")
+    return a, zb, phib, sum(c[3] for c in cands), notes
 
 
 def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
