@@ -30,11 +30,12 @@ h1{font-size:1.4em} .meta{color:#555}
 
 _JS = """
 function filt(){
-  var q=document.getElementById('q').value.toLowerCase().split(/\\s+/).filter(Boolean);
+  // a word with a capital letter matches case-sensitively ([LA] is not [La]), others not
+  var q=document.getElementById('q').value.replace(/,\\s+/g,',').split(/\\s+/).filter(Boolean);
   var n=0;
   document.querySelectorAll('.card').forEach(function(c){
-    var t=c.getAttribute('data-search');
-    var ok=q.every(function(w){return t.indexOf(w)>=0;});
+    var t=c.getAttribute('data-search'), tl=t.toLowerCase();
+    var ok=q.every(function(w){return w===w.toLowerCase()? tl.indexOf(w)>=0 : t.indexOf(w)>=0;});
     c.style.display=ok?'':'none'; if(ok)n++;
   });
   document.getElementById('shown').textContent=n;
@@ -46,10 +47,11 @@ def _card(i: int, rec) -> str:
     masks = [sum(1 << x for x in j) for j in rec.joints]
     choices = mechanism_choices(rec.n, masks)
     la = "-".join(map(str, rec.La)) if rec.La else ("non-planar" if rec.planar is False else "—")
-    search = " ".join([rec.code, rec.code_star, f"V={rec.V}", f"K={rec.K}", "LA=" + str(list(rec.LA)),
-                       "MJA=" + str(list(rec.MJA)), "La=" + la,
+    LA, MJA = ",".join(map(str, rec.LA)), ",".join(map(str, rec.MJA))
+    search = " ".join([rec.code, rec.code_star, f"V={rec.V}", f"K={rec.K}", f"[LA]=[{LA}]", f"LA=[{LA}]",
+                       f"[MJA]=[{MJA}]", f"MJA=[{MJA}]", f"[La]={la}", f"La={la}",
                        "planar" if rec.planar else "nonplanar",
-                       "fractionated" if rec.fractionated else "unfractionated"]).lower()
+                       "fractionated" if rec.fractionated else "unfractionated"])
     rows = [f'<div class="code">#{i} {_html.escape(rec.code_star)}</div>',
             f"<div>Code {_html.escape(rec.code)} · V={rec.V} K={rec.K}</div>",
             f"<div>[LA]={list(rec.LA)} [MJA]={list(rec.MJA)}</div>",
@@ -73,11 +75,10 @@ def gallery_page(atlas: Atlas, n: int, F: int, query: str | None = None, limit: 
 <html lang="en"><head><meta charset="utf-8"><title>Atlas n={n} F={F}</title>
 <style>{_CSS}</style><script>{_JS}</script></head>
 <body><h1>Atlas of planar chains: n = {n} links, F = {F}</h1>
-<p class="meta">{total} non-isomorphic non-degenerate chains{_html.escape(note)}
-{'' if not query else ' matching ' + _html.escape(query)}.
+<p class="meta">{total} non-isomorphic non-degenerate chains{_html.escape(note)}{'' if not query else ' matching ' + _html.escape(query)}.
 Links: bars (2 joints) and shaded polygons (3+ joints); open circles: simple joints;
 <span style="color:#e15759">red ringed dots</span>: multiple joints (number = multiplicity j).</p>
-<p><input id="q" placeholder="filter: code, [LA], V=2, planar …" oninput="filt()">
+<p><input id="q" placeholder="filter: [LA]=[6,2], [La]=4-4-6, V=2, planar …" oninput="filt()">
 shown: <span id="shown">{len(cards)}</span></p>
 <div class="grid">
 {chr(10).join(cards)}

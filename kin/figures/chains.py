@@ -1,17 +1,15 @@
 """Drawings of chains as in published atlases: SVG strings and matplotlib axes.
 
 A **link** is drawn as a bar (two joints) or a shaded polygon through its joints
-(three or more, in angular order around the link's layout point); a **simple joint**
+(three or more, in the cyclic order of a planar embedding); a **simple joint**
 is a small open circle; a **multiple joint** (a pin on ``n' >= 3`` links) is a larger
 filled red circle with a ring and its multiplicity ``j`` next to it, so it cannot be
 mistaken for two joints drawn close together.
 
-Layout (:func:`chain_layout`): the link–joint incidence graph is laid out, link
-and joint vertices alike.  A planar chain gets a **Tutte (barycentric) embedding**
-with its longest face on a circle; if rounding or a non-3-connected graph makes two
-edges cross, networkx's straight-line planar layout (Chrobak–Payne) is used
-instead, so planar chains are always drawn without crossings (:func:`has_crossings`
-checks it).  Non-planar chains use the Kamada–Kawai spring layout.
+Layout (:func:`~kin.figures.layout.chain_layout`, re-exported here): the link
+polygons of a planar chain are laid out as a straight-line planar drawing (Tutte's
+barycentric embedding refined by crossing-free force-directed moves), so no two links
+cross and no drawing collapses; non-planar chains use the Kamada–Kawai spring layout.
 
 References
 ----------
@@ -20,147 +18,19 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Sequence
 
-import networkx as nx
 import numpy as np
+
+from .layout import ChainLayout, chain_layout, has_crossings
 
 __all__ = ["ChainLayout", "chain_layout", "has_crossings", "chain_svg", "draw_chain",
            "existence_domain_chart", "invariant_merges", "invariant_merge_chart"]
 
 
-@dataclass(frozen=True, slots=True)
-class ChainLayout:
-    """Positions in the unit square (y up).
-
-    Attributes
-    ----------
-    links : tuple of (x, y)
-        Layout point of every link (centre of its polygon).
-    joints : tuple of (x, y)
-        Position of every joint.
-    method : str
-        ``"tutte"``, ``"planar"`` or ``"spring"``.
-    """
-
-    links: tuple[tuple[float, float], ...]
-    joints: tuple[tuple[float, float], ...]
-    method: str
-
-
-def _graph(n: int, joints: Sequence[Sequence[int]]) -> nx.Graph:
-    g = nx.Graph()
-    g.add_nodes_from(range(n + len(joints)))
-    g.add_edges_from((x, n + a) for a, j in enumerate(joints) for x in j)
-    return g
-
-
-def _faces(emb: nx.PlanarEmbedding) -> list[list]:
-    seen, faces = set(), []
-    for u, v in emb.edges():
-        if (u, v) in seen:
-            continue
-        face = emb.traverse_face(u, v, mark_half_edges=seen)
-        faces.append(face)
-    return faces
-
-
-def _tutte(g: nx.Graph, outer: list) -> dict:
-    pos = {}
-    k = len(outer)
-    for i, v in enumerate(outer):
-        a = 2 * math.pi * i / k + math.pi / 2
-        pos[v] = (math.cos(a), math.sin(a))
-    inner = [v for v in g if v not in pos]
-    if inner:
-        idx = {v: i for i, v in enumerate(inner)}
-        A = np.zeros((len(inner), len(inner)))
-        b = np.zeros((len(inner), 2))
-        for v in inner:
-            i = idx[v]
-            A[i, i] = g.degree(v)
-            for w in g[v]:
-                if w in idx:
-                    A[i, idx[w]] -= 1
-                else:
-                    b[i] += pos[w]
-        sol = np.linalg.solve(A, b)
-        for v in inner:
-            pos[v] = tuple(sol[idx[v]])
-    return pos
-
-
-def _segments_cross(p1, p2, p3, p4) -> bool:
-    def orient(a, b, c):
-        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-    d1, d2 = orient(p3, p4, p1), orient(p3, p4, p2)
-    d3, d4 = orient(p1, p2, p3), orient(p1, p2, p4)
-    eps = 1e-9
-    return (d1 * d2 < -eps) and (d3 * d4 < -eps)
-
-
-def has_crossings(g: nx.Graph, pos: dict) -> bool:
-    """True when two edges without a common end cross, or two vertices coincide."""
-    pts = np.array([pos[v] for v in g])
-    if len(pts) > 1:
-        d = np.linalg.norm(pts[:, None] - pts[None], axis=2) + np.eye(len(pts))
-        if d.min() < 1e-6:
-            return True
-    edges = list(g.edges())
-    for i, (a, b) in enumerate(edges):
-        for c, d_ in edges[i + 1:]:
-            if len({a, b, c, d_}) < 4:
-                continue
-            if _segments_cross(pos[a], pos[b], pos[c], pos[d_]):
-                return True
-    return False
-
-
-def _normalise(pos: dict) -> dict:
-    pts = np.array(list(pos.values()), dtype=float)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    span = max(hi - lo) or 1.0
-    centre = (lo + hi) / 2
-    return {v: tuple(((np.array(p) - centre) / span) + 0.5) for v, p in pos.items()}
-
-
-def chain_layout(n: int, joints: Sequence[Sequence[int]]) -> ChainLayout:
-    """Layout of a chain given as joints (tuples of link indices ``0…n−1``).
-
-    Examples
-    --------
-    >>> lay = chain_layout(4, [(0, 1), (1, 2), (2, 3), (3, 0)])
-    >>> lay.method, len(lay.links), len(lay.joints)
-    ('tutte', 4, 4)
-    """
-    g = _graph(n, joints)
-    planar, emb = nx.check_planarity(g)
-    pos = None
-    method = "spring"
-    if planar:
-        faces = sorted(_faces(emb), key=lambda f: (-len(f), sorted(f)))
-        for outer in faces[:6]:            # longest faces first as the outer loop
-            try:
-                pos = _tutte(g, outer)
-            except np.linalg.LinAlgError:
-                pos = None
-                continue
-            method = "tutte"
-            if not has_crossings(g, pos):
-                break
-            pos = None
-        if pos is None:
-            pos = nx.planar_layout(g)
-            method = "planar"
-    else:
-        pos = nx.kamada_kawai_layout(g)
-    pos = _normalise(pos)
-    return ChainLayout(tuple(tuple(map(float, pos[x])) for x in range(n)),
-                       tuple(tuple(map(float, pos[n + a])) for a in range(len(joints))), method)
-
-
 def _link_polygon(layout: ChainLayout, joints: Sequence[Sequence[int]], link: int) -> list[tuple[float, float]]:
+    if layout.polygons:
+        return [layout.joints[a] for a in layout.polygons[link]]
     cx, cy = layout.links[link]
     pts = [layout.joints[a] for a, j in enumerate(joints) if link in j]
     return sorted(pts, key=lambda p: math.atan2(p[1] - cy, p[0] - cx))
@@ -196,12 +66,12 @@ def chain_svg(n: int, joints: Sequence[Sequence[int]], size: int = 180, title: s
         colour = _PALETTE[x % len(_PALETTE)]
         if len(poly) == 2:
             (x1, y1), (x2, y2) = xy(poly[0]), xy(poly[1])
-            out.append(f'<line x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" '
-                       f'stroke="{colour}" stroke-width="5" stroke-linecap="round"/>')
+            out.append(f'<line class="link" data-link="{x}" x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" '
+                       f'y2="{y2:.1f}" stroke="{colour}" stroke-width="5" stroke-linecap="round"/>')
         else:
             pts = " ".join(f"{a:.1f},{b:.1f}" for a, b in map(xy, poly))
-            out.append(f'<polygon points="{pts}" fill="{colour}" fill-opacity="0.35" '
-                       f'stroke="{colour}" stroke-width="3" stroke-linejoin="round"/>')
+            out.append(f'<polygon class="link" data-link="{x}" points="{pts}" fill="{colour}" '
+                       f'fill-opacity="0.45" stroke="{colour}" stroke-width="3" stroke-linejoin="round"/>')
     for a, j in enumerate(joints):
         cx, cy = xy(lay.joints[a])
         if len(j) > 2:

@@ -63,6 +63,9 @@ def run(args) -> int:
     from multiloop.catalogue.atlas import Atlas
     from multiloop.catalogue.synthesis import mechanism_choices, universal_table
 
+    for flag, value in (("--html-limit", args.html_limit), ("--workers", args.workers)):
+        if value is not None and value <= 0:
+            raise InputError(explain(flag, expected="a positive integer", got=str(value)))
     if args.links is None and not Path(args.db).exists():
         raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
                                  got=repr(args.db)))
