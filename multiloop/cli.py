@@ -1,9 +1,10 @@
 """The ``multiloop`` console command: parses arguments and dispatches.
 
 Each sub-command lives in ``multiloop/commands/<name>.py`` with two functions,
-``add_arguments(parser)`` and ``run(args) -> int``.  Errors derived from
-``topo.errors.LinkageError`` print their message on stderr and exit 2 (bad input);
-anything else is an internal error, exit 1 (traceback only with ``--debug``).
+``add_arguments(parser)`` and ``run(args) -> int``.  Exit codes: 0 success; 2 bad
+input or environment (every ``topo.errors.LinkageError``, and any ``OSError`` such as
+a permission denied or a directory given for a file), one message on stderr, no
+traceback; 1 internal error (traceback only with ``--debug``); 130 interrupted.
 """
 from __future__ import annotations
 
@@ -27,8 +28,16 @@ COMMANDS = {
 }
 
 
+DESCRIPTION = ("Structure, Assur decomposition, kinematics, kinetostatics and atlases of planar "
+               "multi-loop linkages with multiple joints.  Mechanisms are TOML or JSON files; "
+               "'multiloop COMMAND --help' describes each command.")
+
+EPILOG = ("exit codes: 0 success, 2 bad input (the message names the file, table and key at "
+          "fault), 1 internal error (run with --debug for the traceback)")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="multiloop", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="multiloop", description=DESCRIPTION, epilog=EPILOG)
     parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     parser.add_argument("--version", action="version", version="multiloop 0.1.0")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -61,6 +70,10 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as exc:   # the environment refused a file: not a bug of multiloop
+        where = f"'{exc.filename}'" if exc.filename else "a file"
+        print(f"multiloop {args.command}: error: {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         if args.debug:
             raise

@@ -181,3 +181,122 @@ def test_typed_readers_accept_and_name_the_fault():
         with pytest.raises(InputError) as exc:
             call()
         assert needle in str(exc.value)
+
+
+# ---- physically meaningless or hostile input (issue 10) ---------------------------
+FOUR_BAR = '''
+[[link]]
+name = "g"
+frame = true
+[[joint]]
+name = "O"
+links = ["g", "crank"]
+at = [0, 0]
+[[joint]]
+name = "A"
+links = ["crank", "coupler"]
+at = [1, 1]
+[[joint]]
+name = "B"
+links = ["coupler", "rocker"]
+at = [3, 3]
+[[joint]]
+name = "C"
+links = ["rocker", "g"]
+at = [4, 0]
+[[driver]]
+joint = "O"
+'''
+
+MEANINGLESS = [
+    ("zero-length link", FOUR_BAR.replace("at = [3, 3]", "at = [1, 1]"),
+     "link 'coupler': expected a length > 0 between its pins, got a zero-length link: its pins 'A' and 'B' are both at (1, 1)"),
+    ("coincident pins", FOUR_BAR.replace("at = [1, 1]", "at = [4, 0]"),
+     "joints 'A' and 'C': expected pins at distinct points, got coincident pins, both at (4, 0)"),
+    ("coincident within 1e-9 of the size", FOUR_BAR.replace("at = [3, 3]", "at = [1.000000000001, 1]"),
+     "zero-length link"),
+    ("negative inertia", FOUR_BAR + '[[link]]\nname = "crank"\ninertia = -0.5\n',
+     "link 'crank' inertia: expected a moment of inertia >= 0"),
+]
+
+
+@pytest.mark.parametrize("label,text,needle", MEANINGLESS, ids=[b[0] for b in MEANINGLESS])
+def test_physically_meaningless_input_is_named(tmp_path, capsys, label, text, needle):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    for command in ("analyse", "decompose", "solve", "forces"):
+        assert main([command, str(f)]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err and "toggle" not in err
+
+
+def test_a_slider_point_may_sit_on_its_pin(tmp_path):
+    # the crank-slider's P joint reference point is the piston pin: not a coincidence of pins
+    m = loads(CRANK_SLIDER)
+    assert m.joint("B").at == m.joint("S").at
+
+
+def test_duplicate_json_key_is_named(tmp_path, capsys):
+    f = tmp_path / "dup.json"
+    f.write_text('{"joints": [["a", "b"], ["b", "c"], ["c", "a"]], "name": "x", "name": "y"}')
+    assert main(["analyse", str(f)]) == 2
+    assert "expected each key once, got key 'name' twice" in capsys.readouterr().err
+    with pytest.raises(InputError, match="key 'a' twice"):
+        loads('{"joints": [["a", "b"], ["b", "c"], ["c", "a"]], "link": [{"name": "a", "a": 1, "a": 2}]}', "json")
+
+
+@pytest.mark.parametrize("suffix,text", [
+    ("json", '{"joints": ' + "[" * 100_000 + "]" * 100_000 + "}"),
+    ("json", '{"joints": ' + "[" * 900 + "]" * 900 + "}"),
+    ("toml", "joints = " + "[" * 100_000 + "]" * 100_000 + "\n"),
+])
+def test_deeply_nested_document_is_exit_2(tmp_path, capsys, suffix, text):
+    f = tmp_path / f"deep.{suffix}"
+    f.write_text(text)
+    assert main(["analyse", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "nested at most 64 deep" in err and "Traceback" not in err and "internal" not in err
+
+
+@pytest.mark.parametrize("suffix,text", [
+    ("json", '{"joints": [["a", "b"], ["b", "c"], ["c", "a"]]}'),
+    ("toml", 'joints = [["a", "b"], ["b", "c"], ["c", "a"]]\n'),
+])
+def test_byte_order_mark_is_accepted(tmp_path, capsys, suffix, text):
+    f = tmp_path / f"bom.{suffix}"
+    f.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load(f).n_links == 3
+    assert loads("\ufeff" + text, suffix).n_links == 3
+    assert main(["analyse", str(f)]) == 0
+
+
+def test_unreadable_input_is_exit_2_naming_the_path(tmp_path, capsys, monkeypatch):
+    from pathlib import Path
+    f = tmp_path / "locked.toml"
+    f.write_text(BARE)
+
+    def denied(self):
+        raise PermissionError(13, "Permission denied", str(self))
+    monkeypatch.setattr(Path, "read_bytes", denied)
+    for command in ("analyse", "decompose", "solve"):
+        assert main([command, str(f)]) == 2
+        err = capsys.readouterr().err
+        assert f"file '{f}': expected a readable file, got permission denied" in err
+
+
+def test_any_os_error_is_exit_2_naming_the_file(capsys, monkeypatch):
+    import multiloop.commands.analyse as analyse
+
+    def fails(args):
+        raise IsADirectoryError(21, "Is a directory", "some/dir")
+    monkeypatch.setattr(analyse, "run", fails)
+    assert main(["analyse", "x.toml"]) == 2
+    err = capsys.readouterr().err
+    assert "multiloop analyse: error: 'some/dir': Is a directory" in err and "internal" not in err
+
+
+def test_help_describes_the_tool(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert "planar multi-loop linkages" in out and "console command" not in out

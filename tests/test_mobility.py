@@ -118,3 +118,13 @@ def test_constraint_jacobian_equals_finite_differences(make):
         fd[:, k] = (_residual_by_hand(m, cons, Z + dz.reshape(Z.shape))
                     - _residual_by_hand(m, cons, Z - dz.reshape(Z.shape))) / (2 * h)
     assert np.allclose(J, fd, atol=1e-7)
+
+
+@pytest.mark.parametrize("scale", [1e-9, 1e-3, 1.0, 1e3, 1e12])
+def test_actual_mobility_does_not_depend_on_units(scale):
+    from multiloop.topo.model import Joint, Mechanism
+    for make in (four_bar, crank_slider, parallelogram):
+        m = make()
+        scaled = Mechanism(m.links, tuple(Joint(j.name, j.kind, j.links, (j.at[0] * scale, j.at[1] * scale), j.axis)
+                                          for j in m.joints), m.drivers)
+        assert actual_mobility(scaled).as_dict() == actual_mobility(m).as_dict()

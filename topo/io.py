@@ -35,7 +35,7 @@ from .model import Driver, Joint, JointKind, Link, Load, Mechanism, MechanismBui
 
 __all__ = ["load", "loads", "mechanism_from_dict", "mechanism_to_dict", "dumps_toml",
            "dumps_json", "read_document", "read_number", "read_vector", "read_string", "read_bool",
-           "read_names", "read_table", "read_tables", "table_label"]
+           "read_names", "read_table", "read_tables", "table_label", "MAX_DEPTH"]
 
 _TOP_KEYS = {"name", "description", "source", "joints", "link", "joint", "driver", "point",
              "force", "gravity", "reconstruction", "notes"}
@@ -50,41 +50,104 @@ _REQUIRED = {"link": ("name",), "joint": ("name", "links"), "driver": ("joint",)
              "point": ("name", "link", "at"), "force": ("link",)}
 
 
+#: deepest nesting of tables and arrays a document may have (a mechanism needs 4)
+MAX_DEPTH = 64
+
+
 def read_document(path: str | Path) -> dict[str, Any]:
-    """Parse a ``.toml`` or ``.json`` file into a dict (no interpretation)."""
+    """Parse a ``.toml`` or ``.json`` file into a dict (no interpretation).
+
+    UTF-8 with or without a byte-order mark.  A JSON object may not repeat a key,
+    and no document may nest tables and arrays deeper than :data:`MAX_DEPTH`.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file (permission, directory), undecodable bytes,
+        unknown suffix, syntax error, repeated JSON key, nesting too deep.
+    """
     p = Path(path)
-    if not p.exists():
-        raise InputError(explain(f"file '{p}'", expected="an existing file", got="nothing there"))
-    if p.is_dir():
-        raise InputError(explain(f"file '{p}'", expected="a file", got="a directory"))
     suffix = p.suffix.lower()
+    if suffix not in (".json", ".toml"):
+        if p.is_dir():
+            raise InputError(explain(f"file '{p}'", expected="a file", got="a directory"))
+        raise InputError(explain(f"file '{p}'", expected="a .toml or .json file",
+                                 got=f"suffix '{suffix or '(none)'}'"))
+    text = _read_text(p)
+    return _parse_json(text, str(p)) if suffix == ".json" else _parse_toml(text, str(p))
+
+
+def _read_text(p: Path) -> str:
+    """The file's text as UTF-8 (a leading byte-order mark is dropped)."""
     try:
-        text = p.read_text(encoding="utf-8")
+        data = p.read_bytes()
+    except FileNotFoundError:
+        raise InputError(explain(f"file '{p}'", expected="an existing file", got="nothing there")) from None
+    except IsADirectoryError:
+        raise InputError(explain(f"file '{p}'", expected="a file", got="a directory")) from None
+    except PermissionError:
+        raise InputError(explain(f"file '{p}'", expected="a readable file", got="permission denied",
+                                 hint="check the file's permissions")) from None
+    except OSError as exc:
+        raise InputError(explain(f"file '{p}'", expected="a readable file",
+                                 got=exc.strerror or type(exc).__name__)) from None
+    try:
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise InputError(explain(f"file '{p}'", expected="UTF-8 text", got=f"undecodable bytes ({exc.reason})")) from None
-    if suffix == ".json":
-        return _parse_json(text, str(p))
-    if suffix == ".toml":
-        return _parse_toml(text, str(p))
-    raise InputError(explain(f"file '{p}'", expected="a .toml or .json file",
-                             got=f"suffix '{suffix or '(none)'}'"))
+        raise InputError(explain(f"file '{p}'", expected="UTF-8 text",
+                                 got=f"undecodable bytes ({exc.reason})")) from None
+
+
+def _too_deep(where: str) -> InputError:
+    return InputError(explain(where, expected=f"tables and arrays nested at most {MAX_DEPTH} deep",
+                              got="deeper nesting"))
+
+
+def _check_depth(doc: Any, where: str) -> None:
+    """Raise when ``doc`` nests dicts/lists deeper than :data:`MAX_DEPTH` (iterative)."""
+    stack = [(doc, 1)]
+    while stack:
+        value, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise _too_deep(where)
+        children = value.values() if isinstance(value, dict) else value
+        stack.extend((c, depth + 1) for c in children if isinstance(c, (dict, list)))
 
 
 def _parse_toml(text: str, where: str) -> dict[str, Any]:
     try:
-        return tomllib.loads(text)
+        doc = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{where}: TOML syntax error: {exc}") from None
+    except RecursionError:
+        raise _too_deep(where) from None
+    _check_depth(doc, where)
+    return doc
+
+
+def _unique_keys(where: str):
+    def hook(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key, value in pairs:
+            if key in out:
+                raise InputError(explain(f"{where}: JSON object", expected="each key once",
+                                         got=f"key {key!r} twice", hint="remove or rename one of them"))
+            out[key] = value
+        return out
+    return hook
 
 
 def _parse_json(text: str, where: str) -> dict[str, Any]:
     try:
-        doc = json.loads(text)
+        doc = json.loads(text.removeprefix("\ufeff"), object_pairs_hook=_unique_keys(where))
     except json.JSONDecodeError as exc:
         raise InputError(f"{where}: JSON syntax error: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    except RecursionError:
+        raise _too_deep(where) from None
     if not isinstance(doc, dict):
         raise InputError(explain(f"{where}", expected="a JSON object at top level",
                                  got=type(doc).__name__))
+    _check_depth(doc, where)
     return doc
 
 

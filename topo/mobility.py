@@ -68,6 +68,22 @@ def pair_constraints(m: Mechanism) -> list[Constraint]:
     return out
 
 
+def _dimensionless_jacobian(m: Mechanism, cons: list[Constraint], moving: list[str]) -> np.ndarray:
+    """The reference Jacobian with lengths in units of the mechanism's size.
+
+    Dividing every length by the size ``s`` scales the rotation columns by ``1/s``,
+    which leaves the rank unchanged but makes the rank tolerance independent of the
+    units (a four-bar in metres, nanometres or kilometres has the same rank).
+    """
+    xy = np.array([j.at for j in m.joints], float)
+    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 0.0
+    size = size if size > 0 else 1.0
+    at = {j.name: np.asarray(j.at, float) / size for j in m.joints}
+    org = {x: c / size for x, c in link_origins(m).items()}
+    axis = {j.name: np.asarray(j.axis, float) for j in m.joints if j.axis is not None}
+    return reference_jacobian(m, cons, moving, joint_at=at, joint_axis=axis, origins=org)
+
+
 def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
     """Actual mobility and redundant constraints at the reference configuration.
 
@@ -78,7 +94,8 @@ def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
         (without a frame the chain's mobility is computed with its first link
         fixed).
     tol : float
-        Relative rank tolerance.
+        Relative rank tolerance (lengths are measured in units of the mechanism's
+        size, so the result does not depend on the units).
 
     Returns
     -------
@@ -108,8 +125,7 @@ def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
     frame = m.frame or m.link_names[0]
     moving = [x for x in m.link_names if x != frame]
     cons = pair_constraints(m)
-    org = link_origins(m)
-    J = reference_jacobian(m, cons, moving, origins=org)
+    J = _dimensionless_jacobian(m, cons, moving)
     scale = max(1.0, float(np.abs(J).max())) if J.size else 1.0
     rank = int(np.linalg.matrix_rank(J, tol=tol * scale)) if J.size else 0
     p = n_pairs(m)

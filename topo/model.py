@@ -319,132 +319,29 @@ class MechanismBuilder:
     def build(self) -> Mechanism:
         """Validate everything and return the frozen :class:`Mechanism`.
 
+        The phases each add the problems they find to one list: links, joints (their
+        kinds, link counts and axes), geometry (all-or-nothing, no zero-length link,
+        no coincident pins), drivers, points and loads, mass data.  All problems are
+        reported at once; connectivity is checked last, on its own.
+
         Raises
         ------
         InputError
-            Malformed names, kinds, link counts or coordinates (all problems listed).
+            Malformed names, kinds, link counts, coordinates or mass data (all
+            problems listed).
         TopologyError
             Unknown links, disconnected chains, drivers on unknown joints.
         """
         problems: list[str] = []
-        # links: explicit + implied by joints, in order of first appearance
-        links: dict[str, Link] = {}
-        for link in self.links:
-            if not isinstance(link.name, str) or not link.name:
-                problems.append(explain("[[link]] name", expected="a non-empty string",
-                                        got=repr(link.name)))
-                continue
-            if link.name in links:
-                problems.append(explain(f"link '{link.name}'", expected="a unique name",
-                                        got="a duplicate [[link]] entry"))
-            links[link.name] = link
-        frames = [lk.name for lk in links.values() if lk.is_frame]
-        if len(frames) > 1:
-            problems.append(explain("frame", expected="exactly one link with frame = true",
-                                    got=f"{len(frames)} ({', '.join(frames)})"))
-        joints: list[Joint] = []
-        seen_joint: set[str] = set()
-        for j in self.joints:
-            where = f"joint '{j.name}'"
-            if not isinstance(j.name, str) or not j.name:
-                problems.append(explain("[[joint]] name", expected="a non-empty string",
-                                        got=repr(j.name)))
-                continue
-            if j.name in seen_joint:
-                problems.append(explain(where, expected="a unique name",
-                                        got="a duplicate [[joint]] entry"))
-            seen_joint.add(j.name)
-            try:
-                kind = JointKind(j.kind)
-            except ValueError:
-                problems.append(explain(f"{where} kind", expected="'R' or 'P'",
-                                        got=repr(j.kind)))
-                continue
-            names = j.links
-            if not all(isinstance(x, str) and x for x in names):
-                problems.append(explain(f"{where} links", expected="link names (strings)",
-                                        got=repr(list(names))))
-                continue
-            if len(names) < 2:
-                problems.append(explain(where, expected="at least 2 links",
-                                        got=f"{len(names)} ({', '.join(names) or 'none'})",
-                                        hint="a joint connects two or more links"))
-            if kind is JointKind.P and len(names) != 2:
-                problems.append(explain(where, expected="exactly 2 links for a P joint (guide, slider)",
-                                        got=f"{len(names)}"))
-            if len(set(names)) != len(names):
-                problems.append(explain(f"{where} links", expected="distinct links",
-                                        got=repr(list(names))))
-            if kind is JointKind.P and j.at is not None and j.axis is None:
-                problems.append(explain(f"{where} axis", expected="a guide direction [dx, dy] for a P joint with geometry",
-                                        got="nothing"))
-            if j.axis is not None:
-                if kind is JointKind.R:
-                    problems.append(explain(f"{where} axis", expected="no axis on an R joint",
-                                            got=repr(j.axis)))
-                elif math.hypot(*j.axis) == 0.0:
-                    problems.append(explain(f"{where} axis", expected="a non-zero direction",
-                                            got=repr(list(j.axis))))
-            for x in names:
-                if x not in links:
-                    links[x] = Link(x)
-            joints.append(Joint(j.name, kind, tuple(names), j.at, j.axis))
-        if not joints:
-            problems.append(explain("chain", expected="at least one joint", got="none"))
-        # geometry all-or-nothing
-        with_at = [j.name for j in joints if j.at is not None]
-        if with_at and len(with_at) != len(joints):
-            missing = [j.name for j in joints if j.at is None]
-            problems.append(explain("geometry", expected="'at' on every joint or on none",
-                                    got=f"missing on {', '.join(missing)}"))
-        joint_by_name = {j.name: j for j in joints}
-        # drivers
-        drivers: list[Driver] = []
-        for d in self.drivers:
-            if isinstance(d, Driver):
-                jn, dl, speed, acc = d.joint, d.links, d.speed, d.acceleration
-            else:
-                jn, dl, speed, acc = d
-            if jn not in joint_by_name:
-                problems.append(explain(f"[[driver]] joint '{jn}'", expected="the name of a [[joint]]",
-                                        got="an unknown joint",
-                                        hint=f"known joints: {', '.join(sorted(joint_by_name)) or 'none'}"))
-                continue
-            jt = joint_by_name[jn]
-            if dl is None:
-                dl = jt.links[:2]
-            dl = tuple(dl)
-            if len(dl) != 2 or any(x not in jt.links for x in dl) or dl[0] == dl[1]:
-                bad = [x for x in dl if x not in links]
-                problems.append(explain(f"[[driver]] on joint '{jn}' links",
-                                        expected=f"two distinct links of that joint ({', '.join(jt.links)})",
-                                        got=repr(list(dl)) + (f" (unknown link {', '.join(bad)})" if bad else "")))
-                continue
-            if any(x.joint == jn and set(x.links) == set(dl) for x in drivers):
-                problems.append(explain(f"[[driver]] on joint '{jn}'", expected="one driver per pair",
-                                        got="a duplicate"))
-            drivers.append(Driver(jn, dl, speed, acc))  # type: ignore[arg-type]
-        # points and loads refer to known links
-        seen_pts: set[str] = set()
-        for p in self.points:
-            if p.link not in links:
-                problems.append(explain(f"[[point]] '{p.name}' link", expected="a known link",
-                                        got=repr(p.link)))
-            if p.name in seen_pts:
-                problems.append(explain(f"[[point]] '{p.name}'", expected="a unique name",
-                                        got="a duplicate"))
-            seen_pts.add(p.name)
-        for ld in self.loads:
-            if ld.link not in links:
-                problems.append(explain("[[force]] link", expected="a known link", got=repr(ld.link)))
-        for lk in links.values():
-            if lk.mass is not None and lk.mass < 0:
-                problems.append(explain(f"link '{lk.name}' mass", expected="a mass >= 0",
-                                        got=repr(lk.mass)))
+        links = _collect_links(self.links, problems)
+        joints = _collect_joints(self.joints, links, problems)
+        problems += _geometry_problems(joints)
+        drivers = _collect_drivers(self.drivers, joints, links, problems)
+        problems += _attachment_problems(self.points, self.loads, links)
+        problems += _mass_problems(links.values())
         if problems:
             raise InputError("; ".join(problems) if len(problems) == 1 else
                              f"{len(problems)} problems in the mechanism:\n  - " + "\n  - ".join(problems))
-        # connectivity (a topology problem, reported on its own)
         comps = _components(list(links), joints)
         if len(comps) > 1:
             desc = " | ".join("{" + ", ".join(sorted(c)) + "}" for c in comps)
@@ -454,6 +351,167 @@ class MechanismBuilder:
         return Mechanism(tuple(links.values()), tuple(joints), tuple(drivers),
                          tuple(self.points), tuple(self.loads), self.gravity, self.name,
                          self.description, self.source)
+
+
+# ---- the phases of MechanismBuilder.build -------------------------------------------
+def _collect_links(given: Iterable[Link], problems: list[str]) -> dict[str, Link]:
+    """The explicit links by name (duplicates and a second frame reported)."""
+    links: dict[str, Link] = {}
+    for link in given:
+        if not isinstance(link.name, str) or not link.name:
+            problems.append(explain("[[link]] name", expected="a non-empty string", got=repr(link.name)))
+            continue
+        if link.name in links:
+            problems.append(explain(f"link '{link.name}'", expected="a unique name",
+                                    got="a duplicate [[link]] entry"))
+        links[link.name] = link
+    frames = [lk.name for lk in links.values() if lk.is_frame]
+    if len(frames) > 1:
+        problems.append(explain("frame", expected="exactly one link with frame = true",
+                                got=f"{len(frames)} ({', '.join(frames)})"))
+    return links
+
+
+def _joint_problems(j: Joint, kind: JointKind) -> list[str]:
+    """Link count, distinct links and the axis rule of one joint."""
+    where, names, out = f"joint '{j.name}'", j.links, []
+    if len(names) < 2:
+        out.append(explain(where, expected="at least 2 links", got=f"{len(names)} ({', '.join(names) or 'none'})",
+                           hint="a joint connects two or more links"))
+    if kind is JointKind.P and len(names) != 2:
+        out.append(explain(where, expected="exactly 2 links for a P joint (guide, slider)", got=f"{len(names)}"))
+    if len(set(names)) != len(names):
+        out.append(explain(f"{where} links", expected="distinct links", got=repr(list(names))))
+    if kind is JointKind.P and j.at is not None and j.axis is None:
+        out.append(explain(f"{where} axis", expected="a guide direction [dx, dy] for a P joint with geometry",
+                           got="nothing"))
+    if j.axis is not None:
+        if kind is JointKind.R:
+            out.append(explain(f"{where} axis", expected="no axis on an R joint", got=repr(j.axis)))
+        elif math.hypot(*j.axis) == 0.0:
+            out.append(explain(f"{where} axis", expected="a non-zero direction", got=repr(list(j.axis))))
+    return out
+
+
+def _collect_joints(given: Iterable[Joint], links: dict[str, Link], problems: list[str]) -> list[Joint]:
+    """The valid joints, with kinds as :class:`JointKind`; links they name but the
+    file does not declare are added to ``links`` (in order of first appearance)."""
+    joints: list[Joint] = []
+    seen: set[str] = set()
+    for j in given:
+        if not isinstance(j.name, str) or not j.name:
+            problems.append(explain("[[joint]] name", expected="a non-empty string", got=repr(j.name)))
+            continue
+        if j.name in seen:
+            problems.append(explain(f"joint '{j.name}'", expected="a unique name", got="a duplicate [[joint]] entry"))
+        seen.add(j.name)
+        try:
+            kind = JointKind(j.kind)
+        except ValueError:
+            problems.append(explain(f"joint '{j.name}' kind", expected="'R' or 'P'", got=repr(j.kind)))
+            continue
+        if not all(isinstance(x, str) and x for x in j.links):
+            problems.append(explain(f"joint '{j.name}' links", expected="link names (strings)",
+                                    got=repr(list(j.links))))
+            continue
+        problems += _joint_problems(j, kind)
+        for x in j.links:
+            links.setdefault(x, Link(x))
+        joints.append(Joint(j.name, kind, tuple(j.links), j.at, j.axis))
+    if not joints:
+        problems.append(explain("chain", expected="at least one joint", got="none"))
+    return joints
+
+
+def _geometry_problems(joints: Sequence[Joint]) -> list[str]:
+    """Geometry on every joint or on none; no two pins at one point.
+
+    Two pins of one link at the same point make a zero-length link; two separate
+    pins at the same point make every group they close singular.  Points closer
+    than ``1e-9`` of the mechanism's size count as one.
+    """
+    with_at = [j for j in joints if j.at is not None]
+    if with_at and len(with_at) != len(joints):
+        missing = [j.name for j in joints if j.at is None]
+        return [explain("geometry", expected="'at' on every joint or on none", got=f"missing on {', '.join(missing)}")]
+    pins = [j for j in with_at if j.kind is JointKind.R]
+    if len(pins) < 2:
+        return []
+    xs, ys = [j.at[0] for j in with_at], [j.at[1] for j in with_at]
+    tol = 1e-9 * max(max(xs) - min(xs), max(ys) - min(ys))
+    out = []
+    for i, a in enumerate(pins):
+        for b in pins[i + 1:]:
+            if math.dist(a.at, b.at) <= tol:
+                out.append(_coincident_pins(a, b))
+    return out
+
+
+def _coincident_pins(a: Joint, b: Joint) -> str:
+    at = f"({a.at[0]:g}, {a.at[1]:g})"
+    shared = [x for x in a.links if x in b.links]
+    if shared:
+        return explain(f"link '{shared[0]}'", expected="a length > 0 between its pins",
+                       got=f"a zero-length link: its pins '{a.name}' and '{b.name}' are both at {at}",
+                       hint="move one of the pins, or write one multiple joint if the links share one pin")
+    return explain(f"joints '{a.name}' and '{b.name}'", expected="pins at distinct points",
+                   got=f"coincident pins, both at {at}",
+                   hint="links that share one pin are one [[joint]] listing all of them; otherwise move one pin")
+
+
+def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, Link],
+                     problems: list[str]) -> list[Driver]:
+    """Drivers on known joints, each on two distinct links of its joint, one per pair."""
+    joint_by_name = {j.name: j for j in joints}
+    drivers: list[Driver] = []
+    for d in given:
+        jn, dl, speed, acc = (d.joint, d.links, d.speed, d.acceleration) if isinstance(d, Driver) else d
+        if jn not in joint_by_name:
+            problems.append(explain(f"[[driver]] joint '{jn}'", expected="the name of a [[joint]]",
+                                    got="an unknown joint",
+                                    hint=f"known joints: {', '.join(sorted(joint_by_name)) or 'none'}"))
+            continue
+        jt = joint_by_name[jn]
+        dl = tuple(jt.links[:2] if dl is None else dl)
+        if len(dl) != 2 or any(x not in jt.links for x in dl) or dl[0] == dl[1]:
+            bad = [x for x in dl if x not in links]
+            problems.append(explain(f"[[driver]] on joint '{jn}' links",
+                                    expected=f"two distinct links of that joint ({', '.join(jt.links)})",
+                                    got=repr(list(dl)) + (f" (unknown link {', '.join(bad)})" if bad else "")))
+            continue
+        if any(x.joint == jn and set(x.links) == set(dl) for x in drivers):
+            problems.append(explain(f"[[driver]] on joint '{jn}'", expected="one driver per pair", got="a duplicate"))
+        drivers.append(Driver(jn, dl, speed, acc))  # type: ignore[arg-type]
+    return drivers
+
+
+def _attachment_problems(points: Iterable[TracerPoint], loads: Iterable[Load],
+                         links: dict[str, Link]) -> list[str]:
+    """Tracer points and loads sit on known links; point names are unique."""
+    out: list[str] = []
+    seen: set[str] = set()
+    for p in points:
+        if p.link not in links:
+            out.append(explain(f"[[point]] '{p.name}' link", expected="a known link", got=repr(p.link)))
+        if p.name in seen:
+            out.append(explain(f"[[point]] '{p.name}'", expected="a unique name", got="a duplicate"))
+        seen.add(p.name)
+    for ld in loads:
+        if ld.link not in links:
+            out.append(explain("[[force]] link", expected="a known link", got=repr(ld.link)))
+    return out
+
+
+def _mass_problems(links: Iterable[Link]) -> list[str]:
+    """Mass and moment of inertia are never negative."""
+    out = []
+    for lk in links:
+        if lk.mass is not None and lk.mass < 0:
+            out.append(explain(f"link '{lk.name}' mass", expected="a mass >= 0", got=repr(lk.mass)))
+        if lk.inertia is not None and lk.inertia < 0:
+            out.append(explain(f"link '{lk.name}' inertia", expected="a moment of inertia >= 0 (kg m^2)",
+                               got=repr(lk.inertia)))
+    return out
 
 
 def _components(links: list[str], joints: list[Joint]) -> list[set[str]]:
