@@ -287,155 +287,198 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
     Matching is Hopcroft–Karp, O(E √V) on the scalar incidence; SCCs are linear.
     """
     m = mechanism
-    frame = m.frame
-    if frame is None:
+    if m.frame is None:
         raise DecompositionError(explain("mechanism", expected="a frame link (frame = true)",
                                          got="a bare chain", hint="mark the ground link with frame = true"))
-    moving = [x for x in m.link_names if x != frame]
+    inc = _incidence(m)
+    match = _matching(m, inc)
+    return _plan(m, inc, _blocks(inc, match), check_rigidity)
+
+
+# ---- the phases of decompose ------------------------------------------------------
+Entity = tuple[str, str]    # ("L", link) = a link's pose, ("J", pin) = a pin's point
+
+
+@dataclass(frozen=True)
+class _Incidence:
+    """The scalar incidence *equations × unknowns* of a mechanism.
+
+    ``columns[c]`` is the entity an unknown belongs to (3 per moving link, 2 per pin);
+    ``rows[r]`` the columns equation ``r`` involves and ``row_info[r]`` its origin:
+    ``("R", pin, link)``, ``("P", joint, slider)`` or ``("D", joint, driver index)``.
+    """
+
+    columns: tuple[Entity, ...]
+    rows: tuple[tuple[int, ...], ...]
+    row_info: tuple[tuple, ...]
+
+
+@dataclass(frozen=True)
+class _Block:
+    """One strongly connected block of the matched system, in solving order."""
+
+    links: tuple[str, ...]              # file order; empty for pin points alone
+    drivers: tuple[int, ...]            # drivers whose equation the block matched
+
+
+def _incidence(m: Mechanism) -> _Incidence:
+    """Columns (link poses, then pin points) and rows (pins, sliders, drivers)."""
+    frame = m.frame
     pins = [j for j in m.joints if j.kind is JointKind.R]
-    # ---- columns: link poses (3) then pin points (2)
-    col_entity: list[tuple[str, str]] = []
-    link_col = {}
-    for x in moving:
-        link_col[x] = len(col_entity)
-        col_entity += [("L", x)] * 3
-    pin_col = {}
-    for j in pins:
-        pin_col[j.name] = len(col_entity)
-        col_entity += [("J", j.name)] * 2
-    # ---- rows
-    rows: list[list[int]] = []
-    row_info: list[tuple] = []
+    columns: list[Entity] = []
+    first: dict[Entity, int] = {}
+    for e in [("L", x) for x in m.link_names if x != frame] + [("J", j.name) for j in pins]:
+        first[e] = len(columns)
+        columns += [e] * (3 if e[0] == "L" else 2)
 
     def lc(link, which):
-        return [] if link == frame else [link_col[link] + w for w in which]
+        return [] if link == frame else [first["L", link] + w for w in which]
 
+    rows: list[tuple[int, ...]] = []
+    info: list[tuple] = []
     for j in pins:
         for x in j.links:
             for k in (0, 1):       # x- and y-equation
-                rows.append([pin_col[j.name] + k] + lc(x, (k, 2)))
-                row_info.append(("R", j.name, x))
+                rows.append((first["J", j.name] + k, *lc(x, (k, 2))))
+                info.append(("R", j.name, x))
     for j in m.joints:
         if j.kind is JointKind.P:
-            g, s = j.links
-            rows.append(lc(g, (2,)) + lc(s, (2,)))
-            row_info.append(("P", j.name, s))
-            rows.append(lc(g, (0, 1, 2)) + lc(s, (0, 1, 2)))
-            row_info.append(("P", j.name, s))
+            g, sl = j.links
+            rows += [tuple(lc(g, (2,)) + lc(sl, (2,))), tuple(lc(g, (0, 1, 2)) + lc(sl, (0, 1, 2)))]
+            info += [("P", j.name, sl)] * 2
     for i, d in enumerate(m.drivers):
-        jt = m.joint(d.joint)
-        which = (2,) if jt.kind is JointKind.R else (0, 1, 2)
-        rows.append(lc(d.links[0], which) + lc(d.links[1], which))
-        row_info.append(("D", d.joint, i))
-    n_rows, n_cols = len(rows), len(col_entity)
-    # ---- counting first (mobility)
-    p = n_pairs(m)
-    formula_f = 3 * (m.n_links - 1) - 2 * p
-    data = [(r, c) for r, cs in enumerate(rows) for c in cs]
+        which = (2,) if m.joint(d.joint).kind is JointKind.R else (0, 1, 2)
+        rows.append(tuple(lc(d.links[0], which) + lc(d.links[1], which)))
+        info.append(("D", d.joint, i))
+    return _Incidence(tuple(columns), tuple(rows), tuple(info))
+
+
+def _matching(m: Mechanism, inc: _Incidence) -> np.ndarray:
+    """Maximum bipartite matching row → column (Hopcroft–Karp); raises when a part of
+    the mechanism is under- or over-constrained."""
+    n_rows, n_cols = len(inc.rows), len(inc.columns)
+    data = [(r, c) for r, cs in enumerate(inc.rows) for c in cs]
     S = csr_matrix((np.ones(len(data)), ([d[0] for d in data], [d[1] for d in data])),
                    shape=(n_rows, n_cols))
-    match = np.asarray(maximum_bipartite_matching(S, perm_type="column"))  # row -> col
+    match = np.asarray(maximum_bipartite_matching(S, perm_type="column"))
     free_cols = sorted(set(range(n_cols)) - set(int(c) for c in match if c >= 0))
     surplus_rows = [r for r in range(n_rows) if match[r] < 0]
     if free_cols or surplus_rows:
-        under, over = _dm_coarse(rows, match, n_cols, free_cols, surplus_rows)
-        free_links = sorted({col_entity[c][1] for c in under if col_entity[c][0] == "L"},
-                            key=m.link_names.index)
-        free_pins = sorted({col_entity[c][1] for c in under if col_entity[c][0] == "J"},
-                           key=m.joint_names.index)
-        over_joints = sorted({row_info[r][1] for r in over}, key=m.joint_names.index)
-        parts = []
-        if free_cols:
-            parts.append(f"under-constrained part (moves freely): links {', '.join(free_links) or '-'}"
-                         + (f" and pins {', '.join(free_pins)}" if free_pins and not free_links else ""))
-        if surplus_rows:
-            parts.append(f"over-constrained part (surplus constraints): joints {', '.join(over_joints)}")
-        got = (f"{len(m.drivers)} driver(s) for Chebyshev–Grübler mobility F = 3(n−1) − 2p = "
-               f"3·{m.n_links - 1} − 2·{p} = {formula_f}; " + "; ".join(parts))
-        if formula_f != len(m.drivers):
-            hint = ("add [[driver]] entries" if formula_f > len(m.drivers) else
-                    "remove drivers, or the chain has redundant links (see 'multiloop analyse')")
-            if m.has_geometry:   # special dimensions: say whether the real geometry moves
-                mob = actual_mobility(m)
-                if mob.actual_F == len(m.drivers) and mob.redundant:
-                    hint = (f"the geometry does move with {mob.actual_F} DOF (special dimensions): "
-                            f"redundant constraint(s) {', '.join(mob.redundant)}; remove the "
-                            "redundant link or joint to solve it")
-            raise MobilityError(explain(
-                f"mechanism '{m.name or ''}'", expected=f"{formula_f} driver(s) (one per degree of freedom)",
-                got=got, hint=hint))
-        raise DecompositionError(explain(
-            f"mechanism '{m.name or ''}'", expected="a structurally determined system (every part fixed by its joints and drivers)",
+        raise _structure_error(m, inc, match, free_cols, surplus_rows)
+    return match
+
+
+def _structure_error(m: Mechanism, inc: _Incidence, match, free_cols, surplus_rows) -> Exception:
+    """MobilityError (driver count ≠ F) or DecompositionError naming the free links
+    and the surplus joints (Dulmage–Mendelsohn coarse parts)."""
+    under, over = _dm_coarse(inc.rows, match, len(inc.columns), free_cols, surplus_rows)
+    free_links = sorted({inc.columns[c][1] for c in under if inc.columns[c][0] == "L"}, key=m.link_names.index)
+    free_pins = sorted({inc.columns[c][1] for c in under if inc.columns[c][0] == "J"}, key=m.joint_names.index)
+    over_joints = sorted({inc.row_info[r][1] for r in over}, key=m.joint_names.index)
+    parts = []
+    if free_cols:
+        parts.append(f"under-constrained part (moves freely): links {', '.join(free_links) or '-'}"
+                     + (f" and pins {', '.join(free_pins)}" if free_pins and not free_links else ""))
+    if surplus_rows:
+        parts.append(f"over-constrained part (surplus constraints): joints {', '.join(over_joints)}")
+    p = n_pairs(m)
+    formula_f = 3 * (m.n_links - 1) - 2 * p
+    got = (f"{len(m.drivers)} driver(s) for Chebyshev–Grübler mobility F = 3(n−1) − 2p = "
+           f"3·{m.n_links - 1} − 2·{p} = {formula_f}; " + "; ".join(parts))
+    what = f"mechanism '{m.name or ''}'"
+    if formula_f == len(m.drivers):
+        return DecompositionError(explain(
+            what, expected="a structurally determined system (every part fixed by its joints and drivers)",
             got=got, hint="move a driver into the free part, or remove a surplus link/joint"))
-    # ---- entity digraph of the matched system
-    ent_of_col = col_entity
+    hint = ("add [[driver]] entries" if formula_f > len(m.drivers) else
+            "remove drivers, or the chain has redundant links (see 'multiloop analyse')")
+    if m.has_geometry:   # special dimensions: say whether the real geometry moves
+        mob = actual_mobility(m)
+        if mob.actual_F == len(m.drivers) and mob.redundant:
+            hint = (f"the geometry does move with {mob.actual_F} DOF (special dimensions): "
+                    f"redundant constraint(s) {', '.join(mob.redundant)}; remove the "
+                    "redundant link or joint to solve it")
+    return MobilityError(explain(what, expected=f"{formula_f} driver(s) (one per degree of freedom)",
+                                 got=got, hint=hint))
+
+
+def _blocks(inc: _Incidence, match: np.ndarray) -> list[_Block]:
+    """Strongly connected components of the matched system's entity digraph, in a
+    topological order (ties broken by first column), as blocks of links."""
+    cols = inc.columns
+    first = {}
+    for c, e in enumerate(cols):
+        first.setdefault(e, c)
     g = nx.DiGraph()
-    ents = sorted(set(ent_of_col), key=lambda e: (e[0] != "J", ent_of_col.index(e)))
-    g.add_nodes_from(ents)
-    matched_rows_of: dict[tuple, list[int]] = {}
+    g.add_nodes_from(sorted(first, key=lambda e: (e[0] != "J", first[e])))
+    matched_rows: dict[Entity, list[int]] = {}
     for r, c in enumerate(match):
-        v = ent_of_col[c]
-        matched_rows_of.setdefault(v, []).append(r)
-        for c2 in rows[r]:
-            u = ent_of_col[c2]
-            if u != v:
-                g.add_edge(u, v)
+        v = cols[c]
+        matched_rows.setdefault(v, []).append(r)
+        g.add_edges_from((cols[c2], v) for c2 in inc.rows[r] if cols[c2] != v)
     cond = nx.condensation(g)
-    members = cond.graph["mapping"]           # entity -> scc id
-    scc_ents: dict[int, list] = {}
-    for e, k in members.items():
-        scc_ents.setdefault(k, []).append(e)
-    order_key = {}
-    for k, es in scc_ents.items():
-        order_key[k] = min(ent_of_col.index(e) for e in es)
-    topo_order = list(nx.lexicographical_topological_sort(cond, key=lambda k: order_key[k]))
-    # ---- build steps
-    steps: list = []
-    known = {frame}
-    solved_by: dict[str, int] = {}
-    numbers = {frame: 0}
-    realisations = [_random_realisation(m, s) for s in (12345, 67890)] if check_rigidity else []
-    for k in topo_order:
-        links = [e[1] for e in scc_ents[k] if e[0] == "L"]
+    members: dict[int, list[Entity]] = {}
+    for e, k in cond.graph["mapping"].items():
+        members.setdefault(k, []).append(e)
+    key = {k: min(first[e] for e in es) for k, es in members.items()}
+    out = []
+    for k in nx.lexicographical_topological_sort(cond, key=key.__getitem__):
+        links = sorted((e[1] for e in members[k] if e[0] == "L"), key=lambda x: first["L", x])
         if not links:
             continue  # pin points carried by a known link
-        links.sort(key=m.link_names.index)
-        rows_here = [r for e in scc_ents[k] for r in matched_rows_of.get(e, [])]
-        drv = sorted({row_info[r][2] for r in rows_here if row_info[r][0] == "D"})
+        rows = [r for e in members[k] for r in matched_rows.get(e, [])]
+        drv = sorted({inc.row_info[r][2] for r in rows if inc.row_info[r][0] == "D"})
+        out.append(_Block(tuple(links), tuple(drv)))
+    return out
+
+
+def _check_rigid(m: Mechanism, links: list[str], cons: list[Constraint], realisations) -> None:
+    """Generic rank of a block's Jacobian (two random realisations) must be 3 × links."""
+    n = 3 * len(links)
+    for at, axis, org in realisations:
+        J = reference_jacobian(m, cons, links, at, axis, org)
+        rank = np.linalg.matrix_rank(J, tol=1e-9 * max(1.0, np.abs(J).max()))
+        if rank < n:
+            jn = sorted({c.joint for c in cons}, key=m.joint_names.index)
+            raise DecompositionError(explain(
+                f"block of links {', '.join(links)} (joints {', '.join(jn)})",
+                expected="a rigid Assur group (its equations independent for a generic geometry)",
+                got=f"{n - rank} internal degree(s) of freedom with as many redundant constraints "
+                    f"(rank {rank} < {n}): it passes the counting but is not rigid",
+                hint="some links form a rigid sub-chain while others can move; check the joints named here"))
+
+
+def _plan(m: Mechanism, inc: _Incidence, blocks: list[_Block], check_rigidity: bool) -> AssurPlan:
+    """Driver steps and Assur groups in the blocks' order, with the link numbers."""
+    steps: list = []
+    known = {m.frame}
+    solved_by: dict[str, int] = {}
+    numbers = {m.frame: 0}
+    realisations = [_random_realisation(m, s) for s in (12345, 67890)] if check_rigidity else []
+    for blk in blocks:
+        links = list(blk.links)
         cons = _pair_constraints(m, links, known)
-        n_eq = sum(c.n_equations for c in cons)
-        if n_eq != 3 * len(links):  # pragma: no cover - guaranteed by the matching
-            raise DecompositionError(f"internal: block {links} has {n_eq} equations for {3 * len(links)} unknowns")
-        for at, axis, org in realisations:
-            J = reference_jacobian(m, cons, links, at, axis, org)
-            rank = np.linalg.matrix_rank(J, tol=1e-9 * max(1.0, np.abs(J).max()))
-            if rank < 3 * len(links):
-                jn = sorted({c.joint for c in cons}, key=m.joint_names.index)
-                raise DecompositionError(explain(
-                    f"block of links {', '.join(links)} (joints {', '.join(jn)})",
-                    expected="a rigid Assur group (its equations independent for a generic geometry)",
-                    got=f"{3 * len(links) - rank} internal degree(s) of freedom with as many redundant constraints "
-                        f"(rank {rank} < {3 * len(links)}): it passes the counting but is not rigid",
-                    hint="some links form a rigid sub-chain while others can move; "
-                         "check the joints named here"))
-        idx = len(steps)
+        if sum(c.n_equations for c in cons) != 3 * len(links):  # pragma: no cover - by the matching
+            raise DecompositionError(f"internal: block {links} has the wrong number of equations")
+        _check_rigid(m, links, cons, realisations)
         for x in links:
             numbers[x] = len(numbers)
-        if len(links) == 1 and len(drv) == 1:
-            d = m.drivers[drv[0]]
-            jt = m.joint(d.joint)
-            steps.append(DriverStep(drv[0], d.joint, jt.kind.value, d.links[0], d.links[1], tuple(cons),
-                                    (numbers.get(d.links[0], 0), numbers[links[0]])))
-            if d.links[1] != links[0]:   # driver given "backwards": base is the unknown link
-                steps[-1] = DriverStep(drv[0], d.joint, jt.kind.value, d.links[1], d.links[0], tuple(cons),
-                                       (numbers.get(d.links[1], 0), numbers[links[0]]))
+            solved_by[x] = len(steps)
+        if len(links) == 1 and len(blk.drivers) == 1:
+            steps.append(_driver_step(m, blk.drivers[0], links[0], cons, numbers))
         else:
-            steps.append(_make_group(m, len([s for s in steps if isinstance(s, AssurGroup)]),
-                                     links, cons, known, drv, tuple(numbers[x] for x in links)))
-        for x in links:
-            solved_by[x] = idx
+            steps.append(_make_group(m, sum(isinstance(s, AssurGroup) for s in steps), links, cons,
+                                     known, list(blk.drivers), tuple(numbers[x] for x in links)))
         known.update(links)
     return AssurPlan(m, tuple(steps), tuple(numbers.items()), tuple(solved_by.items()))
+
+
+def _driver_step(m: Mechanism, i: int, link: str, cons: list[Constraint], numbers: dict) -> DriverStep:
+    """The input link ``link`` moved by driver ``i`` (given either way round)."""
+    d = m.drivers[i]
+    base = d.links[0] if d.links[1] == link else d.links[1]
+    return DriverStep(i, d.joint, m.joint(d.joint).kind.value, base, link, tuple(cons),
+                      (numbers.get(base, 0), numbers[link]))
 
 
 def _dm_coarse(rows, match, n_cols, free_cols, surplus_rows):

@@ -247,28 +247,10 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
     >>> r.K, r.F, r.code, r.La
     (1, 1, '[4]/0', (4, 4))
     """
-    n = m.n_links
-    p = sum(j.n_pairs for j in m.joints)
-    degrees = {x: m.degree(x) for x in m.link_names}
     if any(len(j.links) < 2 for j in m.joints):  # pragma: no cover - builder forbids it
         raise TopologyError(explain("joint", expected="two or more links", got="fewer"))
-    K = p - n + 1
-    V = sum(j.multiplicity - 1 for j in m.joints if j.multiplicity >= 2)
-    sum_i3 = sum(d - 2 for d in degrees.values() if d >= 3)
-    sum_i4 = sum(d - 3 for d in degrees.values() if d >= 4)
-    n2 = sum(1 for d in degrees.values() if d == 2)
-    K_formula = 1 + 0.5 * (V + sum_i3)
-    AVC = 2 * (K - 1) - V - sum_i3
-    F1 = 3 * (n - 1) - 2 * p
-    F2 = (n - 1) - 2 * K
-    F3 = n2 - V - 3 - sum_i4
-    drivers = len(m.drivers) if n_drivers is None else int(n_drivers)
-    rc = drivers - F1
-    rc_formula = (drivers + V + 3) - (n2 - sum_i4)
-    SL = sum(degrees.values())
-    SL_formula = 2 * (F1 + 3 * K) - V
-    codes = structural_codes(list(degrees.values()), [j.multiplicity for j in m.joints])
-    LA, MJA, j_max, code, code_star = codes.LA, codes.MJA, codes.j_max, codes.code, codes.code_star
+    c = _counts(m, len(m.drivers) if n_drivers is None else int(n_drivers))
+    codes = structural_codes(list(c.degrees.values()), [j.multiplicity for j in m.joints])
     if loops:
         la = loop_assortment(m)
         La, L0, planar, rule = la.sizes, la.outer, la.planar, la.rule
@@ -276,37 +258,77 @@ def structural_report(m: Mechanism, n_drivers: int | None = None, lam: int = 3,
         La, L0, planar, rule = None, None, False, "not computed"
     rigid = find_rigid_subchain(m)
     frac = fractionation(m)
-    existence_ok = j_max <= K and V <= 2 * (K - 1)
+    existence_ok = codes.j_max <= c.K and c.V <= 2 * (c.K - 1)
     F_space = spatial_mobility(m, lam)
-    dangling = tuple(x for x, d in degrees.items() if d < 2)
-    warnings = []
-    if dangling:
-        warnings.append(f"link(s) {', '.join(dangling)} lie on fewer than two joints: "
-                        "the paper's K formula assumes every link has two or more joints, so AVC != 0")
-    if K != K_formula or AVC != 0:
-        warnings.append(f"inconsistent structure: K from the graph = {K}, seed formula = {K_formula:g}, "
-                        f"AVC = {AVC:g} (expected 0)")
-    if not existence_ok:
-        warnings.append(f"outside the existence domain of Pozhbelko & Kuts 2020 fig. 10: j_max = {j_max} "
-                        f"(<= K = {K}?), V = {V} (<= 2(K-1) = {2 * (K - 1)}?)")
-    actual_F = None
-    redundant = None
+    dangling = tuple(x for x, d in c.degrees.items() if d < 2)
+    warnings = _count_warnings(c, dangling, existence_ok, codes.j_max)
+    actual_F, redundant = None, None
     if geometry and m.has_geometry and m.frame is not None:
         mob = actual_mobility(m)
-        actual_F = int(mob.actual_F)
-        redundant = tuple(mob.redundant)
-        if actual_F != F1:
+        actual_F, redundant = int(mob.actual_F), tuple(mob.redundant)
+        if actual_F != c.F1:
             warnings.append(f"the geometry moves with {actual_F} DOF although the formula "
-                            f"gives F = {F1}: special dimensions (redundant constraints: "
+                            f"gives F = {c.F1}: special dimensions (redundant constraints: "
                             f"{', '.join(redundant) or 'see decompose'})")
-    rc_space = (actual_F if actual_F is not None else F1) - F_space
+    rc_space = (actual_F if actual_F is not None else c.F1) - F_space
     return StructuralReport(
-        name=m.name, n=n, p=p, n_joints=m.n_joints, LA=LA, MJA=MJA, V=V, K=K,
-        K_formula=K_formula, L=K + 1, AVC=AVC, F=F1, F_routes=(F1, F2, F3), N=drivers, rc=rc,
-        rc_formula=rc_formula, SL=SL, SL_formula=SL_formula, La=La, L0=L0, planar=planar,
-        code=code, code_star=code_star, degenerate=rigid is not None, rigid_subchain=rigid,
-        fractionated=frac.is_fractionated, cut_links=frac.cut_links, cut_joints=frac.cut_joints,
-        existence_ok=existence_ok, j_max=j_max, F_space=F_space, rc_space=rc_space, lam=lam,
-        canonical=canonical_form(m, "chain"), has_frame=m.frame is not None,
+        name=m.name, n=c.n, p=c.p, n_joints=m.n_joints, LA=codes.LA, MJA=codes.MJA, V=c.V, K=c.K,
+        K_formula=c.K_formula, L=c.K + 1, AVC=c.AVC, F=c.F1, F_routes=(c.F1, c.F2, c.F3), N=c.N,
+        rc=c.N - c.F1, rc_formula=c.rc_formula, SL=c.SL, SL_formula=c.SL_formula, La=La, L0=L0,
+        planar=planar, code=codes.code, code_star=codes.code_star, degenerate=rigid is not None,
+        rigid_subchain=rigid, fractionated=frac.is_fractionated, cut_links=frac.cut_links,
+        cut_joints=frac.cut_joints, existence_ok=existence_ok, j_max=codes.j_max, F_space=F_space,
+        rc_space=rc_space, lam=lam, canonical=canonical_form(m, "chain"), has_frame=m.frame is not None,
         dangling=dangling, actual_F=actual_F, redundant=redundant, warnings=tuple(warnings),
         la_rule=rule)
+
+
+@dataclass(frozen=True)
+class _Counts:
+    """The counting formulas of Pozhbelko & Kuts 2020, each by every route."""
+
+    degrees: dict[str, int]
+    n: int
+    p: int
+    N: int
+    K: int
+    K_formula: float
+    V: int
+    AVC: float
+    F1: int
+    F2: int
+    F3: int
+    rc_formula: int
+    SL: int
+    SL_formula: int
+
+
+def _counts(m: Mechanism, N: int) -> _Counts:
+    """Loops K, multiple-joint factor V, AVC, mobility F (three routes), rc and SL."""
+    n, p = m.n_links, sum(j.n_pairs for j in m.joints)
+    degrees = {x: m.degree(x) for x in m.link_names}
+    K = p - n + 1
+    V = sum(j.multiplicity - 1 for j in m.joints if j.multiplicity >= 2)
+    sum_i3 = sum(d - 2 for d in degrees.values() if d >= 3)
+    sum_i4 = sum(d - 3 for d in degrees.values() if d >= 4)
+    n2 = sum(1 for d in degrees.values() if d == 2)
+    F1 = 3 * (n - 1) - 2 * p
+    return _Counts(degrees, n, p, N, K, K_formula=1 + 0.5 * (V + sum_i3), V=V,
+                   AVC=2 * (K - 1) - V - sum_i3, F1=F1, F2=(n - 1) - 2 * K, F3=n2 - V - 3 - sum_i4,
+                   rc_formula=(N + V + 3) - (n2 - sum_i4), SL=sum(degrees.values()),
+                   SL_formula=2 * (F1 + 3 * K) - V)
+
+
+def _count_warnings(c: _Counts, dangling, existence_ok: bool, j_max: int) -> list[str]:
+    """Dangling links, routes that disagree, and a chain outside the existence domain."""
+    out = []
+    if dangling:
+        out.append(f"link(s) {', '.join(dangling)} lie on fewer than two joints: "
+                   "the paper's K formula assumes every link has two or more joints, so AVC != 0")
+    if c.K != c.K_formula or c.AVC != 0:
+        out.append(f"inconsistent structure: K from the graph = {c.K}, formula = {c.K_formula:g}, "
+                   f"AVC = {c.AVC:g} (expected 0)")
+    if not existence_ok:
+        out.append(f"outside the existence domain of Pozhbelko & Kuts 2020 fig. 10: j_max = {j_max} "
+                   f"(<= K = {c.K}?), V = {c.V} (<= 2(K-1) = {2 * (c.K - 1)}?)")
+    return out

@@ -33,7 +33,7 @@ def format_report(r) -> str:
         ("link assortment [LA]", "[" + " ".join(f"n{i + 2}={c}" for i, c in enumerate(r.LA) if c) + "]"),
         ("multiple-joint assortment [MJA]", "[" + (" ".join(f"V{j + 2}={c}" for j, c in enumerate(r.MJA) if c) or "none") + "]"),
         ("MJ factor V", r.V),
-        ("loops K (graph / seed formula)", f"{r.K} / {r.K_formula:g}"),
+        ("loops K (graph / formula)", f"{r.K} / {r.K_formula:g}"),
         ("all loops L = K + 1", r.L),
         ("AVC", f"{r.AVC:g}" + ("  (assembly check passed)" if r.AVC == 0 else "  (INCONSISTENT data)")),
         ("mobility F (3 routes)", " = ".join(f"{x:g}" for x in r.F_routes)),
