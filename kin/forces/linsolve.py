@@ -133,15 +133,16 @@ def _eliminate(E: list[list], b: list, N: int):
 
 
 def _back(E: list[list], b: list, order: list[int], N: int) -> np.ndarray:
+    """Back substitution; returns x as (m, N) (one contiguous row per unknown)."""
     m = len(E)
-    x = np.empty((N, m))
+    x = np.empty((m, N))
     for k in range(m - 1, -1, -1):
         p = order[k]
         acc = b[p]
         for j in range(k + 1, m):
             if E[p][j] is not None:
-                acc = acc - E[p][j] * x[:, j]
-        x[:, k] = acc / E[p][k]
+                acc = acc - E[p][j] * x[j]
+        np.divide(acc, E[p][k], out=x[k])
     return x
 
 
@@ -149,7 +150,8 @@ def _dense_rhs(rhs: list, N: int) -> np.ndarray:
     return np.stack([np.broadcast_to(np.asarray(r, float), (N,)) for r in rhs], axis=-1)
 
 
-def solve_sparse(entries: list[list], rhs: list, N: int, check: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def solve_sparse(entries: list[list], rhs: list, N: int, check: bool = True,
+                 transposed: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Solve a batch of ``m × m`` systems given as a sparse entry table.
 
     Parameters
@@ -161,6 +163,8 @@ def solve_sparse(entries: list[list], rhs: list, N: int, check: bool = True) -> 
         Batch size.
     check : bool
         As in :func:`solve_batched` (``False``: near-singular positions are not marked).
+    transposed : bool
+        Return ``x`` as ``(m, N)`` (contiguous per unknown) instead of ``(N, m)``.
 
     Returns
     -------
@@ -178,13 +182,14 @@ def solve_sparse(entries: list[list], rhs: list, N: int, check: bool = True) -> 
     """
     m = len(entries)
     if m == 0:
-        return np.zeros((N, 0)), np.ones(N)
+        return (np.zeros((0, N)) if transposed else np.zeros((N, 0))), np.ones(N)
     E = [list(r) for r in entries]
     b = list(rhs)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         out = _eliminate(E, b, N)
         if out is None:
-            return solve_batched(dense(entries, N), _dense_rhs(rhs, N), check)
+            x, det = solve_batched(dense(entries, N), _dense_rhs(rhs, N), check)
+            return (np.ascontiguousarray(x.T) if transposed else x), det
         order, weak = out
         x = _back(E, b, order, N)
         det = np.ones(N)
@@ -192,11 +197,13 @@ def solve_sparse(entries: list[list], rhs: list, N: int, check: bool = True) -> 
             col = [row[k] for row in entries if row[k] is not None]
             nrm = np.sqrt(sum(c * c for c in col))
             det = det * (np.abs(E[p][k]) / np.where(nrm > 0, nrm, 1.0))
-    redo = weak | ~np.isfinite(det) | ~np.isfinite(x).all(axis=1)
+    redo = weak | ~np.isfinite(det)
+    for xk in x:
+        redo |= ~np.isfinite(xk)
     if check:
         redo |= ~(det > SING_TOL)
     if redo.any():
         rows = np.flatnonzero(redo)
         xr, dr = solve_batched(dense(entries, N, rows), _dense_rhs(rhs, N)[rows], check)
-        x[rows], det[rows] = xr, dr
-    return x, det
+        x[:, rows], det[rows] = xr.T, dr
+    return (x if transposed else np.ascontiguousarray(x.T)), det

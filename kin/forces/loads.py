@@ -135,35 +135,41 @@ def _gravity(m: Mechanism, gravity) -> np.ndarray:
 
 
 class StateColumns:
-    """Contiguous per-index columns of a state's arrays (the state stores positions as
-    (N, n, 2); batched arithmetic is fastest on contiguous (N,) vectors)."""
+    """Contiguous per-index columns of a state's arrays.  The state stores positions as
+    (N, n, 2); batched arithmetic is fastest on contiguous (N,) vectors, so each array
+    is transposed once (one pass) and its columns are views."""
 
     def __init__(self, state: KinematicState):
         self.state = state
         self._cache: dict = {}
 
     def get(self, name: str, k: int, c: int | None = None) -> np.ndarray:
-        key = (name, k, c)
-        if key not in self._cache:
-            a = getattr(self.state, name)
-            self._cache[key] = np.ascontiguousarray(a[:, k] if c is None else a[:, k, c])
-        return self._cache[key]
+        if name not in self._cache:
+            a = np.asarray(getattr(self.state, name))
+            self._cache[name] = np.ascontiguousarray(np.moveaxis(a, 0, -1))
+        t = self._cache[name]
+        return t[k] if c is None else t[k, c]
 
 
-def _point_motion(cols: StateColumns, m: Mechanism, k: int, anchor: int, at) -> tuple:
+def _point_motion(cols: StateColumns, m: Mechanism, k: int, anchor: int, at, acceleration: bool = True) -> tuple:
     """Rigid transport of the material point of link ``k`` that sat at ``at``:
     ``P = X + R(θ) r``, ``v = v_X + ω × r'``, ``a = a_X + ε × r' − ω² r'``, ``r' = R(θ) r``
-    (Vasechkin et al. 2017, eqs. (4)–(8)).  Returns ((x, y), (vx, vy), (ax, ay))."""
+    (Vasechkin et al. 2017, eqs. (4)–(8)).  Returns ((x, y), (vx, vy), (ax, ay) or None)."""
+    P = (cols.get("positions", anchor, 0), cols.get("positions", anchor, 1))
+    V = (cols.get("velocities", anchor, 0), cols.get("velocities", anchor, 1))
+    A = (cols.get("accelerations", anchor, 0), cols.get("accelerations", anchor, 1)) if acceleration else None
     rx, ry = np.subtract(at, m.joints[anchor].at)
-    th, w, e = cols.get("angles", k), cols.get("omegas", k), cols.get("epsilons", k)
+    if rx == 0.0 and ry == 0.0:
+        return P, V, A
+    th, w = cols.get("angles", k), cols.get("omegas", k)
     c, s = np.cos(th), np.sin(th)
     px, py = c * rx - s * ry, s * rx + c * ry
-    vx = cols.get("velocities", anchor, 0) - w * py
-    vy = cols.get("velocities", anchor, 1) + w * px
-    w2 = w * w
-    ax = cols.get("accelerations", anchor, 0) - e * py - w2 * px
-    ay = cols.get("accelerations", anchor, 1) + e * px - w2 * py
-    return (cols.get("positions", anchor, 0) + px, cols.get("positions", anchor, 1) + py), (vx, vy), (ax, ay)
+    vel = (V[0] - w * py, V[1] + w * px)
+    if not acceleration:
+        return (P[0] + px, P[1] + py), vel, None
+    e, w2 = cols.get("epsilons", k), w * w
+    acc = (A[0] - e * py - w2 * px, A[1] + e * px - w2 * py)
+    return (P[0] + px, P[1] + py), vel, acc
 
 
 @dataclass
@@ -228,7 +234,7 @@ def _applied_terms(state: KinematicState, cols: StateColumns, loads: Sequence, o
             mom = np.full(N, ld.moment)
         fx, fy = np.ascontiguousarray(f[:, 0]), np.ascontiguousarray(f[:, 1])
         at = ld.at if ld.at is not None else cg_ref(m, ld.link)
-        (px, py), (vx, vy), _ = _point_motion(cols, m, k, state._anchor(ld.link), at)
+        (px, py), (vx, vy), _ = _point_motion(cols, m, k, state._anchor(ld.link), at, acceleration=False)
         rx, ry = px - out.G[k][0], py - out.G[k][1]
         out.fx[k] = out.fx[k] + fx
         out.fy[k] = out.fy[k] + fy

@@ -38,9 +38,10 @@ class _Geometry:
 
 @dataclass(frozen=True)
 class _Solved:
-    """All unknowns ``x`` (N, n_columns) and the singular-position masks with reasons."""
+    """All unknowns (one (N,) array per column) and the singular-position masks with
+    reasons."""
 
-    x: np.ndarray
+    x: list
     singular: tuple
 
 
@@ -67,19 +68,22 @@ def _geometry(state: KinematicState, cols: StateColumns) -> _Geometry:
     return _Geometry(joints, axes, {x: k for k, x in enumerate(m.link_names)})
 
 
-def _effect(c: Column, link: str, geo: _Geometry, G: dict):
+def _effect(c: Column, link: str, geo: _Geometry, G: dict, arms: dict):
     """Force (fx, fy) and moment about G of ``link`` per unit unknown ``c`` acting on
-    ``link``: each ``None`` (zero), a float or an (N,) array."""
+    ``link``: each ``None`` (zero), a float or an (N,) array.  ``arms`` caches the
+    lever arms ``joint − G``."""
     sgn = 1.0 if link == c.b else -1.0
     if c.kind in ("PM", "DR"):
         return None, None, sgn
-    jx, jy = geo.joints[c.joint]
-    gx, gy = G[geo.link_index[link]]
-    rx, ry = jx - gx, jy - gy
+    if (c.joint, link) not in arms:
+        jx, jy = geo.joints[c.joint]
+        gx, gy = G[geo.link_index[link]]
+        arms[c.joint, link] = (jx - gx, jy - gy)
+    rx, ry = arms[c.joint, link]
     if c.kind == "Rx":
-        return sgn, None, -sgn * ry
+        return sgn, None, -ry if sgn > 0 else ry
     if c.kind == "Ry":
-        return None, sgn, sgn * rx
+        return None, sgn, rx if sgn > 0 else -rx
     tx, ty = geo.axes[c.joint]
     dx, dy = (-ty, tx) if c.kind == "PN" else (tx, ty)
     if sgn < 0:
@@ -95,6 +99,7 @@ def _block_system(fp: ForcePlan, links, cols, geo: _Geometry, G, frame: set):
     """The sparse entry table of one block and the effects of its unknowns on links
     outside it (solved later)."""
     rows = {x: r for r, x in enumerate(links)}
+    arms: dict = {}
     table = [[None] * len(cols) for _ in range(3 * len(links))]
     outside = []
     for q, ci in enumerate(cols):
@@ -102,7 +107,7 @@ def _block_system(fp: ForcePlan, links, cols, geo: _Geometry, G, frame: set):
         for lk in (c.a, c.b):
             if lk in frame:
                 continue
-            e = _effect(c, lk, geo, G)
+            e = _effect(c, lk, geo, G, arms)
             if lk not in rows:
                 outside.append((q, lk, e))
                 continue
@@ -119,23 +124,27 @@ def _solve_blocks(fp: ForcePlan, state: KinematicState, loads: LoadColumns, geo:
     N = state.n_positions
     frame = {lk.name for lk in m.links if lk.is_frame}
     known = {k: [loads.fx[k], loads.fy[k], loads.mz[k]] for k in loads.G}
-    x_all = np.full((N, len(fp.columns)), np.nan)
+    x_all: list = [None] * len(fp.columns)
     bad_kin = np.asarray(state.status != "ok", bool)
+    any_bad = bool(bad_kin.any())
     singular = []
     for block in fp.blocks:
         table, outside = _block_system(fp, block.links, block.columns, geo, loads.G, frame)
-        rhs = [np.nan_to_num(-np.broadcast_to(known[geo.link_index[x]][d], (N,))) for x in block.links for d in range(3)]
-        x, det = solve_sparse(table, rhs, N, check)
-        sing = ~(det > SING_TOL) & ~bad_kin if check else ~np.isfinite(x).all(axis=1) & ~bad_kin
+        rhs = [-np.broadcast_to(known[geo.link_index[x]][d], (N,)) for x in block.links for d in range(3)]
+        x, det = solve_sparse(table, rhs, N, check, transposed=True)
+        sing = ~(det > SING_TOL) if check else ~np.isfinite(x).all(axis=0)
+        if any_bad:
+            sing &= ~bad_kin
+            x[:, bad_kin] = np.nan
         if sing.any():
             singular.append((sing, f"singular: block {{{', '.join(block.links)}}} (scaled det < {SING_TOL:g})"))
-        x[bad_kin] = np.nan
-        x_all[:, list(block.columns)] = x
+        for q, ci in enumerate(block.columns):
+            x_all[ci] = x[q]
         for q, lk, e in outside:
             kk = known[geo.link_index[lk]]
             for d in range(3):
                 if e[d] is not None:
-                    kk[d] = kk[d] + e[d] * x[:, q]
+                    kk[d] = kk[d] + e[d] * x[q]
     return _Solved(x_all, tuple(singular))
 
 
@@ -144,7 +153,7 @@ def _unpack(fp: ForcePlan, sol: _Solved, geo: _Geometry, N: int, n_drivers: int)
     zero = np.zeros(N)
     rx, ry, pm, nn = [zero] * npairs, [zero] * npairs, [zero] * npairs, [zero] * npairs
     bal = [zero] * n_drivers
-    x = np.ascontiguousarray(sol.x.T)
+    x = sol.x
     for ci, c in enumerate(fp.columns):
         v = x[ci]
         if c.kind == "Rx":
