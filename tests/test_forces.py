@@ -379,3 +379,18 @@ def test_p_driver_default_sweep_is_the_solve_commands(capsys):
 def test_forces_plot_without_loads_says_so(tmp_path, capsys):
     assert main(["forces", "four_bar", "--steps", "8", "--plot", str(tmp_path / "f.png")]) == 0
     assert "no loads" in capsys.readouterr().out and (tmp_path / "f.png").exists()
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda t: t.replace("table = [", "value = [1.0, 0.0]\ntable = [", 1), "either 'value'"),
+    (lambda t: t.replace("table = [", "table = [[0.0, 1.0, 0.0], [0.0, 2.0, 0.0], ", 1), "distinct input angles"),
+])
+def test_force_table_faults_named(tmp_path, capsys, edit, words):
+    """Issue 10: a [[force]] with both value and table, repeated table angles."""
+    f = tmp_path / "bad.toml"
+    text = edit(LOADED.read_text())
+    assert text != LOADED.read_text()
+    f.write_text(text)
+    assert main(["forces", str(f), "--at", "30"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err

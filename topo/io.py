@@ -338,6 +338,9 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
                                     read_vector(t["at"], f"{label} at")))
     for label, t in _tables(doc, "force"):
         table = None
+        if "table" in t and "value" in t:
+            raise InputError(explain(label, expected="either 'value' (a constant force) or 'table' (force against "
+                                     "the input)", got="both", hint="a table already gives the force at every input"))
         if "table" in t:
             rows = t["table"]
             if not isinstance(rows, list) or not rows:
@@ -347,6 +350,11 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
                 if not isinstance(row, list) or len(row) != 3:
                     raise InputError(explain(f"{label} table row {r}", expected="[input_deg, Fx, Fy]", got=repr(row)))
                 table.append(tuple(read_number(x, f"{label} table row {r}") for x in row))
+            angles = [row[0] for row in table]
+            dup = sorted({a for a in angles if angles.count(a) > 1})
+            if dup:
+                raise InputError(explain(f"{label} table", expected="distinct input angles",
+                                         got=f"{', '.join(f'{a:g}' for a in dup)} deg more than once"))
             table = tuple(table)
         b.loads.append(Load(read_string(t["link"], f"{label} link"),
                             read_vector(t["at"], f"{label} at") if "at" in t else None,
