@@ -346,3 +346,25 @@ def test_catalogue_structure_formulas(stem, formula):
     if stem == "radial_engine_5cyl":   # all five rods hang off ONE 6-link pin, never broken
         pins = {j for g in p.groups for j in g.outer_joints if len(m.joint(j).links) == 6}
         assert len(pins) == 1
+
+
+def test_documented_outputs_match_the_commands(capsys):
+    """Every ``$ multiloop analyse|decompose FILE`` block of the README and docs shows
+    what the command prints (up to a ``...`` line that marks an abridged block)."""
+    import re
+    from pathlib import Path
+
+    from multiloop.cli import main
+    root = Path(__file__).resolve().parents[1]
+    seen = 0
+    for doc in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
+        for cmd, body in re.findall(r"```\n\$ multiloop ((?:analyse|decompose) \S+)\n(.*?)```", doc.read_text(), re.S):
+            command, path = cmd.split()
+            assert main([command, str(root / path)]) == 0
+            printed = capsys.readouterr().out.splitlines()
+            shown = body.splitlines()
+            cut = [i for i, line in enumerate(shown) if line.strip() == "..."]
+            shown = shown[:cut[0]] if cut else shown
+            assert shown == printed[:len(shown)], f"{doc.name}: multiloop {cmd}"
+            seen += 1
+    assert seen >= 3
