@@ -60,11 +60,15 @@ def _geometry(state: KinematicState, cols: StateColumns) -> _Geometry:
     joints = {j.name: (cols.get("positions", k, 0), cols.get("positions", k, 1)) for k, j in enumerate(m.joints)}
     axes = {}
     for j in m.joints:
-        if j.kind is JointKind.P:
-            ax = np.asarray(j.axis, float) / np.hypot(*j.axis)
-            th = cols.get("angles", m.link_names.index(j.links[0]))
-            c, s = np.cos(th), np.sin(th)
-            axes[j.name] = (c * ax[0] - s * ax[1], s * ax[0] + c * ax[1])
+        if j.kind is not JointKind.P:
+            continue
+        ax = np.asarray(j.axis, float) / np.hypot(*j.axis)
+        if m.link(j.links[0]).is_frame:                  # a fixed guide: a constant axis
+            axes[j.name] = (float(ax[0]), float(ax[1]))
+            continue
+        th = cols.get("angles", m.link_names.index(j.links[0]))
+        c, s = np.cos(th), np.sin(th)
+        axes[j.name] = (c * ax[0] - s * ax[1], s * ax[0] + c * ax[1])
     return _Geometry(joints, axes, {x: k for k, x in enumerate(m.link_names)})
 
 
