@@ -16,14 +16,16 @@ True
 """
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
 
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.io import load
 from multiloop.topo.model import Mechanism
+from multiloop.topo.numbers import structural_codes
 
-__all__ = ["names", "path", "load_named"]
+__all__ = ["names", "path", "load_named", "CatalogueEntry", "entry"]
 
 _PACKAGE = "multiloop.catalogue"
 _FOLDER = "mechanisms"
@@ -56,3 +58,53 @@ def path(name: str) -> Path:
 def load_named(name: str) -> Mechanism:
     """The catalogue mechanism ``name`` (file stem) as a frozen :class:`Mechanism`."""
     return load(path(name))
+
+
+@dataclass(frozen=True, slots=True)
+class CatalogueEntry:
+    """The basic numbers of one catalogue mechanism (``multiloop catalogue``).
+
+    Attributes
+    ----------
+    name : str
+        File stem.
+    n, F, K : int
+        Links, Chebyshev–Grübler mobility ``F = (n − 1) − 2K`` and independent loops
+        (Pozhbelko & Kuts 2020).
+    code : str
+        Structural code ``[LA]/V``.
+    drivers : int
+    description, source : str or None
+    """
+
+    name: str
+    n: int
+    F: int
+    K: int
+    code: str
+    drivers: int
+    description: str | None
+    source: str | None
+
+    def as_dict(self) -> dict:
+        """The JSON keys of ``multiloop catalogue --json``."""
+        return asdict(self)
+
+
+def entry(name: str) -> CatalogueEntry:
+    """The basic numbers of catalogue mechanism ``name``.
+
+    Only the counting formulas are evaluated (no loop assortment, no degeneracy
+    search), so listing stays fast; ``tests/test_catalogue.py`` checks the values
+    against :func:`multiloop.topo.numbers.structural_report`.
+
+    Examples
+    --------
+    >>> e = entry("four_bar")
+    >>> e.n, e.F, e.K, e.code
+    (4, 1, 1, '[4]/0')
+    """
+    m = load_named(name)
+    codes = structural_codes([m.degree(x) for x in m.link_names], [j.multiplicity for j in m.joints])
+    return CatalogueEntry(name, m.n_links, m.n_links - 1 - 2 * codes.K, codes.K, codes.code,
+                          len(m.drivers), m.description, m.source)

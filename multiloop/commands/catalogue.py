@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import json
 
-from multiloop.catalogue.named import load_named, names
-from multiloop.topo.model import Mechanism
-from multiloop.topo.numbers import structural_codes
+from multiloop.catalogue.named import entry, names
 
 
 def add_arguments(p) -> None:
@@ -19,29 +17,8 @@ def add_arguments(p) -> None:
                    help="print a JSON list of {name, n, F, K, code, drivers, description, source}")
 
 
-def summary(name: str) -> dict:
-    """Name, n, F, K, code, drivers, description and source of one catalogue mechanism.
-
-    Only the counting formulas are evaluated (no loop assortment, no degeneracy search),
-    so listing stays fast; ``tests/test_catalogue.py`` checks the values against
-    :func:`topo.numbers.structural_report`.
-    """
-    m: Mechanism = load_named(name)
-    codes = structural_codes([m.degree(x) for x in m.link_names], [j.multiplicity for j in m.joints])
-    return {
-        "name": name,
-        "n": m.n_links,
-        "F": m.n_links - 1 - 2 * codes.K,
-        "K": codes.K,
-        "code": codes.code,
-        "drivers": len(m.drivers),
-        "description": m.description,
-        "source": m.source,
-    }
-
-
 def run(args) -> int:
-    rows = [summary(name) for name in names()]
+    rows = [entry(name).as_dict() for name in names()]
     if args.json:
         print(json.dumps(rows, indent=2, ensure_ascii=False))
         return 0
