@@ -238,6 +238,26 @@ class Problem:
             D = D / size[:, None, None, None]
         return D
 
+    def sqdist(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """Squared relative distances ``(P, N, K)`` of features ``F`` (P, K, c) to
+        targets ``T`` (P, N, c), column by column (no (P, N, K, c) array)."""
+        ang = isinstance(self.target, MotionTarget) or (
+            isinstance(self.target, FunctionTarget)
+            and self.ev.mechanism.joint(self.target.joint).kind is JointKind.R)
+        c = F.shape[-1]
+        inv = (1.0 / size)[:, None, None]
+        out = None
+        for j in range(c):
+            d = F[:, None, :, j] - T[:, :, None, j]
+            if ang and j == c - 1:
+                d = _wrap(d)
+                if c == 1:
+                    d = d * inv
+            else:
+                d = d * inv
+            out = d * d if out is None else out + d * d
+        return out
+
     # -- the reachable curve ---------------------------------------------------
     def curve(self, ok: np.ndarray):
         """Order of the grid samples reached continuously from the reference.
@@ -283,13 +303,17 @@ class Problem:
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         if tim is None:
-            Fc = np.take_along_axis(F[:, :self.M], idx[..., None], axis=1)
-            d2 = np.sum(np.square(self.diff(Fc, T, size)), axis=-1)
-            d2 = np.where(valid[:, None, :], d2, np.inf)
-            cost = np.full(Z.shape[0], np.inf)
-            for a, b in self.windows():
-                w = d2[:, :, a:b]
-                cost = np.minimum(cost, np.minimum(_dp(w), _dp(w[:, :, ::-1])))
+            M = self.M
+            ok = st.ok[:, :M]
+            d0 = self.sqdist(F[:, :M], T[:, :1], size)[:, 0]
+            (oidx, ovalid, _), _ = self.orders(ok, d0)
+            Fo = np.take_along_axis(F[:, :M], oidx[..., None], axis=1)
+            d2f = np.where(ovalid[:, None, :], self.sqdist(Fo, T, size), np.inf)
+            # backward walk: the forward one reversed (and, for a closed curve, shifted so that
+            # it starts two samples past the sample nearest to the first target)
+            rev = d2f[..., ::-1]
+            d2b = np.where(full[:, None, None], np.roll(rev, 5, axis=2), rev)
+            cost = np.minimum(_dp(d2f), _dp(d2b))
         else:
             d2 = np.sum(np.square(self.diff(F[:, self.M:], T, size)), axis=-1)
             cost = np.sum(np.diagonal(d2, axis1=1, axis2=2), axis=1)
@@ -339,27 +363,40 @@ class Problem:
             return np.asarray(tim, float)
         Z = z[None, :]
         st = self.ev.poses(Z[:, :self.nx], self.grid)
-        idx, valid, cphi, _ = self.curve(st.ok)
         T, size = self.targets_for(Z)
-        Fc = np.take_along_axis(self.features(Z, st), idx[..., None], axis=1)
-        d2 = np.where(valid[:, None, :], np.sum(np.square(self.diff(Fc, T, size)), axis=-1), np.inf)[0]
+        d2g = self.sqdist(self.features(Z, st), T, size)
         best = None
-        for a, b in self.windows():
-            for rev in (False, True):
-                dd = d2[:, a:b][:, ::-1] if rev else d2[:, a:b]
-                path, cost = _dp_path(dd)
-                ks = [a + ((dd.shape[1] - 1 - k) if rev else k) for k in path]
-                if best is None or cost < best[0]:
-                    best = (cost, cphi[0, ks])
+        for oidx, ovalid, ophi in self.orders(st.ok, d2g[:, 0, :]):
+            d2 = np.where(ovalid[0][None, :], d2g[0][:, oidx[0]], np.inf)
+            path, cost = _dp_path(d2)
+            if best is None or cost < best[0]:
+                best = (cost, ophi[0, path])
         return best[1]
 
-    def windows(self) -> list[tuple[int, int]]:
-        """Slices of the curve searched for the targets: for a rotary driver, eight
-        one-turn windows of the two-turn curve (so the targets of a fully rotating
-        driver are met within one turn, any start), else the whole curve."""
-        if not self.rotary:
-            return [(0, self.M)]
-        return [(o, o + self.M) for o in range(0, self.M, self.M // 8)]
+    def orders(self, ok: np.ndarray, d0: np.ndarray):
+        """The two ways (forward, backward) of walking the reachable grid in driver order:
+        ``[(idx, valid, phi), ...]``, each ``(P, M)``.
+
+        A fully rotating driver's curve is closed: it is cut one turn long, starting
+        two samples before the sample nearest to the first target, so the targets
+        are met within one turn.  Otherwise the reachable arc is walked from one
+        end to the other.
+        """
+        idx, valid, phi, full = self.curve(ok)
+        M = self.M
+        idx, valid, phi = idx[:, :M], valid[:, :M], phi[:, :M]
+        k = np.arange(M)[None, :]
+        out = [(idx, valid, phi), (idx[:, ::-1], valid[:, ::-1], phi[:, ::-1])]
+        if not full.any():
+            return out
+        k0 = np.argmin(np.where(ok, d0, np.inf), axis=1)[:, None]
+        f = full[:, None]
+        s = (k0 - 2) % M
+        sr = (k0 + 2) % M
+        fw = (np.where(f, (s + k) % M, idx), valid | f, np.where(f, (s + k) * self.delta, phi))
+        bw = (np.where(f, (sr - k) % M, out[1][0]), out[1][1] | f,
+              np.where(f, (sr - k) * self.delta, out[1][2]))
+        return [fw, bw]
 
     def residuals(self, z: np.ndarray, phi: np.ndarray) -> np.ndarray:
         """Relative residuals ``(N·c,)`` of design ``z`` at driver values ``phi``."""

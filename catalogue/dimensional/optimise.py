@@ -45,7 +45,7 @@ class _Counter:
 
     def __init__(self, problem: Problem, budget: float, tol: float, progress=None, probe=None):
         self.p, self.budget, self.tol, self.progress, self.probe = problem, budget, tol, progress, probe
-        self.probed_f, self.probed_t, self.done = np.inf, 0.0, False
+        self.probed_f, self.probed_t, self.done, self.probe_time = np.inf, 0.0, False, 0.0
         self.lo, self.span = problem.lower, problem.upper - problem.lower
         self.n = 0
         self.best_f, self.best_z = np.inf, problem.x0.copy()
@@ -70,10 +70,13 @@ class _Counter:
         self.history.append((t, self.best_f, self.n))
         if self.progress is not None:
             self.progress(min(t / self.budget, 1.0), self.best_f)
-        if self.probe is not None and self.best_f < self.probed_f and t - self.probed_t >= 0.05 * self.budget:
-            # the grid objective cannot reach the tolerance (sampling); ask the polish
+        if self.probe is not None and self.best_f < self.probed_f and t - self.probed_t >= 0.05 * self.budget \
+                and self.probe_time <= 0.25 * t:
+            # the grid objective cannot reach the tolerance (sampling); ask the polish,
+            # spending at most a quarter of the time on it
             self.probed_f, self.probed_t = self.best_f, t
             self.done = bool(self.probe(self.best_z))
+            self.probe_time += self.elapsed() - t
         return self.done or self.best_f <= self.tol or t >= self.budget
 
 
@@ -126,10 +129,17 @@ def _cmaes(c: _Counter, u0: np.ndarray, seed: int, popsize: int) -> None:
         restart += 1
 
 
-def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 60) -> tuple[np.ndarray, np.ndarray, int]:
+class _Deadline(Exception):
+    pass
+
+
+def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
+           deadline: float | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
 
-    Returns the refined ``(z, phi)`` and the number of designs evaluated.
+    Stops at ``max_nfev`` residual evaluations or at ``deadline`` (a
+    ``time.perf_counter()`` value; at least 10 evaluations are made) with the best
+    point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
     nz = len(z)
@@ -145,11 +155,19 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         PHI = W[:, nz:] if free else np.broadcast_to(phi, (W.shape[0], len(phi)))
         return W[:, :nz], PHI
 
+    best = [np.inf, w0]
+
     def fun(w):
         Z, PHI = split(w)
         count[0] += 1
         r = problem.residuals_batch(Z, PHI)[0]
-        return np.where(np.isfinite(r), r, 1.0)
+        r = np.where(np.isfinite(r), r, 1.0)
+        n = float(r @ r)
+        if n < best[0]:
+            best[0], best[1] = n, w.copy()
+        if deadline is not None and count[0] > 10 * (len(w) + 2) and time.perf_counter() > deadline:
+            raise _Deadline
+        return r
 
     def jac(w):
         h = 1e-7 * np.maximum(1.0, np.abs(w))
@@ -161,7 +179,10 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         R = np.where(np.isfinite(R), R, 1.0)
         return ((R[1:] - R[0]) / h[:, None]).T
 
-    r = least_squares(fun, w0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev, x_scale="jac",
+    try:
+        least_squares(fun, w0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev, x_scale="jac",
                       xtol=1e-15, ftol=1e-15, gtol=1e-15)
-    Z, PHI = split(r.x)
+    except _Deadline:
+        pass
+    Z, PHI = split(best[1])
     return Z[0].copy(), PHI[0].copy(), count[0]

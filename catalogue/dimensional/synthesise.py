@@ -230,14 +230,15 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
 
     def probe(z):
         phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=30)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=40)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol
 
-    res = global_search(problem, method=method, seed=seed, budget=budget, tol=tol, popsize=popsize,
+    res = global_search(problem, method=method, seed=seed, budget=0.75 * budget, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
-    (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance")
+    (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance",
+                                              deadline=t0 + budget)
     notes = ([start_note] if start_note else []) + notes
     out = _output(ev, z[:problem.nx], task, target, method, seed)
     achieved, wanted = _achieved(problem, z, phi)
@@ -271,14 +272,14 @@ def _closed_form(problem: Problem) -> str | None:
     return None
 
 
-def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False):
+def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, deadline: float | None = None):
     """The best of the global design, its polish and the probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not."""
     phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
     if not skip:
-        z2, phi2, n = polish(problem, z, phi)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=300, deadline=deadline)
         cands.append((_assess(problem, z2, phi2), z2, phi2, n))
         if not cands[-1][0][2]:
             notes.append("the local polish left the continuous branch")
