@@ -123,9 +123,9 @@ def main(argv=None) -> int:
     print(f"  exact kinematic state (closed form)        {r['state_us']:8.3f} µs")
     print(f"  general / closed form                      {r['groups_us'] / r['closed_form_us']:8.2f}x")
     print(f"  CPU time (process_time, min): general {r['groups_cpu_us']:.3f} µs, closed form {r['closed_cpu_us']:.3f} µs")
-    verdict = "met" if r["groups_us"] <= GOAL_US else "NOT met"
-    print(f"  goal: general group-by-group <= {GOAL_US} µs per position: {r['groups_us']:.3f} µs "
-          f"({r['groups_us'] / GOAL_US:.2f} x goal) -> {verdict}")
+    for what, t in (("wall", r["groups_us"]), ("CPU", r["groups_cpu_us"])):
+        print(f"  goal: general group-by-group <= {GOAL_US} µs per position, {what} time {t:.3f} µs "
+              f"({t / GOAL_US:.2f} x goal) -> {'met' if t <= GOAL_US else 'NOT met'}")
     print(f"  accuracy: max |M_b(general) - M_b(closed)| = {r['max_dMb']:.3g} N m, "
           f"max relative virtual-power residual {r['max_rel_residual']:.3g}")
     return 0

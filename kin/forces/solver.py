@@ -211,10 +211,12 @@ def _status(state: KinematicState, sol: _Solved, rel: np.ndarray) -> np.ndarray:
     """Kinematic status, then singular blocks, then a virtual-power residual above
     ``VP_TOL``: the first reason wins."""
     status = np.array(state.status, dtype=object)
+    ok = status == "ok"
     for mask, why in sol.singular:
-        status[mask & (status == "ok")] = why
+        status[mask & ok] = why
+        ok &= ~mask
     with np.errstate(invalid="ignore"):
-        vp_bad = (status == "ok") & ~(rel <= VP_TOL)
+        vp_bad = ok & ~(rel <= VP_TOL)
     for n in np.flatnonzero(vp_bad):
         status[n] = f"virtual power: relative residual {rel[n]:.2g} > {VP_TOL:g}"
     if sol.singular:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.commands.solve import input_values
-from multiloop.kin.forces import forces, has_loads, reduce_inputs, table_period
+from multiloop.kin.forces import VP_TOL, forces, has_loads, reduce_inputs, table_period
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
@@ -128,7 +128,7 @@ def run(args) -> int:
     if note:
         print(f"  note: {note}")
     if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):
-        print("  note: R inputs reduced modulo 360 deg (720 with two-turn force tables)")
+        print(f"  note: R inputs reduced modulo {table_period(m):g} deg (one load period)")
     print("  blocks solved: " + " <- ".join("{" + ", ".join(b) + "}" for b in fr.blocks))
     heads = ["input"] + [f"Mb[{d.joint}]" if k is JointKind.R else f"Fb[{d.joint}]" for d, k in zip(m.drivers, kinds)] \
         + ["VP residual", "status"]
@@ -148,5 +148,5 @@ def run(args) -> int:
     if bad:
         print(f"  {bad} position(s) failed: {fr.message}")
     print(f"  max |virtual power residual| = {np.nanmax(np.abs(fr.virtual_power_residual)) if fr.ok.any() else float('nan'):.3g} W"
-          f" (relative {np.nanmax(fr.relative_residual) if fr.ok.any() else float('nan'):.3g})")
+          f" (relative {np.nanmax(fr.relative_residual) if fr.ok.any() else float('nan'):.3g}; ok up to {VP_TOL:g})")
     return 0
