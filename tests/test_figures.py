@@ -95,3 +95,91 @@ def test_full_turn_is_detected_and_closed():
     assert np.array_equal(path_pieces(p, True)[0][-1], p[0])
     q = np.array([[0.0, 0], [1, 0], [np.nan, 0], [2, 2], [3, 3], [4, 4]])
     assert [len(x) for x in path_pieces(q, True)] == [2, 3]
+
+
+# ------------------------------------------------------------------ plot readability
+def _label_boxes(fig):
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    return ax, [Text.get_window_extent(t, r) for t in ax.texts]     # the text, not its leader line
+
+
+@pytest.mark.parametrize("name", ["four_bar", "linkage_24", "excavator", "stephenson_3_triad"])
+def test_joint_labels_overlap_neither_each_other_nor_markers(name):
+    import matplotlib.pyplot as plt
+
+    from multiloop.kin.figures.mechanism import _markers, plot_mechanism
+    m = load(ROOT / "catalogue" / "mechanisms" / f"{name}.toml")
+    state = solve(m, np.zeros((12, len(m.drivers))) if len(m.drivers) > 1 else np.radians(np.arange(12) * 30.0))
+    fig = plot_mechanism(state)
+    ax, boxes = _label_boxes(fig)
+    marks = _markers(state, 0)
+    assert len(boxes) == len(marks) > 0
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1:]:
+            assert not a.overlaps(b), (ax.texts[i].get_text(), a, b)
+    px = fig.dpi / 72.0
+    for (mname, p, _, size, _, _) in marks:
+        c = ax.transData.transform(p)
+        half = 0.5 * size * px
+        for t, box in zip(ax.texts, boxes):
+            inside = box.x0 < c[0] + half and c[0] - half < box.x1 and box.y0 < c[1] + half and c[1] - half < box.y1
+            assert not inside, (t.get_text(), "covers the marker of", mname)
+    plt.close(fig)
+
+
+def test_full_turn_paths_are_closed_in_the_plot():
+    import matplotlib.pyplot as plt
+
+    from multiloop.kin.figures.mechanism import plot_mechanism
+    fig = plot_mechanism(_turn(load(FOUR_BAR)))
+    paths = [ln for ln in fig.axes[0].lines if ln.get_linestyle() == "--"]
+    assert paths
+    for ln in paths:
+        xy = ln.get_xydata()
+        assert len(xy) == 37 and np.array_equal(xy[0], xy[-1])
+    plt.close(fig)
+
+
+def test_one_colour_per_cylinder_in_every_engine_panel():
+    import matplotlib.pyplot as plt
+
+    from multiloop.kin.engine import analyse_engine, load_engine
+    from multiloop.kin.figures.engine import engine_figures
+    spec = load_engine(ROOT / "catalogue" / "engines" / "v_twin.toml")
+    figs = engine_figures(analyse_engine(spec, 72, check=False))
+    names = [c.name for c in spec.cylinders]
+    colours: dict[str, set] = {nm: set() for nm in names}
+    for fig in figs.values():
+        for ax in fig.axes:
+            for ln in ax.lines:
+                for nm in names:
+                    if ln.get_label().endswith(f" {nm}") or f" {nm} " in ln.get_label():
+                        colours[nm].add(ln.get_color())
+        plt.close(fig)
+    assert all(len(c) == 1 for c in colours.values()), colours
+    assert len(set.union(*colours.values())) == len(names)
+
+
+def test_force_plot_axes_state_units():
+    import matplotlib.pyplot as plt
+
+    from multiloop.kin.figures.engine import plot_forces
+    from multiloop.kin.forces import forces
+    m = load(ROOT / "catalogue" / "mechanisms" / "crank_slider_loaded.toml")
+    q = np.radians(np.arange(0, 360, 30.0))
+    fig = plot_forces(forces(m, q), np.degrees(q))
+    labels = [ax.get_xlabel() for ax in fig.axes] + [ax.get_ylabel() for ax in fig.axes]
+    assert "balancing moment (N m)" in labels and any(lb.endswith("(deg)") for lb in labels)
+    assert not any(" or " in lb for lb in labels)
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("suffix", [".mp4", ".png", ".webp", ""])
+def test_animate_refuses_other_formats(tmp_path, capsys, suffix):
+    assert main(["solve", str(FOUR_BAR), "--steps", "6", "--animate", str(tmp_path / f"a{suffix}")]) == 2
+    assert ".gif" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from multiloop.topo.model import JointKind
+
 from .style import no_mathtext
 
 __all__ = ["engine_figures", "engine_plots", "plot_forces"]
@@ -32,6 +34,11 @@ def _plt():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
     return plt
+
+
+def _cyl(j: int) -> str:
+    """The colour of cylinder ``j`` (and of its rod and piston) in every panel."""
+    return f"C{j % 10}"
 
 
 def _xaxis(ax):
@@ -60,19 +67,20 @@ def engine_plots(res, outdir) -> list[Path]:
 
 def engine_figures(res) -> dict:
     """The six diagrams of an :class:`~kin.engine.EngineResult`, ``{file name: Figure}``."""
-    plt = _plt()
-    spec = res.spec
-    phi = res.phi_deg
-    names = [c.name for c in spec.cylinders]
-    paths = []
+    return dict(f(res) for f in (_kinematics, _pressure, _balancing, _cyclogram, _rod_com, _reactions))
 
+
+def _kinematics(res):
+    """``kinematics.png``."""
+    plt, spec, phi = _plt(), res.spec, res.phi_deg
+    names = [c.name for c in spec.cylinders]
     fig, axs = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
     for j, nm in enumerate(names):
-        axs[0].plot(phi, res.displacement[:, j] * 1e3, label=f"cyl {nm}")
-        axs[1].plot(phi, res.velocity[:, j], label=f"cyl {nm}")
-        axs[2].plot(phi, res.acceleration[:, j], label=f"cyl {nm} exact")
+        axs[0].plot(phi, res.displacement[:, j] * 1e3, color=_cyl(j), label=f"cyl {nm}")
+        axs[1].plot(phi, res.velocity[:, j], color=_cyl(j), label=f"cyl {nm}")
+        axs[2].plot(phi, res.acceleration[:, j], color=_cyl(j), label=f"cyl {nm} exact")
         if spec.offset == 0.0:
-            axs[2].plot(phi, res.approx["a"][:, j], "--", lw=0.8, label=f"cyl {nm} λ-approx.")
+            axs[2].plot(phi, res.approx["a"][:, j], "--", lw=0.8, color=_cyl(j), label=f"cyl {nm} λ-approx.")
     axs[0].set_ylabel("s from TDC (mm)")
     axs[1].set_ylabel("v (m/s)")
     axs[2].set_ylabel("a (m/s²)")
@@ -83,14 +91,19 @@ def engine_figures(res) -> dict:
     for ax in axs:
         _xaxis(ax)
         ax.legend(fontsize=7, loc="upper right")
-    paths.append(_save(fig, "kinematics.png"))
+    return _save(fig, "kinematics.png")
 
+
+def _pressure(res):
+    """``pressure.png``."""
+    plt, spec, phi = _plt(), res.spec, res.phi_deg
+    names = [c.name for c in spec.cylinders]
     fig, axs = plt.subplots(1, 3, figsize=(14, 4.2))
     for j, nm in enumerate(names):
-        axs[0].plot(phi, res.pressure[:, j] / 1e6, label=f"cyl {nm}")
+        axs[0].plot(phi, res.pressure[:, j] / 1e6, color=_cyl(j), label=f"cyl {nm}")
         order = np.argsort(res.psi_deg[:, j])
-        axs[1].plot(res.volume[order, j] * 1e6, res.pressure[order, j] / 1e6, label=f"cyl {nm}")
-        axs[2].plot(phi, res.gas_force[:, j] / 1e3, label=f"cyl {nm}")
+        axs[1].plot(res.volume[order, j] * 1e6, res.pressure[order, j] / 1e6, color=_cyl(j), label=f"cyl {nm}")
+        axs[2].plot(phi, res.gas_force[:, j] / 1e3, color=_cyl(j), label=f"cyl {nm}")
     axs[0].set_xlabel("crank angle φ (deg)")
     axs[0].set_ylabel("cylinder pressure (MPa, absolute)")
     _xaxis(axs[0])
@@ -103,8 +116,12 @@ def engine_figures(res) -> dict:
     _xaxis(axs[2])
     for ax in axs:
         ax.legend(fontsize=7)
-    paths.append(_save(fig, "pressure.png"))
+    return _save(fig, "pressure.png")
 
+
+def _balancing(res):
+    """``balancing.png``."""
+    plt, phi = _plt(), res.phi_deg
     fig, ax = plt.subplots(figsize=(9, 4))
     ax.plot(phi, res.balancing, label="M_b (on the crank, CCW +)")
     mean = res.cycle_integral / (4 * np.pi)
@@ -114,8 +131,13 @@ def engine_figures(res) -> dict:
     ax.set_title(f"∮M_b dφ = {res.cycle_integral:.6g} J, −W_ind = {-res.indicated_work.sum():.6g} J", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=8)
-    paths.append(_save(fig, "balancing.png"))
+    return _save(fig, "balancing.png")
 
+
+def _cyclogram(res):
+    """``cyclogram.png``."""
+    plt, spec = _plt(), res.spec
+    names = [c.name for c in spec.cylinders]
     fig, ax = plt.subplots(figsize=(9, 1.0 + 0.5 * len(names)))
     cyc = res.cyclogram
     for j, row in enumerate(cyc["cylinders"]):
@@ -128,16 +150,23 @@ def engine_figures(res) -> dict:
         ax.plot([row["firing"]], [y], marker="*", color="red", ms=10)
     ax.set_yticks(range(len(names)))
     ax.set_yticklabels([f"cyl {n}" for n in reversed(names)])
+    for j, tick in enumerate(reversed(ax.get_yticklabels())):
+        tick.set_color(_cyl(j))
     ax.set_xlabel("crank angle φ (deg); * firing")
     ax.set_title("four-stroke cyclogram; firing intervals " + "/".join(f"{x:g}" for x in cyc["firing_intervals"])
                  + " deg, order " + "-".join(cyc["firing_order"]), fontsize=9)
     _xaxis(ax)
-    paths.append(_save(fig, "cyclogram.png"))
+    return _save(fig, "cyclogram.png")
 
+
+def _rod_com(res):
+    """``rod_com.png``."""
+    plt, spec, phi = _plt(), res.spec, res.phi_deg
+    names = [c.name for c in spec.cylinders]
     fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
     for j, nm in enumerate(names):
-        axs[0].plot(res.rod_com[:, j, 0] * 1e3, res.rod_com[:, j, 1] * 1e3, label=f"rod {nm}")
-        axs[1].plot(phi, np.minimum(res.rod_com_radius[:, j], 10.0) * 1e3, label=f"rod {nm}")
+        axs[0].plot(res.rod_com[:, j, 0] * 1e3, res.rod_com[:, j, 1] * 1e3, color=_cyl(j), label=f"rod {nm}")
+        axs[1].plot(phi, np.minimum(res.rod_com_radius[:, j], 10.0) * 1e3, color=_cyl(j), label=f"rod {nm}")
     axs[0].set_aspect("equal")
     axs[0].set_xlabel("x (mm)")
     axs[0].set_ylabel("y (mm)")
@@ -149,21 +178,27 @@ def engine_figures(res) -> dict:
     _xaxis(axs[1])
     for ax in axs:
         ax.legend(fontsize=7)
-    paths.append(_save(fig, "rod_com.png"))
+    return _save(fig, "rod_com.png")
 
+
+def _reactions(res):
+    """``reactions.png``."""
+    plt, spec, phi = _plt(), res.spec, res.phi_deg
+    names = [c.name for c in spec.cylinders]
     fig, ax = plt.subplots(figsize=(9, 4.5))
     rx = res.reactions
-    ax.plot(phi, np.linalg.norm(rx["R01"], axis=-1) / 1e3, label="|R01| main bearing")
+    ax.plot(phi, np.linalg.norm(rx["R01"], axis=-1) / 1e3, color="k", label="|R01| main bearing")
     for j, nm in enumerate(names):
-        ax.plot(phi, np.linalg.norm(rx["R12"][:, j], axis=-1) / 1e3, label=f"|R12| crank pin, rod {nm}")
-        ax.plot(phi, rx["N"][:, j] / 1e3, ":", label=f"N wall, cyl {nm}")
+        ax.plot(phi, np.linalg.norm(rx["R12"][:, j], axis=-1) / 1e3, color=_cyl(j), label=f"|R12| crank pin, rod {nm}")
+        ax.plot(phi, rx["N"][:, j] / 1e3, ":", color=_cyl(j), label=f"N wall, cyl {nm}")
     ax.set_xlabel("crank angle φ (deg)")
     ax.set_ylabel("kN")
     ax.set_title("reactions (crank pin A is a multiple joint: one reaction per rod)", fontsize=9)
     _xaxis(ax)
     ax.legend(fontsize=7, ncol=2)
-    paths.append(_save(fig, "reactions.png"))
-    return dict(paths)
+    return _save(fig, "reactions.png")
+
+
 
 
 def plot_forces(fr, x, out=None):
@@ -174,15 +209,19 @@ def plot_forces(fr, x, out=None):
     plt = _plt()
     m = fr.mechanism
     fig, axs = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    rot = [m.joint(d.joint).kind is JointKind.R for d in m.drivers]
     for i, d in enumerate(m.drivers):
-        axs[0].plot(x, fr.balancing[:, i], marker=".", label=f"driver {d.joint}")
-    axs[0].set_ylabel("balancing (N m or N)")
+        what = "moment M_b (N m)" if rot[i] else "force F_b (N)"
+        axs[0].plot(x, fr.balancing[:, i], marker=".", label=f"driver {d.joint}: {what}")
+    axs[0].set_ylabel("balancing moment (N m)" if all(rot) else "balancing force (N)" if not any(rot)
+                      else "balancing: N m (R drivers), N (P drivers)")
     axs[0].grid(True, alpha=0.3)
     axs[0].legend(fontsize=8)
     for i, p in enumerate(fr.pairs):
         axs[1].plot(x, np.linalg.norm(fr.reactions[:, i], axis=-1), label=p.name)
     axs[1].set_ylabel("|reaction| (N)")
-    axs[1].set_xlabel("input (deg or m)")
+    d0 = m.drivers[0].joint if m.drivers else "?"
+    axs[1].set_xlabel(f"input {d0} ({'deg' if rot and rot[0] else 'm'})")
     axs[1].grid(True, alpha=0.3)
     axs[1].legend(fontsize=7, ncol=2)
     axs[0].set_title(f"{m.name or 'mechanism'}: kinetostatics ({fr.method}); "

@@ -24,6 +24,8 @@ from matplotlib.patches import Polygon  # noqa: E402
 from multiloop.topo.model import JointKind  # noqa: E402
 
 from ..state import KinematicState  # noqa: E402
+from .geometry import extent, is_full_turn, link_outlines, path_pieces, slider_guide  # noqa: E402
+from .labels import place_labels  # noqa: E402
 from .style import no_mathtext  # noqa: E402
 
 __all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis"]
@@ -40,21 +42,6 @@ def input_axis(state: KinematicState) -> tuple[np.ndarray, str]:
     return state.inputs[:, 0], f"input {d.joint} (m)"
 
 
-def _link_points(state: KinematicState, n: int) -> dict[str, np.ndarray]:
-    m = state.mechanism
-    out: dict[str, list] = {lk: [] for lk in m.link_names}
-    for i, j in enumerate(m.joints):
-        p = state.positions[n, i]
-        for lk in j.links:
-            out[lk].append(p)
-    if state.point_positions is not None:   # a tracer point is drawn on its link's plate
-        for k, name in enumerate(state.point_names):
-            lk = next(pt.link for pt in m.points if pt.name == name)
-            if lk != m.frame:
-                out[lk].append(state.point_positions[n, k])
-    return {k: np.array(v) for k, v in out.items() if v}
-
-
 def _bounds(state: KinematicState) -> tuple[np.ndarray, np.ndarray]:
     pts = [state.positions.reshape(-1, 2)]
     if state.point_positions is not None:
@@ -66,50 +53,71 @@ def _bounds(state: KinematicState) -> tuple[np.ndarray, np.ndarray]:
     return lo - pad, hi + pad
 
 
-def _draw(ax, state: KinematicState, n: int, names: bool = True) -> list:
+def _markers(state: KinematicState, n: int) -> list[tuple]:
+    """``(name, position, marker, size pt, face colour, text colour)`` of every visible joint and point."""
     m = state.mechanism
-    art = []
-    pts = _link_points(state, n)
-    for k, lk in enumerate(m.link_names):
-        if lk == m.frame or lk not in pts:
-            continue
-        P = pts[lk]
-        if not np.all(np.isfinite(P)):
-            continue
-        c = _COLORS[k % len(_COLORS)]
-        if len(P) >= 3:
-            centre = P.mean(axis=0)
-            order = np.argsort(np.arctan2(P[:, 1] - centre[1], P[:, 0] - centre[0]))
-            art.append(ax.add_patch(Polygon(P[order], closed=True, alpha=0.35, color=c, lw=2)))
-        else:
-            art += ax.plot(P[:, 0], P[:, 1], "-", color=c, lw=3, solid_capstyle="round")
+    out = []
     for i, j in enumerate(m.joints):
         p = state.positions[n, i]
         if not np.all(np.isfinite(p)):
             continue
         if j.kind is JointKind.P:
-            th = state.angles[n, m.link_names.index(j.links[0])]
-            u = np.asarray(j.axis, float) / np.hypot(*j.axis)
-            u = np.array([np.cos(th) * u[0] - np.sin(th) * u[1], np.sin(th) * u[0] + np.cos(th) * u[1]])
-            size = 0.04 * float(np.max(_bounds(state)[1] - _bounds(state)[0]))
-            seg = np.array([p - 3 * size * u, p + 3 * size * u])
-            art += ax.plot(seg[:, 0], seg[:, 1], "k-", lw=1)
-            art += ax.plot([p[0]], [p[1]], "s", ms=9, mfc="w", mec="k")
+            out.append((j.name, p, "s", 9, "w", "k"))
+        elif m.frame in j.links:
+            out.append((j.name, p, "^", 9, "gold" if j.is_multiple else "w", "k"))
         else:
-            on_frame = m.frame in j.links
-            art += ax.plot([p[0]], [p[1]], "^" if on_frame else "o", ms=9 if on_frame else 6,
-                           mfc="w" if not j.is_multiple else "gold", mec="k")
-        if names:
-            art.append(ax.annotate(j.name, p, textcoords="offset points", xytext=(5, 5), fontsize=9))
-    if state.point_positions is not None:
-        for k, name in enumerate(state.point_names):
-            p = state.point_positions[n, k]
-            if np.all(np.isfinite(p)):
-                art += ax.plot([p[0]], [p[1]], "x", color="crimson", ms=8)
-                if names:
-                    art.append(ax.annotate(name, p, textcoords="offset points", xytext=(5, -12),
-                                           fontsize=9, color="crimson"))
-    return art
+            out.append((j.name, p, "o", 6, "gold" if j.is_multiple else "w", "k"))
+    for k, name in enumerate(state.point_names):
+        p = state.point_positions[n, k]
+        if np.all(np.isfinite(p)):
+            out.append((name, p, "x", 8, "crimson", "crimson"))
+    return out
+
+
+def _draw(ax, state: KinematicState, n: int) -> tuple[list, list]:
+    """Links, guides and markers at position ``n``; returns the artists and the drawn segments."""
+    m = state.mechanism
+    art, segs = [], []
+    outlines = link_outlines(state, n)
+    for k, lk in enumerate(m.link_names):
+        if lk not in outlines:
+            continue
+        P, c = outlines[lk], _COLORS[k % len(_COLORS)]
+        if len(P) >= 3:
+            art.append(ax.add_patch(Polygon(P, closed=True, alpha=0.35, color=c, lw=2)))
+            segs += [(P[i], P[(i + 1) % len(P)]) for i in range(len(P))]
+        else:
+            art += ax.plot(P[:, 0], P[:, 1], "-", color=c, lw=3, solid_capstyle="round")
+            segs.append((P[0], P[1]))
+    half = 0.12 * extent(state)
+    for i, j in enumerate(m.joints):
+        if j.kind is JointKind.P and np.all(np.isfinite(state.positions[n, i])):
+            seg = slider_guide(state, n, i, half)
+            art += ax.plot(seg[:, 0], seg[:, 1], "k-", lw=1)
+            segs.append((seg[0], seg[1]))
+    for name, p, marker, size, face, _ in _markers(state, n):
+        if marker == "x":
+            art += ax.plot([p[0]], [p[1]], "x", color=face, ms=size)
+        else:
+            art += ax.plot([p[0]], [p[1]], marker, ms=size, mfc=face, mec="k")
+    return art, segs
+
+
+def _names(ax, state: KinematicState, n: int, segs) -> list:
+    """Joint and point names placed by :func:`~kin.figures.labels.place_labels`."""
+    marks = _markers(state, n)
+    if not marks:
+        return []
+    offsets = place_labels(ax, [mk[1] for mk in marks], [mk[0] for mk in marks],
+                           [0.5 * mk[3] + 1 for mk in marks], fontsize=9, segments=segs)
+    out = []
+    for (name, p, _, size, _, colour), off in zip(marks, offsets):
+        far = np.hypot(*off) > 0.5 * size + 18
+        out.append(ax.annotate(name, p, textcoords="offset points", xytext=off, fontsize=9, color=colour,
+                               ha="center", va="center", annotation_clip=False,
+                               arrowprops=dict(arrowstyle="-", lw=0.4, color="0.5", shrinkA=0,
+                                               shrinkB=0.5 * size) if far else None))
+    return out
 
 
 def plot_mechanism(state: KinematicState, index: int = 0, ax=None, title: str | None = None):
@@ -124,18 +132,19 @@ def plot_mechanism(state: KinematicState, index: int = 0, ax=None, title: str | 
         fig, ax = plt.subplots(figsize=(7, 6), dpi=110)
     else:
         fig = ax.figure
+    closed = is_full_turn(state)
     for i in range(len(m.joints)):
-        path = state.positions[:, i]
-        ax.plot(path[:, 0], path[:, 1], "-", color="0.8", lw=0.8, zorder=0)
-    if state.point_positions is not None:
-        for k in range(len(state.point_names)):
-            path = state.point_positions[:, k]
-            ax.plot(path[:, 0], path[:, 1], "--", color="crimson", lw=1.2, zorder=0)
-    _draw(ax, state, index)
+        for piece in path_pieces(state.positions[:, i], closed):
+            ax.plot(piece[:, 0], piece[:, 1], "-", color="0.8", lw=0.8, zorder=0)
+    for k in range(len(state.point_names)):
+        for piece in path_pieces(state.point_positions[:, k], closed):
+            ax.plot(piece[:, 0], piece[:, 1], "--", color="crimson", lw=1.2, zorder=0)
+    _, segs = _draw(ax, state, index)
     lo, hi = _bounds(state)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
+    _names(ax, state, index, segs)
     ax.grid(True, lw=0.3)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -192,14 +201,14 @@ def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -
     lo, hi = _bounds(state)
     frames = np.unique(np.linspace(0, state.n_positions - 1, min(max_frames, state.n_positions)).astype(int))
     writer = PillowWriter(fps=fps)
+    closed = is_full_turn(state)
     with writer.saving(fig, str(path), dpi=80):
         for n in frames:
             ax.clear()
-            if state.point_positions is not None:
-                for k in range(len(state.point_names)):
-                    pp = state.point_positions[:, k]
-                    ax.plot(pp[:, 0], pp[:, 1], "--", color="crimson", lw=1)
-            _draw(ax, state, int(n), names=False)
+            for k in range(len(state.point_names)):
+                for piece in path_pieces(state.point_positions[:, k], closed):
+                    ax.plot(piece[:, 0], piece[:, 1], "--", color="crimson", lw=1)
+            _draw(ax, state, int(n))
             ax.set_xlim(lo[0], hi[0])
             ax.set_ylim(lo[1], hi[1])
             ax.set_aspect("equal")
