@@ -81,7 +81,7 @@ class _Counter:
 
 
 def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget: float = 10.0,
-                  tol: float = 1e-4, popsize: int = 15, progress=None, probe=None) -> SearchResult:
+                  tol: float = 1e-4, popsize: int = 8, progress=None, probe=None) -> SearchResult:
     """Minimise ``problem.batch`` over its bounds within ``budget`` seconds.
 
     ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
@@ -93,8 +93,12 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget
     c = _Counter(problem, budget, tol, progress, probe)
     u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
     c(u0[None, :])
+    if probe is not None:                   # the start itself may be one polish away
+        c.probed_f = c.best_f
+        c.done = bool(probe(problem.x0.copy()))
+        c.probe_time = c.elapsed()
     stopped = "tolerance"
-    if c.best_f > tol:
+    if c.best_f > tol and not c.done:
         if method == "de":
             _de(c, u0, seed, popsize)
         else:

@@ -172,7 +172,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
                seed: int = 0, budget: float = 10.0, method: str = "de", tol: float = 1e-6,
                bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
                length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
-               popsize: int = 15, grid: int = 96, progress=None) -> SynthesisResult:
+               popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
     """Dimensional synthesis of ``start``: path, function or motion generation.
 
     Parameters
