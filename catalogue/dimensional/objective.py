@@ -324,10 +324,37 @@ class Problem:
         f = f + self.cons.weight * self.violation(X, st, full)
         return np.where(np.isfinite(f), f, _FAIL)
 
+    def reference_margin(self, X: np.ndarray) -> np.ndarray:
+        """Smallest relative determinant of the dyads in the reference configuration
+        ``(P,)``: |sin| of the angle between an RRR's links, |cos| between an RRP's link
+        and guide, slide / pivot distance of an RPR.  Zero is a singular reference,
+        which no solver accepts."""
+        ev = self.ev
+        out = np.ones(X.shape[0])
+        for g in ev.plan.groups:
+            o1, inner, o2, l1, l2 = g.layout if g.is_dyad else (None,) * 5
+            if g.kind == "RRR":
+                u, w = ev.at(X, inner) - ev.at(X, o1), ev.at(X, inner) - ev.at(X, o2)
+                r = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
+                r = r / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
+            elif g.kind == "RRP":
+                u = ev.at(X, inner) - ev.at(X, o1)
+                r = np.abs(np.sum(u * ev.axis(X, o2), 1)) / np.linalg.norm(u, axis=1)
+            elif g.kind == "RPR":
+                guide = ev.mechanism.joint(inner).links[0]
+                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
+                d = ev.at(X, bx) - ev.at(X, gx)
+                r = np.abs(np.sum(d * ev.axis(X, inner), 1)) / np.linalg.norm(d, axis=1)
+            else:
+                continue
+            out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
+        return out
+
     def violation(self, X: np.ndarray, st: Poses, full: np.ndarray) -> np.ndarray:
-        """Sum of the relative constraint violations ``(P,)``."""
+        """Sum of the relative constraint violations ``(P,)``; a reference configuration
+        within 1e-3 of a singular one always counts."""
         c = self.cons
-        v = np.zeros(X.shape[0])
+        v = np.maximum(0.0, 1e-3 - self.reference_margin(X)) / 1e-3
         if c.full_rotation:
             v += np.where(full, 0.0, 1.0 - np.mean(st.ok[:, :self.M], axis=1))
         if c.min_transmission:

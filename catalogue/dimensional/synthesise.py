@@ -285,11 +285,22 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, d
             notes.append("the local polish left the continuous branch")
 
     def key(c):
-        return (not c[0][2], float(np.sqrt(np.mean(c[0][0] ** 2))))
+        return (not c[0][2], not _solvable(problem, c[1]), float(np.sqrt(np.mean(c[0][0] ** 2))))
     a, zb, phib, _ = min(cands, key=key)
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
     return a, zb, phib, sum(c[3] for c in cands), notes
+
+
+def _solvable(problem: Problem, z: np.ndarray) -> bool:
+    """Whether ``kin.solve`` accepts the design (no singular group at the reference)."""
+    from multiloop.kin.solve import compile_plan
+    from multiloop.topo.errors import LinkageError
+    try:
+        compile_plan(problem.ev.with_design(z[:problem.nx]))
+    except LinkageError:
+        return False
+    return True
 
 
 def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
