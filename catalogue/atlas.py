@@ -115,6 +115,26 @@ def _tokens(text: str) -> list[tuple[str, str]]:
     return out
 
 
+#: limits of a query: nested parentheses, comparisons, integer magnitude (SQLite INTEGER)
+MAX_QUERY_DEPTH = 50
+MAX_QUERY_TERMS = 200
+_MAX_INT = 2 ** 63 - 1
+
+
+def _check_size(toks: list[tuple[str, str]]) -> None:
+    """Refuse queries too deep or too long before parsing them (recursive descent and
+    SQLite's expression depth are both bounded)."""
+    depth = deepest = 0
+    for kind, _ in toks:
+        depth += (kind == "lp") - (kind == "rp")
+        deepest = max(deepest, depth)
+    terms = sum(1 for kind, _ in toks if kind == "op")
+    if deepest > MAX_QUERY_DEPTH or terms > MAX_QUERY_TERMS:
+        raise InputError(explain("--query", expected=f"at most {MAX_QUERY_DEPTH} nested parentheses and "
+                                 f"{MAX_QUERY_TERMS} comparisons",
+                                 got=f"{deepest} nested, {terms} comparisons"))
+
+
 def parse_query(text: str) -> tuple[str, list]:
     """Turn a user expression into a parameterised SQL ``WHERE`` clause.
 
@@ -136,6 +156,7 @@ def parse_query(text: str) -> tuple[str, list]:
     ('("code_star" = ?) OR (NOT ("planar" = ?))', ['[8110]/[3-0-0]', 1])
     """
     toks = _tokens(text)
+    _check_size(toks)
     pos = 0
     params: list = []
 
@@ -187,6 +208,8 @@ def parse_query(text: str) -> tuple[str, list]:
         kind, v = peek()
         if kind == "num":
             value = int(v)
+            if abs(value) > _MAX_INT:
+                bad(f"an integer within ±{_MAX_INT}")
         elif kind == "str":
             value = v[1:-1]
         elif kind == "word" and v.lower() in ("true", "false"):
@@ -229,12 +252,19 @@ class Atlas:
 
     def __init__(self, path: str | Path = "atlas.sqlite"):
         self.path = str(path)
-        self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
-        self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
-        self.con.execute("PRAGMA synchronous=NORMAL")
-        self.con.executescript(_SCHEMA)
-        self.con.execute("PRAGMA user_version = 1")
-        self.con.commit()
+        if self.path != ":memory:" and Path(self.path).is_dir():
+            raise InputError(explain("--db", expected="an atlas file (SQLite)", got=f"the directory {self.path!r}"))
+        try:
+            self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
+            self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
+            self.con.execute("PRAGMA synchronous=NORMAL")
+            self.con.executescript(_SCHEMA)
+            self.con.execute("PRAGMA user_version = 1")
+            self.con.commit()
+        except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place
+            raise InputError(explain("--db", expected="an atlas file (SQLite) or a new file name",
+                                     got=f"{self.path!r}: {exc}",
+                                     hint="give another --db path")) from None
 
     def close(self) -> None:
         self.con.close()

@@ -12,16 +12,31 @@
 
 Results come back as ``(task, records)`` in completion order; the atlas stores each
 task in its own transaction, so the partition and the order do not change the result.
+
+Local pool workers die with their parent: each asks the kernel for a signal when its
+parent dies (Linux ``PR_SET_PDEATHSIG``) and also watches its parent id, so killing
+``multiloop atlas`` (SIGKILL or SIGTERM) leaves no orphan; the killed tasks stay
+pending and a rerun resumes them.  An unreachable scheduler is an
+:class:`~topo.errors.InputError` after a short connect timeout.
 """
 from __future__ import annotations
 
 import os
+import signal
+import threading
+import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterator, Sequence
 
-from .synthesis import ChainRecord, SynthesisOptions, Task, run_task
+from multiloop.topo.errors import InputError, explain
 
-__all__ = ["map_tasks", "default_workers"]
+from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
+
+__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent",
+           "SCHEDULER_TIMEOUT"]
+
+#: seconds to wait for a Dask scheduler before giving up
+SCHEDULER_TIMEOUT = 5.0
 
 
 def default_workers() -> int:
@@ -30,6 +45,32 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - macOS, Windows
         return max(1, os.cpu_count() or 1)
+
+
+def die_with_parent(parent: int | None = None, poll: float = 0.5) -> None:
+    """Make this process exit when its parent dies (pool-worker initializer).
+
+    Linux delivers SIGKILL on the parent's death (``prctl(PR_SET_PDEATHSIG)``); a
+    daemon thread that polls ``os.getppid()`` covers the other platforms and the
+    window before the ``prctl`` call.
+    """
+    parent = os.getppid() if parent is None else parent
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, daemon=True, name="die-with-parent").start()
 
 
 def _run(task: Task, opts: SynthesisOptions, loops: bool) -> tuple[Task, list[ChainRecord]]:
@@ -52,10 +93,10 @@ def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
         Address of a Dask scheduler (or a client); overrides ``workers``.
     """
     tasks = list(tasks)
-    if not tasks:
-        return
-    if scheduler is not None:
+    if scheduler is not None:       # (connects even when nothing is pending: a bad address is reported)
         yield from _dask(tasks, opts, loops, scheduler)
+        return
+    if not tasks:
         return
     workers = default_workers() if workers is None else max(1, int(workers))
     if workers == 1 or len(tasks) == 1:
@@ -64,7 +105,8 @@ def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
         return
     # largest tasks first (fewest joints are the big genbg runs at n >= 12)
     order = sorted(tasks, key=lambda t: (abs(t.m - (opts.p * 3) // 4), t.res))
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent,
+                             initargs=(os.getpid(),)) as pool:
         futures = [pool.submit(_run, t, opts, loops) for t in order]
         try:
             for fut in as_completed(futures):
@@ -79,7 +121,7 @@ def _dask(tasks, opts, loops, scheduler):
     from distributed import Client, as_completed as dask_completed
 
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
+    client = _connect(scheduler) if own else scheduler
     try:
         futures = [client.submit(_run, t, opts, loops, pure=False) for t in tasks]
         for fut in dask_completed(futures):
@@ -87,3 +129,30 @@ def _dask(tasks, opts, loops, scheduler):
     finally:
         if own:
             client.close()
+
+
+def _connect(address: str):
+    """A Dask client, or InputError when the scheduler cannot be reached in time."""
+    from distributed import Client
+
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        raise InputError(explain("--scheduler", expected="a reachable Dask scheduler (tcp://host:8786)",
+                                 got=f"{address!r}: {type(exc).__name__}: {exc}"[:200],
+                                 hint=f"start one with `dask scheduler`; connect timeout "
+                                      f"{SCHEDULER_TIMEOUT:g} s")) from None
+
+
+def type_synthesis(opts: SynthesisOptions, loops: bool = True, workers: int | None = 1,
+                   scheduler: str | None = None) -> list[ChainRecord]:
+    """All non-isomorphic chains, sorted by canonical form.
+
+    ``workers`` > 1 uses local processes, ``scheduler`` a Dask cluster.
+    """
+    if (workers or 1) == 1 and scheduler is None:
+        recs = list(iter_chains(opts, loops))
+    else:
+        recs = [r for part in map_tasks(plan_tasks(opts), opts, loops, workers=workers,
+                                        scheduler=scheduler) for r in part[1]]
+    return sorted(recs, key=lambda r: r.canonical)

@@ -139,3 +139,78 @@ def test_cli_json_query_and_table(tmp_path, capsys):
     assert main(["atlas", "--db", db, "--query", "drop table chains"]) == 2
     assert main(["atlas", "--links", "7", "--dof", "1", "--db", db]) == 2
     assert main(["atlas", "--db", str(tmp_path / "missing.sqlite")]) == 2
+
+
+def _children(pid: int) -> set[int]:
+    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
+    return {int(x) for x in out.split()}
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(") ")[1][0] != "Z"   # a zombie is dead
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_killed_build_leaves_no_orphan_workers(tmp_path, sig):
+    """Issue 10: killing `multiloop atlas` with pool workers must not leave them running;
+    the rerun still ends with the exact count."""
+    db = tmp_path / "o.sqlite"
+    cmd = [sys.executable, "-m", "multiloop", "atlas", "--links", "10", "--dof", "1", "--db", str(db),
+           "--workers", "2", "--no-loops", "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 60
+    workers: set[int] = set()
+    while time.time() < deadline and proc.poll() is None and len(workers) < 2:
+        time.sleep(0.05)
+        workers = _children(proc.pid)
+    if proc.poll() is not None:
+        pytest.skip("the build finished before its workers could be seen")
+    os.kill(proc.pid, sig)
+    proc.wait()
+    deadline = time.time() + 10
+    while time.time() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.1)
+    assert not [w for w in workers if _alive(w)]
+    assert main(["atlas", "--links", "10", "--dof", "1", "--db", str(db), "--no-loops",
+                 "--no-progress", "--workers", "1"]) == 0
+    with Atlas(db) as atlas:
+        assert atlas.count(SynthesisOptions(10, 1)) == 2645
+
+
+def test_bad_db_files_are_input_errors(tmp_path):
+    bad = tmp_path / "not.sqlite"
+    bad.write_bytes(b"this is not a database " * 100)
+    for path in (bad, tmp_path):
+        with pytest.raises(InputError, match="--db"):
+            Atlas(path)
+        assert main(["atlas", "--db", str(path), "--links", "6"]) == 2
+    assert bad.read_bytes() == b"this is not a database " * 100
+
+
+@pytest.mark.parametrize("query, what", [
+    ("(" * 500 + "V=1" + ")" * 500, "nested"),
+    (" OR ".join(["V=1"] * 5000), "comparisons"),
+    ("V = 99999999999999999999999", "integer"),
+    ("V = -9223372036854775809", "integer"),
+])
+def test_runaway_queries_are_input_errors(query, what):
+    with pytest.raises(InputError, match=what):
+        parse_query(query)
+
+
+def test_query_limits_still_allow_reasonable_queries():
+    sql, params = parse_query("(" * 50 + "V=1" + ")" * 50 + " AND " + " OR ".join(["K=2"] * 150))
+    assert len(params) == 151
+
+
+def test_unreachable_scheduler_is_an_input_error(tmp_path, monkeypatch):
+    from multiloop.catalogue import distributed
+
+    monkeypatch.setattr(distributed, "SCHEDULER_TIMEOUT", 0.5)
+    with pytest.raises(InputError, match="--scheduler"):
+        list(distributed.map_tasks([], SynthesisOptions(6, 1), scheduler="tcp://127.0.0.1:9"))

@@ -25,8 +25,6 @@ from itertools import combinations
 
 import networkx as nx
 import numpy as np
-from scipy.sparse import csr_array
-from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from .graphs import incidence_graph
 from .model import Mechanism
@@ -123,6 +121,9 @@ def _mincut_best(m: Mechanism, forced_in: tuple[str, ...], forced_out: tuple[str
     """Maximise 2c(S) − 3|S| over S ⊇ forced_in, S ∩ forced_out = ∅ by a minimum cut
     (the network of :class:`_CutNetwork`; SciPy's compiled Dinic max-flow, the source
     side read off the residual graph).  Returns (max value, chosen links)."""
+    from scipy.sparse import csr_array   # (SciPy loads in ~0.3 s: only when a cut is needed)
+    from scipy.sparse.csgraph import breadth_first_order, maximum_flow
+
     net = _cut_network(m) if net is None else net
     big = 10 ** 6
     extra = [(0, net.link_index[x]) for x in forced_in] + [(net.link_index[x], 1) for x in forced_out]

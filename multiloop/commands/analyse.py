@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+import sys
+import time
 
 from multiloop.topo.io import load
 from multiloop.topo.numbers import structural_report
@@ -17,6 +19,9 @@ def add_arguments(p) -> None:
                         "(3 planar; 6 gives the designer's redundant constraints)")
     p.add_argument("--no-geometry", action="store_true",
                    help="skip the rank check of the constraint Jacobian")
+    p.add_argument("--no-loops", action="store_true",
+                   help="skip the loop assortment [La] (its embedding search grows with the "
+                        "2-vertex cuts of the chain; everything else stays polynomial)")
 
 
 def _row(label: str, value) -> tuple[str, str]:
@@ -60,9 +65,23 @@ def format_report(r) -> str:
     return "\n".join(lines)
 
 
+#: chains above this many links get progress lines on stderr
+PROGRESS_LINKS = 30
+
+
 def run(args) -> int:
     m = load(args.file)
-    r = structural_report(m, n_drivers=args.drivers, lam=args.lam, geometry=not args.no_geometry)
+    loops = not args.no_loops
+    progress = m.n_links > PROGRESS_LINKS
+    if progress:
+        print(f"analyse: {m.n_links} links, {m.n_joints} joints: structural numbers, canonical "
+              f"form, degeneracy" + (", loop assortment [La] (--no-loops skips it)" if loops else ""),
+              file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    r = structural_report(m, n_drivers=args.drivers, lam=args.lam, geometry=not args.no_geometry,
+                          loops=loops)
+    if progress:
+        print(f"analyse: done in {time.perf_counter() - t0:.2f} s", file=sys.stderr, flush=True)
     if args.json:
         print(json.dumps(r.as_dict(), indent=2))
     else:

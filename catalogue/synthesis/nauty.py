@@ -1,0 +1,75 @@
+"""nauty's generators (McKay & Piperno 2014): finding ``geng``/``genbg``, the command of
+a task, and decoding their graph6 output into joint bit masks with NumPy."""
+from __future__ import annotations
+
+import shutil
+from functools import lru_cache
+from typing import Sequence
+
+import numpy as np
+
+from .options import SynthesisOptions, Task
+
+__all__ = ["nauty_available"]
+
+
+def nauty_available() -> bool:
+    """True when nauty's ``geng`` and ``genbg`` are on the PATH."""
+    return _tool("geng") is not None and _tool("genbg") is not None
+
+
+@lru_cache(maxsize=None)
+def _tool(name: str) -> str | None:
+    for cand in (name, f"nauty-{name}"):
+        path = shutil.which(cand)
+        if path:
+            return path
+    return None
+
+
+# ------------------------------------------------------------------ graph6 decoding
+def _graph6_bits(lines: Sequence[bytes], N: int) -> np.ndarray:
+    """Upper-triangle adjacency bits of same-order graph6 lines, shape (B, N(N−1)/2)."""
+    width = len(lines[0])
+    arr = np.frombuffer(b"".join(lines), dtype=np.uint8).reshape(len(lines), width)
+    data = arr[:, 1:] - 63
+    bits = np.unpackbits(data[:, :, None], axis=2)[:, :, 2:].reshape(len(lines), -1)
+    return bits[:, : N * (N - 1) // 2]
+
+
+def _pos(i: int, j: int) -> int:
+    """graph6 bit index of the pair (i, j), i < j."""
+    return j * (j - 1) // 2 + i
+
+
+def _decode_bipartite(lines: Sequence[bytes], n: int, m: int) -> np.ndarray:
+    """Joint masks (B, m) of genbg output (links 0…n−1, joints n…n+m−1)."""
+    bits = _graph6_bits(lines, n + m)
+    idx = np.array([[_pos(i, n + a) for i in range(n)] for a in range(m)])
+    sel = bits[:, idx].astype(np.int64)                    # (B, m, n)
+    return sel @ (np.int64(1) << np.arange(n, dtype=np.int64))
+
+
+def _decode_simple(lines: Sequence[bytes], n: int, p: int) -> np.ndarray:
+    """Joint (edge) masks (B, p) of geng output."""
+    bits = _graph6_bits(lines, n)
+    pairs = [(i, j) for j in range(1, n) for i in range(j)]
+    pm = np.array([(1 << i) | (1 << j) for i, j in pairs], dtype=np.int64)
+    rows, cols = np.nonzero(bits)
+    if len(rows) != len(lines) * p:  # pragma: no cover - geng was asked for p edges
+        raise RuntimeError("geng returned graphs with an unexpected number of edges")
+    return pm[cols].reshape(len(lines), p)
+
+
+# -------------------------------------------------------------------- generation
+def _generator_command(task: Task, opts: SynthesisOptions) -> list[str]:
+    p = opts.p
+    if task.m == p:   # simple joints: triangle-free graphs, min degree 2
+        cmd = [_tool("geng"), "-cq", "-d2", "-t", f"-D{opts.i_cap}", str(opts.n), f"{p}:{p}"]
+    else:
+        e = p + task.m
+        cmd = [_tool("genbg"), "-cq", "-d2:2", f"-D{opts.i_cap}:{opts.j_cap + 1}", "-Z1",
+               str(opts.n), str(task.m), f"{e}:{e}"]
+    if task.mod > 1:
+        cmd.append(f"{task.res}/{task.mod}")
+    return cmd
