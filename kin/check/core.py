@@ -1,0 +1,223 @@
+"""``check(mechanism)``: validate a design over its whole motion.
+
+For every driver in turn (the others held at the reference), from the reference
+along its assembly branch: range of motion with exact limits, branch points met,
+dead centres of the links hinged to the frame and of the sliders on frame guides,
+exact extremes of every transmission / pressure angle, the velocity ratio to an
+output; then the assembly modes of every group, the Grashof class of every
+four-bar loop, the instant centres at one position and a verdict.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from multiloop.kin.solve import compile_plan, solve
+from multiloop.topo.assur import decompose
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .circuits import group_circuits
+from .events import extremes, roots
+from .grashof import four_bar_loops
+from .instant_centres import instant_centres
+from .motion import driver_motion
+from .report import AngleResult, CheckReport, DriverCheck
+from .transmission import angle_specs, angle_values
+from .verdict import verdict
+
+__all__ = ["check", "watched", "signed_dets"]
+
+
+def watched(m: Mechanism) -> tuple[tuple[str, str, str | None], ...]:
+    """Links hinged to the frame ``(link, "R", None)`` and sliders on a frame guide
+    ``(slider, "P", joint)``, in file order."""
+    out, seen = [], set()
+    for j in m.joints:
+        if m.frame not in j.links:
+            continue
+        if j.kind is JointKind.R:
+            for lk in j.links:
+                if lk != m.frame and lk not in seen:
+                    out.append((lk, "R", None))
+                    seen.add(lk)
+        elif j.links[0] == m.frame and j.links[1] not in seen:
+            out.append((j.links[1], "P", j.name))
+            seen.add(j.links[1])
+    return tuple(out)
+
+
+def _velocity(state, w) -> np.ndarray:
+    """(N, len(w)) angular velocity of each watched link or slide rate of each slider."""
+    m = state.mechanism
+    out = np.empty((state.n_positions, len(w)))
+    for c, (lk, kind, jn) in enumerate(w):
+        if kind == "R":
+            out[:, c] = state.omegas[:, state.link_index(lk)]
+        else:
+            ax = np.asarray(m.joint(jn).axis, float)
+            out[:, c] = state.velocities[:, state.joint_index(jn)] @ (ax / np.hypot(*ax))
+    return out
+
+
+def signed_dets(plan):
+    """Dyads with a reach limit and their normalised signed determinant ``D(state)``:
+    sin of the angle at B (RRR), cos of rod–guide angle (RRP), s/|CA| (RPR)."""
+    m = plan.mechanism
+    groups = [g for g in plan.groups if g.kind in ("RRR", "RRP", "RPR")]
+
+    def D(state):
+        P = state.positions
+        out = np.full((P.shape[0], len(groups)), np.nan)
+        for c, g in enumerate(groups):
+            o1, inner, o2, l1, _ = g.layout
+            if g.kind == "RRR":
+                A, B, C = (P[:, state.joint_index(n)] for n in (o1, inner, o2))
+                u, v = A - B, C - B
+                out[:, c] = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (
+                    np.hypot(*u.T) * np.hypot(*v.T))
+                continue
+            pj = o2 if g.kind == "RRP" else inner
+            guide = m.joint(pj).links[0]
+            if g.kind == "RRP":
+                X, Y = P[:, state.joint_index(o1)], P[:, state.joint_index(inner)]
+            else:
+                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
+                X, Y = P[:, state.joint_index(gx)], P[:, state.joint_index(bx)]
+            ax = np.asarray(m.joint(pj).axis, float)
+            th = state.angles[:, state.link_index(guide)]
+            u = np.stack([np.cos(th) * ax[0] - np.sin(th) * ax[1],
+                          np.sin(th) * ax[0] + np.cos(th) * ax[1]], -1) / np.hypot(*ax)
+            d = Y - X
+            out[:, c] = np.sum(d * u, axis=-1) / np.hypot(*d.T)
+        return out
+    return groups, D
+
+
+def _output(m: Mechanism, w, output, driver_link):
+    if output is None:
+        cand = [x for x in w if x[0] != driver_link]
+        return cand[-1] if cand else None
+    if output in m.link_names:
+        for x in w:
+            if x[0] == output:
+                return x
+        return (output, "R", None)
+    if output in tuple(p.name for p in m.points):
+        return (output, "point", None)
+    raise InputError(explain("--output", expected="a link or tracer point name of the mechanism",
+                             got=repr(output), hint="links: " + ", ".join(m.link_names)))
+
+
+def _ratio(state, out) -> np.ndarray:
+    lk, kind, _ = out
+    if kind == "point":
+        return np.hypot(*state.point_velocities[:, state.point_index(lk)].T)
+    if kind == "R":
+        return state.omegas[:, state.link_index(lk)]
+    return _velocity(state, [out])[:, 0]
+
+
+def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
+    d = m.drivers[k]
+    dj = m.joint(d.joint)
+    rotary = dj.kind is JointKind.R
+    mo = driver_motion(m, plan, k)
+    driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
+    limit_groups = []
+    for seg in mo.segments:
+        if seg.limit_bracket is not None:
+            st, r = seg.side.at([seg.limit_bracket[1]])
+            limit_groups.append(str(st.status[r[0]]))
+    groups, D = signed_dets(ap)
+    bps = [(x, groups[c].describe()) for c, xs in enumerate(roots(mo, D)) for x in xs]
+    bps += [(x, "singular position met on the grid") for seg in mo.segments for x in seg.singular]
+    ww = [x for x in w if x[0] != driver_link and not (x[1] == "P" and x[2] == d.joint)]
+    dead = roots(mo, lambda s: _velocity(s, ww), derivatives=True)
+    ext = extremes(mo, lambda s: angle_values(s, specs))
+    angles = tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
+    out = _output(m, w, output, driver_link)
+    xs, rs = [], []
+    for seg in (mo.segments if mo.full_rotation else mo.segments[::-1]):
+        xx, rr = seg.x, (_ratio(seg.state, out)[: seg.n] if out else np.full(seg.n, np.nan))
+        if seg.side.sign < 0:
+            xx, rr = xx[::-1], rr[::-1]
+        xs.append(xx)
+        rs.append(rr)
+    unit = ("m" if out and out[1] in ("P", "point") else "rad") + ("/rad" if rotary else "/m")
+    bad = tuple(x for x in (positions or ()) if not _reachable(mo, x))
+    return DriverCheck(d.joint, rotary, mo.full_rotation, mo.periodic, mo.limits,
+                       tuple(limit_groups), tuple(sorted(bps)),
+                       tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
+                       angles, out[0] if out else None, unit,
+                       np.concatenate(xs), np.concatenate(rs), bad)
+
+
+def _reachable(mo, x) -> bool:
+    if mo.full_rotation:
+        return True
+    fwd, bwd = (mo.segments[0].limit, mo.segments[1].limit)
+    hi = fwd if fwd is not None else np.inf
+    lo = bwd if bwd is not None else -np.inf
+    if mo.rotary:
+        x = float(np.mod(x, 2 * np.pi))
+        return x <= hi or x - 2 * np.pi >= lo
+    return lo <= x <= hi
+
+
+def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
+          at=None, positions=None) -> "CheckReport":
+    """Design check of a mechanism over its whole motion (docs/check.md).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        With geometry, a frame and drivers.
+    min_transmission : float
+        Threshold (degrees): transmission angles below it (or above 180° minus it)
+        and pressure angles above 90° minus it are flagged.
+    output : str, optional
+        Link or tracer point for the velocity ratio / mechanical advantage (default:
+        the last link hinged to the frame or slider on a frame guide, other than the
+        driver's).
+    at : array_like (n_drivers,), optional
+        Driver values (rad or m from the reference) of the instant-centre position
+        (default: the reference).
+    positions : dict {driver joint: sequence}, optional
+        Driver values (rad or m) the design must reach: the ones outside the
+        reachable motion are listed (circuit defect).
+
+    Returns
+    -------
+    CheckReport
+    """
+    m = mechanism
+    if not m.drivers:
+        raise InputError(explain("mechanism", expected="at least one driver", got="none"))
+    if not 0.0 <= float(min_transmission) <= 90.0:
+        raise InputError(explain("min_transmission", expected="degrees in [0, 90]",
+                                 got=repr(min_transmission)))
+    ap = decompose(m)
+    plan = compile_plan(m, ap)
+    specs = angle_specs(ap)
+    w = watched(m)
+    positions = positions or {}
+    unknown = set(positions) - {d.joint for d in m.drivers}
+    if unknown:
+        raise InputError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))))
+    dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint))
+                for k, d in enumerate(m.drivers))
+    x0 = np.zeros(len(m.drivers)) if at is None else np.asarray(at, float).reshape(len(m.drivers))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = solve(m, x0[None, :], derivatives=True, plan=plan)
+    if not st.ok[0]:
+        raise InputError(explain("instant-centre position", expected="an assembled position",
+                                 got=str(st.status[0])))
+    ics = instant_centres(st, 0)
+    circ = group_circuits(ap, dcs)
+    loops = four_bar_loops(m, dict(ap.link_numbers))
+    rep = CheckReport(m.name, ap.formula, float(min_transmission), dcs, circ, loops, ics,
+                      tuple(float(x) for x in x0), ())
+    return CheckReport(**{**rep.__dict__, "verdict": verdict(rep)})

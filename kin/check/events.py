@@ -1,0 +1,113 @@
+"""Exact roots and extrema of quantities along a driver's motion.
+
+A *quantity* is a function ``Q(state) -> (N, q)`` of a solved state.  Roots are
+bracketed by sign changes between consecutive assembled grid values and refined by
+bisection; extrema are bracketed by grid values lower (higher) than both neighbours
+and refined by golden-section search; the ends of a limited motion count as
+candidates, evaluated at the refined limit.  All refinements stop at 1e-10 rad
+(:data:`multiloop.kin.check.sweep.XTOL`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .motion import Motion
+
+__all__ = ["Extreme", "roots", "extremes"]
+
+
+@dataclass(frozen=True)
+class Extreme:
+    """Minimum and maximum of one quantity and the driver values where they occur."""
+
+    min: float
+    at_min: float
+    max: float
+    at_max: float
+
+
+def _pick(Q, rows, cols):
+    cols = np.asarray(cols)
+    rows = np.asarray(rows)
+    return Q[rows, cols.reshape(cols.shape + (1,) * (rows.ndim - 1))]
+
+
+def roots(motion: Motion, Q, derivatives: bool = False, rel_tol: float = 1e-6) -> list[list[float]]:
+    """Inputs (rad or m from the reference) where each column of ``Q`` changes sign.
+
+    A refined root is kept only if ``|Q|`` there is below ``rel_tol`` times the
+    column's typical size (a pole, where the quantity passes through infinity, is
+    dropped).
+    """
+    out: list[list[float]] | None = None
+    for seg in motion.segments:
+        V = Q(seg.state)[: seg.n]
+        if out is None:
+            out = [[] for _ in range(V.shape[1])]
+        if V.shape[1] == 0:
+            continue
+        scale = np.nanmedian(np.abs(V), axis=0) + 1e-300
+        a, b = V[:-1], V[1:]
+        hit = np.isfinite(a) & np.isfinite(b) & ((a * b < 0) | ((a == 0) & (b != 0)))
+        i, c = np.nonzero(hit)
+        if i.size == 0:
+            continue
+        x = seg.x
+        lo, hi = seg.side.bisect(x[i], x[i + 1], lambda s, r: _pick(Q(s), r, c), derivatives)
+        mid = 0.5 * (lo + hi)
+        st, r = seg.side.at(mid, derivatives)
+        val = np.abs(_pick(Q(st), r, c))
+        for xm, cc, v in zip(mid, c, val):
+            if v <= rel_tol * scale[cc]:
+                out[cc].append(float(xm))
+    return out or []
+
+
+def _candidates(seg, V, sign):
+    """(lo, hi, col) brackets of interior grid minima of ``sign * V``."""
+    W = sign * V
+    a, b, c = W[:-2], W[1:-1], W[2:]
+    hit = np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & (b <= a) & (b <= c) & ((b < a) | (b < c))
+    i, col = np.nonzero(hit)
+    return seg.x[i], seg.x[i + 2], col
+
+
+def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | None]:
+    """Exact min and max of every column of ``Q`` over the reachable motion."""
+    best: dict[int, list] = {}
+    ncol = 0
+    for seg in motion.segments:
+        V = Q(seg.state)[: seg.n]
+        ncol = V.shape[1]
+        if ncol == 0:
+            continue
+        cand = []
+        for sign in (1.0, -1.0):
+            lo, hi, col = _candidates(seg, V, sign)
+            xs = seg.side.golden(lo, hi, lambda s, r, col=col, sign=sign: sign * _pick(Q(s), r, col),
+                                 derivatives)
+            cand += [(x, c) for x, c in zip(xs, col)]
+        xs = np.array([x for x, _ in cand] + ([seg.limit] * ncol if seg.limit is not None else []))
+        cols = np.array([c for _, c in cand] + (list(range(ncol)) if seg.limit is not None else []),
+                        int)
+        # grid values too (guards a flat or monotone column without interior extremum)
+        gx = np.repeat(seg.x[[0, -1]], ncol)
+        gc = np.tile(np.arange(ncol), 2)
+        xs, cols = np.concatenate([xs, gx]), np.concatenate([cols, gc])
+        st, r = seg.side.at(xs, derivatives)
+        vals = _pick(Q(st), r, cols)
+        for x, c, v in zip(xs, cols, vals):
+            if np.isfinite(v):
+                best.setdefault(int(c), []).append((float(v), float(x)))
+    out: list[Extreme | None] = []
+    for c in range(ncol):
+        items = best.get(c)
+        if not items:
+            out.append(None)
+            continue
+        vmin, xmin = min(items)
+        vmax, xmax = max(items)
+        out.append(Extreme(vmin, xmin, vmax, xmax))
+    return out

@@ -1,0 +1,111 @@
+"""Range of motion of one driver, and the sampled motion every other check refines on.
+
+The driver is moved from the reference in both directions (the others held at the
+reference) on a grid of 0.5° (R) or 1/400 of the mechanism's size (P).  A limit is the
+first input where the path cannot be assembled; it is bracketed by the last assembled
+and the first failed grid value and refined by bisection on "assembled" to 1e-10 rad
+(at a limit some group is at a toggle: its Jacobian determinant tends to zero, which
+the report shows).  A single failed grid value with assembled neighbours on a
+continuous path is a singular crossing (a change point), not a limit.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.errors import AssemblyError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .sweep import Side, mechanism_size
+
+__all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
+
+R_STEPS = 720            # grid steps per turn (0.5°)
+P_STEPS = 400            # grid steps over ± the mechanism's size
+
+
+@dataclass(frozen=True)
+class Segment:
+    """The assembled part of one side: ``side.grid[:n]`` with its solved ``state``
+    (derivatives included); ``limit`` is the refined last assembled input or None."""
+
+    side: Side
+    n: int
+    state: object
+    limit: float | None
+    limit_bracket: tuple[float, float] | None
+    singular: tuple[float, ...]
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.side.grid[: self.n]
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Motion of driver ``k`` from the reference: one segment (full rotation) or two."""
+
+    mechanism: Mechanism
+    k: int
+    rotary: bool
+    full_rotation: bool
+    segments: tuple[Segment, ...]
+    periodic: bool
+
+    @property
+    def limits(self) -> tuple[float, ...]:
+        """Refined limits (rad or m, signed from the reference): (forward, backward)."""
+        return tuple(s.limit for s in self.segments if s.limit is not None)
+
+
+def _first_stop(st, x) -> tuple[int | None, tuple[float, ...]]:
+    """Index of the first failure that is not an isolated singular crossing."""
+    ok = st.ok.copy()
+    singular = []
+    bad = np.flatnonzero(~ok)
+    for f in bad:
+        if f == 0:
+            return 0, ()
+        isolated = f + 1 < ok.size and ok[f + 1] and ok[f - 1]
+        if isolated:
+            P0, P1 = st.positions[f - 1], st.positions[f + 1]
+            step = np.nanmax(np.abs(st.positions[min(f + 2, ok.size - 1)] - P1)) if f + 2 < ok.size else np.inf
+            if np.nanmax(np.abs(P1 - P0)) <= 4.0 * step:
+                singular.append(float(x[f]))
+                continue
+        return int(f), tuple(singular)
+    return None, tuple(singular)
+
+
+def _segment(side: Side) -> Segment:
+    st = side.solve(side.grid, derivatives=True)
+    f, singular = _first_stop(st, side.grid)
+    if f == 0:
+        raise AssemblyError(explain("reference configuration", expected="an assembled mechanism",
+                                    got=str(st.status[0])))
+    if f is None:
+        return Segment(side, side.grid.size, st, None, None, singular)
+    lo, hi = side.bisect([side.grid[f - 1]], [side.grid[f]],
+                         lambda s, r: np.where(s.ok[r], 1.0, -1.0))
+    st_ok = side.solve(side.grid[:f], derivatives=True)
+    return Segment(side, f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])), singular)
+
+
+def driver_motion(m: Mechanism, plan, k: int) -> Motion:
+    """Sample and bound the motion of driver ``k`` (see the module docstring)."""
+    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    if rotary:
+        h = 2.0 * np.pi / R_STEPS
+        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h)   # to 361°
+    else:
+        fwd = Side.make(m, plan, k, +1, P_STEPS + 1, mechanism_size(m))
+    seg_f = _segment(fwd)
+    if rotary and seg_f.limit is None:
+        st = seg_f.state
+        i360 = R_STEPS
+        periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
+        return Motion(m, k, True, True, (seg_f,), periodic)
+    bwd = Side(m, plan, k, -1, -fwd.grid)
+    seg_b = _segment(bwd)
+    return Motion(m, k, rotary, False, (seg_f, seg_b), False)

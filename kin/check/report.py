@@ -1,0 +1,167 @@
+"""The frozen result of a design check, its JSON form and its text form."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .events import Extreme
+
+__all__ = ["AngleResult", "DriverCheck", "GroupCircuit", "CheckReport"]
+
+
+def _deg(x: float, rotary: bool) -> float:
+    """Driver value for the report: degrees in [0, 360) for R, metres for P."""
+    if not rotary:
+        return float(x)
+    d = float(np.degrees(x)) % 360.0
+    return 0.0 if d >= 360.0 - 1e-9 else d
+
+
+@dataclass(frozen=True)
+class AngleResult:
+    """Extremes of one monitored angle (degrees) over a driver's reachable motion."""
+
+    joint: str
+    quantity: str           # "transmission", "pressure" or "triad"
+    group: str
+    extreme: Extreme | None
+
+    def flagged(self, threshold: float) -> bool:
+        e = self.extreme
+        if e is None:
+            return False
+        if self.quantity == "pressure":
+            return e.max > 90.0 - threshold
+        return e.min < threshold or e.max > 180.0 - threshold
+
+
+@dataclass(frozen=True)
+class GroupCircuit:
+    """Assembly modes of one group at the reference and how many continuous motion reaches."""
+
+    group: str
+    kind: str
+    modes: int | None
+    reachable: int | None
+    note: str
+
+    def as_dict(self) -> dict:
+        return {"group": self.group, "kind": self.kind, "modes": self.modes,
+                "reachable": self.reachable, "note": self.note}
+
+
+@dataclass(frozen=True)
+class DriverCheck:
+    """Everything computed while one driver moves (values in rad or m from the reference)."""
+
+    joint: str
+    rotary: bool
+    full_rotation: bool
+    periodic: bool
+    limits: tuple[float, ...]                       # signed, forward then backward
+    limit_groups: tuple[str, ...]
+    branch_points: tuple[tuple[float, str], ...]
+    dead_centres: tuple[tuple[str, tuple[float, ...]], ...]
+    angles: tuple[AngleResult, ...]
+    output: str | None
+    output_unit: str
+    ratio_x: np.ndarray = field(repr=False)
+    ratio: np.ndarray = field(repr=False)
+    unreachable: tuple[float, ...] = ()
+
+    @property
+    def unit(self) -> str:
+        return "deg" if self.rotary else "m"
+
+    def value(self, x: float) -> float:
+        return _deg(x, self.rotary)
+
+    def as_dict(self) -> dict:
+        v = self.value
+        d = {"kind": "R" if self.rotary else "P", "unit": self.unit,
+             "full_rotation": self.full_rotation,
+             "limits": sorted(v(x) for x in self.limits),
+             "range": ([float(np.degrees(min(self.limits, default=0.0))),
+                        float(np.degrees(max(self.limits, default=0.0)))] if self.rotary
+                       else [min(self.limits, default=None), max(self.limits, default=None)])
+             if self.limits else None,
+             "limit_groups": list(self.limit_groups),
+             "periodic": self.periodic,
+             "branch_points": [{"at": v(x), "group": g} for x, g in self.branch_points],
+             "dead_centres": {k: sorted(v(x) for x in xs) for k, xs in self.dead_centres},
+             "angles": {a.joint: _angle_dict(a, v) for a in self.angles},
+             "unreachable_positions": [v(x) for x in self.unreachable]}
+        if self.output is not None:
+            r = self.ratio[np.isfinite(self.ratio)]
+            d["mechanical_advantage"] = {
+                "output": self.output, "velocity_ratio_unit": self.output_unit,
+                "input": [v(x) for x in self.ratio_x],
+                "velocity_ratio": [None if not np.isfinite(y) else float(y) for y in self.ratio],
+                "max_abs_velocity_ratio": float(np.max(np.abs(r))) if r.size else None}
+        return d
+
+
+def _angle_dict(a: AngleResult, v) -> dict:
+    e = a.extreme
+    if e is None:
+        return {"quantity": a.quantity, "group": a.group, "min": None, "max": None}
+    return {"quantity": a.quantity, "group": a.group, "min": e.min, "at_min": v(e.at_min),
+            "max": e.max, "at_max": v(e.at_max)}
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """Result of :func:`multiloop.kin.check.check` (see docs/check.md for every key)."""
+
+    mechanism: str
+    formula: str
+    min_transmission: float
+    drivers: tuple[DriverCheck, ...]
+    circuits: tuple[GroupCircuit, ...]
+    grashof: tuple
+    instant_centres: tuple
+    instant_centres_at: tuple[float, ...]
+    verdict: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        return not self.verdict
+
+    def as_dict(self) -> dict:
+        """JSON-ready dict with the documented keys."""
+        first = self.drivers[0] if self.drivers else None
+        trans, press, triad, dead = {}, {}, {}, {}
+        table = {"transmission": trans, "pressure": press, "triad": triad}
+        for dc in self.drivers:
+            for a in dc.angles:
+                if a.extreme is None:
+                    continue
+                tgt = table[a.quantity]
+                cur = tgt.get(a.joint)
+                e = a.extreme
+                if cur is None or e.min < cur["min"] or e.max > cur["max"]:
+                    tgt[a.joint] = {"min": min(e.min, cur["min"]) if cur else e.min,
+                                    "max": max(e.max, cur["max"]) if cur else e.max,
+                                    "quantity": a.quantity, "driver": dc.joint}
+        if first is not None:
+            dead = {k: sorted(first.value(x) for x in xs) for k, xs in first.dead_centres}
+        return {
+            "mechanism": self.mechanism, "formula": self.formula,
+            "min_transmission": self.min_transmission,
+            "drivers": {dc.joint: dc.as_dict() for dc in self.drivers},
+            "transmission": {k: {"min": v["min"], "max": v["max"]} for k, v in trans.items()},
+            "pressure_angles": press,
+            "triad_transmission": triad,
+            "dead_centres": dead,
+            "circuits": [c.as_dict() for c in self.circuits],
+            "branch_points": [{"driver": dc.joint, "at": dc.value(x), "group": g}
+                              for dc in self.drivers for x, g in dc.branch_points],
+            "grashof": [g.as_dict() for g in self.grashof],
+            "instant_centres": {"at": list(self.instant_centres_at),
+                                "centres": [c.as_dict() for c in self.instant_centres]},
+            "mechanical_advantage": {dc.joint: dc.as_dict().get("mechanical_advantage")
+                                     for dc in self.drivers},
+            "verdict": list(self.verdict),
+            "ok": self.ok,
+        }

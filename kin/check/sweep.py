@@ -1,0 +1,166 @@
+"""One driver moved from the reference along its assembly branch, the others held.
+
+:class:`Side` is the motion of driver ``k`` in one direction (``+1`` or ``-1``) from
+the reference configuration.  Every evaluation solves one continuous path from the
+reference (the sampled grid up to the furthest point asked, with the asked points
+inserted in order), so the tracked branch is the one continuous motion reaches.
+
+The refinements are vectorised over all brackets of a side: one call of
+:func:`multiloop.kin.solve.solve` per iteration evaluates every bracket at 32
+interior points (a zoom search: bisection's sign test, or the smallest sample for an
+extremum, applied to 32 points at once, so a bracket shrinks 16–33 times per solve).
+The sign test needs no continuity, so it also refines a failure boundary.  Both stop
+when the bracket is below ``XTOL`` (1e-10 rad, or 1e-10 of the mechanism's size for
+a P driver).
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.kin.solve import solve
+from multiloop.topo.model import JointKind, Mechanism
+
+__all__ = ["Side", "XTOL", "mechanism_size"]
+
+#: bracket width at which a refinement stops (rad, or fraction of the size for P drivers)
+XTOL = 1e-10
+_GOLD = 0.5 * (np.sqrt(5.0) - 1.0)
+#: every 4th grid value (2° or 1 % of the size): the solver's own lead-in step
+_STRIDE = 4
+#: samples per bracket and iteration of the zoom searches
+_M = 32
+
+
+def mechanism_size(m: Mechanism) -> float:
+    """Largest extent of the reference joint positions (m)."""
+    xy = np.array([j.at for j in m.joints if j.at is not None], float)
+    return float(max(np.max(np.ptp(xy, axis=0)), 1e-12)) if len(xy) > 1 else 1.0
+
+
+@dataclass(frozen=True)
+class Side:
+    """Driver ``k`` moved in direction ``sign`` from the reference, up to ``span``.
+
+    Attributes
+    ----------
+    mechanism, plan : the mechanism and a compiled solve plan (reused by every call)
+    k : int
+        Driver index.
+    sign : int
+        +1 (increasing input) or -1.
+    grid : ndarray
+        Sampled input values ``0, sign·h, 2·sign·h, …`` (rad or m).
+    """
+
+    mechanism: Mechanism
+    plan: object
+    k: int
+    sign: int
+    grid: np.ndarray
+
+    @classmethod
+    def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float) -> "Side":
+        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n))
+
+    @property
+    def is_rotary(self) -> bool:
+        return self.mechanism.joint(self.mechanism.drivers[self.k].joint).kind is JointKind.R
+
+    @property
+    def xtol(self) -> float:
+        return XTOL if self.is_rotary else XTOL * mechanism_size(self.mechanism)
+
+    def inputs(self, x) -> np.ndarray:
+        x = np.asarray(x, float).reshape(-1)
+        X = np.zeros((x.size, len(self.mechanism.drivers)))
+        X[:, self.k] = x
+        return X
+
+    def solve(self, x, derivatives: bool = False):
+        """The solver's state along ``x`` (a path that must start at the reference)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return solve(self.mechanism, self.inputs(x), derivatives=derivatives, plan=self.plan)
+
+    def at(self, xs, derivatives: bool = False):
+        """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.
+
+        Returns ``(state, rows)`` with ``state`` solved along the path and ``rows[i]``
+        the row of ``xs[i]``.
+        """
+        xs = np.asarray(xs, float).reshape(-1)
+        far = np.max(np.abs(xs)) if xs.size else 0.0
+        g = self.grid[::_STRIDE]
+        g = g[np.abs(g) < far]
+        path = np.concatenate([g, xs])
+        order = np.argsort(np.abs(path), kind="stable")
+        st = self.solve(path[order], derivatives)
+        where = np.empty_like(order)
+        where[order] = np.arange(order.size)
+        return st, where[g.size:]
+
+    def _sample(self, lo, hi, value, derivatives):
+        """``value`` at ``_M`` equispaced interior points of every bracket: (K, _M)."""
+        t = np.arange(1, _M + 1) / (_M + 1)
+        x = lo[:, None] + (hi - lo)[:, None] * t
+        st, r = self.at(x.ravel(), derivatives)
+        return x, value(st, r.reshape(x.shape))
+
+    def bisect(self, lo, hi, value, derivatives: bool = False):
+        """Roots of sign changes, one per bracket, vectorised (zoom search).
+
+        Each iteration samples ``_M`` interior points of every bracket in one solve
+        and keeps the first sub-interval where the sign changes, so the bracket
+        shrinks ``_M + 1`` times per solve (the sign test of bisection, applied to
+        ``_M`` points at once).
+
+        Parameters
+        ----------
+        lo, hi : array_like (K,)
+            Bracket ends (input values) with ``value`` of opposite sign.
+        value : callable (state, rows) -> array of the shape of ``rows``
+            The quantity of bracket i at ``state`` rows ``rows[i]``; NaN counts as
+            the sign of ``hi`` (the failing side of a limit).
+
+        Returns
+        -------
+        (lo, hi) : arrays (K,), the final brackets (width below :attr:`xtol`).
+        """
+        lo = np.array(lo, float)
+        hi = np.array(hi, float)
+        if lo.size == 0:
+            return lo, hi
+        st, r = self.at(lo, derivatives)
+        s_lo = np.sign(value(st, r))
+        rows = np.arange(lo.size)
+        while np.max(np.abs(hi - lo)) > self.xtol:
+            x, v = self._sample(lo, hi, value, derivatives)
+            same = (np.sign(v) == s_lo[:, None]) & np.isfinite(v)
+            # first sample on the other side (or none: the root is in the last sub-interval)
+            first = np.where(~same.all(axis=1), np.argmin(same, axis=1), _M)
+            new_lo = np.where(first > 0, x[rows, np.maximum(first - 1, 0)], lo)
+            hi = np.where(first < _M, x[rows, np.minimum(first, _M - 1)], hi)
+            lo = new_lo
+        return lo, hi
+
+    def golden(self, a, b, value, derivatives: bool = False):
+        """Minimum of ``value`` in each bracket ``[a_i, b_i]`` (zoom search).
+
+        Each iteration samples ``_M`` interior points of every bracket in one solve
+        and keeps the two sub-intervals around the smallest sample.  ``value`` as in
+        :meth:`bisect`.  Returns the abscissae (K,).
+        """
+        a = np.array(a, float)
+        b = np.array(b, float)
+        if a.size == 0:
+            return a
+        rows = np.arange(a.size)
+        while np.max(np.abs(b - a)) > self.xtol:
+            x, v = self._sample(a, b, value, derivatives)
+            i = np.argmin(np.where(np.isfinite(v), v, np.inf), axis=1)
+            xl = np.concatenate([a[:, None], x, b[:, None]], axis=1)
+            a, b = xl[rows, i], xl[rows, i + 2]
+        return 0.5 * (a + b)

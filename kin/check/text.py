@@ -1,0 +1,66 @@
+"""The readable text form of a :class:`CheckReport`."""
+from __future__ import annotations
+
+from .verdict import fmt_input
+
+__all__ = ["format_report"]
+
+
+def _driver(dc, thr: float) -> list[str]:
+    L = [f"driver {dc.joint} ({'R, degrees' if dc.rotary else 'P, metres'} from the reference)"]
+    if dc.full_rotation:
+        L.append("  range of motion: full rotation" + ("" if dc.periodic else
+                                                     " (not periodic in one turn)"))
+    elif dc.limits:
+        L.append("  range of motion: limited; stops at " + ", ".join(fmt_input(dc, x) for x in dc.limits))
+        for s in dc.limit_groups:
+            L.append(f"    beyond the limit: {s}")
+    else:
+        L.append("  range of motion: no limit within the swept stroke")
+    for x, g in dc.branch_points:
+        L.append(f"  branch point: {g} at {fmt_input(dc, x)}")
+    for lk, xs in dc.dead_centres:
+        where = ", ".join(fmt_input(dc, x) for x in xs) or "none (no velocity reversal)"
+        L.append(f"  dead centres of {lk}: {where}")
+    for a in dc.angles:
+        e = a.extreme
+        if e is None:
+            continue
+        flag = "   <-- flagged" if a.flagged(thr) else ""
+        L.append(f"  {a.quantity} angle at {a.joint}: min {e.min:.3f}° at {fmt_input(dc, e.at_min)}, "
+                 f"max {e.max:.3f}° at {fmt_input(dc, e.at_max)}{flag}")
+    if dc.output is not None:
+        import numpy as np
+        r = np.abs(dc.ratio[np.isfinite(dc.ratio)])
+        if r.size:
+            L.append(f"  velocity ratio {dc.output}/{dc.joint} ({dc.output_unit}): |max| {r.max():.4g}, "
+                     f"|min| {r.min():.4g}; mechanical advantage = 1/ratio")
+    return L
+
+
+def format_report(rep) -> str:
+    """Text report: header, each driver, circuits, Grashof loops, verdict."""
+    L = [f"design check of {rep.mechanism}: {rep.formula}",
+         f"threshold: transmission angle {rep.min_transmission:g}° (pressure angle {90 - rep.min_transmission:g}°)", ""]
+    for dc in rep.drivers:
+        L += _driver(dc, rep.min_transmission) + [""]
+    L.append("assembly modes at the reference (modes / reachable by continuous motion):")
+    for c in rep.circuits:
+        L.append(f"  {c.group}: {c.modes if c.modes is not None else '?'} / "
+                 f"{c.reachable if c.reachable is not None else '?'}: {c.note}")
+    if rep.grashof:
+        L.append("four-bar loops (Grashof):")
+        for g in rep.grashof:
+            ls = ", ".join(f"{lk} {x * 1000:.4g} mm" for lk, x in zip(g.links, g.lengths))
+            L.append(f"  {'-'.join(g.links)}: {g.cls} (fixed {g.fixed}; {ls})")
+    fin = sum(c.point is not None for c in rep.instant_centres)
+    L.append(f"instant centres: {len(rep.instant_centres)} pairs at input "
+             f"{[round(x, 6) for x in rep.instant_centres_at]} ({fin} finite, "
+             f"{len(rep.instant_centres) - fin} at infinity)")
+    L.append("")
+    if rep.verdict:
+        L.append(f"verdict: {len(rep.verdict)} problem(s)")
+        L += [f"  - {v}" for v in rep.verdict]
+    else:
+        L.append("verdict: no problem found")
+    return "\n".join(L) + "\n"

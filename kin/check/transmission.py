@@ -1,0 +1,134 @@
+"""Transmission and pressure angles of every group, as functions of a solved state.
+
+Definitions (all in degrees):
+
+* **RRR dyad** (outer A, inner B, outer C): the transmission angle μ is the angle at
+  B between BA and BC, in [0°, 180°]; 90° is ideal, 0° and 180° are the toggle
+  (the dyad's Jacobian determinant l₂l₃ sin(φ₂ − φ₃) vanishes there; Vasechkin et
+  al. 2017, kind 1).
+* **RRP dyad** (rod A–B, slider at B on a guide): the pressure angle α is the angle
+  between the rod line and the guide, in [0°, 90°]; the transmission angle is
+  90° − α (α = 90° is the RRP toggle, det = l cos(φ₂ − φ₃) = 0).
+* **RPR dyad** (block pivoted at A slides on a guide link pivoted at C): the force of
+  the block on the guide is normal to the guide and the point A of the guide link
+  moves normal to CA, so α is the angle between the guide and the line CA, in
+  [0°, 90°] (α = 90° is the RPR toggle s = 0).
+* **Triad** (binary links Aᵢ–Pᵢ on the ternary link): at each inner joint Pᵢ, μᵢ is
+  the angle between the binary link PᵢAᵢ and the line from Pᵢ to the intersection Iⱼₖ
+  of the other two binary-link lines (the instant centre of the ternary link when leg
+  i is removed).  μᵢ is 0° or 180° exactly when the three lines are concurrent or
+  parallel, the triad's singularity (Hunt 1983); for a dyad the same construction
+  gives the classical angle.
+
+PRP and RPP dyads have no reach limit; their only singularity (parallel guides) is a
+design error rejected when the plan is built, so no angle is reported for them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.assur import AssurPlan
+
+__all__ = ["AngleSpec", "angle_specs", "angle_values"]
+
+
+@dataclass(frozen=True)
+class AngleSpec:
+    """One monitored angle: ``joint`` (where it is reported), ``quantity``
+    (``"transmission"``, ``"pressure"`` or ``"triad"``), the group label and the
+    joint/link names the formula needs (``points``: three joint names; ``guide``:
+    (P joint, guide link) for sliders; for a triad ``points`` = (Aᵢ, Pᵢ, Aⱼ, Pⱼ, Aₖ, Pₖ))."""
+
+    joint: str
+    quantity: str
+    group: str
+    kind: str
+    points: tuple[str, ...]
+    guide: tuple[str, str] | None = None
+
+    @property
+    def ideal(self) -> float:
+        return 0.0 if self.quantity == "pressure" else 90.0
+
+
+def angle_specs(plan: AssurPlan) -> tuple[AngleSpec, ...]:
+    """The monitored angles of every group of ``plan``, in solving order."""
+    m = plan.mechanism
+    out: list[AngleSpec] = []
+    for g in plan.groups:
+        lab = g.describe()
+        if g.kind == "RRR":
+            o1, inner, o2, _, _ = g.layout
+            out.append(AngleSpec(inner, "transmission", lab, g.kind, (o1, inner, o2)))
+        elif g.kind == "RRP":
+            o1, inner, o2, _, _ = g.layout
+            out.append(AngleSpec(inner, "pressure", lab, g.kind, (o1, inner),
+                                 (o2, m.joint(o2).links[0])))
+        elif g.kind == "RPR":
+            o1, inner, o2, l1, _ = g.layout
+            guide = m.joint(inner).links[0]
+            gx, bx = (o1, o2) if guide == l1 else (o2, o1)
+            out.append(AngleSpec(inner, "pressure", lab, g.kind, (gx, bx), (inner, guide)))
+        elif g.kind == "triad":
+            _, _, outs, inns = g.layout
+            for i in range(3):
+                j, k = (i + 1) % 3, (i + 2) % 3
+                out.append(AngleSpec(inns[i], "triad", lab, g.kind,
+                                     (outs[i], inns[i], outs[j], inns[j], outs[k], inns[k])))
+    return tuple(out)
+
+
+def _angle(u, w):
+    """Unsigned angle between vectors (…, 2), degrees in [0, 180]."""
+    cr = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
+    dt = u[..., 0] * w[..., 0] + u[..., 1] * w[..., 1]
+    return np.degrees(np.abs(np.arctan2(cr, dt)))
+
+
+def _line_angle(u, w):
+    """Angle between two lines (…, 2), degrees in [0, 90]."""
+    a = _angle(u, w)
+    return np.minimum(a, 180.0 - a)
+
+
+def _guide_dir(state, spec: AngleSpec):
+    m = state.mechanism
+    pj, guide = spec.guide
+    ax = np.asarray(m.joint(pj).axis, float)
+    th = state.angles[:, state.link_index(guide)]
+    c, s = np.cos(th), np.sin(th)
+    return np.stack([c * ax[0] - s * ax[1], s * ax[0] + c * ax[1]], axis=-1)
+
+
+def _triad(P, names, state):
+    Ai, Pi, Aj, Pj, Ak, Pk = (P[:, state.joint_index(n)] for n in names)
+    # homogeneous lines through (A, P): l = (A,1) × (P,1); intersection I = lj × lk
+    def line(A, Q):
+        return np.cross(np.concatenate([A, np.ones_like(A[:, :1])], 1),
+                        np.concatenate([Q, np.ones_like(Q[:, :1])], 1))
+    inter = np.cross(line(Aj, Pj), line(Ak, Pk))
+    w = inter[:, 2:3]
+    scale = np.maximum(np.abs(inter[:, :2]).max(axis=1, keepdims=True), 1e-300)
+    finite = np.abs(w) > 1e-12 * scale
+    # at infinity the line from Pi to I is parallel to the (parallel) legs j, k
+    to_i = np.where(finite, inter[:, :2] / np.where(finite, w, 1.0) - Pi, Pj - Aj)
+    return _angle(Ai - Pi, to_i)
+
+
+def angle_values(state, specs) -> np.ndarray:
+    """``(N, len(specs))`` angles in degrees (NaN where the position failed)."""
+    P = state.positions
+    out = np.full((P.shape[0], len(specs)), np.nan)
+    for c, sp in enumerate(specs):
+        if sp.quantity == "transmission":
+            A, B, C = (P[:, state.joint_index(n)] for n in sp.points)
+            out[:, c] = _angle(A - B, C - B)
+        elif sp.quantity == "pressure":
+            X, Y = (P[:, state.joint_index(n)] for n in sp.points)
+            u = _guide_dir(state, sp)
+            out[:, c] = _line_angle(Y - X, u)
+        else:
+            out[:, c] = _triad(P, sp.points, state)
+    return out

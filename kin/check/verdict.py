@@ -1,0 +1,62 @@
+"""The verdict: the problems a check found, each with its value and where."""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["verdict", "fmt_input"]
+
+
+def fmt_input(dc, x: float) -> str:
+    """Driver value as text: ``O2 = 123.456789°`` or ``S = 0.012 m``."""
+    return f"{dc.joint} = {dc.value(x):.6f}°" if dc.rotary else f"{dc.joint} = {x:.6g} m"
+
+
+def _motion(dc) -> list[str]:
+    out = []
+    if dc.rotary and not dc.full_rotation and dc.limits:
+        lim = " and ".join(fmt_input(dc, x) for x in dc.limits)
+        out.append(f"driver {dc.joint} does not turn fully: motion stops at {lim} "
+                   f"(range {np.degrees(min(dc.limits)):.6f}° … {np.degrees(max(dc.limits)):+.6f}° "
+                   f"from the reference)")
+    elif not dc.rotary and dc.limits:
+        out.append(f"driver {dc.joint} stroke is limited: motion stops at "
+                   + " and ".join(f"{x:+.6g} m" for x in dc.limits) + " from the reference")
+    if dc.rotary and dc.full_rotation and not dc.periodic:
+        out.append(f"driver {dc.joint}: after one full turn the mechanism is not back in the "
+                   "reference configuration (a group changed assembly mode)")
+    for x, g in dc.branch_points:
+        out.append(f"branch point (change point) of {g} at {fmt_input(dc, x)}: the assembly "
+                   "is ambiguous there")
+    for x in dc.unreachable:
+        out.append(f"circuit defect: {fmt_input(dc, x)} cannot be reached from the reference "
+                   "without disassembly")
+    return out
+
+
+def _angles(dc, thr: float) -> list[str]:
+    out = []
+    for a in dc.angles:
+        e = a.extreme
+        if e is None or not a.flagged(thr):
+            continue
+        if a.quantity == "pressure":
+            out.append(f"pressure angle at {a.joint} reaches {e.max:.3f}° at {fmt_input(dc, e.at_max)} "
+                       f"(above {90 - thr:g}°) in {a.group}")
+            continue
+        name = "transmission angle" if a.quantity == "transmission" else "triad transmission angle"
+        if e.min < thr:
+            out.append(f"{name} at {a.joint} falls to {e.min:.3f}° at {fmt_input(dc, e.at_min)} "
+                       f"(below {thr:g}°) in {a.group}")
+        if e.max > 180.0 - thr:
+            out.append(f"{name} at {a.joint} rises to {e.max:.3f}° at {fmt_input(dc, e.at_max)} "
+                       f"(above {180 - thr:g}°) in {a.group}")
+    return out
+
+
+def verdict(rep) -> tuple[str, ...]:
+    """Problems of a :class:`CheckReport`, one line each (empty: no problem found)."""
+    out: list[str] = []
+    for dc in rep.drivers:
+        out += _motion(dc)
+        out += _angles(dc, rep.min_transmission)
+    return tuple(out)

@@ -1,0 +1,113 @@
+"""``multiloop check FILE [--json] [--plot P] [--html DIR] [--min-transmission DEG]
+[--output LINK] [--at DEG] [--positions DEG,…]``: design check over the whole motion.
+
+Text report by default; ``--json`` prints :meth:`CheckReport.as_dict` (keys in
+docs/check.md: ``drivers``, ``transmission``, ``dead_centres``, ``pressure_angles``,
+``triad_transmission``, ``circuits``, ``branch_points``, ``grashof``,
+``instant_centres``, ``mechanical_advantage``, ``verdict``, ``ok``).  Driver values
+are degrees for R drivers (in [0, 360) from the reference) and metres for P drivers.
+Files are written only after the whole check and every figure succeeded.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.io import load
+from multiloop.topo.model import JointKind
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(p) -> None:
+    p.add_argument("file", help="mechanism with geometry, a frame and drivers (.toml or .json)")
+    p.add_argument("--json", action="store_true", help="print the stable JSON (docs/check.md)")
+    p.add_argument("--plot", metavar="P.png", default=None,
+                   help="one figure: mechanism with coupler curves, transmission and MA "
+                        "against input, instant centres")
+    p.add_argument("--html", metavar="DIR", default=None, help="one-page report with its figures")
+    p.add_argument("--min-transmission", type=float, default=40.0, metavar="DEG",
+                   help="flag transmission angles below DEG (default 40)")
+    p.add_argument("--output", metavar="LINK", default=None,
+                   help="output link or tracer point of the velocity ratio / mechanical advantage")
+    p.add_argument("--at", type=float, default=None, metavar="DEG",
+                   help="driver value of the instant-centre figure (deg or m; default the reference)")
+    p.add_argument("--positions", default=None, metavar="V,V,…",
+                   help="driver values the design must reach (deg or m, first driver): "
+                        "unreachable ones are flagged (circuit defect)")
+
+
+def _to_api(m, v: float, k: int = 0) -> float:
+    return math.radians(v) if m.joint(m.drivers[k].joint).kind is JointKind.R else v
+
+
+def _finite(v: float, what: str) -> float:
+    if not math.isfinite(v) or abs(v) > 1e9:
+        raise InputError(explain(what, expected="a finite number of magnitude ≤ 1e9", got=repr(v)))
+    return v
+
+
+def _positions(m, text):
+    if text is None:
+        return None
+    try:
+        vals = [float(s) for s in text.split(",") if s.strip()]
+    except ValueError:
+        raise InputError(explain("--positions", expected="comma-separated numbers", got=repr(text))) from None
+    if not m.drivers:
+        return None
+    return {m.drivers[0].joint: [_to_api(m, _finite(v, "--positions")) for v in vals]}
+
+
+def run(args) -> int:
+    from multiloop.kin.check import check, format_report
+
+    m = load(args.file)
+    _finite(args.min_transmission, "--min-transmission")
+    outs = Outputs("multiloop check")
+    if args.plot:
+        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    if args.html:
+        outs.directory(args.html, "--html")
+    at = None
+    if args.at is not None and m.drivers:
+        at = np.zeros(len(m.drivers))
+        at[0] = _to_api(m, _finite(args.at, "--at"))
+    rep = check(m, min_transmission=args.min_transmission, output=args.output, at=at,
+                positions=_positions(m, args.positions))
+    if args.plot or args.html:
+        from multiloop.kin.check.figures import html_page, overview_figure, report_figures
+        with quiet_warnings("multiloop check"):
+            if args.plot:
+                p = Path(args.plot)
+                outs.add_figure(p, overview_figure(m, rep), "--plot", **({} if p.suffix else {"format": "png"}))
+            if args.html:
+                d = Path(args.html)
+                figs = report_figures(m, rep)
+                for name, fig in figs.items():
+                    outs.add_figure(d / name, fig, "--html")
+                outs.add(d / "index.html", html_page(rep, list(figs)), "--html")
+    if args.json:
+        print(json.dumps(_clean(rep.as_dict()), indent=1, allow_nan=False))
+    else:
+        print(format_report(rep), end="")
+    outs.commit()
+    return 0
+
+
+def _clean(o):
+    """NaN and infinities become ``null``; numpy scalars become Python numbers."""
+    if isinstance(o, dict):
+        return {k: _clean(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_clean(v) for v in o]
+    if isinstance(o, (np.floating, float)):
+        return float(o) if math.isfinite(o) else None
+    if isinstance(o, np.integer):
+        return int(o)
+    return o

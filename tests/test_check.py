@@ -1,0 +1,307 @@
+"""Tests of ``multiloop check``: every number against a second route.
+
+Closed forms (Norton R. L., Design of Machinery, 5th ed., 2012, ch. 4: four-bar
+toggle positions, transmission angle; offset crank-slider dead centres), Kennedy's
+theorem (Kennedy 1886), Grashof's criterion (Grashof 1883) against the sweep, and fine
+sweeps of the solver for the multi-loop mechanisms.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, strategies as st
+
+from multiloop.cli import main
+from multiloop.kin.check import check
+from multiloop.kin.check.grashof import grashof_class
+from multiloop.kin.check.instant_centres import instant_centres
+from multiloop.kin.check.transmission import angle_specs, angle_values
+from multiloop.kin.solve import solve
+from multiloop.topo.assur import decompose
+from multiloop.topo.io import load
+from multiloop.topo.model import MechanismBuilder
+
+CAT = Path(__file__).resolve().parents[1] / "catalogue" / "mechanisms"
+
+
+def _ang(x):
+    return float(np.degrees(x)) % 360.0
+
+
+def _close_mod360(a, b, tol):
+    d = (a - b + 180.0) % 360.0 - 180.0
+    return abs(d) <= tol
+
+
+def four_bar(a, b, c, d, theta0, sign=1.0):
+    """Crank a (O2 at the origin, at angle theta0), coupler b, rocker c, ground d along x."""
+    A = np.array([a * math.cos(theta0), a * math.sin(theta0)])
+    O4 = np.array([d, 0.0])
+    AC = O4 - A
+    L = float(np.hypot(*AC))
+    x = (b * b + L * L - c * c) / (2 * L)
+    y2 = b * b - x * x
+    if y2 <= 0:
+        return None
+    u = AC / L
+    n = np.array([-u[1], u[0]])
+    B = A + x * u + sign * math.sqrt(y2) * n
+    bld = MechanismBuilder("fb")
+    bld.add_link("frame", frame=True)
+    for lk in ("crank", "coupler", "rocker"):
+        bld.add_link(lk)
+    bld.add_joint("O2", "R", ("frame", "crank"), at=(0.0, 0.0))
+    bld.add_joint("A", "R", ("crank", "coupler"), at=tuple(A))
+    bld.add_joint("B", "R", ("coupler", "rocker"), at=tuple(B))
+    bld.add_joint("O4", "R", ("rocker", "frame"), at=(d, 0.0))
+    bld.add_driver("O2")
+    return bld.build()
+
+
+def crank_slider(a, b, e, theta0):
+    A = np.array([a * math.cos(theta0), a * math.sin(theta0)])
+    Bx = A[0] + math.sqrt(b * b - (A[1] - e) ** 2)
+    bld = MechanismBuilder("cs")
+    bld.add_link("frame", frame=True)
+    for lk in ("crank", "rod", "piston"):
+        bld.add_link(lk)
+    bld.add_joint("O", "R", ("frame", "crank"), at=(0.0, 0.0))
+    bld.add_joint("A", "R", ("crank", "rod"), at=tuple(A))
+    bld.add_joint("B", "R", ("rod", "piston"), at=(Bx, e))
+    bld.add_joint("S", "P", ("frame", "piston"), at=(Bx, e), axis=(1.0, 0.0))
+    bld.add_driver("O")
+    return bld.build()
+
+
+lengths = st.floats(0.2, 2.0)
+
+
+def _margin(L):
+    s = sorted(L)
+    return abs(s[0] + s[3] - s[1] - s[2]) / s[3]
+
+
+# ---------------------------------------------------------------- four-bars (hypothesis)
+@given(a=lengths, b=lengths, c=lengths, d=lengths, t0=st.floats(0.0, 2 * math.pi))
+def test_four_bar_grashof_class_matches_sweep(a, b, c, d, t0):
+    assume(_margin((a, b, c, d)) > 0.05)
+    m = four_bar(a, b, c, d, t0)
+    assume(m is not None)
+    rep = check(m)
+    dc = rep.drivers[0]
+    cls = grashof_class((d, a, b, c), fixed=0)
+    assert [g.cls for g in rep.grashof] == [cls]
+    # second route: what the sweep shows
+    crank_turns = dc.full_rotation
+    rocker_dead = dict(dc.dead_centres)["rocker"]
+    if cls == "crank-rocker" and min(a, b, c, d) == a:
+        assert crank_turns and len(rocker_dead) == 2
+    elif cls == "double crank":
+        assert crank_turns and len(rocker_dead) == 0
+    elif cls in ("double rocker", "non-Grashof") or (cls == "crank-rocker" and min(a, b, c, d) == c):
+        assert not crank_turns and len(dc.limits) == 2
+
+
+@given(a=lengths, b=lengths, c=lengths, d=lengths, t0=st.floats(0.0, 2 * math.pi))
+def test_four_bar_limits_law_of_cosines(a, b, c, d, t0):
+    assume(_margin((a, b, c, d)) > 0.05)
+    m = four_bar(a, b, c, d, t0)
+    assume(m is not None)
+    dc = check(m).drivers[0]
+    assume(not dc.full_rotation)
+    cands = []
+    for k in (b + c, b - c):
+        cs = (a * a + d * d - k * k) / (2 * a * d)
+        if abs(cs) <= 1:
+            cands += [math.acos(cs) - t0, -math.acos(cs) - t0]
+    assert len(dc.limits) == 2
+    for x in dc.limits:
+        assert any(_close_mod360(_ang(x), _ang(y), 1e-7) for y in cands), (x, cands)
+
+
+@given(a=st.floats(0.2, 0.6), b=st.floats(1.5, 2.5), c=st.floats(1.0, 2.0), t0=st.floats(0.0, 2 * math.pi))
+def test_crank_rocker_transmission_extremes_at_ground_collinear(a, b, c, t0):
+    d = 2.0
+    assume(a + max(b, c, d) < sum(sorted((b, c, d))[:2]) + 0.05 * d)   # Grashof, crank shortest
+    m = four_bar(a, b, c, d, t0)
+    assume(m is not None)
+    dc = check(m).drivers[0]
+    assume(dc.full_rotation)
+    tr = {x.joint: x.extreme for x in dc.angles}["B"]
+    mu_min = math.degrees(math.acos((b * b + c * c - (d - a) ** 2) / (2 * b * c)))
+    mu_max = math.degrees(math.acos((b * b + c * c - (d + a) ** 2) / (2 * b * c)))
+    ext = sorted([mu_min, mu_max])
+    assert tr.min == pytest.approx(ext[0], abs=1e-8)
+    assert tr.max == pytest.approx(ext[1], abs=1e-8)
+    # where: crank along the ground line (θ = 0 or π absolute)
+    for at in (tr.at_min, tr.at_max):
+        assert any(_close_mod360(_ang(at), _ang(t - t0), 1e-4) for t in (0.0, math.pi))
+
+
+@given(a=st.floats(0.2, 0.6), b=st.floats(1.5, 2.5), c=st.floats(1.0, 2.0), t0=st.floats(0.0, 2 * math.pi))
+def test_rocker_dead_centres_where_crank_and_coupler_collinear(a, b, c, t0):
+    d = 2.0
+    assume(a + max(b, c, d) < sum(sorted((b, c, d))[:2]) + 0.05 * d)
+    m = four_bar(a, b, c, d, t0)
+    assume(m is not None)
+    dc = check(m).drivers[0]
+    assume(dc.full_rotation)
+    dead = dict(dc.dead_centres)["rocker"]
+    assert len(dead) == 2
+    s = solve(m, np.array(dead))
+    O2, A, B = (s.positions[:, s.joint_index(n)] for n in ("O2", "A", "B"))
+    u, v = A - O2, B - A
+    cross = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (a * b)
+    assert np.all(np.abs(cross) < 1e-9)
+
+
+def test_non_grashof_limits_published_example():
+    # docs: a triple rocker stops where the driven dyad is collinear (law of cosines)
+    a, b, c, d = 1.0, 1.0, 2.0, 2.5
+    m = four_bar(a, b, c, d, math.radians(60.0))
+    dc = check(m).drivers[0]
+    th = math.degrees(math.acos((a * a + d * d - (b + c) ** 2) / (2 * a * d)))
+    assert not dc.full_rotation
+    assert sorted(_ang(x) for x in dc.limits) == pytest.approx(sorted([(th - 60) % 360, (-th - 60) % 360]),
+                                                               abs=1e-8)
+
+
+# ---------------------------------------------------------------- offset crank-slider
+@pytest.mark.parametrize("a,b,e,t0", [(0.05, 0.2, 0.01, 0.3), (0.04, 0.15, -0.02, 2.0), (0.05, 0.2, 0.0, 1.0)])
+def test_offset_crank_slider_dead_centres(a, b, e, t0):
+    m = crank_slider(a, b, e, t0)
+    rep = check(m)
+    dead = sorted(_ang(x) for x in dict(rep.drivers[0].dead_centres)["piston"])
+    want = sorted(_ang(t - t0) for t in (math.asin(e / (b + a)), math.pi + math.asin(e / (b - a))))
+    assert len(dead) == 2
+    for x, y in zip(dead, want):
+        assert _close_mod360(x, y, 1e-7)
+    assert rep.as_dict()["dead_centres"]["piston"] == pytest.approx(dead)
+
+
+# ---------------------------------------------------------------- Kennedy on the catalogue
+CATALOGUE = sorted(p for p in CAT.glob("*.toml") if not p.stem.startswith("excavator"))
+
+
+@pytest.mark.parametrize("path", CATALOGUE, ids=lambda p: p.stem)
+def test_kennedy_and_primary_centres(path):
+    m = load(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = solve(m, np.array([[0.7] * len(m.drivers)]), derivatives=True)
+    ics = instant_centres(s, 0)
+    h = {frozenset((c.a, c.b)): np.array(c.homogeneous) for c in ics}
+    for i, j, k in itertools.combinations(m.link_names, 3):
+        M = np.array([h[frozenset(p)] for p in ((i, j), (j, k), (i, k))])
+        M = M / np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
+        assert abs(np.linalg.det(M)) < 1e-9
+    # second route: the centre of two links on one pin is that pin
+    by = {frozenset((c.a, c.b)): c for c in ics}
+    for jn, j in enumerate(m.joints):
+        for p, q in itertools.combinations(j.links, 2):
+            c = by[frozenset((p, q))]
+            if j.kind.value == "R":
+                assert c.point is not None
+                assert np.allclose(c.point, s.positions[0, jn], atol=1e-9)
+            else:
+                assert c.point is None
+
+
+# ---------------------------------------------------------------- against fine sweeps
+def _fine(m, n=72001):
+    x = np.linspace(0, 2 * np.pi, n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return x, solve(m, x, derivatives=True)
+
+
+@pytest.mark.parametrize("name", ["knitting_needle_drive", "stephenson_3_triad"])
+def test_multi_loop_against_fine_sweep(name):
+    m = load(CAT / f"{name}.toml")
+    assert name != "knitting_needle_drive" or any(j.is_multiple for j in m.joints)
+    rep = check(m)
+    dc = rep.drivers[0]
+    x, s = _fine(m)
+    assert s.success and dc.full_rotation
+    specs = angle_specs(decompose(m))
+    V = angle_values(s, specs)
+    h = x[1] - x[0]
+    for c, a in enumerate(dc.angles):
+        e = a.extreme
+        # the exact extremes bound every sample and are within the sampling error
+        assert e.min <= V[:, c].min() + 1e-9 and e.max >= V[:, c].max() - 1e-9
+        assert V[:, c].min() - e.min < 5e-3 and e.max - V[:, c].max() < 5e-3
+        # and a local sweep 1e-4 rad around each refined extremum reaches it to 1e-9°
+        for at, val, f in ((e.at_min, e.min, np.min), (e.at_max, e.max, np.max)):
+            xl = np.concatenate([np.linspace(0, at - 1e-4, 400), np.linspace(at - 1e-4, at + 1e-4, 2001)])
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                loc = angle_values(solve(m, xl), specs)[400:, c]
+            assert abs(f(loc) - val) < 1e-9
+    for lk, xs in dc.dead_centres:
+        w = s.omegas[:, s.link_index(lk)]
+        flips = x[np.flatnonzero(np.sign(w[:-1]) * np.sign(w[1:]) < 0)]
+        assert len(flips) == len(xs)
+        for f in flips:
+            assert min(abs(((f - y) + np.pi) % (2 * np.pi) - np.pi) for y in xs) < 2 * h
+
+
+def test_triad_circuits_count_all_modes():
+    rep = check(load(CAT / "stephenson_3_triad.toml"))
+    (c,) = rep.circuits
+    assert c.kind == "triad" and c.modes >= 2 and c.reachable == 1
+
+
+# ---------------------------------------------------------------- Grashof unit cases
+@pytest.mark.parametrize("L,fixed,cls", [
+    ((100, 40, 120, 80), 0, "crank-rocker"),   # the catalogue four-bar: s + l = 140 < 180
+    ((40, 100, 120, 80), 0, "double crank"),
+    ((120, 80, 40, 100), 0, "double rocker"),
+    ((100, 50, 100, 50), 0, "change point"),
+    ((100, 70, 85, 60), 0, "non-Grashof"),
+])
+def test_grashof_classes(L, fixed, cls):
+    assert grashof_class(L, fixed) == cls
+
+
+# ---------------------------------------------------------------- CLI
+def test_cli_json_keys(capsys):
+    assert main(["check", str(CAT / "four_bar.toml"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    for k in ("drivers", "transmission", "dead_centres", "circuits", "branch_points", "grashof",
+              "instant_centres", "mechanical_advantage", "verdict"):
+        assert k in d
+    assert d["drivers"]["O2"]["full_rotation"] is True and d["drivers"]["O2"]["limits"] == []
+    assert set(d["transmission"]["B"]) == {"min", "max"}
+    assert all(0 <= v < 360 for v in d["dead_centres"]["rocker"])
+
+
+@pytest.mark.parametrize("argv", [
+    ["check", "no_such_file.toml"],
+    ["check", str(CAT / "four_bar.toml"), "--min-transmission", "120"],
+    ["check", str(CAT / "four_bar.toml"), "--output", "nosuch"],
+    ["check", str(CAT / "four_bar.toml"), "--positions", "a,b"],
+    ["check", str(CAT / "four_bar.toml"), "--at", "nan"],
+])
+def test_cli_bad_input_exit_2(argv, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1
+
+
+def test_cli_circuit_defect_and_html(tmp_path, capsys):
+    m = four_bar(1.0, 1.0, 2.0, 2.5, math.radians(60.0))
+    from multiloop.topo.io import dumps_toml
+    f = tmp_path / "nongrashof.toml"
+    f.write_text(dumps_toml(m))
+    out = tmp_path / "rep"
+    assert main(["check", str(f), "--positions", "10,180", "--html", str(out)]) == 0
+    txt = capsys.readouterr().out
+    assert "circuit defect" in txt and "180.000000°" in txt
+    assert (out / "index.html").exists() and list(out.glob("*.png"))
