@@ -94,9 +94,11 @@ def test_cli_path_writes_a_mechanism_that_solves(tmp_path, capsys):
     from multiloop.topo.io import load
     tgt = _four_bar_path(tmp_path)
     out = tmp_path / "out.toml"
+    png = tmp_path / "fit.png"
     rc = main(["synthesise", str(named_path("four_bar")), "--path", str(tgt), "--point", "P",
-               "--out", str(out), "--budget", "1", "--json"])
+               "--out", str(out), "--budget", "1", "--json", "--plot", str(png)])
     assert rc == 0
+    assert png.stat().st_size > 1000
     doc = json.loads(capsys.readouterr().out)
     assert doc["error_max"] < 1e-3 and doc["evaluations"] > 0
     m = load(out)
@@ -290,3 +292,20 @@ def test_cmaes_and_seed_reproducible():
     # same seed, same history of best values per generation (the budget cuts at a time)
     n = min(len(r1.history), len(r2.history))
     assert n > 0 and [h[1] for h in r1.history[:n]] == [h[1] for h in r2.history[:n]]
+
+
+def test_cli_function_and_motion(tmp_path, capsys):
+    f = tmp_path / "f.csv"
+    f.write_text("input,output\n0,0\n30,15\n60,30\n")
+    out = tmp_path / "f.toml"
+    assert main(["synthesise", str(named_path("four_bar")), "--function", str(f), "--output", "O4",
+                 "--out", str(out), "--budget", "1", "--plot", str(tmp_path / "f.png")]) == 0
+    assert "function generation" in capsys.readouterr().out
+    assert (tmp_path / "f.png").exists()
+    poses = tmp_path / "p.csv"
+    poses.write_text("0.05,0.1,0\n0.03,0.11,10\n0.0,0.1,25\n")
+    out2 = tmp_path / "p.toml"
+    assert main(["synthesise", str(named_path("four_bar")), "--motion", str(poses), "--link", "coupler",
+                 "--out", str(out2), "--budget", "1"]) == 0
+    assert "pose angle error" in capsys.readouterr().out
+    assert main(["solve", str(out2), "--steps", "4"]) == 0

@@ -142,7 +142,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
 
     Stops at ``max_nfev`` residual evaluations or at ``deadline`` (a
-    ``time.perf_counter()`` value; at least 10 evaluations are made) with the best
+    ``time.perf_counter()`` value; at least three Jacobians are made) with the best
     point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
@@ -169,7 +169,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         n = float(r @ r)
         if n < best[0]:
             best[0], best[1] = n, w.copy()
-        if deadline is not None and count[0] > 10 * (len(w) + 2) and time.perf_counter() > deadline:
+        if deadline is not None and count[0] > 3 * (len(w) + 2) and time.perf_counter() > deadline:
             raise _Deadline
         return r
 

@@ -230,7 +230,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
 
     def probe(z):
         phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=40)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=t0 + budget)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol
