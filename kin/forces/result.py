@@ -85,10 +85,8 @@ class ForceResult(BatchStatus):
                      "inertia_moments", "load_power", "virtual_power_residual", "power_scale", "status",
                      "normal_forces"):
             a = getattr(self, name)
-            if isinstance(a, np.ndarray) and a.flags.writeable:
-                a = a.copy() if a.base is not None else a
+            if isinstance(a, np.ndarray):
                 a.flags.writeable = False
-                object.__setattr__(self, name, a)
 
     @property
     def n_positions(self) -> int:

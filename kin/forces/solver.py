@@ -19,7 +19,8 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
-from .loads import LoadColumns, PointLoad, StateColumns, check_mass_data, driver_speeds, load_columns, table_period
+from .loads import (LoadColumns, PointLoad, StateColumns, check_mass_data, driver_speeds, load_columns, table_period,
+                    transpose_batch)
 from .plan import Column, ForcePlan, compile_forces
 from .result import VP_TOL, ForceResult
 
@@ -171,8 +172,16 @@ def _unpack(fp: ForcePlan, sol: _Solved, geo: _Geometry, N: int, n_drivers: int)
             pm[c.index] = v
         else:
             bal[c.index] = v
-    st = (lambda a: np.stack(a, axis=1) if a else np.zeros((N, 0)))
-    return _Unpacked(np.stack([st(rx), st(ry)], axis=-1), st(pm), st(nn), st(bal))
+    xy = [v for pair in zip(rx, ry) for v in pair]
+    return _Unpacked(_rows_to_batch(xy, N).reshape(N, npairs, 2), _rows_to_batch(pm, N),
+                     _rows_to_batch(nn, N), _rows_to_batch(bal, N))
+
+
+def _rows_to_batch(rows: list, N: int) -> np.ndarray:
+    """(N,) rows as the columns of a fresh ``(N, len(rows))`` array."""
+    if not rows:
+        return np.zeros((N, 0))
+    return transpose_batch(np.stack(rows))
 
 
 def _driver_rates(state: KinematicState, geo: _Geometry) -> np.ndarray:
@@ -334,10 +343,10 @@ def _blank_failures(u: _Unpacked, status, state: KinematicState, sol: _Solved, r
 
 
 def _inertia_arrays(loads: LoadColumns, N: int, nl: int):
-    fi, mi = np.zeros((N, nl, 2)), np.zeros((N, nl))
-    for k, (fx, fy, mz) in loads.inertia.items():
-        fi[:, k, 0], fi[:, k, 1], mi[:, k] = fx, fy, mz
-    return fi, mi
+    zero = np.zeros(N)
+    rows = [loads.inertia.get(k, (zero, zero, zero)) for k in range(nl)]
+    fi = _rows_to_batch([v for r in rows for v in r[:2]], N).reshape(N, nl, 2)
+    return fi, _rows_to_batch([r[2] for r in rows], N)
 
 
 def _sing_mask(sol: _Solved, n: int) -> np.ndarray:
