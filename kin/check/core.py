@@ -131,10 +131,12 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
             st, r = seg.side.at([seg.limit_bracket[1]])
             limit_groups.append(str(st.status[r[0]]))
     groups, D = signed_dets(ap)
-    bps = [(x, groups[c].describe()) for c, xs in enumerate(roots(mo, D)) for x in xs]
-    bps += [(x, "singular position met on the grid") for seg in mo.segments for x in seg.singular]
     ww = [x for x in w if x[0] != driver_link and not (x[1] == "P" and x[2] == d.joint)]
-    dead = roots(mo, lambda s: _velocity(s, ww), derivatives=True)
+    # one refinement for both: signed determinants (branch points), velocities (dead centres)
+    found = roots(mo, lambda s: np.hstack([D(s), _velocity(s, ww)]), derivatives=True)
+    bps = [(x, groups[c].describe()) for c, xs in enumerate(found[: len(groups)]) for x in xs]
+    bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
+    dead = found[len(groups):] or [[] for _ in ww]
     ext = extremes(mo, lambda s: angle_values(s, specs))
     angles = tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
     out = _output(m, w, output, driver_link)

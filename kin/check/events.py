@@ -62,7 +62,22 @@ def roots(motion: Motion, Q, derivatives: bool = False, rel_tol: float = 1e-6) -
         for xm, cc, v in zip(mid, c, val):
             if v <= rel_tol * scale[cc]:
                 out[cc].append(float(xm))
-    return out or []
+    return [_unique(xs, motion) for xs in (out or [])]
+
+
+def _unique(xs, motion: Motion, tol: float = 1e-8) -> list[float]:
+    """Roots of a full turn reduced to [0, 2π), duplicates (the overlap past 360°) merged."""
+    if not (motion.rotary and motion.full_rotation):
+        return sorted(xs)
+    two = 2.0 * np.pi
+    out: list[float] = []
+    for x in sorted(float(np.mod(x, two)) for x in xs):
+        if out and min(abs(x - out[-1]), two - abs(x - out[-1])) <= tol:
+            continue
+        if out and x > two - tol and out[0] < tol:
+            continue
+        out.append(x)
+    return out
 
 
 def _candidates(seg, V, sign):
@@ -83,12 +98,15 @@ def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | Non
         ncol = V.shape[1]
         if ncol == 0:
             continue
-        cand = []
-        for sign in (1.0, -1.0):
-            lo, hi, col = _candidates(seg, V, sign)
-            xs = seg.side.golden(lo, hi, lambda s, r, col=col, sign=sign: sign * _pick(Q(s), r, col),
-                                 derivatives)
-            cand += [(x, c) for x, c in zip(xs, col)]
+        lo1, hi1, c1 = _candidates(seg, V, 1.0)
+        lo2, hi2, c2 = _candidates(seg, V, -1.0)
+        col = np.concatenate([c1, c2])
+        sign = np.concatenate([np.ones(c1.size), -np.ones(c2.size)])
+        sh = (-1,) + (1,)
+        xs = seg.side.golden(np.concatenate([lo1, lo2]), np.concatenate([hi1, hi2]),
+                             lambda s, r: sign.reshape(sh[: 1] + (1,) * (r.ndim - 1)) * _pick(Q(s), r, col),
+                             derivatives)
+        cand = list(zip(xs, col))
         xs = np.array([x for x, _ in cand] + ([seg.limit] * ncol if seg.limit is not None else []))
         cols = np.array([c for _, c in cand] + (list(range(ncol)) if seg.limit is not None else []),
                         int)

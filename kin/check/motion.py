@@ -35,7 +35,7 @@ class Segment:
     state: object
     limit: float | None
     limit_bracket: tuple[float, float] | None
-    singular: tuple[float, ...]
+    singular: tuple[tuple[float, str], ...]
 
     @property
     def x(self) -> np.ndarray:
@@ -59,20 +59,20 @@ class Motion:
         return tuple(s.limit for s in self.segments if s.limit is not None)
 
 
-def _first_stop(st, x) -> tuple[int | None, tuple[float, ...]]:
-    """Index of the first failure that is not an isolated singular crossing."""
-    ok = st.ok.copy()
+def _first_stop(st, x) -> tuple[int | None, tuple[tuple[float, str], ...]]:
+    """Index of the first failure that is not an isolated singular crossing, and the
+    crossings passed before it (input, the solver's reason)."""
+    ok = st.ok
     singular = []
-    bad = np.flatnonzero(~ok)
-    for f in bad:
+    steps = np.nanmax(np.abs(np.diff(st.positions[ok], axis=0)), axis=(1, 2)) if ok.sum() > 2 else np.array([np.inf])
+    typical = float(np.median(steps))
+    for f in np.flatnonzero(~ok):
         if f == 0:
             return 0, ()
-        isolated = f + 1 < ok.size and ok[f + 1] and ok[f - 1]
-        if isolated:
-            P0, P1 = st.positions[f - 1], st.positions[f + 1]
-            step = np.nanmax(np.abs(st.positions[min(f + 2, ok.size - 1)] - P1)) if f + 2 < ok.size else np.inf
-            if np.nanmax(np.abs(P1 - P0)) <= 4.0 * step:
-                singular.append(float(x[f]))
+        if f + 1 < ok.size and ok[f + 1] and ok[f - 1]:
+            jump = np.nanmax(np.abs(st.positions[f + 1] - st.positions[f - 1]))
+            if jump <= 4.0 * typical:      # bounded motion through one singular sample
+                singular.append((float(x[f]), str(st.status[f])))
                 continue
         return int(f), tuple(singular)
     return None, tuple(singular)
