@@ -421,9 +421,9 @@ class Atlas:
 
 
 def _row(r: ChainRecord) -> tuple:
-    deg = [sum(1 for j in r.joints if x in j) for x in range(r.n)]
     p = sum(len(j) - 1 for j in r.joints)
-    return (r.canonical, r.n, r.F, p, r.K, r.V, len(r.joints), r.j_max, max(deg),
+    i_max = len(r.LA) + 1        # [LA] runs n2 … n_imax (every atlas link is on >= 2 joints)
+    return (r.canonical, r.n, r.F, p, r.K, r.V, len(r.joints), r.j_max, i_max,
             json.dumps(list(r.LA)), json.dumps(list(r.MJA)), r.code, r.code_star,
             None if r.planar is None else int(r.planar), int(r.fractionated),
             None if r.La is None else json.dumps(list(r.La)), r.L0,

@@ -201,3 +201,18 @@ def test_literature_mechanism_counts(n, expected):
     total = sum(mechanism_choices(n, [sum(1 << x for x in j) for j in r.joints]).n_frames
                 for r in iter_chains(opts, loops=False))
     assert total == expected
+
+
+@given(st.integers(3, 9), st.lists(st.integers(1, 2 ** 9 - 1), min_size=2, max_size=12))
+def test_fractionation_two_routes(n, raw):
+    # articulation points of the incidence graph (rustworkx) vs removing each link / joint
+    from multiloop.catalogue.synthesis.records import _connected, _fractionation, _fractionation_by_removal
+
+    full = (1 << n) - 1
+    joints = sorted({jm & full for jm in raw if bin(jm & full).count("1") >= 2})
+    covered = 0
+    for jm in joints:
+        covered |= jm
+    if covered != full or not _connected(n, joints):
+        return   # every link on a joint, one connected chain
+    assert _fractionation(n, joints) == _fractionation_by_removal(n, joints)

@@ -7,6 +7,7 @@ from functools import lru_cache
 from typing import Sequence
 
 import pynauty
+import rustworkx as rx
 
 __all__ = ["ChainRecord", "chain_record", "canonical_string"]
 
@@ -34,8 +35,18 @@ def _connected(n: int, joints: Sequence[int], skip_link: int | None = None) -> b
     return seen == alive
 
 
-def _fractionation(n: int, joints: Sequence[int], F: int | None = None) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """Cut links and cut joints (indices) of the incidence graph.
+def _incidence_rx(n: int, tuples: Sequence[Sequence[int]]) -> rx.PyGraph:
+    """The incidence graph for rustworkx (links 0…n−1, joints n…n+m−1)."""
+    g = rx.PyGraph(multigraph=False)
+    g.add_nodes_from(range(n + len(tuples)))
+    g.add_edges_from_no_data([(x, n + a) for a, j in enumerate(tuples) for x in j])
+    return g
+
+
+def _fractionation(n: int, joints: Sequence[int], F: int | None = None,
+                   graph: rx.PyGraph | None = None) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """Cut links and cut joints (indices): the articulation points of the incidence
+    graph (rustworkx; :func:`_fractionation_by_removal` is the independent route).
 
     With ``F`` given the chain is taken to be non-degenerate, and the searches that
     cannot succeed are skipped: splitting at a cut link gives ``F = F_A + F_B``, at a
@@ -44,8 +55,16 @@ def _fractionation(n: int, joints: Sequence[int], F: int | None = None) -> tuple
     """
     if F is not None and F < 2:
         return (), ()
+    g = _incidence_rx(n, [_mask_links(int(jm)) for jm in joints]) if graph is None else graph
+    arts = sorted(rx.articulation_points(g))
+    cut_links = tuple(v for v in arts if v < n)
     if F is not None and F < 3:
-        return tuple(x for x in range(n) if not _connected(n, joints, skip_link=x)), ()
+        return cut_links, ()
+    return cut_links, tuple(v - n for v in arts if v >= n)
+
+
+def _fractionation_by_removal(n: int, joints: Sequence[int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """The definition: a link or joint whose removal disconnects the links."""
     cut_links = tuple(x for x in range(n) if not _connected(n, joints, skip_link=x))
     cut_joints = tuple(a for a in range(len(joints))
                        if not _connected(n, [jm for b, jm in enumerate(joints) if b != a]))
@@ -115,83 +134,23 @@ class ChainRecord:
                 "joints": self.joint_lists}
 
 
-def _bipartite(adj: dict[int, set[int]]) -> bool:
-    side: dict[int, int] = {}
-    for start in adj:
-        if start in side:
-            continue
-        side[start] = 0
-        stack = [start]
-        while stack:
-            v = stack.pop()
-            for w in adj[v]:
-                if w not in side:
-                    side[w] = 1 - side[v]
-                    stack.append(w)
-                elif side[w] == side[v]:
-                    return False
-    return True
-
-
-def _is_planar(n: int, joints: Sequence[Sequence[int]]) -> bool:
-    """Planarity of the incidence graph.
-
-    Vertices of degree <= 2 are suppressed first (subdivisions, parallel edges and
-    pendant vertices do not change planarity); a reduced graph with at most 4
-    vertices or 8 edges is planar (K3,3 has 9 edges), one with more than
-    ``3v − 6`` edges is not; the rest goes to networkx's LR test.
-    """
-    import networkx as nx
-
-    adj: dict[int, set[int]] = {x: set() for x in range(n)}
-    for a, j in enumerate(joints):
-        adj[n + a] = set(j)
-        for x in j:
-            adj[x].add(n + a)
-    stack = [v for v in adj if len(adj[v]) <= 2]
-    while stack:
-        v = stack.pop()
-        if v not in adj or len(adj[v]) > 2:
-            continue
-        nbs = adj.pop(v)
-        for u in nbs:
-            adj[u].discard(v)
-        if len(nbs) == 2:
-            u, w = nbs
-            adj[u].add(w)
-            adj[w].add(u)
-        stack.extend(u for u in nbs if len(adj[u]) <= 2)
-    nv = len(adj)
-    ne = sum(len(s) for s in adj.values()) // 2
-    if nv <= 4 or ne <= 8:
-        return True
-    if ne > 3 * nv - 6:
-        return False
-    if ne - nv + 1 <= 4:
-        # connected, min degree 3, cyclomatic number <= 4: K5 (cyclomatic 6) is out
-        # of reach and a K3,3 subdivision would be all of it (cyclomatic 4), i.e. the
-        # reduced graph is 3-regular on 6 vertices and bipartite
-        if ne - nv + 1 < 4 or nv != 6 or any(len(s) != 3 for s in adj.values()):
-            return True
-        return not _bipartite(adj)
-    g = nx.Graph()
-    g.add_edges_from((u, w) for u, s in adj.items() for w in s if u < w)
-    return nx.check_planarity(g)[0]
-
-
 def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> ChainRecord:
     """Numbers of a chain given by joint masks.
 
-    Planarity always (incidence graph); the loop assortment [La] and ``L0`` via
+    Planarity always (incidence graph, rustworkx's compiled test); the loop assortment [La] and ``L0`` via
     :func:`topo.loops.loop_assortment` when ``loops`` (the slow part: ~10 ms a chain).
     """
     from multiloop.topo.numbers import structural_codes
 
     joints = sorted(int(j) for j in joints)
-    deg = [sum(1 for j in joints if j >> x & 1) for x in range(n)]
-    codes = structural_codes(deg, [bin(j).count("1") - 1 for j in joints])
-    cl, cj = _fractionation(n, joints, F)
     tuples = tuple(_mask_links(j) for j in joints)
+    deg = [0] * n
+    for j in tuples:
+        for x in j:
+            deg[x] += 1
+    codes = structural_codes(deg, [len(j) - 1 for j in tuples])
+    graph = _incidence_rx(n, tuples)
+    cl, cj = _fractionation(n, joints, F, graph)
     La = L0 = None
     if loops:
         from multiloop.topo.loops import loop_assortment
@@ -199,7 +158,7 @@ def chain_record(n: int, F: int, joints: Sequence[int], loops: bool = True) -> C
         la = loop_assortment(chain_from_joint_lists([[str(x + 1) for x in j] for j in tuples]))
         planar, La, L0 = la.planar, la.sizes, la.outer
     else:
-        planar = _is_planar(n, tuples)
+        planar = rx.is_planar(graph)
     return ChainRecord(n=n, F=F, joints=tuples, canonical=canonical_string(n, joints), LA=codes.LA,
                        MJA=codes.MJA, V=codes.V, K=codes.K, j_max=codes.j_max, code=codes.code,
                        code_star=codes.code_star, fractionated=bool(cl or cj),
