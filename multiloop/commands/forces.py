@@ -1,6 +1,6 @@
 """``multiloop forces FILE [--at ANGLE] [--steps N] [--json] [--plot out.png]``.
 
-Kinetostatics of a mechanism file (the kinetostatics (docs/forces.md)): reactions in every pair and the balancing
+Kinetostatics of a mechanism file (docs/forces.md): reactions in every pair and the balancing
 moment/force of every driver, checked by virtual power.  FILE may also name a bundled
 mechanism of ``catalogue/mechanisms`` (e.g. ``crank_slider_loaded``) or an engine file
 (``[engine]`` table: the engine is built as a mechanism with its gas forces as 1° force
@@ -8,14 +8,11 @@ tables against the crank angle; ``multiloop engine`` uses the exact curve).
 
 Driver speeds and accelerations come from ``[[driver]] speed`` / ``acceleration``
 (defaults 1 rad/s or 1 m/s, and 0).  ``--at`` gives one input (deg for an R driver, m
-for a P driver; several drivers: comma-separated); otherwise ``--steps`` positions over
-one turn of the first driver (720 deg when a force table runs past 360 deg).
-
-JSON (documented in docs/forces.md): ``mechanism``, ``method``, ``blocks``,
-``drivers`` (joint, links, speed, acceleration, unit), ``input`` (deg or m, per position
-and driver), ``status``, ``balancing`` (driver joint → list), ``reactions`` (pair name →
-``joint``, ``kind``, ``from``, ``on``, ``Fx``, ``Fy``, and for P pairs ``moment`` and
-``offset``), ``virtual_power_residual`` (W), ``relative_residual``.
+for a P driver; several drivers: comma-separated; R inputs beyond one load period are
+reduced); otherwise ``--steps`` positions (at most 100 000) over one turn of the first
+driver (720 deg when a force table runs past 360 deg), or the ``solve`` command's
+default stroke for P drivers.  The JSON report is :meth:`ForceResult.as_dict`
+(keys in docs/forces.md).
 """
 from __future__ import annotations
 
