@@ -10,7 +10,8 @@ from multiloop.kin.solve import solve
 
 
 @pytest.mark.parametrize("name", ["four_bar", "watt_1", "stephenson_1", "crank_slider", "dyad_rpr",
-                                  "knitting_needle_drive", "stephenson_3_triad"])
+                                  "knitting_needle_drive", "stephenson_3_triad",
+                                  "stephenson_3", "dyad_prp", "dyad_rpp"])       # the last three: slow path
 def test_batched_evaluator_equals_solve(name):
     """Two routes: the parameterised batch evaluator and kin.solve agree at the start design."""
     m = load_named(name)

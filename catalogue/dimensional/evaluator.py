@@ -8,6 +8,8 @@ positions in one vectorised pass over the plan: each dyad is one call of its
 closed-form kernel of :mod:`multiloop.kin.groups` (Vasechkin et al. 2017,
 eqs. 1-18) with the dimensions as arrays of shape ``(population, 1)``; a triad
 is one call of the triad tracker per candidate (vectorised over positions).
+Plans with other groups (PRP, RPP, class IV, larger groups) take a slow path:
+:func:`multiloop.kin.solve.solve` once per candidate.
 
 Link poses are kept as maps from reference coordinates to the plane,
 ``world = R(θ) r + t``, so a candidate's reference configuration is its own
@@ -145,9 +147,6 @@ class Evaluator:
         self.frame = self.links[m.frame]
         self.slow = [s.kind for s in self.plan.steps
                      if isinstance(s, AssurGroup) and s.kind not in _CLOSED + ("triad",)]
-        if self.slow:
-            raise InputError(explain(f"mechanism '{m.name or ''}'", expected="dyads RRR, RRP, RPR and triads",
-                                     got=", ".join(self.slow), hint="these groups have no batched kernel yet"))
         self._cols = {n: i for i, n in enumerate(space.names)}
 
     # -- decoding --------------------------------------------------------------
@@ -175,6 +174,8 @@ class Evaluator:
         X = np.atleast_2d(np.asarray(X, float))
         P = X.shape[0]
         phi = np.broadcast_to(np.asarray(phi, float), (P, np.shape(phi)[-1]))
+        if self.slow:
+            return self._per_candidate(X, phi)
         N = phi.shape[1]
         nl = len(self.links)
         th = np.full((nl, P, N), np.nan)
@@ -189,6 +190,36 @@ class Evaluator:
             else:
                 getattr(self, "_" + step.kind.lower())(step, X, st)
         ok = np.all(np.isfinite(th), axis=0)
+        return Poses(th, tx, ty, ok)
+
+    def _per_candidate(self, X, phi) -> Poses:
+        """Slow path for groups without a batched kernel (PRP, RPP, class IV, larger
+        groups): :func:`kin.solve.solve` once per candidate, poses converted."""
+        import warnings
+
+        from multiloop.kin.solve import compile_plan, solve
+        from multiloop.topo.errors import LinkageError
+        P, N = phi.shape
+        th = np.full((len(self.links), P, N), np.nan)
+        tx, ty = th.copy(), th.copy()
+        ok = np.zeros((P, N), bool)
+        for p in range(P):
+            try:
+                mp = self.with_design(X[p])
+                sp = compile_plan(mp)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    st = solve(mp, phi[p], plan=sp)
+            except LinkageError:
+                continue
+            Z = st.poses                                      # (N, n_links, 3): origin + angle
+            good = np.asarray(st.status == "ok")
+            c, s = np.cos(Z[:, :, 2]), np.sin(Z[:, :, 2])
+            o = sp.origins
+            th[:, p] = np.where(good, Z[:, :, 2].T, np.nan)
+            tx[:, p] = np.where(good, (Z[:, :, 0] - (c * o[:, 0] - s * o[:, 1])).T, np.nan)
+            ty[:, p] = np.where(good, (Z[:, :, 1] - (s * o[:, 0] + c * o[:, 1])).T, np.nan)
+            ok[p] = good
         return Poses(th, tx, ty, ok)
 
     def _place(self, st: Poses, link: str, theta, anchor_world, anchor_ref) -> None:
