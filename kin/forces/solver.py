@@ -8,6 +8,7 @@ solved in order, each solved block's reactions becoming known loads on earlier l
 """
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass
 from typing import Sequence
@@ -426,5 +427,4 @@ def _solve_state(m: Mechanism, inputs, speeds, accelerations) -> KinematicState:
         s1 = solve(m, q, derivatives=True, input_rates=unit)
         acc += s1.velocities * e[k]
         eps += s1.omegas * e[k]
-    return KinematicState(st.mechanism, st.inputs, st.positions, st.angles, st.status,
-                          st.velocities, acc, st.omegas, eps, st.input_rates, st.branches)
+    return dataclasses.replace(st, accelerations=acc, epsilons=eps)   # every other field kept
