@@ -289,7 +289,11 @@ def _tables(doc: dict, key: str) -> list[tuple[str, dict]]:
 
 
 def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
-    """Build a :class:`Mechanism` from a parsed document (strict, see module doc)."""
+    """Build a :class:`Mechanism` from a parsed document (strict, see module doc).
+
+    The document is read table by table into a :class:`MechanismBuilder`, whose
+    ``build`` then validates the mechanism as a whole.
+    """
     if not isinstance(doc, dict):
         raise InputError(explain("document", expected="a table", got=type(doc).__name__))
     unknown = sorted(set(doc) - _TOP_KEYS)
@@ -298,6 +302,22 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
                                  got=f"unknown key {', '.join(repr(u) for u in unknown)}",
                                  hint="tables are written [[link]], [[joint]], [[driver]], [[point]], [[force]]"))
     b = MechanismBuilder()
+    _read_header(doc, b)
+    b.links += [_read_link(label, t) for label, t in _tables(doc, "link")]
+    b.joints += [_read_joint(label, t) for label, t in _tables(doc, "joint")]
+    for label, t in _tables(doc, "driver"):
+        b.add_driver(read_string(t["joint"], f"{label} joint"),
+                     read_names(t["links"], f"{label} links") if "links" in t else None,
+                     read_number(t["speed"], f"{label} speed") if "speed" in t else None,
+                     read_number(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None)
+    b.points += [TracerPoint(read_string(t["name"], f"{label} name"), read_string(t["link"], f"{label} link"),
+                             read_vector(t["at"], f"{label} at")) for label, t in _tables(doc, "point")]
+    b.loads += [_read_force(label, t) for label, t in _tables(doc, "force")]
+    return b.build()
+
+
+def _read_header(doc: dict, b: MechanismBuilder) -> None:
+    """Name, description, source, gravity and the bare-chain short form ``joints``."""
     for key in ("name", "description", "source"):
         if key in doc:
             setattr(b, key, read_string(doc[key], f"top-level key '{key}'"))
@@ -312,56 +332,52 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
             raise InputError(explain("key 'joints'", expected="a non-empty list of link-name lists", got=repr(jl)[:60]))
         for i, lks in enumerate(jl, 1):
             b.add_joint(f"J{i}", "R", read_names(lks, f"joints[{i - 1}]"))
-    for label, t in _tables(doc, "link"):
-        frame = read_bool(t.get("frame", False), f"{label} frame")
-        b.links.append(Link(
-            read_string(t["name"], f"{label} name"), frame,
-            read_number(t["mass"], f"{label} mass") if "mass" in t else None,
-            read_vector(t["cg"], f"{label} cg") if "cg" in t else None,
-            read_number(t["inertia"], f"{label} inertia") if "inertia" in t else None,
-            read_string(t["color"], f"{label} color") if "color" in t else None))
-    for label, t in _tables(doc, "joint"):
-        kind = t.get("kind", "R")
-        if kind not in ("R", "P"):
-            raise InputError(explain(f"{label} kind", expected="'R' or 'P'", got=repr(kind)))
-        b.joints.append(Joint(
-            read_string(t["name"], f"{label} name"), JointKind(kind), read_names(t["links"], f"{label} links"),
-            read_vector(t["at"], f"{label} at") if "at" in t else None,
-            read_vector(t["axis"], f"{label} axis") if "axis" in t else None))
-    for label, t in _tables(doc, "driver"):
-        links = read_names(t["links"], f"{label} links") if "links" in t else None
-        b.add_driver(read_string(t["joint"], f"{label} joint"), links,
-                     read_number(t["speed"], f"{label} speed") if "speed" in t else None,
-                     read_number(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None)
-    for label, t in _tables(doc, "point"):
-        b.points.append(TracerPoint(read_string(t["name"], f"{label} name"), read_string(t["link"], f"{label} link"),
-                                    read_vector(t["at"], f"{label} at")))
-    for label, t in _tables(doc, "force"):
-        table = None
-        if "table" in t and "value" in t:
-            raise InputError(explain(label, expected="either 'value' (a constant force) or 'table' (force against "
-                                     "the input)", got="both", hint="a table already gives the force at every input"))
-        if "table" in t:
-            rows = t["table"]
-            if not isinstance(rows, list) or not rows:
-                raise InputError(explain(f"{label} table", expected="rows [input_deg, Fx, Fy]", got=repr(rows)[:60]))
-            table = []
-            for r, row in enumerate(rows):
-                if not isinstance(row, list) or len(row) != 3:
-                    raise InputError(explain(f"{label} table row {r}", expected="[input_deg, Fx, Fy]", got=repr(row)))
-                table.append(tuple(read_number(x, f"{label} table row {r}") for x in row))
-            angles = [row[0] for row in table]
-            dup = sorted({a for a in angles if angles.count(a) > 1})
-            if dup:
-                raise InputError(explain(f"{label} table", expected="distinct input angles",
-                                         got=f"{', '.join(f'{a:g}' for a in dup)} deg more than once"))
-            table = tuple(table)
-        b.loads.append(Load(read_string(t["link"], f"{label} link"),
-                            read_vector(t["at"], f"{label} at") if "at" in t else None,
-                            read_vector(t["value"], f"{label} value") if "value" in t else (0.0, 0.0),
-                            table, read_number(t["moment"], f"{label} moment") if "moment" in t else 0.0,
-                            read_string(t["name"], f"{label} name") if "name" in t else None))
-    return b.build()
+
+
+def _read_link(label: str, t: dict) -> Link:
+    return Link(read_string(t["name"], f"{label} name"), read_bool(t.get("frame", False), f"{label} frame"),
+                read_number(t["mass"], f"{label} mass") if "mass" in t else None,
+                read_vector(t["cg"], f"{label} cg") if "cg" in t else None,
+                read_number(t["inertia"], f"{label} inertia") if "inertia" in t else None,
+                read_string(t["color"], f"{label} color") if "color" in t else None)
+
+
+def _read_joint(label: str, t: dict) -> Joint:
+    kind = t.get("kind", "R")
+    if kind not in ("R", "P"):
+        raise InputError(explain(f"{label} kind", expected="'R' or 'P'", got=repr(kind)))
+    return Joint(read_string(t["name"], f"{label} name"), JointKind(kind), read_names(t["links"], f"{label} links"),
+                 read_vector(t["at"], f"{label} at") if "at" in t else None,
+                 read_vector(t["axis"], f"{label} axis") if "axis" in t else None)
+
+
+def _read_force(label: str, t: dict) -> Load:
+    if "table" in t and "value" in t:
+        raise InputError(explain(label, expected="either 'value' (a constant force) or 'table' (force against "
+                                 "the input)", got="both", hint="a table already gives the force at every input"))
+    return Load(read_string(t["link"], f"{label} link"),
+                read_vector(t["at"], f"{label} at") if "at" in t else None,
+                read_vector(t["value"], f"{label} value") if "value" in t else (0.0, 0.0),
+                _read_force_table(label, t["table"]) if "table" in t else None,
+                read_number(t["moment"], f"{label} moment") if "moment" in t else 0.0,
+                read_string(t["name"], f"{label} name") if "name" in t else None)
+
+
+def _read_force_table(label: str, rows: Any) -> tuple[tuple[float, float, float], ...]:
+    """Rows ``[input_deg, Fx, Fy]`` with distinct input angles."""
+    if not isinstance(rows, list) or not rows:
+        raise InputError(explain(f"{label} table", expected="rows [input_deg, Fx, Fy]", got=repr(rows)[:60]))
+    table = []
+    for r, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != 3:
+            raise InputError(explain(f"{label} table row {r}", expected="[input_deg, Fx, Fy]", got=repr(row)[:60]))
+        table.append(tuple(read_number(x, f"{label} table row {r}") for x in row))
+    seen: set[float] = set()
+    dup = sorted({row[0] for row in table if row[0] in seen or seen.add(row[0])})
+    if dup:
+        raise InputError(explain(f"{label} table", expected="distinct input angles",
+                                 got=f"{', '.join(f'{a:g}' for a in dup)} deg more than once"))
+    return tuple(table)
 
 
 def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
