@@ -14,9 +14,12 @@ Prints
 from __future__ import annotations
 
 import argparse
+import os
+import platform
 import time
 
 import numpy as np
+import scipy
 
 from multiloop.kin.spatial.platform import (Platform, PointLoad, Strut, condition_numbers, platform_statics, plucker_matrices,
                           strut_forces_equilibrium, strut_forces_screws, symmetric_struts)
@@ -62,6 +65,9 @@ def main(argv=None) -> int:
     per_loop = t_loop / args.loop
     diff = np.abs(S_eq - S_sc)[ok]
     scale = np.maximum(1.0, np.abs(S_eq[ok]))
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"Python {platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}; "
+          f"{os.cpu_count()} CPUs, load average {load:.2f}")
     print(f"batch of {args.n} random platforms ({ok.sum()} with cond < 1e8)")
     print(f"  equilibrium (batched solve)   {per_eq * 1e6:8.2f} µs/platform   ratio 1.00")
     print(f"  screw method (batched SVD)    {per_sc * 1e6:8.2f} µs/platform   ratio {per_sc / per_eq:.2f}")
