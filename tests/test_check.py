@@ -168,6 +168,12 @@ def test_non_grashof_limits_published_example():
     dc = check(m).drivers[0]
     th = math.degrees(math.acos((a * a + d * d - (b + c) ** 2) / (2 * a * d)))
     assert not dc.full_rotation
+    # at the limit the dyad is stretched out: transmission 180° (toggle), both modes reachable
+    assert {x.joint: x.extreme for x in dc.angles}["B"].max == pytest.approx(180.0, abs=1e-2)
+    assert check(m).circuits[0].reachable == 2
+    assert "out of reach" in dc.limit_groups[0]
+    bad = check(m, positions={"O2": [math.radians(10.0), math.pi]}).drivers[0].unreachable
+    assert bad == (math.pi,)
     assert sorted(_ang(x) for x in dc.limits) == pytest.approx(sorted([(th - 60) % 360, (-th - 60) % 360]),
                                                                abs=1e-8)
 

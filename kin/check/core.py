@@ -123,12 +123,12 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = dj.kind is JointKind.R
-    mo = driver_motion(m, plan, k)
+    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups))
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     limit_groups = []
     for seg in mo.segments:
         if seg.limit_bracket is not None:
-            st, r = seg.side.at([seg.limit_bracket[1]])
+            st, r = seg.side.at([seg.side.grid[seg.n]])      # the first failed grid value
             limit_groups.append(str(st.status[r[0]]))
     groups, D = signed_dets(ap)
     ww = [x for x in w if x[0] != driver_link and not (x[1] == "P" and x[2] == d.joint)]

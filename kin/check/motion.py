@@ -23,6 +23,10 @@ __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
 R_STEPS = 720            # grid steps per turn (0.5°)
 P_STEPS = 400            # grid steps over ± the mechanism's size
+#: groups with a closed-form or all-modes kernel; any other group is tracked by Newton
+#: at about a millisecond per position, so its mechanism gets a coarser P grid and
+#: fewer samples per zoom iteration (same 1e-10 tolerance, more iterations)
+_KERNELS = ("RRR", "RRP", "RPR", "PRP", "RPP", "triad", "class IV")
 
 
 @dataclass(frozen=True)
@@ -92,20 +96,24 @@ def _segment(side: Side) -> Segment:
     return Segment(side, f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])), singular)
 
 
-def driver_motion(m: Mechanism, plan, k: int) -> Motion:
-    """Sample and bound the motion of driver ``k`` (see the module docstring)."""
+def driver_motion(m: Mechanism, plan, k: int, kinds=()) -> Motion:
+    """Sample and bound the motion of driver ``k`` (see the module docstring);
+    ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    heavy = any(kd not in _KERNELS for kd in kinds)
+    samples = 8 if heavy else 32
     if rotary:
         h = 2.0 * np.pi / R_STEPS
-        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h)   # to 361°
+        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h, samples)   # to 361°
     else:
-        fwd = Side.make(m, plan, k, +1, P_STEPS + 1, mechanism_size(m))
+        n = P_STEPS // 4 if heavy else P_STEPS
+        fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples)
     seg_f = _segment(fwd)
     if rotary and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic)
-    bwd = Side(m, plan, k, -1, -fwd.grid)
+    bwd = Side(m, plan, k, -1, -fwd.grid, samples)
     seg_b = _segment(bwd)
     return Motion(m, k, rotary, False, (seg_f, seg_b), False)

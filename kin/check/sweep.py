@@ -30,8 +30,6 @@ XTOL = 1e-10
 _GOLD = 0.5 * (np.sqrt(5.0) - 1.0)
 #: every 4th grid value (2° or 1 % of the size): the solver's own lead-in step
 _STRIDE = 4
-#: samples per bracket and iteration of the zoom searches
-_M = 32
 
 
 def mechanism_size(m: Mechanism) -> float:
@@ -60,10 +58,12 @@ class Side:
     k: int
     sign: int
     grid: np.ndarray
+    samples: int = 32
 
     @classmethod
-    def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float) -> "Side":
-        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n))
+    def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
+             samples: int = 32) -> "Side":
+        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n), samples)
 
     @property
     def is_rotary(self) -> bool:
@@ -103,8 +103,8 @@ class Side:
         return st, where[g.size:]
 
     def _sample(self, lo, hi, value, derivatives):
-        """``value`` at ``_M`` equispaced interior points of every bracket: (K, _M)."""
-        t = np.arange(1, _M + 1) / (_M + 1)
+        """``value`` at ``samples`` equispaced interior points of every bracket."""
+        t = np.arange(1, self.samples + 1) / (self.samples + 1)
         x = lo[:, None] + (hi - lo)[:, None] * t
         st, r = self.at(x.ravel(), derivatives)
         return x, value(st, r.reshape(x.shape))
@@ -112,10 +112,10 @@ class Side:
     def bisect(self, lo, hi, value, derivatives: bool = False):
         """Roots of sign changes, one per bracket, vectorised (zoom search).
 
-        Each iteration samples ``_M`` interior points of every bracket in one solve
+        Each iteration samples ``samples`` interior points of every bracket in one solve
         and keeps the first sub-interval where the sign changes, so the bracket
-        shrinks ``_M + 1`` times per solve (the sign test of bisection, applied to
-        ``_M`` points at once).
+        shrinks ``samples + 1`` times per solve (the sign test of bisection, applied to
+        ``samples`` points at once).
 
         Parameters
         ----------
@@ -140,16 +140,17 @@ class Side:
             x, v = self._sample(lo, hi, value, derivatives)
             same = (np.sign(v) == s_lo[:, None]) & np.isfinite(v)
             # first sample on the other side (or none: the root is in the last sub-interval)
-            first = np.where(~same.all(axis=1), np.argmin(same, axis=1), _M)
+            M = self.samples
+            first = np.where(~same.all(axis=1), np.argmin(same, axis=1), M)
             new_lo = np.where(first > 0, x[rows, np.maximum(first - 1, 0)], lo)
-            hi = np.where(first < _M, x[rows, np.minimum(first, _M - 1)], hi)
+            hi = np.where(first < M, x[rows, np.minimum(first, M - 1)], hi)
             lo = new_lo
         return lo, hi
 
     def golden(self, a, b, value, derivatives: bool = False):
         """Minimum of ``value`` in each bracket ``[a_i, b_i]`` (zoom search).
 
-        Each iteration samples ``_M`` interior points of every bracket in one solve
+        Each iteration samples ``samples`` interior points of every bracket in one solve
         and keeps the two sub-intervals around the smallest sample.  ``value`` as in
         :meth:`bisect`.  Returns the abscissae (K,).
         """
