@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Install multiloop and everything its tests use, on a fresh Debian/Ubuntu machine or
-# any machine with Python >= 3.10 and a C compiler (pynauty builds nauty from source).
+# Install multiloop and everything its tests use.  pip alone gives every feature:
+# nauty's geng/genbg come from the passagemath-nauty wheel and pynauty from a prebuilt
+# wheel (no C compiler on Linux x86_64, Python 3.11); extras: [test] the suite, [dask]
+# Dask clusters for `atlas --scheduler`, [notebook] the notebook widgets and the
+# executed example notebook, [bench] the libraries the benchmarks compare against.
 # System packages are installed with apt-get when it is available and we are root:
-# nauty (geng/genbg, the generators behind `multiloop atlas`) and headless Chromium
-# (the HTML-atlas browser test).  Set MULTILOOP_NO_APT=1 to skip them: `atlas` then
-# says it needs nauty (exit 2) and the tests that need them are skipped with a reason.
+# Debian's nauty (a fallback for the wheel's generators) and headless Chromium (the
+# HTML-atlas browser test).  Set MULTILOOP_NO_APT=1 to skip them.
 set -euo pipefail
 cd "$(dirname "$0")"
-python3 -m pip install --disable-pip-version-check -q -e ".[test]"
+python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook]"
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"

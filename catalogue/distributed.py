@@ -32,7 +32,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
 
-__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent",
+__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent", "require_dask",
            "SCHEDULER_TIMEOUT"]
 
 #: seconds to wait for a Dask scheduler before giving up
@@ -117,7 +117,19 @@ def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
             raise
 
 
+def require_dask() -> None:
+    """Raise :class:`InputError` naming the ``[dask]`` extra when Dask is not installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("distributed") is None:
+        raise InputError(explain("--scheduler", expected="Dask's distributed package",
+                                 got="it is not installed",
+                                 hint="pip install 'multiloop[dask]' (the [dask] extra), "
+                                      "or drop --scheduler to use local processes"))
+
+
 def _dask(tasks, opts, loops, scheduler):
+    require_dask()
     from distributed import Client, as_completed as dask_completed
 
     own = not isinstance(scheduler, Client)

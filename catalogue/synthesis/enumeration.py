@@ -22,9 +22,9 @@ __all__ = ["run_task", "count_task", "iter_chains", "brute_force_chains"]
 def _raw_task(task: Task, opts: SynthesisOptions, batch: int = 20000) -> Iterator[np.ndarray]:
     """Joint masks of the non-degenerate chains of one task, in batches."""
     if not nauty_available():
-        raise InputError(explain("type synthesis", expected="nauty's geng/genbg on the PATH",
+        raise InputError(explain("type synthesis", expected="nauty's geng/genbg (PATH or the passagemath-nauty wheel)",
                                  got="neither geng nor nauty-geng found",
-                                 hint="apt-get install nauty (or pip install passagemath-nauty), "
+                                 hint="pip install passagemath-nauty (or apt-get install nauty), "
                                       "or use method='brute-force' for small n"))
     cmd = _generator_command(task, opts)
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)

@@ -2,29 +2,23 @@
 a task, and decoding their graph6 output into joint bit masks with NumPy."""
 from __future__ import annotations
 
-import shutil
-from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
 
+from .. import nauty_tools
 from .options import SynthesisOptions, Task
 
 __all__ = ["nauty_available"]
 
 
 def nauty_available() -> bool:
-    """True when nauty's ``geng`` and ``genbg`` are on the PATH."""
+    """True when nauty's ``geng`` and ``genbg`` were found (:mod:`catalogue.nauty_tools`)."""
     return _tool("geng") is not None and _tool("genbg") is not None
 
 
-@lru_cache(maxsize=None)
 def _tool(name: str) -> str | None:
-    for cand in (name, f"nauty-{name}"):
-        path = shutil.which(cand)
-        if path:
-            return path
-    return None
+    return nauty_tools.tool(name)
 
 
 # ------------------------------------------------------------------ graph6 decoding

@@ -69,6 +69,9 @@ def run(args) -> int:
     if args.links is None and not Path(args.db).exists():
         raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
                                  got=repr(args.db)))
+    if args.scheduler is not None:
+        from multiloop.catalogue.distributed import require_dask
+        require_dask()
     opts = _options(args) if args.links is not None else None
     outs = Outputs("multiloop atlas")
     for d in (args.html, args.charts):
