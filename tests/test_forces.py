@@ -394,3 +394,16 @@ def test_force_table_faults_named(tmp_path, capsys, edit, words):
     assert main(["forces", str(f), "--at", "30"]) == 2
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err
+
+
+def test_sparse_elimination_weak_static_pivot_falls_back_to_lapack():
+    """A constant pivot 1e-12 against a column entry 1 fails the threshold test: those
+    positions are re-solved with partial pivoting and match LAPACK to round-off."""
+    from multiloop.kin.forces.linsolve import dense, solve_sparse
+    a = np.array([1.0, 2.0, 3.0])
+    E = [[1e-12, 1.0], [a, 1.0]]
+    b = [np.ones(3), np.arange(3.0)]
+    x, det = solve_sparse(E, b, 3)
+    ref = np.linalg.solve(dense(E, 3), np.stack(b, axis=-1)[..., None])[..., 0]
+    np.testing.assert_allclose(x, ref, rtol=1e-12)
+    assert np.all(det > 0)
