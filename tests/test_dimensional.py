@@ -106,6 +106,7 @@ def test_cli_path_writes_a_mechanism_that_solves(tmp_path, capsys):
     assert "target.csv" in m.source
     assert main(["analyse", str(out)]) == 0
     assert main(["solve", str(out), "--steps", "8"]) == 0
+    assert main(["check", str(out)]) == 0          # read like any other mechanism file
 
 
 @pytest.mark.parametrize("case", ["few", "nan", "point", "budget", "unassembled", "output", "link"])
@@ -310,3 +311,23 @@ def test_cli_function_and_motion(tmp_path, capsys):
                  "--out", str(out2), "--budget", "1"]) == 0
     assert "pose angle error" in capsys.readouterr().out
     assert main(["solve", str(out2), "--steps", "4"]) == 0
+
+
+@pytest.mark.parametrize("name", ["six_bar_slider", "dyad_rpr", "watt_1"])
+def test_transmission_angles_agree_with_check(name):
+    """Two routes: the batched penalty's angles and multiloop check's definitions."""
+    from multiloop.catalogue.dimensional import transmission_angles
+    from multiloop.kin.check.transmission import angle_specs, angle_values
+    from multiloop.kin.solve import compile_plan
+    m = load_named(name)
+    sp = design_space(m, [])
+    ev = Evaluator(m, sp)
+    phi = np.linspace(0.0, 0.5, 11)
+    ours = transmission_angles(ev, sp.x0[None, :], ev.poses(sp.x0[None, :], phi))[0]
+    plan = compile_plan(m)
+    st = solve(m, phi)
+    specs = [s_ for s_ in angle_specs(plan.assur) if s_.quantity != "triad"]
+    v = angle_values(st, specs)
+    folded = np.column_stack([np.minimum(v[:, i], 180.0 - v[:, i]) if s_.quantity == "transmission"
+                              else 90.0 - v[:, i] for i, s_ in enumerate(specs)])
+    np.testing.assert_allclose(ours, folded.min(axis=1), atol=1e-9)

@@ -11,10 +11,9 @@ D[i-1, k']``).  :meth:`Problem.residuals` is the smooth form for the local polis
 the design plus one driver value per target.
 
 Constraints are penalties added to the relative RMS error: full rotation of the
-driver, a minimum transmission angle of every RRR dyad (the angle at the inner
-pin between the lines to the two outer pins, folded to [0°, 90°]; Hartenberg &
-Denavit 1964, ch. 3), bounds on the link lengths and on the ratio of the longest
-to the shortest.
+driver, a minimum transmission angle of every dyad (the definitions of
+``multiloop check``: :func:`transmission_angles`), bounds on the link lengths and
+on the ratio of the longest to the shortest.
 """
 from __future__ import annotations
 
@@ -45,24 +44,51 @@ class Constraints:
 
 
 def transmission_angles(ev: Evaluator, X: np.ndarray, st: Poses) -> np.ndarray:
-    """Smallest folded transmission angle (deg, in [0, 90]) over the RRR dyads, ``(P, N)``.
+    """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the dyads,
+    ``(P, N)``; ``inf`` when there is none.
 
-    The angle μ at the inner pin B between B→A and B→C (A, C the outer pins) is
-    folded to ``min(μ, 180° − μ)``; 90° is ideal.  ``inf`` when there is no RRR dyad.
+    The definitions of ``multiloop check`` (:mod:`multiloop.kin.check.transmission`):
+    RRR, the angle μ at the inner pin between the lines to the outer pins, folded to
+    ``min(μ, 180° − μ)``; RRP and RPR, 90° minus the pressure angle (the angle between
+    the rod, or the line between the pivots, and the guide).  Triads are not included.
     """
     out = np.full(st.ok.shape, np.inf)
+    m = ev.mechanism
     for g in ev.plan.groups:
-        if g.kind != "RRR":
+        if g.kind not in ("RRR", "RRP", "RPR"):
             continue
         o1, inner, o2, l1, l2 = g.layout
-        k1, k2 = ev.links[l1], ev.links[l2]
-        A, B = st.world(k1, ev.at(X, o1)), st.world(k1, ev.at(X, inner))
-        C = st.world(k2, ev.at(X, o2))
-        u, v = A - B, C - B
-        cos = np.sum(u * v, -1) / (np.linalg.norm(u, axis=-1) * np.linalg.norm(v, axis=-1))
-        mu = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
-        out = np.fmin(out, np.minimum(mu, 180.0 - mu))
+        if g.kind == "RRR":
+            k1, k2 = ev.links[l1], ev.links[l2]
+            A, B = st.world(k1, ev.at(X, o1)), st.world(k1, ev.at(X, inner))
+            a = _angle_deg(A - B, st.world(k2, ev.at(X, o2)) - B)
+            q = np.minimum(a, 180.0 - a)
+        else:
+            if g.kind == "RRP":
+                pj, guide = o2, m.joint(o2).links[0]
+                k1 = ev.links[l1]
+                d = st.world(k1, ev.at(X, inner)) - st.world(k1, ev.at(X, o1))
+            else:
+                pj, guide = inner, m.joint(inner).links[0]
+                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
+                kg = ev.links[guide]
+                kb = ev.links[l2 if guide == l1 else l1]
+                d = st.world(kb, ev.at(X, bx)) - st.world(kg, ev.at(X, gx))
+            u0 = ev.axis(X, pj)
+            th = st.th[ev.links[guide]]
+            c, s = np.cos(th), np.sin(th)
+            u = np.stack([c * u0[:, 0:1] - s * u0[:, 1:2], s * u0[:, 0:1] + c * u0[:, 1:2]], axis=-1)
+            a = _angle_deg(d, u)
+            q = 90.0 - np.minimum(a, 180.0 - a)
+        out = np.fmin(out, q)
     return out
+
+
+def _angle_deg(u, w):
+    """Unsigned angle between vectors ``(..., 2)`` in degrees, [0, 180]."""
+    cr = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
+    dt = u[..., 0] * w[..., 0] + u[..., 1] * w[..., 1]
+    return np.degrees(np.abs(np.arctan2(cr, dt)))
 
 
 def _wrap(a):
