@@ -20,3 +20,61 @@ def test_single_loop_and_dangling_link():
     # a triangle with a dangling link: its joint adds two link corners (c again, d) to the outer loop
     la = loop_assortment(chain_from_joint_lists([["a", "b"], ["b", "c"], ["c", "a"], ["c", "d"]]))
     assert la.sizes == (3, 5) and la.outer == 5
+
+
+def test_branch_and_bound_minimum_equals_the_full_enumeration():
+    # two routes to the canonical face sizes of every block: the minimum over all
+    # embeddings (block_embeddings) and the branch-and-bound search (loop_assortment)
+    import random
+
+    import networkx as nx
+
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import _minimum_faces, block_embeddings
+    from tests.common import random_joint_lists
+
+    rng = random.Random(5)
+    checked = 0
+    for _ in range(80):
+        m = chain_from_joint_lists(random_joint_lists(rng, rng.randint(5, 12), rng.randint(1, 6), 0.3))
+        g = incidence_graph(m)
+        for block in nx.biconnected_components(g):
+            if len(block) < 3:
+                continue
+            sub = {v: list(g.subgraph(block)[v]) for v in block}
+            full = set(block_embeddings(sub, use_filter=False))
+            for use_filter in (False, True):
+                best, _ = _minimum_faces(sub, use_filter)
+                assert best == (min(full) if full else None)
+            checked += 1
+    assert checked > 60
+
+
+def test_strip_of_quadrilaterals():
+    # the catalogue's 24-link chain (Pozhbelko & Kuts 2020): eleven quadrilaterals and
+    # the outer loop of 22 links
+    from multiloop.catalogue.named import load_named
+
+    assert loop_assortment(load_named("linkage_24")).sizes == (4,) * 11 + (22,)
+
+
+def test_cycle_lists_two_routes():
+    # the path search and networkx's simple_cycles list the same cycles (edge masks)
+    import random
+
+    import networkx as nx
+
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import _reduce, _simple_cycles_dfs, _simple_cycles_nx
+    from tests.common import random_joint_lists
+
+    rng = random.Random(3)
+    for _ in range(40):
+        m = chain_from_joint_lists(random_joint_lists(rng, rng.randint(4, 12), rng.randint(1, 6), 0.3))
+        g = incidence_graph(m)
+        for block in nx.biconnected_components(g):
+            if len(block) >= 3:
+                keep, edges = _reduce({v: list(g.subgraph(block)[v]) for v in block})
+                a = {mask: set(p) for mask, p in _simple_cycles_dfs(keep, edges)}
+                b = {mask: set(p) for mask, p in _simple_cycles_nx(keep, edges)}
+                assert a == b

@@ -63,8 +63,8 @@ class LoopAssortment:
     outer : int or None
         ``L0``, the outer loop (largest face).
     n_embeddings : int
-        Distinct face-size lists found over all blocks (1 when every embedding of every
-        block has the same loop sizes, e.g. a rigidly embedded chain).
+        Complete embeddings examined over all blocks by the branch-and-bound search
+        (1 for a block with a single embedding).
     rule : str
         The canonical rule used.
     """
@@ -211,8 +211,35 @@ def _reduced_block(block) -> _ReducedBlock:
     return _ReducedBlock(tuple(keep), tuple(edges), tuple((kidx[u], kidx[v]) for u, v, *_r in edges))
 
 
+#: reduced blocks with more vertices list their cycles with networkx (output-sensitive)
+DFS_CYCLES_MAX = 10
+
+
 def _simple_cycles(vertices, edges):
     """All simple cycles of a multigraph as (edge bitmask, vertex tuple)."""
+    if len(vertices) > DFS_CYCLES_MAX:
+        return _simple_cycles_nx(vertices, edges)
+    return _simple_cycles_dfs(vertices, edges)
+
+
+def _simple_cycles_nx(vertices, edges):
+    """The same list by networkx's output-sensitive ``simple_cycles`` (Gupta & Suzumura
+    2021) on the graph with every edge subdivided (parallel edges stay distinct); a
+    plain path search is exponential in the paths, e.g. on a ladder."""
+    index = {v: i for i, v in enumerate(vertices)}
+    g = nx.Graph()
+    for e, (u, v, *_rest) in enumerate(edges):
+        g.add_edge(index[u], ("s", e))
+        g.add_edge(("s", e), index[v])
+    out = []
+    for cyc in nx.simple_cycles(g):
+        mask = sum(1 << x[1] for x in cyc if isinstance(x, tuple))
+        out.append((mask, tuple(x for x in cyc if not isinstance(x, tuple))))
+    return out
+
+
+def _simple_cycles_dfs(vertices, edges):
+    """All simple cycles by a path search from each vertex through larger vertices."""
     index = {v: i for i, v in enumerate(vertices)}
     adj: dict[int, list[tuple[int, int]]] = {i: [] for i in range(len(vertices))}
     for e, (u, v, *_rest) in enumerate(edges):
@@ -334,6 +361,11 @@ class _FaceSearch:
         self._lower_of = [itemgetter(*edges, edges[0]) for edges in cand.cycle_edges]
         self.count = 0
         self.nodes = 0
+        # branch and bound (minimum mode only): best list so far, smallest candidate,
+        # sum of the face sizes of every embedding (the block's link corners)
+        self.best: tuple[int, ...] | None = None
+        self.smin = min(cand.sizes, default=0)
+        self.total = 0
 
     def _path_end(self, v_idx: int, start: int) -> tuple[int, int]:
         """Follow corners from edge ``start`` at vertex v; return (end edge, edges seen)."""
@@ -397,10 +429,39 @@ class _FaceSearch:
         if self.node_budget is not None and self.nodes > self.node_budget:
             raise _BudgetExceeded
 
+    def _hopeless(self, chosen: list[int]) -> bool:
+        """True when no completion of ``chosen`` can beat ``best``.  Every remaining face
+        has at least ``smin`` links and all faces add up to ``total``; the ascending list
+        ``chosen + [smin] * (r − 1) + [rest]`` is a lexicographic lower bound of every
+        completion (any other completion has fewer faces of size ``smin`` and agrees
+        below it), so a bound >= best prunes."""
+        if self.best is None:
+            return False
+        sizes = [self.cand.sizes[c] for c in chosen]
+        r = self.n_faces - len(chosen)
+        if r <= 0:
+            return False
+        rest = self.total - sum(sizes) - (r - 1) * self.smin
+        bound = sorted(sizes + [self.smin] * (r - 1) + [max(rest, self.smin)])
+        return tuple(bound) >= self.best
+
+    def minimum(self) -> tuple[int, ...] | None:
+        """The lexicographically smallest ascending face-size list, by branch and bound
+        (the same answer as the minimum over :meth:`search`, tested)."""
+        for faces in self.search():
+            if self.best is None:
+                self.total = sum(faces)
+            if self.best is None or faces < self.best:
+                self.best = faces
+        return self.best
+
     def search(self, used1: int = 0, used2: int = 0, chosen: list[int] | None = None):
-        """Yield the sorted face sizes of every embedding below this node."""
+        """Yield the sorted face sizes of every embedding below this node (in minimum
+        mode, only those that may beat the best so far)."""
         chosen = [] if chosen is None else chosen
         self._tick()
+        if self._hopeless(chosen):
+            return
         if used2 == self.full or len(chosen) == self.n_faces:
             # every edge twice and no wheel closed early: each rotation is one cycle
             if used2 == self.full and len(chosen) == self.n_faces:
@@ -461,13 +522,27 @@ def block_embeddings(block, limit: int = MAX_EMBEDDINGS, use_filter: bool = True
 NODE_BUDGET = 2_000
 
 
+def _minimum_faces(block, use_filter: bool, node_budget: int | None = None
+                   ) -> tuple[tuple[int, ...] | None, int]:
+    """Branch-and-bound minimum of :func:`block_embeddings` and the number of complete
+    embeddings it examined."""
+    rb = _reduced_block(block)
+    if not rb.keep:
+        s = sum(1 for v in block if _is_link(v))
+        return (s, s), 1
+    if len(rb.keep) > 4 and not _planar(len(rb.keep), rb.pairs):
+        return None, 0
+    search = _FaceSearch(rb, _face_candidates(rb, use_filter), MAX_EMBEDDINGS, node_budget)
+    return search.minimum(), search.count
+
+
 def _best_block_faces(block) -> tuple[list[int], int] | None:
-    """Canonical face sizes of a block and the number of embeddings, or None when the
-    block is not planar (tested on the reduced graph first)."""
+    """Canonical face sizes of a block and the number of embeddings examined, or None
+    when the block is not planar (tested on the reduced graph first)."""
     try:
-        found = list(block_embeddings(block, use_filter=False, node_budget=NODE_BUDGET))
+        best, count = _minimum_faces(block, use_filter=False, node_budget=NODE_BUDGET)
     except _BudgetExceeded:
-        found = list(block_embeddings(block, use_filter=True))
-    if not found:
+        best, count = _minimum_faces(block, use_filter=True)
+    if best is None:
         return None
-    return list(min(found)), len(found)
+    return list(best), count
