@@ -331,3 +331,16 @@ def test_transmission_angles_agree_with_check(name):
     folded = np.column_stack([np.minimum(v[:, i], 180.0 - v[:, i]) if s_.quantity == "transmission"
                               else 90.0 - v[:, i] for i, s_ in enumerate(specs)])
     np.testing.assert_allclose(ours, folded.min(axis=1), atol=1e-9)
+
+
+def test_function_generation_slider_output_in_metres():
+    """A P output joint: the slide of the piston (m) against the crank angle (deg)."""
+    m = load_named("crank_slider")
+    x = np.arange(0.0, 181.0, 20.0)
+    st = solve(m, np.radians(x))
+    j = m.joint("S")
+    B = st.positions[:, m.joint_names.index("B")]                  # B rides on the piston
+    y = (B - B[0]) @ (np.asarray(j.axis) / np.hypot(*j.axis))
+    res = synthesise(_perturbed(m, 0.02), function=np.column_stack([x, y]), output="S", budget=1.5)
+    assert res.error_max < 1e-3
+    np.testing.assert_allclose(res.achieved, y, atol=1e-3 * np.ptp(y))
