@@ -5,7 +5,7 @@ import json
 import sys
 import time
 
-from multiloop.topo.io import load
+from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.numbers import structural_report
 
 

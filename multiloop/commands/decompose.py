@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 
 from multiloop.topo.assur import decompose
-from multiloop.topo.io import load
+from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
 __all__ = ["add_arguments", "run", "format_plan"]
 

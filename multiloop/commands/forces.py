@@ -53,7 +53,7 @@ def _resolve(path: str) -> Path:
 
 def load_any(path: str):
     """A mechanism from a mechanism file, or built from an engine file."""
-    from multiloop.topo.io import load, read_document  # noqa: PLC0415
+    from multiloop.topo.io import read_document  # noqa: PLC0415
     p = _resolve(path)
     if p.suffix.lower() in (".toml", ".json") and p.exists():
         doc = read_document(p)
@@ -63,7 +63,8 @@ def load_any(path: str):
                 return engine_mechanism(engine_from_dict(doc), gas_loads=True)
             except InputError as exc:
                 raise InputError(f"{p}: {exc}") from None
-    return load(p)
+    from multiloop.inputs import load_mechanism  # noqa: PLC0415
+    return load_mechanism(p)
 
 
 #: most positions a run computes (--steps)

@@ -39,7 +39,7 @@ import numpy as np
 
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
-from multiloop.topo.io import load
+from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.model import JointKind
 
 __all__ = ["add_arguments", "run", "state_to_dict", "input_values"]

@@ -27,7 +27,8 @@ from pathlib import Path
 
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
-from multiloop.topo.io import dumps_toml, load
+from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
+from multiloop.topo.io import dumps_toml
 
 __all__ = ["add_arguments", "run"]
 
