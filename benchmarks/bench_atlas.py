@@ -1,31 +1,24 @@
-"""Benchmark of the atlas: time to the full atlas against a brute-force generate-and-filter.
+"""Benchmark of the atlas against nauty's genbg piped into a compiled filter.
 
 Run::
 
-    python benchmarks/bench_atlas.py            # everything (about 15 min on 2 busy cores)
-    python benchmarks/bench_atlas.py --quick    # up to 10 links
+    python benchmarks/bench_atlas.py            # n = 10 and 11 (a few minutes on 2 busy cores)
+    python benchmarks/bench_atlas.py --with-12  # also n = 12
 
-Rows (each printed as ``ours`` vs ``baseline`` with the ratio):
-
-* ``count``: the enumeration alone (nauty with pruning options + NumPy exact
-  degeneracy filter), serial;
-* ``atlas``: the full SQLite atlas (canonical form, assortments, codes, planarity,
-  fractionation) with 1 and 2 worker processes; ``+La``: the same with the loop
-  assortments of :func:`topo.loops.loop_assortment` (2 workers, n <= 11);
-* ``baseline``: generate-and-filter without pruning: ``geng -c -d2`` / ``genbg -c
-  -d2:2`` (no ``-t``, no ``-Z1``), every graph built as a :class:`topo.model.Mechanism`
-  and tested with :func:`topo.degeneracy.is_degenerate`.  When the baseline would run
-  longer than ``--budget`` seconds, its per-graph rate is measured on a prefix and
-  multiplied by the number of graphs (nauty's ``-u`` count); such rows say
-  ``(extrapolated)``.
-
-Peak memory is the largest resident set of this process and of its children.
-Writes ``benchmarks/charts/atlas_times.png``.
+Yardstick: the same generator commands as the atlas (``geng -t`` for simple joints,
+``genbg -d2:2 -Z1`` per joint count; ``-Z1`` is safe: two joints sharing two links make a
+rigid pair), one run per joint count, piped into ``benchmarks/c/chainfilter.c``
+(compiled here with ``cc -O2``), which counts the non-degenerate chains by visiting
+every link subset in Gray-code order.  Ours: ``multiloop atlas`` into a fresh SQLite
+file (canonical forms, codes, planarity, fractionation; [La] where the command computes
+it by default, n <= 10), with the command's default workers (all cores) and with one.
+Both counts must agree.  Times are wall clock, min of ``--repeat`` runs; CPU seconds
+(this process and its children) are printed beside them because the machine is shared.
 """
 from __future__ import annotations
 
 import argparse
-import resource
+import os
 import subprocess
 import sys
 import tempfile
@@ -36,172 +29,91 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from multiloop.catalogue.atlas import Atlas  # noqa: E402
-from multiloop.catalogue.synthesis import (  # noqa: E402
-    LITERATURE_SJ_F1, SynthesisOptions, _decode_bipartite, _decode_simple, _tool, count_task,
-    plan_tasks,
-)
-from multiloop.topo.degeneracy import is_degenerate  # noqa: E402
-from multiloop.topo.model import chain_from_joint_lists  # noqa: E402
+from multiloop.catalogue.synthesis import LITERATURE_SJ_F1, SynthesisOptions, plan_tasks  # noqa: E402
+from multiloop.catalogue.synthesis.nauty import _generator_command, _tool  # noqa: E402
+
+GOAL = 1.5   # issue 11: multiloop atlas --links 11 --dof 2 within 1.5x of genbg + compiled filter
+FILTER_SRC = ROOT / "benchmarks" / "c" / "chainfilter.c"
 
 
-def _baseline_commands(opts: SynthesisOptions):
-    p, n = opts.p, opts.n
-    if opts.simple_joints:
-        yield [_tool("geng"), "-cq", "-d2", str(n), f"{p}:{p}"], None
-        return
-    for m in range(p, 0, -1):
-        if p + m < 2 * n:
-            break
-        e = p + m
-        if m == p:
-            yield [_tool("geng"), "-cq", "-d2", str(n), f"{p}:{p}"], None
-        else:
-            yield [_tool("genbg"), "-cq", "-d2:2", str(n), str(m), f"{e}:{e}"], m
+def build_filter(workdir: Path) -> Path:
+    exe = workdir / "chainfilter"
+    subprocess.run(["cc", "-O2", "-o", str(exe), str(FILTER_SRC)], check=True)
+    return exe
 
 
-def _count_only(cmd, timeout: float) -> int:
-    args = [a for a in cmd[1:] if a != "-cq"] + ["-c"]
-    out = subprocess.run(cmd[:1] + ["-u"] + args, capture_output=True, text=True,
-                         timeout=timeout).stderr
-    for line in out.splitlines():
-        if "graphs generated" in line:
-            return int(line.split()[1])
-    return 0
+def cpu() -> float:
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
 
 
-def baseline(opts: SynthesisOptions, budget: float) -> tuple[float | None, int | None, bool]:
-    """Seconds of generate-and-filter, survivors (None if extrapolated), extrapolated?
-
-    ``None`` seconds when even counting the unpruned graphs exceeds the budget.
-    """
-    t0 = time.perf_counter()
-    kept = 0
-    seen = 0
-    try:
-        total = sum(_count_only(c, budget) for c, _ in _baseline_commands(opts))
-    except subprocess.TimeoutExpired:
-        return None, None, True
-    t0 = time.perf_counter()
-    extrapolated = False
-    for cmd, m in _baseline_commands(opts):
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE)
-        for line in proc.stdout:
-            line = line.rstrip(b"\n")
-            masks = (_decode_simple([line], opts.n, opts.p) if m is None else
-                     _decode_bipartite([line], opts.n, m))[0]
-            mech = chain_from_joint_lists([[str(x) for x in range(opts.n) if j >> x & 1]
-                                           for j in masks.tolist()])
-            kept += not is_degenerate(mech)
-            seen += 1
-            if time.perf_counter() - t0 > budget:
-                extrapolated = True
-                break
-        proc.kill()
-        proc.wait()
-        if extrapolated:
-            break
-    dt = time.perf_counter() - t0
-    if extrapolated:
-        return dt / seen * total, None, True
-    return dt, kept, False
+def yardstick(opts: SynthesisOptions, exe: Path) -> tuple[float, float, int]:
+    """Wall seconds, CPU seconds and count of generator | chainfilter, task by task."""
+    t0, c0, total = time.perf_counter(), cpu(), 0
+    for task in plan_tasks(opts, split=1):
+        cmd = _generator_command(task, opts)
+        gen = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        m = 0 if task.m == opts.p else task.m
+        out = subprocess.run([str(exe), str(opts.n), str(m)], stdin=gen.stdout, capture_output=True,
+                             text=True, check=True).stdout
+        gen.stdout.close()
+        gen.wait()
+        total += int(out)
+    return time.perf_counter() - t0, cpu() - c0, total
 
 
-def ours_count(opts: SynthesisOptions) -> tuple[float, int]:
-    t0 = time.perf_counter()
-    c = sum(count_task(t, opts) for t in plan_tasks(opts))
-    return time.perf_counter() - t0, c
-
-
-def ours_atlas(opts: SynthesisOptions, workers: int, loops: bool = False) -> tuple[float, int]:
+def ours(opts: SynthesisOptions, workers: int | None) -> tuple[float, float, int]:
+    """``multiloop atlas --links n --dof F`` into a fresh file (the command's defaults)."""
     with tempfile.TemporaryDirectory() as d:
         with Atlas(Path(d) / "bench.sqlite") as atlas:
-            t0 = time.perf_counter()
-            r = atlas.build(opts, loops=loops, workers=workers, progress=False)
-            return time.perf_counter() - t0, r.count
+            t0, c0 = time.perf_counter(), cpu()
+            r = atlas.build(opts, loops=opts.n <= 10, workers=workers, progress=False)
+            return time.perf_counter() - t0, cpu() - c0, r.count
 
 
-def peak_mb() -> tuple[float, float]:
-    me = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return me, kids
+def versions() -> str:
+    def first(cmd):
+        try:
+            return subprocess.run(cmd, capture_output=True, text=True).stdout.splitlines()[0]
+        except (OSError, IndexError):
+            return "?"
+    nauty = first(["dpkg-query", "-W", "-f", "${Version}", "nauty"])
+    return f"nauty {nauty} ({_tool('genbg')}), {first(['cc', '--version'])}, python {sys.version.split()[0]}"
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="only up to 10 links")
-    ap.add_argument("--budget", type=float, default=60.0, help="seconds before a baseline is extrapolated")
-    ap.add_argument("--with-14", action="store_true",
-                    help="also count the 1-DOF simple-jointed 14-link chains (literature: 318 162)")
-    ap.add_argument("--chart", default=str(ROOT / "benchmarks" / "charts" / "atlas_times.png"))
+    ap.add_argument("--with-12", action="store_true", help="also the 12-link 1-DOF atlases")
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--quick", action="store_true", help="one repeat, no 1-worker column")
     args = ap.parse_args(argv)
-    cases = [("SJ F=1 n=10", SynthesisOptions(10, 1, simple_joints=True), 1.0),
-             ("MJ F=1 n=10", SynthesisOptions(10, 1), 3.0),
-             ("MJ F=2 n=11", SynthesisOptions(11, 2), None)]
-    if not args.quick:
-        cases.insert(1, ("SJ F=1 n=12", SynthesisOptions(12, 1, simple_joints=True), 10.0))
-        cases.append(("MJ F=1 n=12", SynthesisOptions(12, 1), 600.0))
-    print(f"{'case':<14}{'chains':>8}{'count s':>9}{'atlas 1w':>10}{'atlas 2w':>10}{'speed-up':>9}"
-          f"{'+La 2w':>9}{'baseline s':>12}{'ratio':>8}{'goal s':>8}", flush=True)
-    rows = []
-    for name, opts, goal in cases:
-        big = opts.n >= 12 and not opts.simple_joints
-        tc, count = (None, None) if big else ours_count(opts)
-        t1 = None if big else ours_atlas(opts, 1)[0]     # 1-worker atlas of MJ 12: ~10 min
-        t2, count2 = ours_atlas(opts, 2)
-        if count is None:
-            count = count2
-        assert count2 == count, (count, count2)
-        tl = ours_atlas(opts, 2, loops=True)[0] if opts.n <= 11 else None
-        if opts.simple_joints and opts.F == 1:
-            assert count == LITERATURE_SJ_F1[opts.n]
-        tb, kept, extra = baseline(opts, args.budget)
-        if kept is not None:
-            assert kept == count, (name, kept, count)
-        ours = tc if tc is not None else t2
-        ratio = "n/a" if tb is None else f"{tb / ours:.0f}x"
-        speed = "" if t1 is None else f"{t1 / t2:.2f}"
-        tbs = "n/a" if tb is None else f"{tb:.1f}"
-        print(f"{name:<14}{count:>8}{'' if tc is None else f'{tc:.2f}':>9}"
-              f"{'' if t1 is None else f'{t1:.2f}':>10}{t2:>10.2f}"
-              f"{speed:>9}{'' if tl is None else f'{tl:.2f}':>9}{tbs:>11}{'*' if extra else ' '}"
-              f"{ratio:>8}{'' if goal is None else f'{goal:.0f}':>8}", flush=True)
-        rows.append((name, count, tc, t1, t2, tb, extra))
-    if args.with_14:
-        opts = SynthesisOptions(14, 1, simple_joints=True)
-        tc, count = ours_count(opts)
-        assert count == LITERATURE_SJ_F1[14], count
-        print(f"{'SJ F=1 n=14':<14}{count:>8}{tc:>9.2f}   (count only; literature 318162)", flush=True)
-    me, kids = peak_mb()
-    print(f"peak memory: this process {me:.0f} MB, largest child {kids:.0f} MB")
-    print("* baseline extrapolated from its per-graph rate on a prefix (see --budget); "
-          "n/a: counting the unpruned graphs alone exceeds the budget")
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        import numpy as np
-
-        fig, ax = plt.subplots(figsize=(8, 4.5))
-        x = np.arange(len(rows))
-        w = 0.2
-        ax.bar(x - 1.5 * w, [r[2] or 0 for r in rows], w, label="count (serial)")
-        ax.bar(x - 0.5 * w, [r[3] or 0 for r in rows], w, label="atlas, 1 worker")
-        ax.bar(x + 0.5 * w, [r[4] for r in rows], w, label="atlas, 2 workers")
-        ax.bar(x + 1.5 * w, [r[5] or 0 for r in rows], w, label="baseline (generate-and-filter)",
-               hatch=None, color="grey")
-        ax.set_yscale("log")
-        ax.set_xticks(x)
-        ax.set_xticklabels([f"{r[0]}\n{r[1]} chains" for r in rows], fontsize=8)
-        ax.set_ylabel("seconds (log)")
-        ax.set_title("Time to the full atlas (bench_atlas.py)")
-        ax.legend(fontsize=8)
-        ax.grid(axis="y", alpha=0.3)
-        fig.tight_layout()
-        Path(args.chart).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.chart, dpi=110)
-        print(f"chart: {args.chart}")
-    except Exception as exc:  # noqa: BLE001 - the numbers are printed anyway
-        print(f"no chart: {exc}")
+    repeat = 1 if args.quick else args.repeat
+    print(versions())
+    cases = [("SJ F=1 n=10", SynthesisOptions(10, 1, simple_joints=True)),
+             ("MJ F=1 n=10", SynthesisOptions(10, 1)),
+             ("MJ F=2 n=11", SynthesisOptions(11, 2))]
+    if args.with_12:
+        cases += [("SJ F=1 n=12", SynthesisOptions(12, 1, simple_joints=True)),
+                  ("MJ F=1 n=12", SynthesisOptions(12, 1))]
+    print(f"{'case':<13}{'chains':>8}{'yardstick s':>13}{'cpu':>7}{'ours s':>9}{'cpu':>7}"
+          f"{'ours 1w s':>11}{'ratio':>8}")
+    with tempfile.TemporaryDirectory() as d:
+        exe = build_filter(Path(d))
+        for name, opts in cases:
+            ys = min((yardstick(opts, exe) for _ in range(repeat)), key=lambda r: r[0])
+            us = min((ours(opts, None) for _ in range(repeat)), key=lambda r: r[0])
+            one = None if args.quick else ours(opts, 1)
+            assert ys[2] == us[2], (name, ys[2], us[2])
+            if opts.simple_joints and opts.F == 1:
+                assert us[2] == LITERATURE_SJ_F1[opts.n]
+            ratio = us[0] / ys[0]
+            print(f"{name:<13}{us[2]:>8}{ys[0]:>13.2f}{ys[1]:>7.1f}{us[0]:>9.2f}{us[1]:>7.1f}"
+                  f"{'' if one is None else f'{one[0]:.2f}':>11}{ratio:>7.2f}x", flush=True)
+            if name == "MJ F=2 n=11":
+                print(f"goal atlas --links 11 --dof 2 / (genbg -Z1 + compiled filter): {ratio:.2f}x wall, "
+                      f"{us[1] / ys[1]:.2f}x CPU (goal <= {GOAL}x) -> {'met' if ratio <= GOAL else 'NOT met'}",
+                      flush=True)
+    print(f"load average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     return 0
 
 
