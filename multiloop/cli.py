@@ -23,6 +23,7 @@ COMMANDS = {
     "platform": "six-strut spatial platform: strut forces, screws, frequencies",
     "atlas": "number/type synthesis: atlases of chains (SQLite, HTML)",
     "catalogue": "list the bundled mechanisms",
+    "convert": "convert a mechanism between .toml, .json and .pyslvs (Pyslvs)",
     "check": "design check over the whole motion: limits, dead centres, transmission, circuits",
     "bench": "run the benchmarks and print ratios",
     "synthesise": "dimensional synthesis: path, function and motion generation",

@@ -1,0 +1,46 @@
+"""``multiloop convert IN OUT``: convert a mechanism between ``.toml``, ``.json`` and ``.pyslvs``.
+
+IN may be any input the other commands take (a ``.toml``/``.json``/``.pyslvs``/``.expr``
+file or a catalogue name); the format of OUT follows its suffix: ``.toml``, ``.json``,
+``.pyslvs`` (Pyslvs project YAML: ``mechanism`` expression and ``input`` pairs) or
+``.expr`` (a bare Pyslvs expression).  The mapping to and from Pyslvs is documented in
+:mod:`multiloop.exchange.pyslvs`.  Nothing is written when the conversion fails.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from multiloop.inputs import load_mechanism
+from multiloop.outputs import Outputs
+from multiloop.topo.errors import InputError, explain
+
+__all__ = ["add_arguments", "run", "render"]
+
+FORMATS = (".toml", ".json", ".pyslvs", ".expr")
+
+
+def add_arguments(p) -> None:
+    p.add_argument("input", help="mechanism file (.toml/.json/.pyslvs/.expr) or catalogue name")
+    p.add_argument("output", help="output file; its suffix picks the format (.toml/.json/.pyslvs/.expr)")
+
+
+def render(m, suffix: str) -> str:
+    """The text of ``m`` in the format of ``suffix``."""
+    from multiloop.exchange.pyslvs import dumps_expression, dumps_pyslvs  # noqa: PLC0415
+    from multiloop.topo.io import dumps_json, dumps_toml  # noqa: PLC0415
+
+    writers = {".toml": dumps_toml, ".json": dumps_json, ".pyslvs": dumps_pyslvs, ".expr": dumps_expression}
+    return writers[suffix](m)
+
+
+def run(args) -> int:
+    suffix = Path(args.output).suffix.lower()
+    if suffix not in FORMATS:
+        raise InputError(explain(f"output '{args.output}'", expected="a suffix among " + ", ".join(FORMATS),
+                                 got=repr(suffix or "none")))
+    m = load_mechanism(args.input)
+    text = render(m, suffix)
+    outs = Outputs("multiloop convert")
+    outs.add(args.output, text, "OUT")
+    outs.commit()
+    return 0
