@@ -10,7 +10,7 @@ continuous path is a singular crossing (a change point), not a limit.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -82,16 +82,33 @@ def _first_stop(st, x) -> tuple[int | None, tuple[tuple[float, str], ...]]:
     return None, tuple(singular)
 
 
-def _segment(side: Side) -> Segment:
-    st = side.solve(side.grid, derivatives=True)
-    f, singular = _first_stop(st, side.grid)
+def _scan(side: Side, chunk: int | None):
+    """The grid solved from the reference; with ``chunk``, in growing prefixes that stop
+    after the first failure (a failed Newton position costs many retries)."""
+    if chunk is None:
+        return side.solve(side.grid, derivatives=True)
+    end = chunk
+    while True:
+        st = side.solve(side.grid[:end], derivatives=True)
+        if not st.ok.all() or end >= side.grid.size:
+            return st
+        end += chunk
+
+
+def _segment(side: Side, chunk: int | None = None) -> Segment:
+    st = _scan(side, chunk)
+    grid = side.grid[: st.n_positions]
+    f, singular = _first_stop(st, grid)
     if f == 0:
         raise AssemblyError(explain("reference configuration", expected="an assembled mechanism",
                                     got=str(st.status[0])))
-    if f is None:
+    if f is None and st.n_positions == side.grid.size:
         return Segment(side, side.grid.size, st, None, None, singular)
-    lo, hi = side.bisect([side.grid[f - 1]], [side.grid[f]],
-                         lambda s, r: np.where(s.ok[r], 1.0, -1.0))
+    if f is None:                         # chunk ended on an isolated singular sample
+        f = st.n_positions - 1
+    probe = side if chunk is None else replace(side, samples=1)
+    lo, hi = probe.bisect([side.grid[f - 1]], [side.grid[f]],
+                          lambda s, r: np.where(s.ok[r], 1.0, -1.0))
     st_ok = side.solve(side.grid[:f], derivatives=True)
     return Segment(side, f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])), singular)
 
@@ -101,19 +118,20 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=()) -> Motion:
     ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     heavy = any(kd not in _KERNELS for kd in kinds)
-    samples = 8 if heavy else 32
+    samples, stride = (8, 1) if heavy else (32, 4)
     if rotary:
         h = 2.0 * np.pi / R_STEPS
-        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h, samples)   # to 361°
+        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h, samples, stride)   # to 361°
     else:
         n = P_STEPS // 4 if heavy else P_STEPS
-        fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples)
-    seg_f = _segment(fwd)
+        fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples, stride)
+    chunk = 8 if heavy else None
+    seg_f = _segment(fwd, chunk)
     if rotary and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic)
-    bwd = Side(m, plan, k, -1, -fwd.grid, samples)
-    seg_b = _segment(bwd)
+    bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride)
+    seg_b = _segment(bwd, chunk)
     return Motion(m, k, rotary, False, (seg_f, seg_b), False)

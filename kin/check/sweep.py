@@ -59,11 +59,12 @@ class Side:
     sign: int
     grid: np.ndarray
     samples: int = 32
+    stride: int = _STRIDE
 
     @classmethod
     def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
-             samples: int = 32) -> "Side":
-        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n), samples)
+             samples: int = 32, stride: int = _STRIDE) -> "Side":
+        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n), samples, stride)
 
     @property
     def is_rotary(self) -> bool:
@@ -93,7 +94,7 @@ class Side:
         """
         xs = np.asarray(xs, float).reshape(-1)
         far = np.max(np.abs(xs)) if xs.size else 0.0
-        g = self.grid[::_STRIDE]
+        g = self.grid[:: self.stride]
         g = g[np.abs(g) < far]
         path = np.concatenate([g, xs])
         order = np.argsort(np.abs(path), kind="stable")
@@ -104,10 +105,10 @@ class Side:
 
     def _sample(self, lo, hi, value, derivatives):
         """``value`` at ``samples`` equispaced interior points of every bracket."""
-        t = np.arange(1, self.samples + 1) / (self.samples + 1)
+        t = np.arange(0, self.samples + 1) / (self.samples + 1)
         x = lo[:, None] + (hi - lo)[:, None] * t
-        st, r = self.at(x.ravel(), derivatives)
-        return x, value(st, r.reshape(x.shape))
+        st, r = self.at(x.ravel(), derivatives)      # lo too: the path approaches gradually
+        return x[:, 1:], value(st, r.reshape(x.shape))[:, 1:]
 
     def bisect(self, lo, hi, value, derivatives: bool = False):
         """Roots of sign changes, one per bracket, vectorised (zoom search).
