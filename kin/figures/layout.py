@@ -192,12 +192,16 @@ class _Refiner:
             f, room = self._step(k)
             nf = np.maximum(np.linalg.norm(f, axis=1), 1e-12)
             new = self.P + f / nf[:, None] * np.minimum(nf, temp)[:, None]
+            moved = 0.0
             for _ in range(4):              # put back the vertices of offending edges
                 bad = _offenders(new, self.E, self.pairs)
                 if not bad.size:
+                    moved = float(np.abs(new - self.P).max())
                     self.P = new
                     break
                 new[bad] = self.P[bad]
+            if r > 20 and moved < 1e-3 * temp:
+                break                       # settled: the forces are in balance
         return self.P
 
 
