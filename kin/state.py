@@ -57,6 +57,11 @@ class KinematicState(BatchStatus):
     def point_index(self, name: str) -> int:
         return self.point_names.index(name)
 
+    def _repr_html_(self) -> str:
+        """Notebook view: a table, link angles against the input and a drawing."""
+        from multiloop.kin.notebook import state_html  # noqa: PLC0415 - only when a notebook asks
+        return state_html(self)
+
     @property
     def n_positions(self) -> int:
         return self.positions.shape[0]

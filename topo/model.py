@@ -213,6 +213,11 @@ class Mechanism:
         """Number of joints on the link (an *i*-vertex link has degree *i*)."""
         return sum(1 for j in self.joints if link in j.links)
 
+    def _repr_svg_(self) -> str:
+        """Notebook preview: the reference configuration with names (:mod:`topo.svg`)."""
+        from .svg import mechanism_svg  # noqa: PLC0415 - only when a notebook asks
+        return mechanism_svg(self)
+
     def with_drivers(self, drivers: Sequence[Driver]) -> "Mechanism":
         """A copy with another driver set (validated)."""
         b = MechanismBuilder.from_mechanism(self)

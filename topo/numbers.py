@@ -180,6 +180,11 @@ class StructuralReport:
         return (self.K == self.K_formula and self.AVC == 0 and self.SL == self.SL_formula
                 and len(set(self.F_routes)) == 1)
 
+    def _repr_html_(self) -> str:
+        """Notebook view: the numbers and bars of [LA], [MJA] (:mod:`topo.svg`)."""
+        from .svg import report_html  # noqa: PLC0415 - only when a notebook asks
+        return report_html(self)
+
     def as_dict(self) -> dict:
         """The JSON keys of the documented JSON keys (README) (and a few more, documented in the README)."""
         d = asdict(self)

@@ -124,6 +124,11 @@ class CheckReport:
     instant_centres_at: tuple[float, ...]
     verdict: tuple[str, ...]
 
+    def _repr_html_(self) -> str:
+        """Notebook view: verdict and drivers, bars of the transmission ranges."""
+        from multiloop.kin.notebook import check_html  # noqa: PLC0415 - only when a notebook asks
+        return check_html(self)
+
     @property
     def ok(self) -> bool:
         return not self.verdict
