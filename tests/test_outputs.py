@@ -234,3 +234,25 @@ def test_engine_and_atlas_write_directories(tmp_path, capsys):
     assert len(list((tmp_path / "c").glob("*.png"))) == 2
     assert _leftovers(tmp_path) == []
     assert "Warning" not in capsys.readouterr().err
+
+
+def test_warnings_become_one_line_each(capsys):
+    import warnings
+
+    from multiloop.outputs import quiet_warnings
+    with quiet_warnings("multiloop t"):
+        warnings.warn("Glyph 128512 (\\N{GRINNING FACE}) missing from font(s) DejaVu Sans.")
+        warnings.warn("something\n  worth   saying")
+        warnings.warn("something worth saying")
+    assert capsys.readouterr().err == "multiloop t: warning: something worth saying\n"
+
+
+def test_no_raw_library_warning_on_stderr(tmp_path, capsys):
+    """A name the font cannot draw makes matplotlib warn; nothing raw reaches stderr."""
+    text = Path(FOUR_BAR).read_text().replace('name = "four_bar"', 'name = "bar \\u4e2d\\uac00"', 1)
+    src = tmp_path / "m.toml"
+    src.write_text(text, encoding="utf-8")
+    assert main(["solve", str(src), "--steps", "6", "--plot", str(tmp_path / "w.png"),
+                 "--animate", str(tmp_path / "w.gif")]) == 0
+    err = capsys.readouterr().err
+    assert "Warning" not in err and "warnings.warn" not in err
