@@ -123,14 +123,14 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = dj.kind is JointKind.R
-    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups))
+    groups, D = signed_dets(ap)
+    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     limit_groups = []
     for seg in mo.segments:
         if seg.limit_bracket is not None:
             st, r = seg.side.at([seg.side.grid[seg.n]])      # the first failed grid value
             limit_groups.append(str(st.status[r[0]]))
-    groups, D = signed_dets(ap)
     ww = [x for x in w if x[0] != driver_link and not (x[1] == "P" and x[2] == d.joint)]
     # one refinement for both: signed determinants (branch points), velocities (dead centres)
     found = roots(mo, lambda s: np.hstack([D(s), _velocity(s, ww)]), derivatives=True)

@@ -103,28 +103,38 @@ def _segment(side: Side, chunk: int | None = None) -> Segment:
         raise AssemblyError(explain("reference configuration", expected="an assembled mechanism",
                                     got=str(st.status[0])))
     if f is None and st.n_positions == side.grid.size:
-        return Segment(side, side.grid.size, st, None, None, singular)
+        return Segment(_guarded(side, st), side.grid.size, st, None, None, singular)
     if f is None:                         # chunk ended on an isolated singular sample
         f = st.n_positions - 1
     probe = side if chunk is None else replace(side, samples=1)
     lo, hi = probe.bisect([side.grid[f - 1]], [side.grid[f]],
                           lambda s, r: np.where(s.ok[r], 1.0, -1.0))
     st_ok = side.solve(side.grid[:f], derivatives=True)
-    return Segment(side, f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])), singular)
+    return Segment(_guarded(side, st_ok), f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])),
+                   singular)
 
 
-def driver_motion(m: Mechanism, plan, k: int, kinds=()) -> Motion:
+def _guarded(side: Side, st) -> Side:
+    if side.branch is None:
+        return side
+    return replace(side, signs=np.sign(side.branch(st)))
+
+
+def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
     """Sample and bound the motion of driver ``k`` (see the module docstring);
-    ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid)."""
+    ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid);
+    ``branch(state)`` gives the signed dyad determinants that guard refinements against
+    branch jumps (:meth:`Side._guard`)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     heavy = any(kd not in _KERNELS for kd in kinds)
-    samples, stride = (8, 1) if heavy else (32, 4)
+    samples, stride = (8, 1) if heavy else (32, 1)
     if rotary:
         h = 2.0 * np.pi / R_STEPS
         fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h, samples, stride)   # to 361°
     else:
         n = P_STEPS // 4 if heavy else P_STEPS
         fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples, stride)
+    fwd = replace(fwd, branch=branch)
     chunk = 8 if heavy else None
     seg_f = _segment(fwd, chunk)
     if rotary and seg_f.limit is None:
@@ -132,6 +142,6 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=()) -> Motion:
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic)
-    bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride)
+    bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride, branch)
     seg_b = _segment(bwd, chunk)
     return Motion(m, k, rotary, False, (seg_f, seg_b), False)

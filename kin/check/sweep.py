@@ -16,7 +16,7 @@ a P driver).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -60,6 +60,8 @@ class Side:
     grid: np.ndarray
     samples: int = 32
     stride: int = _STRIDE
+    branch: object = None            # D(state) -> (N, q) signed dyad determinants
+    signs: np.ndarray | None = None  # sign of D on the assembled grid
 
     @classmethod
     def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
@@ -101,7 +103,41 @@ class Side:
         st = self.solve(path[order], derivatives)
         where = np.empty_like(order)
         where[order] = np.arange(order.size)
-        return st, where[g.size:]
+        rows = where[g.size:]
+        if self.signs is not None and rows.size:
+            st = self._guard(st, rows, xs)
+        return st, rows
+
+    def _guard(self, st, rows, xs):
+        """Rows whose dyad branches differ from the dense grid's around them are failed.
+
+        The solver keeps each dyad's branch by prediction from the previous two path
+        points; on a path with uneven steps (grid, then a tiny bracket) that prediction
+        can pick the other branch of a near-toggle dyad.  A dyad's determinant changes
+        sign only at a branch point, so a sign that differs from the grid's on both
+        sides is such a jump, and the row is discarded (NaN).
+        """
+        n = self.signs.shape[0]
+        h = abs(self.grid[1] - self.grid[0])
+        i = np.clip((np.abs(xs) / h).astype(int), 0, max(n - 2, 0))
+        lo, hi = self.signs[i], self.signs[np.minimum(i + 1, n - 1)]
+        got = np.sign(self.branch(st)[rows])
+        bad = np.any((lo == hi) & (got != lo) & (got != 0) & np.isfinite(got), axis=1)
+        if not bad.any():
+            return st
+        r = rows[bad]
+        upd = {}
+        for name in ("positions", "angles", "velocities", "accelerations", "omegas", "epsilons",
+                     "point_positions", "point_velocities", "point_accelerations", "poses",
+                     "pose_rates", "pose_accelerations"):
+            a = getattr(st, name)
+            if a is not None:
+                a = a.copy()
+                a[r] = np.nan
+                upd[name] = a
+        status = st.status.copy()
+        status[r] = "branch jump of the solver on an uneven path (discarded)"
+        return replace(st, status=status, **upd)
 
     def _sample(self, lo, hi, value, derivatives):
         """``value`` at ``samples`` equispaced interior points of every bracket."""
