@@ -57,3 +57,16 @@ def test_long_ring_and_ring_with_triangle():
     tri = ring + [["l0", "t1"], ["t1", "t2"], ["t2", "l0"], ["l0", "t2"]]
     found = find_rigid_subchain(chain_from_joint_lists(tri))
     assert found is not None and subchain_deficit(chain_from_joint_lists(tri), found) <= 0
+
+
+@given(chains(min_links=3, max_links=10))
+def test_fractionation_matches_networkx_articulation_points(m):
+    # rustworkx's articulation points (topo.degeneracy) vs networkx's on the incidence graph
+    import networkx as nx
+
+    from multiloop.topo.graphs import incidence_graph
+
+    arts = set(nx.articulation_points(incidence_graph(m)))
+    fr = fractionation(m)
+    assert set(fr.cut_links) == {v[1] for v in arts if v[0] == "L"}
+    assert set(fr.cut_joints) == {v[1] for v in arts if v[0] == "J"}

@@ -44,10 +44,34 @@ def test_branch_and_bound_minimum_equals_the_full_enumeration():
             sub = {v: list(g.subgraph(block)[v]) for v in block}
             full = set(block_embeddings(sub, use_filter=False))
             for use_filter in (False, True):
-                best, _ = _minimum_faces(sub, use_filter)
-                assert best == (min(full) if full else None)
+                for whitney in (False, True):   # the 3-connected shortcut (Whitney) and without
+                    best, _ = _minimum_faces(sub, use_filter, whitney=whitney)
+                    assert best == (min(full) if full else None)
             checked += 1
     assert checked > 60
+
+
+def test_three_connected_blocks_have_one_embedding():
+    # Whitney: a 3-connected planar graph has one embedding; K4 as a chain of ternary links
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import _reduced_block, _three_connected
+
+    k4 = [["a", "b"], ["a", "c"], ["a", "d"], ["b", "c"], ["b", "d"], ["c", "d"]]
+    g = incidence_graph(chain_from_joint_lists(k4))
+    rb = _reduced_block({v: list(g[v]) for v in g})
+    assert _three_connected(rb)
+    assert len(set(block_embeddings_of(k4))) == 1
+    ring = [["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"], ["a", "c"]]
+    g = incidence_graph(chain_from_joint_lists(ring))
+    assert not _three_connected(_reduced_block({v: list(g[v]) for v in g}))
+
+
+def block_embeddings_of(joints):
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import block_embeddings
+
+    g = incidence_graph(chain_from_joint_lists(joints))
+    return block_embeddings({v: list(g[v]) for v in g})
 
 
 def test_strip_of_quadrilaterals():

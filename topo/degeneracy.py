@@ -23,10 +23,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from itertools import combinations
 
-import networkx as nx
 import numpy as np
+import rustworkx as rx
 
-from .graphs import incidence_graph
 from .model import Mechanism
 
 __all__ = ["find_rigid_subchain", "is_degenerate", "rigid_subset_mask", "Fractionation", "fractionation",
@@ -276,8 +275,12 @@ def fractionation(m: Mechanism) -> Fractionation:
     >>> fractionation(chain_from_joint_lists(two_loops)).cut_links
     ('a',)
     """
-    g = incidence_graph(m)
-    arts = set(nx.articulation_points(g))
-    links = tuple(x for x in m.link_names if ("L", x) in arts)
-    joints = tuple(j.name for j in m.joints if ("J", j.name) in arts)
+    n = m.n_links
+    index = {x: i for i, x in enumerate(m.link_names)}
+    g = rx.PyGraph(multigraph=False)          # the incidence graph (links, then joints)
+    g.add_nodes_from(range(n + m.n_joints))
+    g.add_edges_from_no_data([(index[x], n + k) for k, j in enumerate(m.joints) for x in j.links])
+    arts = set(rx.articulation_points(g))
+    links = tuple(x for x in m.link_names if index[x] in arts)
+    joints = tuple(j.name for k, j in enumerate(m.joints) if n + k in arts)
     return Fractionation(links, joints)

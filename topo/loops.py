@@ -445,14 +445,17 @@ class _FaceSearch:
         bound = sorted(sizes + [self.smin] * (r - 1) + [max(rest, self.smin)])
         return tuple(bound) >= self.best
 
-    def minimum(self) -> tuple[int, ...] | None:
+    def minimum(self, unique: bool = False) -> tuple[int, ...] | None:
         """The lexicographically smallest ascending face-size list, by branch and bound
-        (the same answer as the minimum over :meth:`search`, tested)."""
+        (the same answer as the minimum over :meth:`search`, tested).  ``unique``: the
+        block has one embedding (3-connected, Whitney), the first one found is it."""
         for faces in self.search():
             if self.best is None:
                 self.total = sum(faces)
             if self.best is None or faces < self.best:
                 self.best = faces
+            if unique:
+                break
         return self.best
 
     def search(self, used1: int = 0, used2: int = 0, chosen: list[int] | None = None):
@@ -522,10 +525,10 @@ def block_embeddings(block, limit: int = MAX_EMBEDDINGS, use_filter: bool = True
 NODE_BUDGET = 2_000
 
 
-def _minimum_faces(block, use_filter: bool, node_budget: int | None = None
+def _minimum_faces(block, use_filter: bool, node_budget: int | None = None, whitney: bool = True
                    ) -> tuple[tuple[int, ...] | None, int]:
     """Branch-and-bound minimum of :func:`block_embeddings` and the number of complete
-    embeddings it examined."""
+    embeddings it examined (one for a 3-connected block unless ``whitney`` is off)."""
     rb = _reduced_block(block)
     if not rb.keep:
         s = sum(1 for v in block if _is_link(v))
@@ -533,7 +536,24 @@ def _minimum_faces(block, use_filter: bool, node_budget: int | None = None
     if len(rb.keep) > 4 and not _planar(len(rb.keep), rb.pairs):
         return None, 0
     search = _FaceSearch(rb, _face_candidates(rb, use_filter), MAX_EMBEDDINGS, node_budget)
-    return search.minimum(), search.count
+    return search.minimum(unique=whitney and _three_connected(rb)), search.count
+
+
+def _three_connected(rb: _ReducedBlock) -> bool:
+    """The reduced block is a simple 3-connected graph: then its planar embedding is
+    unique up to reflection (Whitney 1932), and so are its faces.  Parallel reduced
+    edges are a 2-vertex cut; otherwise no vertex removal may leave a cut vertex."""
+    n = len(rb.keep)
+    if n < 4 or len({tuple(sorted(p)) for p in rb.pairs}) < len(rb.pairs):
+        return False
+    for v in range(n):
+        g = rx.PyGraph(multigraph=False)
+        g.add_nodes_from(range(n))
+        g.add_edges_from_no_data([p for p in rb.pairs if v not in p])
+        g.remove_node(v)
+        if rx.number_connected_components(g) != 1 or rx.articulation_points(g):
+            return False
+    return True
 
 
 def _best_block_faces(block) -> tuple[list[int], int] | None:
