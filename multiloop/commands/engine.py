@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.kin.engine import MAX_STEPS, analyse_engine, load_engine
+from multiloop.inputs import resolve
 from multiloop.outputs import Outputs, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
@@ -29,13 +30,12 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from multiloop.commands.forces import _resolve  # noqa: PLC0415
     if not 8 <= args.steps <= MAX_STEPS:
         raise InputError(explain("--steps", expected=f"an integer from 8 to {MAX_STEPS}", got=repr(args.steps)))
     outs = Outputs("multiloop engine")
     if args.plot is not None:
         outs.directory(args.plot, "--plot")
-    spec = load_engine(_resolve(args.file))
+    spec = load_engine(resolve(args.file, ("engines",)))
     res = analyse_engine(spec, args.steps, check=not args.no_check)
     if args.plot is not None:
         from multiloop.kin.figures.engine import engine_figures  # noqa: PLC0415

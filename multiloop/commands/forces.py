@@ -17,12 +17,12 @@ default stroke for P drivers.  The JSON report is :meth:`ForceResult.as_dict`
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 
 from multiloop.commands.solve import input_values
 from multiloop.kin.forces import VP_TOL, forces, has_loads, reduce_inputs, table_period
+from multiloop.inputs import resolve
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
@@ -39,22 +39,10 @@ def add_arguments(p) -> None:
     p.add_argument("--plot", default=None, metavar="OUT.png", help="plot balancing and reactions against the input")
 
 
-def _resolve(path: str) -> Path:
-    p = Path(path)
-    if p.exists():
-        return p
-    from importlib import resources  # noqa: PLC0415
-    for sub in ("mechanisms", "engines"):
-        cand = Path(str(resources.files("multiloop.catalogue") / sub / f"{path}.toml"))
-        if cand.exists():
-            return cand
-    return p
-
-
 def load_any(path: str):
     """A mechanism from a mechanism file, or built from an engine file."""
     from multiloop.topo.io import read_document  # noqa: PLC0415
-    p = _resolve(path)
+    p = resolve(path)
     if p.suffix.lower() in (".toml", ".json") and p.exists():
         doc = read_document(p)
         if isinstance(doc, dict) and "engine" in doc:

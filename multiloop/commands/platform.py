@@ -12,13 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
 from multiloop.kin.spatial.platform import load_platform
 from multiloop.kin.spatial.report import platform_report
+from multiloop.inputs import resolve
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 
 __all__ = ["add_arguments", "run"]
@@ -35,16 +34,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="normalisation of the printed mode shapes: x = 1 as in Doronin 2015 (default), "
                              "phi^T A phi = 1, or largest component = 1 (JSON always has 'shape' mass-normalised "
                              "and 'shape_x1')")
-
-
-def _resolve(name: str) -> Path:
-    p = Path(name)
-    if p.exists() or p.suffix:
-        return p
-    bundled = resources.files("multiloop.catalogue") / "platforms" / f"{name}.toml"
-    if bundled.is_file():
-        return Path(str(bundled))
-    return p
 
 
 def _fmt(v, width=10, prec=4) -> str:
@@ -103,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     outs = Outputs("multiloop platform")
     if args.plot is not None:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
-    platform = load_platform(_resolve(args.file))
+    platform = load_platform(resolve(args.file, ("platforms",)))
     rep = platform_report(platform, args.modes)
     if args.plot is not None:
         from multiloop.kin.figures.platform import plot_platform
