@@ -140,6 +140,10 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     ext = extremes(mo, lambda s: angle_values(s, specs))
     angles = tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
     out = _output(m, w, output, driver_link)
+    if output is None and out is not None:
+        # the default output must move with this driver: the last watched link that does
+        moving = [x for x in ww if np.nanmax(np.abs(_ratio(mo.segments[0].state, x)), initial=0.0) > 1e-12]
+        out = moving[-1] if moving else out
     xs, rs = [], []
     for seg in (mo.segments if mo.full_rotation else mo.segments[::-1]):
         xx, rr = seg.x, (_ratio(seg.state, out)[: seg.n] if out else np.full(seg.n, np.nan))

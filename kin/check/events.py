@@ -107,9 +107,15 @@ def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | Non
                              lambda s, r: sign.reshape(sh[: 1] + (1,) * (r.ndim - 1)) * _pick(Q(s), r, col),
                              derivatives)
         cand = list(zip(xs, col))
-        xs = np.array([x for x, _ in cand] + ([seg.limit] * ncol if seg.limit is not None else []))
-        cols = np.array([c for _, c in cand] + (list(range(ncol)) if seg.limit is not None else []),
-                        int)
+        xs = np.array([x for x, _ in cand], float)
+        cols = np.array([c for _, c in cand], int)
+        if seg.limit is not None:
+            # the limit itself, approached geometrically (a Newton-tracked group only
+            # reaches a turning point by ever smaller steps)
+            d = seg.limit - seg.x[-1]
+            ap = seg.limit - d * 2.0 ** -np.arange(1, 40)
+            xs = np.concatenate([xs, np.repeat(np.append(ap, seg.limit), ncol)])
+            cols = np.concatenate([cols, np.tile(np.arange(ncol), ap.size + 1)])
         # grid values too (guards a flat or monotone column without interior extremum)
         gx = np.repeat(seg.x[[0, -1]], ncol)
         gc = np.tile(np.arange(ncol), 2)

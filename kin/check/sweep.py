@@ -86,7 +86,10 @@ class Side:
         """The solver's state along ``x`` (a path that must start at the reference)."""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return solve(self.mechanism, self.inputs(x), derivatives=derivatives, plan=self.plan)
+            rates = np.zeros(len(self.mechanism.drivers))
+            rates[self.k] = 1.0                  # this driver at unit rate, the others held
+            return solve(self.mechanism, self.inputs(x), derivatives=derivatives, plan=self.plan,
+                         input_rates=rates if derivatives else None)
 
     def at(self, xs, derivatives: bool = False):
         """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.
