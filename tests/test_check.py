@@ -311,3 +311,28 @@ def test_cli_circuit_defect_and_html(tmp_path, capsys):
     txt = capsys.readouterr().out
     assert "circuit defect" in txt and "180.000000°" in txt
     assert (out / "index.html").exists() and list(out.glob("*.png"))
+
+
+def test_two_drivers_each_moves_only_its_own_loop():
+    # two copies of one crank-rocker on one frame: each driver's dead centres are the
+    # single four-bar's, and the other loop (held) has none
+    a, b, c, d, t0 = 0.4, 1.8, 1.5, 2.0, 1.0
+    one = check(four_bar(a, b, c, d, t0)).drivers[0]
+    A = (a * math.cos(t0), a * math.sin(t0))
+    B = next(j.at for j in four_bar(a, b, c, d, t0).joints if j.name == "B")
+    bld = MechanismBuilder("twin")
+    bld.add_link("frame", frame=True)
+    for k, dx in ((1, 0.0), (2, 10.0)):
+        for lk in ("crank", "coupler", "rocker"):
+            bld.add_link(f"{lk}{k}")
+        bld.add_joint(f"O{k}", "R", ("frame", f"crank{k}"), at=(dx, 0.0))
+        bld.add_joint(f"A{k}", "R", (f"crank{k}", f"coupler{k}"), at=(A[0] + dx, A[1]))
+        bld.add_joint(f"B{k}", "R", (f"coupler{k}", f"rocker{k}"), at=(B[0] + dx, B[1]))
+        bld.add_joint(f"C{k}", "R", (f"rocker{k}", "frame"), at=(d + dx, 0.0))
+        bld.add_driver(f"O{k}")
+    rep = check(bld.build())
+    for k, dc in enumerate(rep.drivers, start=1):
+        dead = dict(dc.dead_centres)
+        assert dead[f"rocker{3 - k}"] == () and dead[f"crank{3 - k}"] == ()
+        assert dead[f"rocker{k}"] == pytest.approx(dict(one.dead_centres)["rocker"], abs=1e-9)
+        assert dc.output == f"rocker{k}"
