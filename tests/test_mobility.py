@@ -128,3 +128,15 @@ def test_actual_mobility_does_not_depend_on_units(scale):
         scaled = Mechanism(m.links, tuple(Joint(j.name, j.kind, j.links, (j.at[0] * scale, j.at[1] * scale), j.axis)
                                           for j in m.joints), m.drivers)
         assert actual_mobility(scaled).as_dict() == actual_mobility(m).as_dict()
+
+
+def test_compiled_equations_are_read_only():
+    import numpy as np
+    from multiloop.topo.assur import decompose
+    from multiloop.topo.constraints import PairEquations
+    m = four_bar()
+    eqs = PairEquations.compile(m, [c for s in decompose(m).steps for c in s.constraints])
+    for name in ("R_a", "R_ra", "R_row", "P_dir", "A_a", "drv"):
+        with pytest.raises(ValueError):
+            getattr(eqs, name)[...] = 0
+    assert isinstance(eqs.jacobian(np.zeros((1, m.n_links, 3))), np.ndarray)

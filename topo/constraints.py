@@ -87,8 +87,14 @@ def _unit(v) -> np.ndarray:
 
 
 def _arr(rows: list, k: int, shape: tuple, dtype=float) -> np.ndarray:
-    return (np.array([t[k] for t in rows], dtype).reshape(shape) if rows
-            else np.zeros(shape, dtype))
+    out = (np.array([t[k] for t in rows], dtype).reshape(shape) if rows
+           else np.zeros(shape, dtype))
+    return _frozen(out)
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,7 +186,7 @@ class PairEquations:
                    _arr(P, 2, (nP, 2)), _arr(P, 3, (nP, 2)), _arr(P, 4, (nP, 2)),
                    _arr(P, 5, (nP,), int),
                    _arr(A, 0, (nA,), int), _arr(A, 1, (nA,), int), _arr(A, 2, (nA,), int),
-                   np.array(drv, int), tuple(labels))
+                   _frozen(np.array(drv, int)), tuple(labels))
 
     @staticmethod
     def _rho(Z, k, r):
