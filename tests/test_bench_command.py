@@ -1,0 +1,24 @@
+"""`multiloop bench`: listing, unknown names, and the summary of goal lines."""
+from __future__ import annotations
+
+from multiloop.cli import main
+
+
+def test_list_and_unknown_name(capsys):
+    assert main(["bench", "--list"]) == 0
+    names = capsys.readouterr().out.split()
+    assert {"analyse", "atlas", "solve", "forces"} <= set(names)
+    assert main(["bench", "no_such_bench"]) == 2
+
+
+def test_goal_lines_are_collected(tmp_path, monkeypatch, capsys):
+    from multiloop.commands import bench
+
+    (tmp_path / "bench_demo.py").write_text(
+        "import sys\nprint('timing 1 s')\nprint('goal demo: 0.9x (goal <= 1.0x) -> met', sys.argv[1:])\n")
+    monkeypatch.setattr(bench, "BENCH_DIR", tmp_path)
+    assert main(["bench", "demo"]) == 0
+    out = capsys.readouterr().out
+    summary = out.split("=== goals")[1]
+    assert "[demo] goal demo: 0.9x (goal <= 1.0x) -> met []" in summary
+    assert "timing 1 s" not in summary
