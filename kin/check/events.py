@@ -120,8 +120,9 @@ def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | Non
         gx = np.repeat(seg.x[[0, -1]], ncol)
         gc = np.tile(np.arange(ncol), 2)
         xs, cols = np.concatenate([xs, gx]), np.concatenate([cols, gc])
-        st, r = seg.side.at(xs, derivatives)
-        vals = _pick(Q(st), r, cols)
+        ux, inv = np.unique(xs, return_inverse=True)
+        st, r = seg.side.at(ux, derivatives)
+        vals = _pick(Q(st), r[inv], cols)
         for x, c, v in zip(xs, cols, vals):
             if np.isfinite(v):
                 best.setdefault(int(c), []).append((float(v), float(x)))
