@@ -360,6 +360,8 @@ def test_documented_outputs_match_the_commands(capsys):
     for doc in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
         for cmd, body in re.findall(r"```\n\$ multiloop ((?:analyse|decompose) \S+)\n(.*?)```", doc.read_text(), re.S):
             command, path = cmd.split()
+            if not (root / path).is_file():
+                continue        # a user's file, not one of the repository
             assert main([command, str(root / path)]) == 0
             printed = capsys.readouterr().out.splitlines()
             shown = body.splitlines()
