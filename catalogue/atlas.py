@@ -157,75 +157,83 @@ def parse_query(text: str) -> tuple[str, list]:
     """
     toks = _tokens(text)
     _check_size(toks)
-    pos = 0
-    params: list = []
-
-    def peek():
-        return toks[pos] if pos < len(toks) else (None, None)
-
-    def bad(what):
-        raise InputError(explain("--query", expected=what, got=repr(peek()[1]) if peek()[0] else "end of text",
-                                 hint="columns: " + ", ".join(QUERY_COLUMNS)))
-
-    def expr():
-        nonlocal pos
-        parts = [term()]
-        while peek()[0] == "word" and peek()[1].upper() == "OR":
-            pos += 1
-            parts.append(term())
-        return " OR ".join(parts)
-
-    def term():
-        nonlocal pos
-        parts = [factor()]
-        while peek()[0] == "word" and peek()[1].upper() == "AND":
-            pos += 1
-            parts.append(factor())
-        return " AND ".join(parts)
-
-    def factor():
-        nonlocal pos
-        kind, val = peek()
-        if kind == "word" and val.upper() == "NOT":
-            pos += 1
-            return f"(NOT {factor()})"
-        if kind == "lp":
-            pos += 1
-            inner = expr()
-            if peek()[0] != "rp":
-                bad("')'")
-            pos += 1
-            return f"({inner})"
-        col = _column(val) if kind == "word" else None
-        if col is None:
-            bad("a column name (LA and La are case-sensitive)")
-        pos += 1
-        kind, op = peek()
-        if kind != "op":
-            bad("a comparison operator")
-        pos += 1
-        op = {"==": "=", "<>": "!="}.get(op, op)
-        kind, v = peek()
-        if kind == "num":
-            value = int(v)
-            if abs(value) > _MAX_INT:
-                bad(f"an integer within ±{_MAX_INT}")
-        elif kind == "str":
-            value = v[1:-1]
-        elif kind == "word" and v.lower() in ("true", "false"):
-            value = int(v.lower() == "true")
-        else:
-            bad("a number, 'string', true or false")
-        pos += 1
-        params.append(value)
-        return f'("{col}" {op} ?)'
-
     if not toks:
         return "1", []
-    sql = expr()
-    if pos != len(toks):
-        bad("AND, OR or the end of the query")
-    return sql, params
+    parser = _QueryParser(toks)
+    sql = parser.expr()
+    if parser.pos != len(toks):
+        parser.bad("AND, OR or the end of the query")
+    return sql, parser.params
+
+
+class _QueryParser:
+    """Recursive descent over the tokens of :func:`parse_query` (depth bounded by
+    :func:`_check_size`); ``params`` collects the bound values in order."""
+
+    def __init__(self, toks: list[tuple[str, str]]):
+        self.toks, self.pos, self.params = toks, 0, []
+
+    def peek(self) -> tuple[str | None, str | None]:
+        return self.toks[self.pos] if self.pos < len(self.toks) else (None, None)
+
+    def bad(self, what: str):
+        kind, val = self.peek()
+        raise InputError(explain("--query", expected=what, got=repr(val) if kind else "end of text",
+                                 hint="columns: " + ", ".join(QUERY_COLUMNS)))
+
+    def _joined(self, word: str, part) -> str:
+        parts = [part()]
+        while self.peek()[0] == "word" and self.peek()[1].upper() == word:
+            self.pos += 1
+            parts.append(part())
+        return f" {word} ".join(parts)
+
+    def expr(self) -> str:
+        return self._joined("OR", self.term)
+
+    def term(self) -> str:
+        return self._joined("AND", self.factor)
+
+    def factor(self) -> str:
+        kind, val = self.peek()
+        if kind == "word" and val.upper() == "NOT":
+            self.pos += 1
+            return f"(NOT {self.factor()})"
+        if kind == "lp":
+            self.pos += 1
+            inner = self.expr()
+            if self.peek()[0] != "rp":
+                self.bad("')'")
+            self.pos += 1
+            return f"({inner})"
+        return self.comparison()
+
+    def comparison(self) -> str:
+        kind, val = self.peek()
+        col = _column(val) if kind == "word" else None
+        if col is None:
+            self.bad("a column name (LA and La are case-sensitive)")
+        self.pos += 1
+        kind, op = self.peek()
+        if kind != "op":
+            self.bad("a comparison operator")
+        self.pos += 1
+        op = {"==": "=", "<>": "!="}.get(op, op)
+        self.params.append(self.value())
+        self.pos += 1
+        return f'("{col}" {op} ?)'
+
+    def value(self):
+        kind, v = self.peek()
+        if kind == "num":
+            if abs(int(v)) > _MAX_INT:
+                self.bad(f"an integer within ±{_MAX_INT}")
+            return int(v)
+        if kind == "str":
+            return v[1:-1]
+        if kind == "word" and v.lower() in ("true", "false"):
+            return int(v.lower() == "true")
+        self.bad("a number, 'string', true or false")
 
 
 @dataclass(frozen=True, slots=True)
