@@ -32,7 +32,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
 
-__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent", "require_dask",
+__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent", "connect_scheduler", "require_dask",
            "SCHEDULER_TIMEOUT"]
 
 #: seconds to wait for a Dask scheduler before giving up
@@ -133,7 +133,7 @@ def _dask(tasks, opts, loops, scheduler):
     from distributed import Client, as_completed as dask_completed
 
     own = not isinstance(scheduler, Client)
-    client = _connect(scheduler) if own else scheduler
+    client = connect_scheduler(scheduler) if own else scheduler
     try:
         futures = [client.submit(_run, t, opts, loops, pure=False) for t in tasks]
         for fut in dask_completed(futures):
@@ -143,7 +143,7 @@ def _dask(tasks, opts, loops, scheduler):
             client.close()
 
 
-def _connect(address: str):
+def connect_scheduler(address: str):
     """A Dask client, or InputError when the scheduler cannot be reached in time."""
     from distributed import Client
 

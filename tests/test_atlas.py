@@ -214,3 +214,13 @@ def test_unreachable_scheduler_is_an_input_error(tmp_path, monkeypatch):
     monkeypatch.setattr(distributed, "SCHEDULER_TIMEOUT", 0.5)
     with pytest.raises(InputError, match="--scheduler"):
         list(distributed.map_tasks([], SynthesisOptions(6, 1), scheduler="tcp://127.0.0.1:9"))
+
+
+def test_unreachable_scheduler_creates_no_file(tmp_path, monkeypatch):
+    from multiloop.catalogue import distributed
+
+    monkeypatch.setattr(distributed, "SCHEDULER_TIMEOUT", 0.5)
+    db = tmp_path / "none.sqlite"
+    assert main(["atlas", "--links", "6", "--db", str(db), "--scheduler", "tcp://127.0.0.1:9",
+                 "--no-progress"]) == 2
+    assert not db.exists()

@@ -73,6 +73,9 @@ def run(args) -> int:
         from multiloop.catalogue.distributed import require_dask
         require_dask()
     opts = _options(args) if args.links is not None else None
+    if args.scheduler is not None and opts is not None and not Path(args.db).exists():
+        from multiloop.catalogue.distributed import connect_scheduler   # fail before a file is created
+        connect_scheduler(args.scheduler).close()
     outs = Outputs("multiloop atlas")
     for d in (args.html, args.charts):
         if d is not None:
