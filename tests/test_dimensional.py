@@ -344,3 +344,25 @@ def test_function_generation_slider_output_in_metres():
     res = synthesise(_perturbed(m, 0.02), function=np.column_stack([x, y]), output="S", budget=4.0)
     assert res.error_max < 1e-3
     np.testing.assert_allclose(res.achieved, y, atol=1e-3 * np.ptp(y))
+
+
+# ---------------------------------------------------------------------------------
+# the time budget is a hard bound, also on the slow path (kin.solve per candidate)
+@pytest.mark.parametrize("method", ["de", "cmaes"])
+def test_slow_path_respects_the_budget(method):
+    import time
+
+    import cma  # noqa: F401  (one-off imports are not synthesis time)
+    import scipy.optimize  # noqa: F401
+    m = load_named("stephenson_3")                    # class IV group: the slow path
+    assert Evaluator(m, design_space(m, ["P"])).slow
+    st = solve(m, np.radians(np.arange(0.0, 60.0, 10.0)))
+    target = st.point_positions[:, st.point_index("P")]
+    budget = 1.0
+    t = time.perf_counter()
+    res = synthesise(m, path=target, point="P", budget=budget, seed=0, tol=0.0, method=method)
+    wall = time.perf_counter() - t
+    # before the bound, budget 3 took 34 s; the margin is for a loaded machine
+    assert wall < budget + 1.0, wall
+    assert res.seconds <= wall
+    assert np.isfinite(res.error_max) and res.evaluations > 0

@@ -148,6 +148,7 @@ class Evaluator:
         self.slow = [s.kind for s in self.plan.steps
                      if isinstance(s, AssurGroup) and s.kind not in _CLOSED + ("triad",)]
         self._cols = {n: i for i, n in enumerate(space.names)}
+        self.deadline: float | None = None      # time.perf_counter() value; see _per_candidate
 
     # -- decoding --------------------------------------------------------------
     def at(self, X: np.ndarray, name: str) -> np.ndarray:
@@ -194,7 +195,12 @@ class Evaluator:
 
     def _per_candidate(self, X, phi) -> Poses:
         """Slow path for groups without a batched kernel (PRP, RPP, class IV, larger
-        groups): :func:`kin.solve.solve` once per candidate, poses converted."""
+        groups): :func:`kin.solve.solve` once per candidate, poses converted.
+
+        Past ``self.deadline`` (a ``time.perf_counter()`` value, when set) the
+        remaining candidates are not solved and count as failures (``ok`` False),
+        so that one population cannot overrun the time budget."""
+        import time
         import warnings
 
         from multiloop.kin.solve import compile_plan, solve
@@ -204,6 +210,8 @@ class Evaluator:
         tx, ty = th.copy(), th.copy()
         ok = np.zeros((P, N), bool)
         for p in range(P):
+            if self.deadline is not None and time.perf_counter() > self.deadline:
+                break
             try:
                 mp = self.with_design(X[p])
                 sp = compile_plan(mp)

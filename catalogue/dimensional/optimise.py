@@ -142,8 +142,8 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
 
     Stops at ``max_nfev`` residual evaluations or at ``deadline`` (a
-    ``time.perf_counter()`` value; at least three Jacobians are made) with the best
-    point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
+    ``time.perf_counter()`` value, checked before every residual and Jacobian
+    evaluation) with the best point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
     nz = len(z)
@@ -161,19 +161,23 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
 
     best = [np.inf, w0]
 
+    def late():
+        if deadline is not None and time.perf_counter() > deadline:
+            raise _Deadline
+
     def fun(w):
+        late()
         Z, PHI = split(w)
         count[0] += 1
         r = problem.residuals_batch(Z, PHI)[0]
         r = np.where(np.isfinite(r), r, 1.0)
         n = float(r @ r)
-        if n < best[0]:
-            best[0], best[1] = n, w.copy()
-        if deadline is not None and count[0] > 3 * (len(w) + 2) and time.perf_counter() > deadline:
-            raise _Deadline
+        if n < best[0] and (deadline is None or time.perf_counter() <= deadline):
+            best[0], best[1] = n, w.copy()      # (past the deadline a slow path leaves NaN)
         return r
 
     def jac(w):
+        late()
         h = 1e-7 * np.maximum(1.0, np.abs(w))
         h = np.where(w + h > hi, -h, h)
         W = np.vstack([w, w + np.diag(h)])

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -147,9 +148,25 @@ def _target(m, path, point, shape_only, function, output, motion, link):
     return "motion", motion_target(m, motion, link)
 
 
+@contextmanager
+def _unbounded(ev: Evaluator):
+    """Lift the evaluator's deadline for a few single-design evaluations (the
+    assessment of a result must not see designs cut off as failures)."""
+    saved, ev.deadline = ev.deadline, None
+    try:
+        yield
+    finally:
+        ev.deadline = saved
+
+
 def _assess(problem: Problem, z: np.ndarray, phi: np.ndarray):
     """Errors of design ``z`` at driver values ``phi`` and whether the motion from the
     reference reaches them continuously, in order: ``(rel (N,), ang (N,)|None, ok)``."""
+    with _unbounded(problem.ev):
+        return _assess_unbounded(problem, z, phi)
+
+
+def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     Z = z[None, :]
     st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, phi]))
     _, valid, cphi, full = problem.curve(st.ok[:, :problem.M])
@@ -210,6 +227,8 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     AssemblyError, SingularityError
         The start does not assemble in its reference configuration.
     """
+    _import_optimisers(method)          # one-off module imports (seconds) are not synthesis time
+    t0 = time.perf_counter()
     m = start
     _check_start(m, budget, method)
     task, target = _target(m, path, point, shape_only, function, output, motion, link)
@@ -217,6 +236,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     pts = [target.point] if task == "path" else []
     space = design_space(m, pts, region=region, bounds=bounds)
     ev = Evaluator(m, space)
+    ev.deadline = t0 + budget           # a hard bound for the slow path's per-candidate loop
     cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio)
     problem = Problem(ev, target, cons, grid)
     problem.init_motion_frame()
@@ -224,28 +244,52 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     if not ev.poses(space.x0[None, :], [0.0]).ok.all():
         raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="a reference configuration that assembles",
                                  got="a group out of reach at the reference"))
-    t0 = time.perf_counter()
     start_note = _closed_form(problem)
+    end = ev.deadline = _search_deadline(problem, t0, budget)
     polished: list = []
 
     def probe(z):
-        phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=t0 + budget)
+        if time.perf_counter() > end:
+            return False
+        with _unbounded(ev):
+            phi = problem.match(z)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=end)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol
 
-    res = global_search(problem, method=method, seed=seed, budget=0.75 * budget, tol=tol, popsize=popsize,
+    left = end - time.perf_counter()
+    res = global_search(problem, method=method, seed=seed, budget=0.75 * left, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
     (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance",
-                                              deadline=t0 + budget)
+                                              deadline=end)
     notes = ([start_note] if start_note else []) + notes
     out = _output(ev, z[:problem.nx], task, target, method, seed)
-    achieved, wanted = _achieved(problem, z, phi)
+    with _unbounded(ev):
+        achieved, wanted = _achieved(problem, z, phi)
     return SynthesisResult(out, task, float(np.max(rel)), float(np.sqrt(np.mean(rel ** 2))), res.evaluations + n2,
                            time.perf_counter() - t0, method, seed, phi, achieved, wanted,
                            dict(zip(problem.names, map(float, z))), res.stopped,
                            None if ang is None else float(np.max(ang)), res.history, tuple(notes))
+
+
+def _import_optimisers(method: str) -> None:
+    """Import the optimiser modules now, so that the budget's clock does not pay
+    for them (``cma`` alone can take seconds to import on a loaded machine)."""
+    import scipy.optimize  # noqa: F401
+    if method == "cmaes":
+        import cma  # noqa: F401
+
+
+def _search_deadline(problem: Problem, t0: float, budget: float) -> float:
+    """When the search and the polish must stop: the budget less a reserve for the
+    final assessment (about six single-design evaluations, timed here; at most a
+    quarter of the budget).  It matters on the slow path, where one design costs
+    one :func:`kin.solve.solve` call."""
+    t = time.perf_counter()
+    with _unbounded(problem.ev):
+        problem.batch(problem.x0[None, :])
+    return t0 + budget - min(0.25 * budget, 6.0 * (time.perf_counter() - t))
 
 
 def _output(ev: Evaluator, x: np.ndarray, task: str, target, method: str, seed: int) -> Mechanism:
@@ -275,10 +319,11 @@ def _closed_form(problem: Problem) -> str | None:
 def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, deadline: float | None = None):
     """The best of the global design, its polish and the probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not."""
-    phi = problem.match(z)
+    with _unbounded(problem.ev):
+        phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
-    if not skip:
+    if not skip and (deadline is None or time.perf_counter() < deadline):
         z2, phi2, n = polish(problem, z, phi, max_nfev=300, deadline=deadline)
         cands.append((_assess(problem, z2, phi2), z2, phi2, n))
         if not cands[-1][0][2]:
