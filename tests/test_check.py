@@ -238,6 +238,8 @@ def test_multi_loop_against_fine_sweep(name):
     specs = angle_specs(decompose(m))
     V = angle_values(s, specs)
     h = x[1] - x[0]
+    # every monitored angle is continuous along the motion (no jump of the definition)
+    assert np.max(np.abs(np.diff(V, axis=0))) < 0.5
     for c, a in enumerate(dc.angles):
         e = a.extreme
         # the exact extremes bound every sample and are within the sampling error

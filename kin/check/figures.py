@@ -66,7 +66,7 @@ def transmission_axes(ax, ax2, m, rep):
         ax.plot(x, V[:, c], lw=1.4, label=f"{sp.quantity} at {sp.joint}")
     thr = rep.min_transmission
     ax.axhline(thr, color="r", lw=0.8, ls=":")
-    if any(sp.quantity != "pressure" for sp in specs):
+    if any(sp.quantity == "transmission" for sp in specs):
         ax.axhline(180 - thr, color="r", lw=0.8, ls=":")
     ax.set_ylabel("angle (deg)")
     ma = np.abs(1.0 / np.where(dc.ratio == 0, np.nan, dc.ratio))

@@ -33,6 +33,8 @@ class AngleResult:
             return False
         if self.quantity == "pressure":
             return e.max > 90.0 - threshold
+        if self.quantity == "triad":
+            return e.min < threshold
         return e.min < threshold or e.max > 180.0 - threshold
 
 

@@ -14,11 +14,13 @@ Definitions (all in degrees):
   moves normal to CA, so α is the angle between the guide and the line CA, in
   [0°, 90°] (α = 90° is the RPR toggle s = 0).
 * **Triad** (binary links Aᵢ–Pᵢ on the ternary link): at each inner joint Pᵢ, μᵢ is
-  the angle between the binary link PᵢAᵢ and the line from Pᵢ to the intersection Iⱼₖ
-  of the other two binary-link lines (the instant centre of the ternary link when leg
-  i is removed).  μᵢ is 0° or 180° exactly when the three lines are concurrent or
-  parallel, the triad's singularity (Hunt 1983); for a dyad the same construction
-  gives the classical angle.
+  the angle between the *line* of binary link PᵢAᵢ and the *line* from Pᵢ to the
+  intersection Iⱼₖ of the other two binary-link lines (the instant centre of the
+  ternary link when leg i is removed), in [0°, 90°].  It is a line-to-line angle
+  because Iⱼₖ passes through infinity when legs j and k become parallel, which flips
+  the direction PᵢIⱼₖ; as lines the angle stays continuous.  μᵢ = 0° exactly when the
+  three leg lines are concurrent or parallel, the triad's singularity (Hunt 1983);
+  90° is ideal, and only the minimum is flagged.
 
 PRP and RPP dyads have no reach limit; their only singularity (parallel guides) is a
 design error rejected when the plan is built, so no angle is reported for them.
@@ -130,5 +132,6 @@ def angle_values(state, specs) -> np.ndarray:
             u = _guide_dir(state, sp)
             out[:, c] = _line_angle(Y - X, u)
         else:
-            out[:, c] = _triad(P, sp.points, state)
+            a = _triad(P, sp.points, state)
+            out[:, c] = np.minimum(a, 180.0 - a)
     return out

@@ -47,7 +47,7 @@ def _angles(dc, thr: float) -> list[str]:
         if e.min < thr:
             out.append(f"{name} at {a.joint} falls to {e.min:.3f}° at {fmt_input(dc, e.at_min)} "
                        f"(below {thr:g}°) in {a.group}")
-        if e.max > 180.0 - thr:
+        if e.max > 180.0 - thr and a.quantity == "transmission":
             out.append(f"{name} at {a.joint} rises to {e.max:.3f}° at {fmt_input(dc, e.at_max)} "
                        f"(above {180 - thr:g}°) in {a.group}")
     return out
