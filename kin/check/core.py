@@ -142,8 +142,14 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     out = _output(m, w, output, driver_link)
     if output is None and out is not None:
         # the default output must move with this driver: the last watched link that does
-        moving = [x for x in ww if np.nanmax(np.abs(_ratio(mo.segments[0].state, x)), initial=0.0) > 1e-12]
-        out = moving[-1] if moving else out
+        # (a link hinged to the frame if one moves, else the last moving link in solving order)
+        st0 = mo.segments[0].state
+        order = [lk for lk, _ in sorted(ap.link_numbers, key=lambda t: t[1]) if lk != m.frame]
+        for pool in (ww, [(lk, "R", None) for lk in order]):
+            moving = [x for x in pool if np.nanmax(np.abs(_ratio(st0, x)), initial=0.0) > 1e-12]
+            if moving:
+                out = moving[-1]
+                break
     xs, rs = [], []
     for seg in (mo.segments if mo.full_rotation else mo.segments[::-1]):
         xx, rr = seg.x, (_ratio(seg.state, out)[: seg.n] if out else np.full(seg.n, np.nan))
