@@ -191,8 +191,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
         and pressure angles above 90° minus it are flagged.
     output : str, optional
         Link or tracer point for the velocity ratio / mechanical advantage (default:
-        the last link hinged to the frame or slider on a frame guide, other than the
-        driver's).
+        the last link hinged to the frame or slider on a frame guide that moves with
+        the driver, other than the driver's own; else the last moving link).
     at : array_like (n_drivers,), optional
         Driver values (rad or m from the reference) of the instant-centre position
         (default: the reference).
