@@ -1,13 +1,55 @@
-"""Shared behaviour of batch results: a ``status`` array with ``"ok"`` or a reason."""
+"""Batch statuses: integer codes with one message table, and the shared behaviour of
+batch results (``ok`` / ``success`` / ``message``).
+
+A batch result carries ``status`` (one readable message per position: ``"ok"`` or the
+reason, naming the group) and, from :mod:`kin.solve`, ``codes`` (one :class:`Status`
+per position).  Callers test the codes, never the text: ``state.codes == Status.SINGULAR``.
+"""
 from __future__ import annotations
+
+from enum import IntEnum
 
 import numpy as np
 
-__all__ = ["BatchStatus"]
+__all__ = ["Status", "MESSAGES", "BatchStatus", "status_text"]
+
+
+class Status(IntEnum):
+    """Why a position of a batch is not ``ok`` (0 means it is)."""
+
+    OK = 0
+    OUT_OF_REACH = 1        #: a group cannot be assembled at this input
+    SINGULAR = 2            #: a group is singular here (branches meet, dead centre)
+    LIMIT = 3               #: the motion from the reference stops at a limit before this input
+    OTHER_CIRCUIT = 4       #: assembles here, but on a circuit no motion from the reference reaches
+    UPSTREAM = 5            #: an earlier group failed
+    MODE_LOST = 6           #: a tracked mode (triad, class IV, Newton) was lost earlier in the path
+    NOT_CONVERGED = 7       #: Newton did not converge
+    NOT_SOLVED = 8          #: not asked for (``only=``)
+
+
+#: the short text of each code; position messages start with the group's label
+MESSAGES = {
+    Status.OK: "ok",
+    Status.OUT_OF_REACH: "no assembly (out of reach)",
+    Status.SINGULAR: "singular position",
+    Status.LIMIT: "unreachable: past a limit of the motion from the reference",
+    Status.OTHER_CIRCUIT: "other circuit: not reachable from the reference without disassembly",
+    Status.UPSTREAM: "failed upstream",
+    Status.MODE_LOST: "assembly mode lost earlier in the path",
+    Status.NOT_CONVERGED: "no assembly (Newton did not converge)",
+    Status.NOT_SOLVED: "not solved (not asked for)",
+}
+
+
+def status_text(code: int) -> str:
+    """The message of a status code."""
+    return MESSAGES[Status(int(code))]
 
 
 class BatchStatus:
-    """Mixin for frozen batch results that carry ``status`` (and possibly ``inputs``).
+    """Mixin for frozen batch results that carry ``status`` (and possibly ``inputs``,
+    ``codes``).
 
     ``ok`` is the mask of positions that succeeded, ``success`` says all did, and
     ``message`` names how many failed and the first failing input with its reason.
@@ -18,6 +60,9 @@ class BatchStatus:
     @property
     def ok(self) -> np.ndarray:
         """Boolean mask of the positions that succeeded."""
+        codes = getattr(self, "codes", None)
+        if codes is not None:
+            return np.asarray(codes) == Status.OK
         return np.asarray(self.status) == "ok"
 
     @property

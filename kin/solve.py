@@ -42,10 +42,13 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
 
+from .continuation import Probe, Walk, walk
 from .groups.newton import ConstraintSystem, rates, track
+from .result import MESSAGES, Status
+from .rigid import move_point, perp, rotate, transport
 from .state import KinematicState
 
-__all__ = ["solve", "compile_plan", "SolvePlan", "StepPlan", "METHODS"]
+__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH"]
 
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = 1e-9          # relative determinant below which a position is singular
@@ -162,19 +165,366 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
     return x, single
 
 
-def _lead_in(plan: SolvePlan, x0: np.ndarray) -> np.ndarray:
-    m = plan.mechanism
-    lim = np.array([np.radians(2.0) if m.joint(d.joint).kind is JointKind.R else 0.01 * plan.size
-                    for d in m.drivers])
-    n = int(np.ceil(np.max(np.abs(x0) / lim))) if np.any(x0 != 0) else 0
-    if n == 0:
-        return np.zeros((0, len(lim)))
-    t = np.arange(n)[:, None] / n
-    return t * x0[None, :]
+#: largest number of samples of a path (lead-in and fill-ins included) before it is refused
+MAX_PATH = 1_000_000
+#: largest step of the path followed by the tracked route (2°, or 2 % of the size)
+_PATH_STEP = np.radians(2.0)
+#: P-driver inputs beyond this multiple of the mechanism's size are refused
+MAX_SLIDE = 1000.0
+#: a position this near (scaled input) to a crossing of the branches is singular
+_AT_CROSSING = 1e-9
+
+
+@dataclass
+class _Run:
+    """Everything solved at a batch of inputs: poses, per-position codes and reasons."""
+
+    G: "_Poses"
+    code: np.ndarray                  # (M,) int8 Status of the first failing group
+    reason: dict                      # n -> text (the group's label and why)
+    probes: dict                      # step index -> Probe (only when asked)
+
+
+def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
+    """Solve the steps ``steps`` at the inputs ``X`` (M, n_drivers), the closed-form dyads
+    on the branch ``reference sign × signs[k]`` (default 1)."""
+    M = X.shape[0]
+    G = _Poses(sp, M)
+    code = np.zeros(M, np.int8)
+    reason: dict[int, str] = {}
+    probes = {}
+    for k in steps:
+        st = sp.steps[k]
+        u = list(st.unknown)
+        up = G.finite(np.setdiff1d(st.system.involved, u)) if probe else None
+        if st.solver == "driver" and _driver_closed_form(st):
+            okk, why = _solve_driver(sp, st, G, X)
+            pr = Probe(okk) if probe else None
+        elif st.solver in ("dyad", "triad", "class4") and kernels and st.step.kind in kernels:
+            okk, why, pr = kernels[st.step.kind](sp, st, G, X, signs.get(k, 1.0), probe)
+        else:
+            known = np.setdiff1d(st.system.involved, u)
+            Z = G.to_Z(known)
+            Z[:, u, :2] = sp.origins[u]
+            Z[:, u, 2] = 0.0
+            tr = track(st.system, Z, X, u, singular_tol=_SINGULAR)
+            G.from_Z(tr.Z, u)
+            okk = tr.ok
+            why = {int(n): (int(tr.code[n]), tr.reason[n]) for n in np.flatnonzero(~okk)}
+            pr = Probe(okk.copy()) if probe else None
+        if probe:
+            probes[k] = Probe(pr.ok, pr.gap, pr.pts, up)
+        for n in np.flatnonzero(~okk & (code == 0)):
+            c, w = why.get(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
+            if c == Status.UPSTREAM:
+                continue
+            code[n] = c
+            reason[int(n)] = f"{st.label}: {w}"
+        G.invalidate(u, ~okk)
+    return _Run(G, code, reason, probes)
+
+
+def _scale(sp: SolvePlan) -> np.ndarray:
+    """Input units per scaled unit: 1 (rad) for R drivers, the size (m) for P drivers."""
+    m = sp.mechanism
+    return np.array([1.0 if m.joint(d.joint).kind is JointKind.R else sp.size for d in m.drivers])
+
+
+def _fill(nodes: np.ndarray, max_step: float) -> tuple[np.ndarray, np.ndarray]:
+    """The polyline through ``nodes`` (K, d) sampled with steps ≤ ``max_step``; returns the
+    samples and the index of each node among them."""
+    d = np.sqrt(np.sum(np.square(np.diff(nodes, axis=0)), axis=1))
+    k = np.maximum(np.ceil(d / max_step), 1).astype(np.int64)
+    k[d == 0] = 1
+    total = int(k.sum()) + 1
+    if total > MAX_PATH:
+        raise InputError(explain("inputs", expected=f"a path from the reference of at most {MAX_PATH} steps of "
+                                 f"{np.degrees(max_step):.3g}° (R) or {max_step:g} × size (P)",
+                                 got=f"{total} steps", hint="give inputs nearer to the reference "
+                                 "(R inputs modulo 360°) or fewer positions"))
+    seg = np.repeat(np.arange(len(k)), k)
+    frac = (np.arange(total - 1) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
+    out = np.empty((total, nodes.shape[1]))
+    out[:-1] = nodes[seg] + frac[:, None] * (nodes[seg + 1] - nodes[seg])
+    out[-1] = nodes[-1]
+    idx = np.concatenate([[0], np.cumsum(k)])
+    return out, idx
+
+
+def _walk_on(sp: SolvePlan, kernels, P_scaled: np.ndarray) -> Walk:
+    """:func:`kin.continuation.walk` of the whole mechanism along ``P_scaled``."""
+    scale = _scale(sp)
+    steps = list(range(len(sp.steps)))
+    groups = [k for k in steps if sp.steps[k].solver != "driver"]
+
+    def evaluate(Xs, signs):
+        return _run(sp, Xs * scale, steps, signs, kernels, probe=True).probes
+    return walk(evaluate, P_scaled, groups)
+
+
+@dataclass(frozen=True)
+class _Chart:
+    """The motion of a one-driver mechanism of closed-form groups, from the reference.
+
+    ``lo`` ≤ input ≤ ``hi`` is reachable (±inf when periodic); ``period`` is 2π or 4π
+    for an R driver that turns without limit; ``flips[k]`` are the inputs (sorted) where
+    group k's sign flips (crossings kept by the tangent rule); ``crossings`` (x, k) every
+    crossing met; ``limits`` maps ``"lo"``/``"hi"`` to the step index stopping there.
+    """
+
+    lo: float
+    hi: float
+    period: float | None
+    flips: dict
+    crossings: tuple
+    limits: dict
+    is_r: bool
+
+    def covers(self, x: np.ndarray) -> bool:
+        return self.is_r or (x.size == 0 or (self.lo_req <= x.min() and x.max() <= self.hi_req))
+
+    def reduce(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Chart coordinate of each input and whether the motion reaches it."""
+        if self.period is not None:
+            return np.mod(x, self.period), np.ones(x.shape, bool)
+        if self.is_r:
+            t = 2 * np.pi
+            xr = x + t * np.ceil((self.lo - x) / t)
+            with np.errstate(invalid="ignore"):
+                reach = xr <= self.hi
+            return np.where(reach, xr, x), reach
+        return x, (x >= self.lo) & (x <= self.hi)
+
+    def factor(self, k: int, xr: np.ndarray):
+        """Sign factor of group k at chart coordinates ``xr`` (1.0 when it never flips)."""
+        f = self.flips.get(k, ())
+        if not f:
+            return 1.0
+        f = np.asarray(f)
+        pos, neg = f[f > 0], f[f < 0]
+        n = np.searchsorted(pos, xr, side="left") + (neg.size - np.searchsorted(neg, xr, side="right"))
+        return np.where(n % 2 == 0, 1.0, -1.0)
+
+
+def _walk_dir(sp: SolvePlan, kernels, extent: float, sign: float) -> Walk:
+    n = int(np.ceil(extent / 0.02)) + 1
+    return _walk_on(sp, kernels, sign * np.linspace(0.0, extent, n)[:, None])
+
+
+def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart:
+    """Walk up and down from the reference (one driver; scaled inputs)."""
+    is_r = sp.mechanism.joint(sp.mechanism.drivers[0].joint).kind is JointKind.R
+    scale = _scale(sp)[0]
+    flips: dict = {}
+    crossings, limits = [], {}
+    ext_up = 2 * np.pi if is_r else max(hi_req / scale, 0.0)
+    up = _walk_dir(sp, kernels, ext_up, 1.0) if ext_up > 0 else None
+    period = None
+    if is_r and up.block is None:
+        odd = [k for k, f in up.flips.items() if len(f) % 2]
+        if odd:
+            up = _walk_dir(sp, kernels, 4 * np.pi, 1.0)
+            odd = [k for k, f in up.flips.items() if len(f) % 2]
+        period = (2 * np.pi if len(up.s) and up.s[-1] < 3 * np.pi else 4 * np.pi) if not odd else None
+    hi = np.inf if period else (up.block[0] * scale if up is not None and up.block else
+                                (up.s[-1] * scale if up is not None else 0.0))
+    if up is not None:
+        if up.block:
+            limits["hi"] = up.block[2]
+        for k, f in up.flips.items():
+            flips.setdefault(k, []).extend(x * scale for x in f)
+        crossings += [(x * scale, k) for x, k in up.crossings]
+    lo = -np.inf if period else 0.0
+    ext_dn = 2 * np.pi if is_r else max(-lo_req / scale, 0.0)
+    if not period and ext_dn > 0:
+        dn = _walk_dir(sp, kernels, ext_dn, -1.0)
+        lo = -(dn.block[0] if dn.block else dn.s[-1]) * scale
+        if dn.block:
+            limits["lo"] = dn.block[2]
+        for k, f in dn.flips.items():
+            flips.setdefault(k, []).extend(-x * scale for x in f)
+        crossings += [(-x * scale, k) for x, k in dn.crossings]
+    ch = _Chart(lo, hi, period, {k: tuple(sorted(f)) for k, f in flips.items()},
+                tuple(sorted(crossings)), limits, is_r)
+    object.__setattr__(ch, "lo_req", lo_req if not is_r else -np.inf)
+    object.__setattr__(ch, "hi_req", hi_req if not is_r else np.inf)
+    return ch
+
+
+def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
+    """The cached chart of ``sp`` covering the inputs ``x`` (built on first use)."""
+    ch = sp.extra.get("chart")
+    if ch is not None and ch.covers(x):
+        return ch
+    if not ch or ch.is_r:
+        lo_req, hi_req = min(0.0, float(x.min(initial=0.0))), max(0.0, float(x.max(initial=0.0)))
+    else:
+        lo_req = min(ch.lo_req, float(x.min(initial=0.0)))
+        hi_req = max(ch.hi_req, float(x.max(initial=0.0)))
+    ch = _build_chart(sp, kernels, lo_req, hi_req)
+    sp.extra["chart"] = ch
+    return ch
+
+
+def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
+    m = sp.mechanism
+    if m.joint(m.drivers[k].joint).kind is JointKind.R:
+        return f"{np.degrees(v):.6g}°"
+    return f"{v:.6g} m"
+
+
+def _chartable(sp: SolvePlan, kernels) -> bool:
+    if len(sp.mechanism.drivers) != 1 or not kernels:
+        return False
+    return all((st.solver == "driver" and _driver_closed_form(st)) or
+               (st.solver == "dyad" and st.step.kind in kernels) for st in sp.steps)
+
+
+def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
+    """Rows the motion does not reach: ``other circuit`` where they assemble on the
+    reference's signs, else ``unreachable: limit of …``."""
+    idx = np.flatnonzero(bad)
+    sub = _run(sp, X[idx], range(len(sp.steps)), {}, kernels)
+    for j, n in enumerate(idx):
+        x = float(X[n, 0])
+        if sub.code[j] == Status.OK:
+            run.code[n] = Status.OTHER_CIRCUIT
+            run.reason[int(n)] = (f"other circuit: assembles at {_fmt_x(sp, 0, x)}, but no motion from the "
+                                  f"reference reaches it (the motion stops at {_fmt_x(sp, 0, ch.lo)} "
+                                  f"and {_fmt_x(sp, 0, ch.hi)})")
+            continue
+        side = _nearer_limit(ch, x)
+        k = ch.limits.get(side)
+        where = ch.hi if side == "hi" else ch.lo
+        label = sp.steps[k].label if k is not None else "the mechanism"
+        run.code[n] = Status.LIMIT
+        run.reason[int(n)] = f"unreachable: limit of {label} at {_fmt_x(sp, 0, where)}"
+    run.G.invalidate(range(sp.mechanism.n_links), bad)
+
+
+def _nearer_limit(ch: _Chart, x: float) -> str:
+    """``"hi"`` or ``"lo"``: the limit the input lies beyond (the nearer one, for R modulo 2π)."""
+    if "lo" not in ch.limits or "hi" not in ch.limits:
+        return "hi" if "hi" in ch.limits else "lo"
+    up, dn = x - ch.hi, ch.lo - x
+    if ch.is_r:
+        up, dn = up % (2 * np.pi), dn % (2 * np.pi)
+    return "hi" if up <= dn else "lo"
+
+
+def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, period=None) -> list[str]:
+    """Notes for the crossings that the path between consecutive output rows passes."""
+    notes = []
+    for c, k in crossings:
+        if period is not None:
+            w = np.floor((xs - c) / period)
+            hit = np.flatnonzero(np.diff(w) != 0)
+        else:
+            lo, hi = np.minimum(xs[:-1], xs[1:]), np.maximum(xs[:-1], xs[1:])
+            hit = np.flatnonzero((lo < c) & (c < hi))
+        flipped = c in flips.get(k, ())
+        for n in hit:                  # xs[0] is the reference: xs[n] → xs[n+1] is row n−1 → row n
+            if len(notes) >= 20:
+                return notes + ["… more crossings not listed"]
+            where = "the reference" if n == 0 else f"row {n - 1}"
+            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_x(sp, 0, c)} "
+                         f"(between {where} and row {n}); the motion keeps the mode of the reference"
+                         f"{' (the sign of the assembly branch changes there)' if flipped else ''}")
+    return notes
+
+
+def _mark_crossings(sp, run: _Run, xr, reach, crossings, scale) -> None:
+    for c, k in crossings:
+        near = np.flatnonzero(reach & (np.abs(xr - c) <= _AT_CROSSING * scale))
+        for n in near:
+            run.code[n] = Status.SINGULAR
+            run.reason[int(n)] = (f"{sp.steps[k].label}: singular position (its assembly branches meet "
+                                  f"at {_fmt_x(sp, 0, c)})")
+        run.G.invalidate(range(sp.mechanism.n_links), np.isin(np.arange(len(xr)), near))
+
+
+def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
+    """One driver, closed-form groups: the cached chart gives each input's branch."""
+    x = X[:, 0]
+    ch = _chart(sp, kernels, x)
+    xr, reach = ch.reduce(x)
+    signs = {k: ch.factor(k, xr) for k in ch.flips if ch.flips[k]}
+    run = _run(sp, X, needed, signs, kernels)
+    if not reach.all():
+        _mark_unreachable(sp, ch, run, X, ~reach, kernels)
+    notes = []
+    if ch.crossings:
+        _mark_crossings(sp, run, xr, reach, ch.crossings, _scale(sp)[0])
+        xs = np.concatenate([[0.0], x if ch.period else xr])
+        notes = _crossing_notes(sp, ch.crossings, xs, reach, ch.flips, ch.period)
+    return run, notes
+
+
+def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
+    """Any plan: follow the path reference → inputs[0] → inputs[1] … with certified steps."""
+    from .continuation import path_parameter, sign_factor
+    scale = _scale(sp)
+    nodes = np.vstack([np.zeros((1, X.shape[1])), X / scale])
+    P, idx = _fill(nodes, _PATH_STEP)
+    steps = list(range(len(sp.steps)))
+    groups = [k for k in steps if sp.steps[k].solver != "driver"]
+    last = {}
+
+    def evaluate(Xs, signs):
+        last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
+        last["n"] = Xs.shape[0]
+        return last["run"].probes
+    w = walk(evaluate, P, groups, refine_limits=False)
+    s_nodes = path_parameter(P)
+    s = w.s
+    if only_all(sp, needed) and last.get("n") == len(s) and w.block is None:
+        run = last["run"]                  # the walk's last round is the answer
+    else:
+        Xs = np.stack([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])], axis=1) * scale
+        signs = {k: sign_factor(f, s) for k, f in w.flips.items() if f}
+        run = _run(sp, Xs, needed, signs, kernels)
+    rows = np.searchsorted(s, s_nodes[idx[1:]])
+    run = _take(run, rows)
+    sn = s_nodes[idx[1:]]
+    notes = []
+    if w.block is not None:
+        s_b, _, k = w.block
+        xb = np.array([np.interp(s_b, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
+        where = ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(xb))
+        past = np.flatnonzero(sn > s_b)
+        for n in past:
+            run.code[n] = Status.LIMIT
+            run.reason[int(n)] = f"unreachable: limit of {sp.steps[k].label} at {where}"
+        run.G.invalidate(range(sp.mechanism.n_links), sn > s_b)
+        if past.size:
+            notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} at "
+                         f"{where}; rows {int(past[0])}… lie beyond it")
+    for c, k in w.crossings:
+        near = np.flatnonzero(np.abs(sn - c) <= 10 * _AT_CROSSING)
+        for n in near:
+            run.code[n] = Status.SINGULAR
+            run.reason[int(n)] = f"{sp.steps[k].label}: singular position (its assembly branches meet here)"
+        run.G.invalidate(range(sp.mechanism.n_links), np.isin(np.arange(len(sn)), near))
+        after = np.flatnonzero(sn > c)
+        if after.size:
+            n = int(after[0])
+            notes.append(f"{sp.steps[k].label}: its two assembly branches meet between "
+                         f"{'the reference' if n == 0 else f'row {n - 1}'} and row {n}; the motion keeps "
+                         f"the mode of the reference")
+    return run, notes
+
+
+def only_all(sp: SolvePlan, needed) -> bool:
+    return len(needed) == len(sp.steps)
+
+
+def _take(run: _Run, rows: np.ndarray) -> _Run:
+    reason = {i: run.reason[int(r)] for i, r in enumerate(rows) if int(r) in run.reason}
+    return _Run(run.G.take(rows), run.code[rows].copy(), reason, {})
 
 
 def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rates=None,
-          only=None, plan=None, method: str = "auto") -> KinematicState:
+          only=None, plan=None, method: str = "auto", assemble: bool = False) -> KinematicState:
     """Positions (and velocities, accelerations) of a mechanism over a batch of inputs.
 
     Parameters
@@ -192,10 +542,14 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         Names of joints, tracer points or links wanted: only the groups upstream
         of them are solved (the other entries stay NaN).
     plan : AssurPlan or SolvePlan, optional
-        A precompiled plan (see :func:`compile_plan`).
+        A precompiled plan (default: the one cached on the mechanism).
     method : {"auto", "closed_form", "newton"}
         ``auto``/``closed_form``: closed-form dyads, triad kernel, Newton for the
         rest; ``newton``: every group by Newton with continuation.
+    assemble : bool
+        Solve every input independently, each dyad on the branch sign of the
+        reference (no continuation: positions on other circuits come back ``ok``).
+        Never the default.
 
     Returns
     -------
@@ -206,7 +560,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     AssemblyError, SingularityError
         Only for a single-position query (scalar input) that fails.
     InputError
-        Bad shapes, unknown names in ``only``, unknown method.
+        Bad shapes, unknown names in ``only``, unknown method, runaway inputs.
 
     Examples
     --------
@@ -224,99 +578,106 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(repr(x) for x in METHODS), got=repr(method)))
     m = mechanism
-    sp = plan if isinstance(plan, SolvePlan) else compile_plan(m, plan)
+    sp = plan_of(m, plan)
     X, single = _as_inputs(m, inputs)
-    nd = X.shape[1]
-    lead = _lead_in(sp, X[0])
-    XX = np.vstack([lead, X]) if lead.size else X
-    L = lead.shape[0]
-    M = XX.shape[0]
-    # which steps
-    needed = list(range(len(sp.steps)))
-    if only is not None:
-        needed = _needed_steps(sp, only)
-    G = _Poses(sp, M)
-    reason: dict[int, str] = {}
-    has_reason = np.zeros(M, bool)
-    notes: list[str] = []
-    branches = []
+    _check_range(sp, X)
+    needed = list(range(len(sp.steps))) if only is None else _needed_steps(sp, only)
     kernels = _kernels() if method != "newton" else None
-    for k in needed:
-        st = sp.steps[k]
-        u = list(st.unknown)
-        known = np.setdiff1d(st.system.involved, u)
-        upstream_bad = ~G.finite(known)
-        if st.solver == "driver" and _driver_closed_form(st):
-            okk, why = _solve_driver(sp, st, G, XX)
-        elif st.solver in ("dyad", "triad", "class4") and kernels and st.step.kind in kernels:
-            okk, why, note = kernels[st.step.kind](sp, st, G, XX)
-            notes += note
-        else:
-            Z = G.to_Z(known)
-            Z[:, u, :2] = sp.origins[u]
-            Z[:, u, 2] = 0.0
-            tr = track(st.system, Z, XX, u, singular_tol=_SINGULAR)
-            G.from_Z(tr.Z, u)
-            okk, why = tr.ok, tr.reason
-        idx = np.flatnonzero(~okk & ~upstream_bad & ~has_reason)
-        for n in idx:
-            w = why.get(int(n)) if isinstance(why, dict) else why[n]
-            reason[int(n)] = f"{st.label}: {w or 'no assembly (out of reach)'}"
-        has_reason[idx] = True
-        G.invalidate(u, ~okk)
-        branches.append((st.label, "reference"))
-    # drop the lead-in
-    if L and has_reason[:L].any():
-        first = int(np.flatnonzero(has_reason[:L])[0])
-        notes.append(f"the path from the reference configuration to the first input failed at "
-                     f"{_fmt_input(m, lead[first])}: {reason[first]}")
+    if assemble:
+        run, notes = _run(sp, X, needed, {}, kernels), []
+    elif _chartable(sp, kernels):
+        run, notes = _solve_chart(sp, X, needed, kernels)
+    else:
+        run, notes = _solve_path(sp, X, needed, kernels)
+    return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels)
+
+
+def _check_range(sp: SolvePlan, X: np.ndarray) -> None:
+    m = sp.mechanism
+    for k, d in enumerate(m.drivers):
+        if m.joint(d.joint).kind is JointKind.P and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
+            raise InputError(explain(f"input of the P driver {d.joint}",
+                                     expected=f"a slide of at most {MAX_SLIDE:g} × the mechanism's size "
+                                              f"({MAX_SLIDE * sp.size:.6g} m)",
+                                     got=f"{np.max(np.abs(X[:, k])):.6g} m"))
+
+
+def plan_of(mechanism: Mechanism, plan=None) -> SolvePlan:
+    """The compiled plan: ``plan`` if given, else the one cached for ``mechanism``
+    (compiled on first use and kept for the last 64 mechanisms, by identity; a
+    mechanism is frozen, so its plan stays valid)."""
+    if isinstance(plan, SolvePlan):
+        return plan
+    if plan is not None:
+        return compile_plan(mechanism, plan)
+    hit = _PLANS.get(id(mechanism))
+    if hit is not None and hit[0] is mechanism:
+        return hit[1]
+    sp = compile_plan(mechanism)
+    if len(_PLANS) >= _PLANS_KEPT:
+        del _PLANS[next(iter(_PLANS))]
+    _PLANS[id(mechanism)] = (mechanism, sp)      # holds the mechanism: its id stays unique
+    return sp
+
+
+#: compiled plans of the last mechanisms solved, by identity (Mechanism is frozen)
+_PLANS: dict = {}
+_PLANS_KEPT = 64
+
+
+def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, kernels) -> KinematicState:
+    """Statuses, NaN for unsolved links, derivatives and the frozen state."""
+    m = sp.mechanism
+    G = run.G
     G.unset_to_nan()
-    if L:
-        G = G.tail(L)
-    N = M - L
-    failed = np.flatnonzero(has_reason[L:])
-    status = np.empty(N, dtype=object)
-    status.fill("ok")                       # (np.full with an object is ~30x slower)
-    for n in failed:
-        status[n] = reason[int(n) + L]
+    N = X.shape[0]
+    code = run.code
     solved_links = [i for s in needed for i in sp.steps[s].unknown]
     finite = G.finite(solved_links)
-    okm = ~has_reason[L:]
-    status[okm & ~finite] = "failed upstream"
-    okm &= finite
-    failed = np.flatnonzero(~okm)
+    code[(code == 0) & ~finite] = Status.UPSTREAM
+    okm = code == 0
+    status = np.empty(N, dtype=object)
+    status.fill("ok")                       # (np.full with an object is ~30x slower)
+    for n in np.flatnonzero(~okm):
+        status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
     Z = G.to_Z()
-    # derivatives
-    Zd = Zdd = None
-    rates_in = None
+    Zd = Zdd = rates_in = None
     if derivatives:
-        rates_in = np.ones(nd) if input_rates is None else np.asarray(input_rates, float).reshape(nd)
-        Zd = np.zeros_like(Z)
-        Zdd = np.zeros_like(Z)
-        R = np.broadcast_to(rates_in, (N, nd))
-        for k in needed:
-            st = sp.steps[k]
-            if st.solver == "dyad" and kernels and st.step.kind in kernels:
-                _dyad_rates(sp, st, Z, Zd, Zdd)       # closed form (one 2×2 system)
-            elif st.solver == "driver" and _driver_closed_form(st):
-                _driver_rates(sp, st, Z, Zd, Zdd, rates_in)
-            else:
-                Zd, Zdd = rates(st.system, Z, Zd, R, st.unknown, Zdd, None)
-        unsolved = [k for k in range(m.n_links) if k not in set(solved_links) and m.link_names[k] != m.frame]
-        Zd[:, unsolved] = np.nan
-        Zdd[:, unsolved] = np.nan
-        bad = ~okm
-        Zd[bad] = np.nan
-        Zdd[bad] = np.nan
-    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(branches), tuple(notes))
-    if single and status[0] != "ok":
+        rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links)
+    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code)
+    if single and code[0] != 0:
         msg = f"input {_fmt_input(m, X[0])}: {status[0]}"
-        if "singular position" in status[0]:
+        if code[0] == Status.SINGULAR:
             raise SingularityError(msg)
         raise AssemblyError(msg)
-    if not single and failed.size and any(("singular position" in s) for s in status[failed]):
-        warnings.warn("singular positions met: marked in status", SingularityWarning, stacklevel=2)
+    if not single and np.any(code == Status.SINGULAR):
+        warnings.warn("singular positions met: marked in status", SingularityWarning, stacklevel=3)
     return state
+
+
+def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
+    m = sp.mechanism
+    N = Z.shape[0]
+    nd = len(m.drivers)
+    rates_in = np.ones(nd) if input_rates is None else np.asarray(input_rates, float).reshape(nd)
+    Zd = np.zeros_like(Z)
+    Zdd = np.zeros_like(Z)
+    R = np.broadcast_to(rates_in, (N, nd))
+    for k in needed:
+        st = sp.steps[k]
+        if st.solver == "dyad" and kernels and st.step.kind in kernels:
+            _dyad_rates(sp, st, Z, Zd, Zdd)       # closed form (one 2×2 system)
+        elif st.solver == "driver" and _driver_closed_form(st):
+            _driver_rates(sp, st, Z, Zd, Zdd, rates_in)
+        else:
+            Zd, Zdd = rates(st.system, Z, Zd, R, st.unknown, Zdd, None)
+    solved = set(solved_links)
+    unsolved = [k for k in range(m.n_links) if k not in solved and m.link_names[k] != m.frame]
+    Zd[:, unsolved] = np.nan
+    Zdd[:, unsolved] = np.nan
+    Zd[~okm] = np.nan
+    Zdd[~okm] = np.nan
+    return rates_in, Zd, Zdd
 
 
 def _fmt_input(m: Mechanism, x) -> str:
@@ -391,20 +752,7 @@ def _solve_driver(sp: SolvePlan, st: StepPlan, G: "_Poses", X: np.ndarray):
     return np.isfinite(G.th[L]), {}
 
 
-def _rotate(v, th):
-    v = np.asarray(v, float)
-    c, s = np.cos(th), np.sin(th)
-    if v.ndim == 1:
-        return np.stack([c * v[0] - s * v[1], s * v[0] + c * v[1]], axis=-1)
-    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
-
-
-def _material(Z, k, r_local):
-    """Position of the material point ``c_k + r_local`` of link k, shape (N, 2)."""
-    return Z[:, k, :2] + _rotate(r_local, Z[:, k, 2])
-
-
-def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, branches, notes) -> KinematicState:
+def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, notes, code) -> KinematicState:
     m = sp.mechanism
     N = G.M
     pos = np.empty((N, m.n_joints, 2))
@@ -413,12 +761,7 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, branches
     vel = acc = om = ep = None
     if Zd is not None:
         host = np.asarray(sp.joint_host)
-        rr = pos - Z[:, host, :2]
-        w = Zd[:, host, 2][..., None]
-        perp = np.stack([-rr[..., 1], rr[..., 0]], axis=-1)
-        vel = Zd[:, host, :2] + w * perp
-        e = Zdd[:, host, 2][..., None]
-        acc = Zdd[:, host, :2] + e * perp - w * w * rr
+        vel, acc = transport(pos - Z[:, host, :2], Zd[:, host, :2], Zdd[:, host, :2], Zd[:, host, 2], Zdd[:, host, 2])
         om, ep = Zd[:, :, 2].copy(), Zdd[:, :, 2].copy()
     ppos = pvel = pacc = None
     if m.points:
@@ -427,15 +770,11 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, branches
         for i, p in enumerate(m.points):
             ppos[:, i] = G.point_k(ph[i], np.asarray(p.at, float))
         if Zd is not None:
-            pr = ppos - Z[:, ph, :2]
-            w = Zd[:, ph, 2][..., None]
-            perp = np.stack([-pr[..., 1], pr[..., 0]], axis=-1)
-            pvel = Zd[:, ph, :2] + w * perp
-            pacc = Zdd[:, ph, :2] + Zdd[:, ph, 2][..., None] * perp - w * w * pr
+            pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
     return KinematicState(m, X, pos, np.stack(G.th, axis=1), status, vel, acc, om, ep,
-                          rates_in, branches, point_names=tuple(p.name for p in m.points),
+                          rates_in, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,
-                          notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd)
+                          notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
 
 
 def _kernels():
@@ -501,11 +840,12 @@ class _Poses:
             if self.th[k] is None:
                 self.x[k] = self.y[k] = self.th[k] = self.c[k] = self.s[k] = nan
 
-    def tail(self, L: int) -> "_Poses":
+    def take(self, rows: np.ndarray) -> "_Poses":
+        """The poses at the given rows only."""
         out = object.__new__(_Poses)
-        out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, self.M - L, self.idx, self.frame_k
+        out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, len(rows), self.idx, self.frame_k
         for name in ("x", "y", "th", "c", "s"):
-            setattr(out, name, [a[L:] for a in getattr(self, name)])
+            setattr(out, name, [None if a is None else a[rows] for a in getattr(self, name)])
         return out
 
     # -- reading -------------------------------------------------------------------
@@ -598,55 +938,19 @@ def _known_on(st: StepPlan, joint: str) -> str:
     raise KeyError(joint)  # pragma: no cover
 
 
-def _choose_branch(cand_s, gap, sgn0, reach_ok, scale, alternate):
-    """Branch sign per position: ``sgn0`` except after a crossing kept by prediction.
+def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
+    """A dyad in closed form on the branch ``sign of the reference × factor``.
 
-    ``cand_s`` (N, k) is a signature of the reference branch's solution and
-    ``gap`` (N,) the distance between the two branches' signatures.  Where the
-    branches come closer than the local motion, the candidate nearest to the
-    linear prediction from the two previous positions is taken (a change is only
-    accepted when the next position assembles: a true crossing, not a turning
-    point).  ``alternate()`` returns the other branch's signatures (N, k); it is
-    called only when such positions exist.
-    Returns (signs (N,), event indices where the branch changed, alternates or None).
+    Returns ``(ok, why, probe)``: ``why[n] = (Status, text)`` for the failed
+    positions, ``probe`` a :class:`~kin.continuation.Probe` when asked.
     """
-    N = cand_s.shape[0]
-    signs = np.full(N, float(sgn0))
-    if N < 3:
-        return signs, [], None
-    mot = np.sqrt(np.sum(np.square(cand_s[1:] - cand_s[:-1]), axis=-1))
-    local = np.empty(N)
-    local[0], local[-1] = mot[0], mot[-1]
-    np.fmax(mot[:-1], mot[1:], out=local[1:-1])
-    near = (gap <= 3.0 * local) | (gap <= 1e-9 * scale)
-    if not near[2:].any():
-        return signs, [], None
-    near[1:] |= near[:-1].copy()          # and the position right after a near-merge
-    ev = np.flatnonzero(near)
-    ev = ev[ev >= 2]
-    cand_o = alternate()
-    flips = []
-    for n in ev:
-        cur = np.where(signs[:, None] == sgn0, cand_s, cand_o)
-        if not (np.all(np.isfinite(cur[n - 2:n])) and reach_ok[n]):
-            continue
-        pred = 2 * cur[n - 1] - cur[n - 2]
-        here, other = cur[n], np.where(signs[n] == sgn0, cand_o[n], cand_s[n])
-        if np.linalg.norm(other - pred) < np.linalg.norm(here - pred) and \
-                n + 1 < N and reach_ok[n + 1]:
-            signs[n:] *= -1.0
-            flips.append(int(n))
-    return signs, flips, cand_o
-
-
-def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     import multiloop.kin.groups as K
     g: AssurGroup = st.step
     o1, inner, o2, l1, l2 = g.layout
     m = sp.mechanism
     kind = g.kind
-    why: dict[int, str] = {}
-    notes: list[str] = []
+    why: dict[int, tuple] = {}
+    pr = None
     scale = sp.size
     if kind == "RRR":
         Aref, Bref, Cref = G.at(o1), G.at(inner), G.at(o2)
@@ -654,19 +958,20 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         C = G.point(_known_on(st, o2), Cref)
         la, lc = np.hypot(*(Bref - Aref)), np.hypot(*(Bref - Cref))
         sgn0 = float(K.rrr_branch(Aref, Cref, Bref))
-        rs = K.rrr_position(A, C, la, lc, sgn0)
+        rs = K.rrr_position(A, C, la, lc, sgn0 * factor)
+        B = rs.B
+        ok = rs.ok.copy()
         AC = C - A
         d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
-        gap = 2.0 * np.abs(AC[:, 0] * (rs.B[:, 1] - A[:, 1]) - AC[:, 1] * (rs.B[:, 0] - A[:, 0])) / d
-        signs, flips, alt = _choose_branch(rs.B, gap, sgn0, rs.ok, scale,
-                                           lambda: K.rrr_position(A, C, la, lc, -sgn0).B)
-        B = rs.B if not flips else np.where((signs == sgn0)[:, None], rs.B, alt)
-        ok = rs.ok.copy()
+        if probe:
+            gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / d
+            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1))
         for n in np.flatnonzero(~ok):
             if np.isfinite(d[n]):
-                why[n] = (f"no assembly: |{o1}{o2}| = {d[n]:.6g} > {la:.6g} + {lc:.6g} (out of reach)"
-                          if d[n] > la + lc else
-                          f"no assembly: |{o1}{o2}| = {d[n]:.6g} < |{la:.6g} − {lc:.6g}| (out of reach)")
+                why[int(n)] = (Status.OUT_OF_REACH,
+                               f"no assembly: |{o1}{o2}| = {d[n]:.6g} > {la:.6g} + {lc:.6g} (out of reach)"
+                               if d[n] > la + lc else
+                               f"no assembly: |{o1}{o2}| = {d[n]:.6g} < |{la:.6g} − {lc:.6g}| (out of reach)")
         G.place_dir(l1, A, Aref, B - A, Bref - Aref)
         G.place_dir(l2, C, Cref, B - C, Bref - Cref)
         det, rdet = rs.det, la * lc
@@ -679,17 +984,17 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         P, u = G.point(kp, Pref), G.direction(kp, u_ref)
         la = np.hypot(*(Bref - Aref))
         sgn0 = float(K.rrp_branch(Aref, Bref, u_ref))
-        rs = K.rrp_position(A, P, u, la, h, sgn0)
-        gap = 2.0 * np.abs(np.sum((rs.B - A) * u, axis=-1))
-        signs, flips, alt = _choose_branch(rs.B, gap, sgn0, rs.ok, scale,
-                                           lambda: K.rrp_position(A, P, u, la, h, -sgn0).B)
-        B = rs.B if not flips else np.where((signs == sgn0)[:, None], rs.B, alt)
+        rs = K.rrp_position(A, P, u, la, h, sgn0 * factor)
+        B = rs.B
         ok = rs.ok.copy()
+        if probe:
+            gap = 2.0 * np.abs(np.sum((B - A) * u, axis=-1))
+            pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1))
         dist = np.abs(np.sum((A - P) * _nrm(u), axis=-1) - h)
         for n in np.flatnonzero(~ok):
             if np.isfinite(dist[n]):
-                why[n] = (f"no assembly: {o1} is {dist[n]:.6g} from the track of {inner}, "
-                          f"longer than {l1} ({la:.6g}) (out of reach)")
+                why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: {o1} is {dist[n]:.6g} from the track of "
+                               f"{inner}, longer than {l1} ({la:.6g}) (out of reach)")
         G.place_dir(l1, A, Aref, B - A, Bref - Aref)
         G.place_like(l2, B, Bref, kp)
         det, rdet = rs.det, la
@@ -704,24 +1009,21 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         Xp = G.point(_known_on(st, gx), Xref)
         Yp = G.point(_known_on(st, bx), Yref)
         sgn0 = float(K.rpr_branch(Yref, Xref, u_ref))
-        rs = K.rpr_position(Yp, Xp, h, sgn0)
-        fs = Xp + rs.s[:, None] * rs.u
-        ro = []
-
-        def _alt():
-            ro.append(K.rpr_position(Yp, Xp, h, -sgn0))
-            return Xp + ro[0].s[:, None] * ro[0].u
-        signs, flips, _ = _choose_branch(fs, 2.0 * np.abs(rs.s), sgn0, rs.ok, scale, _alt)
-        u = rs.u if not flips else np.where((signs == sgn0)[:, None], rs.u, ro[0].u)
+        rs = K.rpr_position(Yp, Xp, h, sgn0 * factor)
+        u = rs.u
         ok = rs.ok.copy()
+        if probe:
+            fs = Xp + rs.s[:, None] * u
+            pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1))
         dist = np.hypot(*(Yp - Xp).T)
         for n in np.flatnonzero(~ok):
             if np.isfinite(dist[n]):
-                why[n] = f"no assembly: |{gx}{bx}| = {dist[n]:.6g} < offset {abs(h):.6g} (out of reach)"
+                why[int(n)] = (Status.OUT_OF_REACH,
+                               f"no assembly: |{gx}{bx}| = {dist[n]:.6g} < offset {abs(h):.6g} (out of reach)")
         blk = l2 if guide == l1 else l1
         G.place_dir(guide, Xp, Xref, u, u_ref)
         G.place_like(blk, Yp, Yref, guide)
-        det, rdet = (rs.det if not flips else np.where(signs == sgn0, rs.det, ro[0].det)), scale
+        det, rdet = rs.det, scale
     elif kind == "PRP":
         Bref = G.at(inner)
         k1, k2 = _known_on(st, o1), _known_on(st, o2)
@@ -730,7 +1032,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         h2 = float(_nrm(u2r) @ (Bref - G.at(o2)))
         r = K.prp_position(G.point(k1, G.at(o1)), G.direction(k1, u1r), h1,
                            G.point(k2, G.at(o2)), G.direction(k2, u2r), h2)
-        B, ok, flips = r.B, r.ok.copy(), []
+        B, ok = r.B, r.ok.copy()
         G.place_like(l1, B, Bref, k1)
         G.place_like(l2, B, Bref, k2)
         det, rdet = r.det, 1.0
@@ -742,28 +1044,30 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
         h = float(_nrm(w_ref) @ (Aref - Qref))
         A = G.point(_known_on(st, o1), Aref)
         r = K.rpp_position(A, G.point(kq, Qref), G.direction(kq, u_ref), alpha, h)
-        ok, flips = r.ok.copy(), []
+        ok = r.ok.copy()
         G.place_like(l2, r.Q, Qref, kq)
         G.place_like(l1, A, Aref, kq)
         det, rdet = r.det, 1.0
     else:  # pragma: no cover
         raise ValueError(kind)
+    for n in np.flatnonzero(~ok):
+        why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
     tol = _PARALLEL_GUIDES if kind in ("PRP", "RPP") else _SINGULAR
     sing = ok & ~(np.abs(det) > tol * rdet)
     for n in np.flatnonzero(sing):
-        why[n] = f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)"
+        why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
+    if pr is None and probe:       # PRP, RPP: one assembly; parallel guides are a pole, not a limit
+        pr = Probe(ok.copy())
     ok &= ~sing
-    for n in flips:
-        notes.append(f"{st.label}: two assembly branches cross near position {n}; "
-                     f"kept the continuous branch by prediction (assembly index changes there)")
-    return ok, why, notes
+    return ok, why, pr
 
 
-_TRIAD_STATUS = {1: "no assembly (out of reach)", 2: "assembly modes collide / ambiguous step "
-                 "(triad singular or turning point)", 3: "mode lost earlier in the batch"}
+_TRIAD_STATUS = {1: (Status.OUT_OF_REACH, "no assembly (out of reach)"),
+                 2: (Status.SINGULAR, "assembly modes collide / ambiguous step (triad singular or turning point)"),
+                 3: (Status.MODE_LOST, "mode lost earlier in the path")}
 
 
-def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
+def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
     import multiloop.kin.groups as K
     g: AssurGroup = st.step
     tern, bins, outs, inns = g.layout
@@ -776,21 +1080,21 @@ def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     P = np.full((N, 3, 2), np.nan)
     th = np.full(N, np.nan)
     ok = np.zeros(N, bool)
-    why: dict[int, str] = {}
+    why: dict[int, tuple] = {}
     if good.any():
         idx = np.flatnonzero(good)
         r = K.triad_track(A[idx], b, lengths, b)
         P[idx], th[idx], ok[idx] = r.P, r.theta, r.ok
         for k, n in enumerate(idx):
             if not r.ok[k]:
-                why[n] = _TRIAD_STATUS.get(int(r.status[k]), f"triad status {int(r.status[k])}")
+                why[int(n)] = _TRIAD_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
     G.place_cs(tern, P[:, 0], b[0], np.cos(th), np.sin(th), th)
     for i, (lk, o) in enumerate(zip(bins, outs)):
         G.place_dir(lk, A[:, i], Aref[i], P[:, i] - A[:, i], b[i] - Aref[i])
-    return ok, why, []
+    return ok, why, (Probe(ok.copy()) if probe else None)
 
 
-def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
+def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
     """Class IV order 2 group by the kernel's tracker (mode of the reference)."""
     import multiloop.kin.groups as K
     t1, t2, b0, b1, o1, o2, j1, j2, j3, j4 = st.step.layout
@@ -804,27 +1108,23 @@ def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray):
     J = np.full((N, 4, 2), np.nan)
     th = np.full((N, 2), np.nan)
     ok = np.zeros(N, bool)
-    why: dict[int, str] = {}
+    why: dict[int, tuple] = {}
     if good.any():
         idx = np.flatnonzero(good)
         res = K.class4_track(O[idx], r, lengths, np.zeros(2))
         J[idx], th[idx], ok[idx] = res.J, res.theta, res.ok
         for k, n in enumerate(idx):
             if not res.ok[k]:
-                why[n] = _TRIAD_STATUS.get(int(res.status[k]), f"class IV status {int(res.status[k])}")
+                why[int(n)] = _TRIAD_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))
     G.place_cs(t1, O[:, 0], Oref[0], np.cos(th[:, 0]), np.sin(th[:, 0]), th[:, 0])
     G.place_cs(t2, O[:, 1], Oref[1], np.cos(th[:, 1]), np.sin(th[:, 1]), th[:, 1])
     G.place_dir(b0, J[:, 0], Jref[0], J[:, 2] - J[:, 0], Jref[2] - Jref[0])
     G.place_dir(b1, J[:, 1], Jref[1], J[:, 3] - J[:, 1], Jref[3] - Jref[1])
-    return ok, why, []
+    return ok, why, (Probe(ok.copy()) if probe else None)
 
 
 # ---------------------------------------------------------------------------------
 # closed-form rates of dyads (kernels' Cramer 2×2 systems) on the pose arrays
-def _perp2(v):
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
-
-
 class _Rates:
     """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd."""
 
@@ -835,25 +1135,18 @@ class _Rates:
     def point(self, link: str, r):
         """Position, velocity, acceleration of ``link``'s material point at reference ``r``."""
         k = self.idx[link]
-        rho = _rotate(np.asarray(r, float) - self.sp.origins[k], self.Z[:, k, 2])
-        w, e = self.Zd[:, k, 2][:, None], self.Zdd[:, k, 2][:, None]
-        pr = _perp2(rho)
-        return (self.Z[:, k, :2] + rho, self.Zd[:, k, :2] + w * pr,
-                self.Zdd[:, k, :2] + e * pr - w * w * rho)
+        return move_point(self.Z[:, k, :2], self.Z[:, k, 2], np.asarray(r, float) - self.sp.origins[k],
+                          self.Zd[:, k, :2], self.Zd[:, k, 2], self.Zdd[:, k, :2], self.Zdd[:, k, 2])
 
     def direction(self, link: str, v):
         k = self.idx[link]
-        return _rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], self.Zdd[:, k, 2]
+        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], self.Zdd[:, k, 2]
 
     def set(self, link: str, P, vP, aP, w, e) -> None:
         """Rates of ``link`` from those of its point at P and its ω, ε."""
         k = self.idx[link]
-        rho = self.Z[:, k, :2] - P
-        pr = _perp2(rho)
-        w2, e2 = np.asarray(w)[:, None], np.asarray(e)[:, None]
-        self.Zd[:, k, :2] = vP + w2 * pr
+        self.Zd[:, k, :2], self.Zdd[:, k, :2] = transport(self.Z[:, k, :2] - P, vP, aP, w, e)
         self.Zd[:, k, 2] = w
-        self.Zdd[:, k, :2] = aP + e2 * pr - w2 * w2 * rho
         self.Zdd[:, k, 2] = e
 
 
@@ -889,7 +1182,7 @@ def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
         blk = l2 if guide == l1 else l1
         Xp, vX, aX = R.point(_known_on(st, gx), at(gx))
         Yp, vY, aY = R.point(_known_on(st, bx), at(bx))
-        u = _rotate(_unit(m.joint(inner).axis), Z[:, R.idx[guide], 2])
+        u = rotate(_unit(m.joint(inner).axis), Z[:, R.idx[guide], 2])
         r = K.rpr_rates(Yp, Xp, u, vY, vX, aY, aX)
         R.set(guide, Xp, vX, aX, r.w3, r.e3)
         R.set(blk, Yp, vY, aY, r.w3, r.e3)
@@ -943,6 +1236,6 @@ def _driver_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd, rates_in) -> None:
         Q = R.point(lk, jt.at)[0]
         rel = Q - P
         w2 = w[:, None]
-        vQ = vP + w2 * _perp2(rel) + sgn * rate * u
-        aQ = aP + e[:, None] * _perp2(rel) - w2 * w2 * rel + 2.0 * w2 * sgn * rate * _perp2(u)
+        vQ = vP + w2 * perp(rel) + sgn * rate * u
+        aQ = aP + e[:, None] * perp(rel) - w2 * w2 * rel + 2.0 * w2 * sgn * rate * perp(u)
         R.set(lk, Q, vQ, aQ, w, e)

@@ -16,7 +16,9 @@ Conventions
   (default 1 rad/s or 1 m/s for every driver, zero input acceleration), so for one
   driver they are the paper's analogues d/dφ and d²/dφ² (Vasechkin et al. 2017).
 * ``status[n]`` is ``"ok"`` or the reason position ``n`` failed (which group, why);
+  ``codes[n]`` is its :class:`~kin.result.Status` (test the codes, not the text);
   failed rows are NaN.
+* The arrays are read-only (the result is frozen).
 """
 from __future__ import annotations
 
@@ -27,6 +29,7 @@ import numpy as np
 from multiloop.topo.model import Mechanism
 
 from .result import BatchStatus
+from .rigid import move_point
 
 __all__ = ["KinematicState"]
 
@@ -43,7 +46,6 @@ class KinematicState(BatchStatus):
     omegas: np.ndarray | None = None        # (N, n_links)
     epsilons: np.ndarray | None = None
     input_rates: np.ndarray | None = None   # (n_drivers,)
-    branches: tuple = ()                    # per-group assembly branch, free-form
     # -- added by kin.solve (fields at the end; defaults keep older callers valid)
     point_names: tuple = ()                 # tracer point names, in file order
     point_positions: np.ndarray | None = None      # (N, n_points, 2)
@@ -53,6 +55,15 @@ class KinematicState(BatchStatus):
     poses: np.ndarray | None = None         # (N, n_links, 3): (X, Y, θ) of each link's reference point
     pose_rates: np.ndarray | None = None
     pose_accelerations: np.ndarray | None = None
+    codes: np.ndarray | None = None         # (N,) int8 kin.result.Status per position
+
+    def __post_init__(self) -> None:
+        for f in self.__dataclass_fields__:
+            v = getattr(self, f)
+            if isinstance(v, np.ndarray) and v.flags.writeable:
+                v = v.view()
+                v.flags.writeable = False
+                object.__setattr__(self, f, v)
 
     def point_index(self, name: str) -> int:
         return self.point_names.index(name)
@@ -95,18 +106,9 @@ class KinematicState(BatchStatus):
             z = np.zeros_like(p)
             return p, (z if self.velocities is not None else None), (z if self.accelerations is not None else None)
         i = self._anchor(link)
-        x_ref = np.asarray(m.joints[i].at, float)
-        r = np.asarray(at_ref, float) - x_ref
-        th = self.angles[:, k]
-        c, s = np.cos(th), np.sin(th)
-        rr = np.stack([c * r[0] - s * r[1], s * r[0] + c * r[1]], axis=-1)
-        pos = self.positions[:, i] + rr
-        vel = acc = None
-        if self.velocities is not None and self.omegas is not None:
-            w = self.omegas[:, k][:, None]
-            perp = np.stack([-rr[:, 1], rr[:, 0]], axis=-1)
-            vel = self.velocities[:, i] + w * perp
-            if self.accelerations is not None and self.epsilons is not None:
-                e = self.epsilons[:, k][:, None]
-                acc = self.accelerations[:, i] + e * perp - w * w * rr
-        return pos, vel, acc
+        r = np.asarray(at_ref, float) - np.asarray(m.joints[i].at, float)
+        w = self.omegas[:, k] if self.omegas is not None else None
+        e = self.epsilons[:, k] if self.epsilons is not None else None
+        return move_point(self.positions[:, i], self.angles[:, k], r, self.velocities[:, i]
+                          if self.velocities is not None else None, w,
+                          self.accelerations[:, i] if self.accelerations is not None else None, e)

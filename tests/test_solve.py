@@ -173,13 +173,13 @@ def test_non_grashof_reports_its_reach_limits():
         st = solve(m, x)
     assert not st.success and st.ok[0]
     first = int(np.flatnonzero(~st.ok)[0])
-    assert "out of reach" in st.status[first] and "II1(2,3)" in st.status[first]
+    assert "unreachable: limit of" in st.status[first] and "II1(2,3)" in st.status[first]
     assert "first at input" in st.message
     assert np.isnan(st.positions[first]).any()
     # the limit is where the coupler and rocker are stretched: |AC| = l + c
     A = st.positions[first - 1, 1]
     assert abs(np.hypot(*(A - st.positions[0, 3])) - 4.0) < 0.1
-    with pytest.raises(AssemblyError, match="out of reach"):
+    with pytest.raises(AssemblyError, match="unreachable: limit of"):
         solve(m, x[first])
     with pytest.raises(AssemblyError):
         solve(m, x[first], method="newton")
@@ -206,7 +206,7 @@ def test_parallelogram_change_points_keep_the_branch_and_say_so():
     # parallelogram branch: coupler translates, rocker turns with the crank
     assert np.allclose(st.angles[ok, i_cp], 0.0, atol=1e-9)
     assert np.allclose(np.unwrap(st.angles[ok, i_c2]), x[ok], atol=1e-9)
-    assert st.notes and "kept the continuous branch" in st.notes[0]
+    assert st.notes and "keeps the mode of the reference" in st.notes[0]
     # at the exact flat positions the dyad is singular: marked, not hidden
     assert all(("singular" in s) for s in st.status[~ok])
 

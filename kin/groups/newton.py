@@ -28,6 +28,8 @@ import numpy as np
 
 from multiloop.topo.constraints import PairEquations
 
+from ..result import Status
+
 __all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
 
 
@@ -177,6 +179,7 @@ class TrackResult:
     reason: np.ndarray
     rel_det: np.ndarray
     n_iter: int
+    code: np.ndarray | None = None      # (N,) int: 0 ok, else a :class:`kin.result.Status`
 
 
 def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
@@ -202,6 +205,7 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
     N = Z.shape[0]
     ok = np.zeros(N, bool)
     reason = np.full(N, "", dtype=object)
+    code = np.zeros(N, np.int8)
     rel = np.full(N, np.nan)
     if start is not None:
         Z[0, u] = start
@@ -211,6 +215,7 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
     for n in range(N):
         if not np.all(np.isfinite(Z[n, known])):
             reason[n] = "upstream"
+            code[n] = Status.UPSTREAM
             Z[n, u] = np.nan
             prev2 = None
             continue
@@ -225,12 +230,14 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
                 ok[n] = True
             else:
                 reason[n] = "no assembly (Newton did not converge)"
+                code[n] = Status.NOT_CONVERGED
                 Z[n, u] = np.nan
         else:
             zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol,
                           known=known)
             if zz is None:
                 reason[n] = "no assembly (continuation failed: out of reach, or a turning point)"
+                code[n] = Status.OUT_OF_REACH
                 Z[n, u] = np.nan
             else:
                 Z[n] = zz
@@ -240,11 +247,12 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
             rel[n] = _relative_det(J)[0]
             if rel[n] < singular_tol:
                 reason[n] = f"singular position (relative det {rel[n]:.1e})"
+                code[n] = Status.SINGULAR
                 ok[n] = False
             prev2, prev = prev, (Z[n].copy(), inputs[n].copy())
         else:
             prev2 = None       # keep the last good position: the next one continues from it
-    return TrackResult(Z, ok, reason, rel, iters)
+    return TrackResult(Z, ok, reason, rel, iters, code)
 
 
 def _euler_tangent(sys, Za, xa, Zn, xn, u, known):

@@ -57,6 +57,9 @@ def add_arguments(p) -> None:
                    help="velocities and accelerations (analogues: driver at unit rate)")
     p.add_argument("--method", choices=("auto", "closed_form", "newton"), default="auto",
                    help="closed-form groups (default) or Newton with continuation for all")
+    p.add_argument("--assemble", action="store_true",
+                   help="solve each input on its own, on the reference's branch signs (no continuation: "
+                        "positions on other circuits come back ok)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--json", action="store_true", help="print the stable JSON (see docs/kinematics.md)")
     out.add_argument("--csv", action="store_true", help="print CSV, one row per position")
@@ -69,18 +72,29 @@ def add_arguments(p) -> None:
     p.add_argument("--dxf", metavar="OUT.dxf", default=None, help="the same drawing as DXF (ezdxf, mm)")
 
 
+#: largest --steps accepted
+MAX_STEPS = 1_000_000
+
+
 def input_values(m, steps: int | None, start: float | None, stop: float | None) -> np.ndarray:
-    """CLI inputs in CLI units (deg / m), shape (N,)."""
-    if steps is not None and steps < 1:
-        raise InputError(explain("--steps", expected="a positive integer", got=str(steps)))
+    """CLI inputs in CLI units (deg / m), shape (N,): exactly ``from + k·step``."""
+    if steps is not None and not 1 <= steps <= MAX_STEPS:
+        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
     if (start is None) != (stop is None):
         raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
+    for name, v in (("--from", start), ("--to", stop)):
+        if v is not None and not np.isfinite(v):
+            raise InputError(explain(name, expected="a finite number", got=str(v)))
     n = steps if steps is not None else 36
     if start is not None:
-        return np.linspace(start, stop, n) if n > 1 else np.array([start])
+        if n == 1:
+            return np.array([start])
+        out = start + np.arange(n) * ((stop - start) / (n - 1))
+        out[-1] = stop
+        return out
     kinds = {m.joint(d.joint).kind for d in m.drivers}
     if kinds == {JointKind.R}:
-        return 360.0 * np.arange(n) / n
+        return np.arange(n) * (360.0 / n)
     xy = np.array([j.at for j in m.joints], float)
     size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
     if kinds == {JointKind.P}:
@@ -101,15 +115,20 @@ def _list(a) -> list:
     return [None if not np.isfinite(v) else float(v) for v in a.ravel()]
 
 
-def state_to_dict(state, plan=None) -> dict:
-    """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc)."""
+def state_to_dict(state, plan=None, inputs_cli=None) -> dict:
+    """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc).
+    ``inputs_cli`` (N,): the inputs as given on the command line (deg / m), printed
+    as given (no round trip through radians)."""
     m = state.mechanism
     drivers = []
     inp = []
     for k, d in enumerate(m.drivers):
         is_r = m.joint(d.joint).kind is JointKind.R
         drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
-        inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
+        if inputs_cli is not None:
+            inp.append(np.asarray(inputs_cli, float))
+        else:
+            inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
     doc = {"mechanism": m.name, "formula": plan.formula if plan is not None else None,
            "drivers": drivers,
            "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
@@ -162,7 +181,8 @@ def _csv(doc: dict) -> str:
 
 def _table(doc: dict) -> str:
     names = list(doc["joints"])
-    unit = doc["drivers"][0]["unit"] if doc["drivers"] else ""
+    units = sorted({d["unit"] for d in doc["drivers"]})
+    unit = "/".join(units) + (" each driver" if len(doc["drivers"]) > 1 else "")
     head = [f"input ({unit})"] + [f"{n}.{c}" for n in names for c in "xy"]
     lines = [f"{doc['mechanism'] or 'mechanism'}: {doc['formula']}", "  ".join(f"{h:>12}" for h in head)]
     for i, s in enumerate(doc["status"]):
@@ -197,13 +217,14 @@ def run(args) -> int:
     want_der = args.derivatives or args.plot is not None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        state = solve(m, _to_api(m, x_cli), derivatives=want_der, plan=plan, method=args.method)
+        state = solve(m, _to_api(m, x_cli), derivatives=want_der, plan=plan, method=args.method,
+                      assemble=args.assemble)
     doc_state = state
     if want_der and not args.derivatives:
         doc_state = type(state)(state.mechanism, state.inputs, state.positions, state.angles, state.status,
                                 point_names=state.point_names, point_positions=state.point_positions,
                                 notes=state.notes, poses=state.poses)
-    doc = state_to_dict(doc_state, plan.assur)
+    doc = state_to_dict(doc_state, plan.assur, x_cli)
     # render every file in memory first: nothing is written half-way
     if args.plot is not None:
         from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
@@ -231,9 +252,9 @@ def run(args) -> int:
     if not state.success:
         bad = np.flatnonzero(~state.ok)
         x0 = doc["input"][int(bad[0])]
-        unit = doc["drivers"][0]["unit"] if doc["drivers"] else ""
+        unit = "/".join(sorted({d["unit"] for d in doc["drivers"]}))
         print(f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
               f"{x0:g} {unit}: {state.status[bad[0]]}" if not isinstance(x0, list) else
               f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
-              f"{x0}: {state.status[bad[0]]}", file=sys.stderr)
+              f"{x0} {unit}: {state.status[bad[0]]}", file=sys.stderr)
     return 0

@@ -1,0 +1,161 @@
+"""Branch safety of the continuation (kin.continuation, kin.solve): never ``ok`` on the
+wrong branch, whatever the spacing of the inputs.
+
+Oracles are closed forms written here independently of the kernels: the four-bar
+by the law of cosines (Norton, Design of Machinery, 2012, ch. 4), the crank-slider
+with crank = rod (slider at 2 r cos θ on the reference mode), the parallelogram
+(the coupler translates).  The mechanisms are in tests/data/branches.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from multiloop.kin.result import Status
+from multiloop.kin.solve import solve
+from multiloop.topo.errors import InputError
+from multiloop.topo.io import load
+from test_assur import stephenson3_triad
+
+DATA = Path(__file__).parent / "data" / "branches"
+
+
+def _load(name):
+    return load(DATA / f"{name}.toml")
+
+
+def _solve(m, deg, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return solve(m, np.radians(np.asarray(deg, float)), **kw)
+
+
+def _four_bar_B(m, deg):
+    """B by the law of cosines on the reference's side of line A-D (crank at 90° + input)."""
+    j = dict(zip(m.joint_names, m.joints))
+    A0, B0, D = (np.array(j[n].at) for n in "ABD")
+    b, c = np.hypot(*(B0 - A0)), np.hypot(*(B0 - D))
+    u, v = D - A0, B0 - A0
+    side = np.sign(u[0] * v[1] - u[1] * v[0])
+    th = math.atan2(A0[1], A0[0]) + np.radians(deg)
+    a = np.hypot(*A0)
+    A = np.stack([a * np.cos(th), a * np.sin(th)], axis=-1)
+    AD = D - A
+    d = np.hypot(AD[:, 0], AD[:, 1])
+    t = (b * b + d * d - c * c) / (2 * d * d)
+    k = side * np.sqrt(np.maximum(b * b / (d * d) - t * t, 0.0))
+    return A + t[:, None] * AD + k[:, None] * np.stack([-AD[:, 1], AD[:, 0]], axis=-1)
+
+
+def test_uneven_steps_near_a_reach_limit_stay_on_the_reference_branch():
+    m = _load("nongrashof")                      # limit at 47.87° from the reference
+    for deg in (np.linspace(47.5, 47.6, 11), [0, 20, 40, 47.0, 47.5], [47.5, 47.51, 47.8, 47.87]):
+        st = _solve(m, deg)
+        assert st.success, st.message
+        assert np.allclose(st.positions[:, 2], _four_bar_B(m, np.asarray(deg)), atol=1e-9)
+        assert not st.notes
+
+
+def test_past_the_limit_is_unreachable_and_says_where():
+    m = _load("nongrashof")
+    st = _solve(m, [40.0, 50.0, 60.0, -10.0, 320.0])
+    assert list(st.codes) == [0, Status.LIMIT, Status.LIMIT, 0, 0]
+    assert "unreachable: limit of group 1" in st.status[1] and "47.87" in st.status[1]
+    assert np.isnan(st.positions[1:3, 1:3]).all()        # the moving joints A, B
+    # 320° is −40°: reached by turning the other way (R inputs modulo 360°)
+    assert np.allclose(st.positions[4, 2], _four_bar_B(m, np.array([-40.0]))[0], atol=1e-9)
+
+
+def test_other_circuit_is_not_ok_unless_assemble_is_asked():
+    m = _load("double_rocker")
+    deg = [0.0, 30.0, 90.0, 240.0, 330.0]
+    st = _solve(m, deg)
+    assert list(st.codes) == [0, 0, Status.LIMIT, Status.OTHER_CIRCUIT, 0]
+    assert st.status[3].startswith("other circuit")
+    asm = _solve(m, deg, assemble=True)
+    assert asm.ok[3] and asm.codes[2] == Status.OUT_OF_REACH
+
+
+def test_parallelogram_keeps_the_mode_of_the_reference():
+    m = _load("parallelogram")
+    ic = m.link_names.index("coupler")
+    st = _solve(m, np.linspace(119.5, 119.6, 11))
+    assert st.success and np.allclose(st.angles[:, ic], 0.0, atol=1e-9)
+    # the flat positions (120° and 300°) are both singular, by the same rule
+    full = _solve(m, np.arange(0.0, 360.0, 10.0))
+    bad = np.flatnonzero(~full.ok)
+    assert list(full.inputs[bad, 0].round(9)) == list(np.radians([120.0, 300.0]).round(9))
+    assert all(full.codes[bad] == Status.SINGULAR)
+    assert np.allclose(full.angles[full.ok, ic], 0.0, atol=1e-9)
+    assert len(full.notes) == 2 and "between row 11 and row 13" not in full.notes[0]
+    assert "between row 11 and row 12" in full.notes[0] or "row 12" in full.notes[0]
+
+
+def test_crank_equal_to_rod_continues_smoothly_through_the_bifurcation():
+    m = _load("crank_equals_rod")                # bifurcation at input 45°
+    deg = np.array([44.5, 44.55, 44.6, 44.99, 45.01, 46.0, 90.0])
+    st = _solve(m, deg)
+    th = np.radians(45.0 + deg)
+    assert st.success, st.message
+    assert np.allclose(st.positions[:, 2, 0], 100.0 * np.cos(th), atol=1e-7)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-0.9, 1.0), min_size=1, max_size=12))
+def test_hypothesis_uneven_steps_never_ok_off_the_reference_branch(u):
+    # inputs clustered near both reach limits (+47.87°, −227.87°) with uneven spacing
+    m = _load("nongrashof")
+    deg = np.array([47.873 * x if x > 0 else 227.87 * x for x in u])
+    st = _solve(m, deg)
+    ok = st.ok
+    assert np.allclose(st.positions[ok, 2], _four_bar_B(m, deg[ok]), atol=1e-7)
+    inside = (deg > -227.86) & (deg < 47.87)
+    assert ok[inside].all()
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.floats(-360.0, 360.0), min_size=2, max_size=8))
+def test_hypothesis_parallelogram_any_spacing_keeps_translating(deg):
+    m = _load("parallelogram")
+    st = _solve(m, deg)
+    assert np.allclose(st.angles[st.ok, m.link_names.index("coupler")], 0.0, atol=1e-8)
+    flat = np.isclose(np.mod(deg, 180.0), 120.0 % 180.0, atol=1e-7)
+    assert st.ok[~flat].all()
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.lists(st.floats(0.0, 360.0), min_size=2, max_size=5))
+def test_hypothesis_triad_large_steps_match_a_fine_continuation(deg):
+    m = stephenson3_triad()
+    coarse = _solve(m, deg)
+    path = [0.0]
+    for x in deg:                       # the same path, walked in 0.5° steps
+        n = max(int(np.ceil(abs(x - path[-1]) / 0.5)), 1)
+        path += list(np.linspace(path[-1], x, n + 1)[1:])
+    fine = _solve(m, path)
+    rows = np.cumsum([0] + [max(int(np.ceil(abs(b - a) / 0.5)), 1)
+                            for a, b in zip([0.0] + deg[:-1], deg)])[1:]
+    both = coarse.ok & fine.ok[rows]
+    assert np.allclose(coarse.positions[both], fine.positions[rows][both], atol=1e-9)
+    assert np.array_equal(coarse.ok, fine.ok[rows])
+
+
+def test_runaway_inputs_are_reduced_or_refused():
+    m = _load("nongrashof")
+    st = _solve(m, [1e9 * 360.0 + 10.0, 1e300])
+    assert st.ok[0] and np.allclose(st.positions[0, 2], _four_bar_B(m, np.array([10.0]))[0], atol=1e-6)
+    assert st.codes[1] in (0, Status.LIMIT)
+    with pytest.raises(InputError, match="at most"):
+        _solve(stephenson3_triad(), [1e9])
+
+
+def test_frozen_result_arrays_are_read_only():
+    st = _solve(_load("nongrashof"), [0.0, 10.0])
+    with pytest.raises(ValueError):
+        st.positions[0, 0, 0] = 1.0
