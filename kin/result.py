@@ -59,10 +59,8 @@ class BatchStatus:
 
     @property
     def ok(self) -> np.ndarray:
-        """Boolean mask of the positions that succeeded."""
-        codes = getattr(self, "codes", None)
-        if codes is not None:
-            return np.asarray(codes) == Status.OK
+        """Boolean mask of the positions that succeeded (``status == "ok"``; the codes
+        say the same, and callers that rewrite ``status`` keep it authoritative)."""
         return np.asarray(self.status) == "ok"
 
     @property

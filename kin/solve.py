@@ -398,7 +398,7 @@ def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
         where = ch.hi if side == "hi" else ch.lo
         label = sp.steps[k].label if k is not None else "the mechanism"
         run.code[n] = Status.LIMIT
-        run.reason[int(n)] = f"unreachable: limit of {label} at {_fmt_x(sp, 0, where)}"
+        run.reason[int(n)] = f"{label}: unreachable: limit at {_fmt_x(sp, 0, where)} (out of reach beyond it)"
     run.G.invalidate(range(sp.mechanism.n_links), bad)
 
 
@@ -494,7 +494,7 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         past = np.flatnonzero(sn > s_b)
         for n in past:
             run.code[n] = Status.LIMIT
-            run.reason[int(n)] = f"unreachable: limit of {sp.steps[k].label} at {where}"
+            run.reason[int(n)] = f"{sp.steps[k].label}: unreachable: limit at {where} (out of reach beyond it)"
         run.G.invalidate(range(sp.mechanism.n_links), sn > s_b)
         if past.size:
             notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} at "

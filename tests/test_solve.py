@@ -173,13 +173,13 @@ def test_non_grashof_reports_its_reach_limits():
         st = solve(m, x)
     assert not st.success and st.ok[0]
     first = int(np.flatnonzero(~st.ok)[0])
-    assert "unreachable: limit of" in st.status[first] and "II1(2,3)" in st.status[first]
+    assert "unreachable: limit at" in st.status[first] and "II1(2,3)" in st.status[first]
     assert "first at input" in st.message
     assert np.isnan(st.positions[first]).any()
     # the limit is where the coupler and rocker are stretched: |AC| = l + c
     A = st.positions[first - 1, 1]
     assert abs(np.hypot(*(A - st.positions[0, 3])) - 4.0) < 0.1
-    with pytest.raises(AssemblyError, match="unreachable: limit of"):
+    with pytest.raises(AssemblyError, match="unreachable: limit at"):
         solve(m, x[first])
     with pytest.raises(AssemblyError):
         solve(m, x[first], method="newton")

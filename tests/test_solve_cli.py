@@ -61,7 +61,7 @@ def test_solve_from_to_and_failures_are_null(files, capsys, tmp_path):
     d = json.loads(cap.out)
     bad = [i for i, s in enumerate(d["status"]) if s != "ok"]
     assert bad and all(d["joints"]["B"]["x"][i] is None for i in bad)
-    assert "unreachable: limit of" in d["status"][bad[0]]
+    assert "unreachable: limit at" in d["status"][bad[0]]
     assert "first at input" in cap.err
 
 
