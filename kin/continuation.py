@@ -187,7 +187,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         d = min(delta, 0.25 * (s_star - s[0])) if s_star > s[0] else delta
         rule = _resolve(evaluate, P, s_nodes, flips, g, s_star, d)
         if rule == "limit":                  # a turning point within delta: the motion stops
-            return Walk(s[:i + 2], _frozen(flips), tuple(crossings), (s[i + 1], s_star + d, g), rounds)
+            return Walk(s, _frozen(flips), tuple(crossings), (s[i + 1], s_star + d, g), rounds)
         if rule == "flip":
             flips[g].append(s_star)
         handled[g].append(s_star)

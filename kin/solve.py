@@ -483,7 +483,7 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         Xs = np.stack([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])], axis=1) * scale
         signs = {k: sign_factor(f, s) for k, f in w.flips.items() if f}
         run = _run(sp, Xs, needed, signs, kernels)
-    rows = np.searchsorted(s, s_nodes[idx[1:]])
+    rows = np.minimum(np.searchsorted(s, s_nodes[idx[1:]]), len(s) - 1)
     run = _take(run, rows)
     sn = s_nodes[idx[1:]]
     notes = []

@@ -159,3 +159,17 @@ def test_frozen_result_arrays_are_read_only():
     st = _solve(_load("nongrashof"), [0.0, 10.0])
     with pytest.raises(ValueError):
         st.positions[0, 0, 0] = 1.0
+
+
+def test_tracked_route_past_a_limit_reports_it_without_crashing():
+    # excavator (three P drivers, Newton groups + a dyad): the default stroke passes the
+    # bucket dyad's limit; every later row is unreachable (was an IndexError)
+    from multiloop.catalogue.named import load_named
+    m = load_named("excavator")
+    x = np.linspace(0.0, 0.7, 8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = solve(m, np.stack([x, x, x], axis=1))
+    bad = np.flatnonzero(~st.ok)
+    assert st.ok[0] and bad.size and np.all(st.codes[bad[0]:] == Status.LIMIT)
+    assert "unreachable: limit at" in st.status[bad[0]]
