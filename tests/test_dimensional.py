@@ -366,3 +366,86 @@ def test_slow_path_respects_the_budget(method):
     assert wall < budget + 1.0, wall
     assert res.seconds <= wall
     assert np.isfinite(res.error_max) and res.evaluations > 0
+
+
+# ---------------------------------------------------------------------------------
+# constraint options: full rotation, length bounds, longest / shortest ratio
+def _non_grashof_four_bar():
+    """The catalogue four-bar with a 0.09 crank: s + l > p + q, the crank rocks."""
+    m = load_named("four_bar")
+    js = [replace(j, at=(0.045, 0.0779423)) if j.name == "A" else j for j in m.joints]
+    return replace(m, joints=tuple(js))
+
+
+def _link_lengths(m):
+    """Distances between the R joints of each link (the frame's too), from the joints."""
+    from multiloop.topo.model import JointKind
+    out = []
+    for lk in m.link_names:
+        at = [np.asarray(j.at) for j in m.joints if lk in j.links and j.kind is JointKind.R]
+        out += [np.hypot(*(at[a] - at[b])) for a in range(len(at)) for b in range(a + 1, len(at))]
+    return np.array(out)
+
+
+def test_full_rotation_penalises_a_rocking_crank():
+    from multiloop.catalogue.dimensional.objective import Constraints
+    from multiloop.kin.check import check
+    m0 = load_named("four_bar")
+    st = solve(m0, np.radians(np.arange(10.0, 130.0, 20.0)))
+    target = st.point_positions[:, st.point_index("P")]
+    for m, rotates in ((load_named("four_bar"), True), (_non_grashof_four_bar(), False)):
+        assert check(m).drivers[0].full_rotation is rotates
+        ev = Evaluator(m, design_space(m, ["P"]))
+        t = path_target(m, target, "P")
+        free, full = (Problem(ev, t, c).batch(ev.space.x0[None, :])[0]
+                      for c in (Constraints(), Constraints(full_rotation=True)))
+        assert (full > free + 1e-3) is not rotates and full >= free
+
+
+def test_full_rotation_result_turns_fully():
+    from multiloop.kin.check import check
+    m = load_named("four_bar")
+    st = solve(m, np.radians(np.arange(10.0, 130.0, 20.0)))
+    target = st.point_positions[:, st.point_index("P")]
+    res = synthesise(_non_grashof_four_bar(), path=target, point="P", full_rotation=True, budget=2.0, seed=0)
+    assert check(res.mechanism).drivers[0].full_rotation      # the output's driver turns fully
+    assert np.isfinite(res.error_max)          # (2 s do not reach the true four-bar from this start)
+
+
+def test_length_bounds_and_max_ratio_are_met():
+    m = load_named("four_bar")                     # lengths 0.04 .. 0.12: ratio 3
+    st = solve(m, np.radians(np.arange(7.0, 360.0, 33.0)))
+    target = st.point_positions[:, st.point_index("P")]
+    assert _link_lengths(m).max() / _link_lengths(m).min() > 2.9
+    res = synthesise(m, path=target, point="P", max_ratio=2.0, budget=2.0, seed=0)
+    L = _link_lengths(res.mechanism)
+    assert L.max() / L.min() <= 2.0 * (1 + 1e-6), L
+    res = synthesise(m, path=target, point="P", length_bounds=(0.05, 0.2), budget=2.0, seed=0)
+    L = _link_lengths(res.mechanism)
+    assert L.min() >= 0.05 * (1 - 1e-6) and L.max() <= 0.2 * (1 + 1e-6), L
+
+
+def test_cli_without_a_terminal_writes_nothing_to_stderr(tmp_path, capsys):
+    """The rich progress bar is shown only when stderr is a terminal."""
+    import sys
+    assert not sys.stderr.isatty()
+    start = str(named_path("four_bar"))
+    tgt = tmp_path / "t.csv"
+    m = load_named("four_bar")
+    st = solve(m, np.radians(np.arange(7.0, 360.0, 45.0)))
+    np.savetxt(tgt, st.point_positions[:, st.point_index("P")], delimiter=",")
+    assert main(["synthesise", start, "--path", str(tgt), "--point", "P", "--out", str(tmp_path / "o.toml"),
+                 "--budget", "0.5"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_progress_bar_callback_reports_fractions():
+    from multiloop.commands.synthesise import _progress
+    assert _progress(False) == (None, None)
+    seen = []
+    m = load_named("four_bar")
+    st = solve(m, np.radians(np.arange(7.0, 360.0, 45.0)))
+    synthesise(m, path=st.point_positions[:, st.point_index("P")], point="P", budget=0.5, tol=0.0,
+               progress=lambda frac, best: seen.append((frac, best)))
+    assert seen and all(0.0 <= f <= 1.0 for f, _ in seen)
+    assert all(b2 <= b1 for (_, b1), (_, b2) in zip(seen, seen[1:]))     # the best only improves

@@ -247,17 +247,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     start_note = _closed_form(problem)
     end = ev.deadline = _search_deadline(problem, t0, budget)
     polished: list = []
-
-    def probe(z):
-        if time.perf_counter() > end:
-            return False
-        with _unbounded(ev):
-            phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=end)
-        a = _assess(problem, z2, phi2)
-        polished.append((a, z2, phi2, n))
-        return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol
-
+    probe = _prober(problem, polished, end, tol)
     left = end - time.perf_counter()
     res = global_search(problem, method=method, seed=seed, budget=0.75 * left, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
@@ -271,6 +261,21 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
                            time.perf_counter() - t0, method, seed, phi, achieved, wanted,
                            dict(zip(problem.names, map(float, z))), res.stopped,
                            None if ang is None else float(np.max(ang)), res.history, tuple(notes))
+
+
+def _prober(problem: Problem, polished: list, end: float, tol: float):
+    """The global search's probe: polish design ``z`` (until ``end``), keep the result
+    in ``polished``, and say whether it meets the tolerance and every constraint."""
+    def probe(z):
+        if time.perf_counter() > end:
+            return False
+        with _unbounded(problem.ev):
+            phi = problem.match(z)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=end)
+        a = _assess(problem, z2, phi2)
+        polished.append((a, z2, phi2, n))
+        return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0
+    return probe
 
 
 def _import_optimisers(method: str) -> None:
@@ -330,11 +335,22 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, d
             notes.append("the local polish left the continuous branch")
 
     def key(c):
-        return (not c[0][2], not _solvable(problem, c[1]), float(np.sqrt(np.mean(c[0][0] ** 2))))
+        return (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
+                float(np.sqrt(np.mean(c[0][0] ** 2))))
     a, zb, phib, _ = min(cands, key=key)
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
     return a, zb, phib, sum(c[3] for c in cands), notes
+
+
+def _violation(problem: Problem, z: np.ndarray) -> float:
+    """The constraint violation of design ``z`` (zero when it meets every constraint:
+    full rotation, transmission, lengths, ratio, a non-singular reference)."""
+    X = z[None, :problem.nx]
+    with _unbounded(problem.ev):
+        st = problem.ev.poses(X, problem.grid)
+    full = problem.curve(st.ok)[3]
+    return float(problem.violation(X, st, full)[0])
 
 
 def _solvable(problem: Problem, z: np.ndarray) -> bool:
