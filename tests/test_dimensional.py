@@ -449,3 +449,17 @@ def test_progress_bar_callback_reports_fractions():
                progress=lambda frac, best: seen.append((frac, best)))
     assert seen and all(0.0 <= f <= 1.0 for f, _ in seen)
     assert all(b2 <= b1 for (_, b1), (_, b2) in zip(seen, seen[1:]))     # the best only improves
+
+
+def test_triad_targets_are_met():
+    """A mechanism with a triad (class III group): targets traced by the catalogue
+    stephenson_3_triad are met again from a slightly perturbed copy."""
+    m = load_named("stephenson_3_triad")
+    st = solve(m, np.radians(np.arange(7.0, 300.0, 29.0)))
+    assert (st.status == "ok").all()
+    target = st.point_positions[:, st.point_index("P")]
+    res = synthesise(_perturbed(m, 0.001), path=target, point="P", budget=3.0, seed=0)
+    assert res.error_max < 1e-3, (res.error_max, res.notes)
+    st2 = solve(res.mechanism, res.inputs)
+    got = st2.point_positions[:, st2.point_index("P")]
+    assert np.max(np.hypot(*(got - target).T)) / float(np.max(np.ptp(target, axis=0))) < 1e-3
