@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.model import Mechanism
+from multiloop.topo.model import JointKind, Mechanism
 
 from .result import BatchStatus
 from .rigid import move_point
@@ -64,6 +64,12 @@ class KinematicState(BatchStatus):
                 v = v.view()
                 v.flags.writeable = False
                 object.__setattr__(self, f, v)
+
+    def as_dict(self, formula: str | None = None, inputs_cli=None) -> dict:
+        """The stable JSON document (layout: docs/kinematics.md, section 3); NaN is
+        ``None``.  ``inputs_cli`` (N,): the inputs as the user gave them (deg / m),
+        printed as given; default: this state's inputs in deg (R) or m (P)."""
+        return _state_dict(self, formula, inputs_cli)
 
     def point_index(self, name: str) -> int:
         return self.point_names.index(name)
@@ -112,3 +118,51 @@ class KinematicState(BatchStatus):
         return move_point(self.positions[:, i], self.angles[:, k], r, self.velocities[:, i]
                           if self.velocities is not None else None, w,
                           self.accelerations[:, i] if self.accelerations is not None else None, e)
+
+
+def _list(a) -> list:
+    a = np.asarray(a, float)
+    return [None if not np.isfinite(v) else float(v) for v in a.ravel()]
+
+
+def _state_dict(state, formula=None, inputs_cli=None) -> dict:
+    """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc).
+    ``inputs_cli`` (N,): the inputs as given on the command line (deg / m), printed
+    as given (no round trip through radians)."""
+    m = state.mechanism
+    drivers = []
+    inp = []
+    for k, d in enumerate(m.drivers):
+        is_r = m.joint(d.joint).kind is JointKind.R
+        drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
+        if inputs_cli is not None:
+            inp.append(np.asarray(inputs_cli, float))
+        else:
+            inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
+    doc = {"mechanism": m.name, "formula": formula,
+           "drivers": drivers,
+           "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
+           "status": [str(s) for s in state.status]}
+    der = state.velocities is not None
+    joints = {}
+    for i, j in enumerate(m.joints):
+        e = {"x": _list(state.positions[:, i, 0]), "y": _list(state.positions[:, i, 1])}
+        if der:
+            e.update(vx=_list(state.velocities[:, i, 0]), vy=_list(state.velocities[:, i, 1]),
+                     ax=_list(state.accelerations[:, i, 0]), ay=_list(state.accelerations[:, i, 1]))
+        joints[j.name] = e
+    links = {}
+    for k, lk in enumerate(m.link_names):
+        e = {"angle": _list(np.degrees(state.angles[:, k]))}
+        if der:
+            e.update(omega=_list(state.omegas[:, k]), epsilon=_list(state.epsilons[:, k]))
+        links[lk] = e
+    points = {}
+    for k, name in enumerate(state.point_names):
+        e = {"x": _list(state.point_positions[:, k, 0]), "y": _list(state.point_positions[:, k, 1])}
+        if der:
+            e.update(vx=_list(state.point_velocities[:, k, 0]), vy=_list(state.point_velocities[:, k, 1]),
+                     ax=_list(state.point_accelerations[:, k, 0]), ay=_list(state.point_accelerations[:, k, 1]))
+        points[name] = e
+    doc.update(joints=joints, links=links, points=points, notes=list(state.notes))
+    return doc

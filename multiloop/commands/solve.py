@@ -110,52 +110,9 @@ def _to_api(m, x_cli: np.ndarray) -> np.ndarray:
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
 
 
-def _list(a) -> list:
-    a = np.asarray(a, float)
-    return [None if not np.isfinite(v) else float(v) for v in a.ravel()]
-
-
 def state_to_dict(state, plan=None, inputs_cli=None) -> dict:
-    """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc).
-    ``inputs_cli`` (N,): the inputs as given on the command line (deg / m), printed
-    as given (no round trip through radians)."""
-    m = state.mechanism
-    drivers = []
-    inp = []
-    for k, d in enumerate(m.drivers):
-        is_r = m.joint(d.joint).kind is JointKind.R
-        drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
-        if inputs_cli is not None:
-            inp.append(np.asarray(inputs_cli, float))
-        else:
-            inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
-    doc = {"mechanism": m.name, "formula": plan.formula if plan is not None else None,
-           "drivers": drivers,
-           "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
-           "status": [str(s) for s in state.status]}
-    der = state.velocities is not None
-    joints = {}
-    for i, j in enumerate(m.joints):
-        e = {"x": _list(state.positions[:, i, 0]), "y": _list(state.positions[:, i, 1])}
-        if der:
-            e.update(vx=_list(state.velocities[:, i, 0]), vy=_list(state.velocities[:, i, 1]),
-                     ax=_list(state.accelerations[:, i, 0]), ay=_list(state.accelerations[:, i, 1]))
-        joints[j.name] = e
-    links = {}
-    for k, lk in enumerate(m.link_names):
-        e = {"angle": _list(np.degrees(state.angles[:, k]))}
-        if der:
-            e.update(omega=_list(state.omegas[:, k]), epsilon=_list(state.epsilons[:, k]))
-        links[lk] = e
-    points = {}
-    for k, name in enumerate(state.point_names):
-        e = {"x": _list(state.point_positions[:, k, 0]), "y": _list(state.point_positions[:, k, 1])}
-        if der:
-            e.update(vx=_list(state.point_velocities[:, k, 0]), vy=_list(state.point_velocities[:, k, 1]),
-                     ax=_list(state.point_accelerations[:, k, 0]), ay=_list(state.point_accelerations[:, k, 1]))
-        points[name] = e
-    doc.update(joints=joints, links=links, points=points, notes=list(state.notes))
-    return doc
+    """The JSON document of a state: :meth:`KinematicState.as_dict` (kept for callers)."""
+    return state.as_dict(plan.formula if plan is not None else None, inputs_cli)
 
 
 def _csv(doc: dict) -> str:
