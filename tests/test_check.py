@@ -45,6 +45,8 @@ def four_bar(a, b, c, d, theta0, sign=1.0):
     O4 = np.array([d, 0.0])
     AC = O4 - A
     L = float(np.hypot(*AC))
+    if L < 1e-9 * d:  # the crank pin on the rocker's pivot: no reference configuration
+        return None
     x = (b * b + L * L - c * c) / (2 * L)
     y2 = b * b - x * x
     if y2 <= 0:
