@@ -425,6 +425,47 @@ def test_length_bounds_and_max_ratio_are_met():
     assert L.min() >= 0.05 * (1 - 1e-6) and L.max() <= 0.2 * (1 + 1e-6), L
 
 
+def test_polish_trades_the_targets_against_the_constraints():
+    """The local polish sees the constraint penalty: from the exact four-bar (zero target
+    residual) with a longest/shortest ratio of 3 under ``max_ratio=2``, the polish moves
+    towards the constraint; a polish of the target residuals alone would not move."""
+    from multiloop.catalogue.dimensional.objective import Constraints
+    from multiloop.catalogue.dimensional.optimise import polish
+    m = load_named("four_bar")
+    st = solve(m, np.radians(np.arange(7.0, 360.0, 33.0)))
+    target = st.point_positions[:, st.point_index("P")]
+    ev = Evaluator(m, design_space(m, ["P"], region=target))
+    pr = Problem(ev, path_target(m, target, "P"), Constraints(max_ratio=2.0))
+    z0 = pr.x0.copy()
+    phi0 = np.radians(np.arange(7.0, 360.0, 33.0))             # where the targets were read
+    assert np.max(np.abs(pr.residuals(z0, phi0))) < 1e-6       # the start meets the targets
+    v0 = pr.penalty_batch(z0[None, :])[0]
+    assert v0 > 0.1                                             # and violates the ratio
+    z1, phi1, _ = polish(pr, z0, phi0, max_nfev=60)
+    assert pr.penalty_batch(z1[None, :])[0] < 0.5 * v0
+
+
+def test_cli_length_bounds(tmp_path, capsys):
+    from multiloop.topo.io import load
+    start = str(named_path("four_bar"))
+    tgt = tmp_path / "t.csv"
+    m = load_named("four_bar")
+    st = solve(m, np.radians(np.arange(7.0, 360.0, 45.0)))
+    np.savetxt(tgt, st.point_positions[:, st.point_index("P")], delimiter=",")
+    out = tmp_path / "o.toml"
+    base = ["synthesise", start, "--path", str(tgt), "--point", "P", "--out", str(out), "--budget", "1"]
+    assert main(base + ["--length-bounds", "0.05", "0.2"]) == 0
+    L = _link_lengths(load(str(out)))
+    assert L.min() >= 0.05 * (1 - 1e-6) and L.max() <= 0.2 * (1 + 1e-6), L
+    out.unlink()
+    for bad in (["0.2", "0.05"], ["0", "0.2"], ["nan", "1"]):
+        capsys.readouterr()
+        assert main(base + ["--length-bounds", *bad]) == 2
+        err = capsys.readouterr().err
+        assert "--length-bounds" in err and "Traceback" not in err
+        assert not out.exists()
+
+
 def test_cli_without_a_terminal_writes_nothing_to_stderr(tmp_path, capsys):
     """The rich progress bar is shown only when stderr is a terminal."""
     import sys

@@ -42,6 +42,14 @@ class Constraints:
     max_ratio: float | None = None
     weight: float = 10.0
 
+    def __post_init__(self):
+        lb = self.length_bounds
+        if lb is not None and not (len(lb) == 2 and np.all(np.isfinite(lb)) and 0 < lb[0] < lb[1]):
+            raise InputError(explain("length_bounds (--length-bounds)", expected="two lengths 0 < LOW < HIGH (m)",
+                                     got=str(tuple(lb))))
+        if self.max_ratio is not None and not (np.isfinite(self.max_ratio) and self.max_ratio >= 1):
+            raise InputError(explain("max_ratio (--max-ratio)", expected="a number >= 1", got=str(self.max_ratio)))
+
 
 def transmission_angles(ev: Evaluator, X: np.ndarray, st: Poses) -> np.ndarray:
     """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the dyads,
@@ -349,6 +357,20 @@ class Problem:
         f = np.sqrt(cost / self.n_targets)
         f = f + self.cons.weight * self.violation(X, st, full)
         return np.where(np.isfinite(f), f, _FAIL)
+
+    @property
+    def constrained(self) -> bool:
+        """Whether any design constraint is set (the reference margin always counts)."""
+        c = self.cons
+        return bool(c.full_rotation or c.min_transmission or c.length_bounds or c.max_ratio)
+
+    def penalty_batch(self, Z: np.ndarray) -> np.ndarray:
+        """The constraint penalty of :meth:`batch` alone, ``(P,)``: the weighted
+        violation over the driver grid walked from the reference."""
+        X = np.atleast_2d(Z)[:, :self.nx]
+        st = self.ev.poses(X, self.grid)
+        full = self.curve(st.ok[:, :self.M])[3]
+        return self.cons.weight * self.violation(X, st, full)
 
     def reference_margin(self, X: np.ndarray) -> np.ndarray:
         """Smallest relative determinant of the dyads in the reference configuration

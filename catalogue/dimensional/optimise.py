@@ -11,7 +11,11 @@ in one call of :meth:`~.objective.Problem.batch`:
 Both stop at the time budget or when the best objective reaches the tolerance.
 The polish is :func:`scipy.optimize.least_squares` (trust-region reflective) on
 the design plus one driver value per target, with the forward-difference
-Jacobian computed as one batched call (all perturbed designs together).
+Jacobian computed as one batched call (all perturbed designs together).  When the
+problem has constraints, the polish's residual vector carries the same weighted
+violation as the global objective (:meth:`~.objective.Problem.penalty_batch`) as one
+more residual, so the polish trades the targets against the constraints as the
+search does instead of polishing a design out of them.
 """
 from __future__ import annotations
 
@@ -137,6 +141,14 @@ class _Deadline(Exception):
     pass
 
 
+def _residuals(problem: Problem, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
+    """The polish's residuals: the targets', plus the constraint penalty when there are constraints."""
+    R = problem.residuals_batch(Z, PHI)
+    if problem.constrained:
+        R = np.concatenate([R, problem.penalty_batch(Z)[:, None]], axis=1)
+    return R
+
+
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
            deadline: float | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
@@ -169,7 +181,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         late()
         Z, PHI = split(w)
         count[0] += 1
-        r = problem.residuals_batch(Z, PHI)[0]
+        r = _residuals(problem, Z, PHI)[0]
         r = np.where(np.isfinite(r), r, 1.0)
         n = float(r @ r)
         if n < best[0] and (deadline is None or time.perf_counter() <= deadline):
@@ -183,7 +195,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         W = np.vstack([w, w + np.diag(h)])
         Z, PHI = split(W)
         count[0] += W.shape[0]
-        R = problem.residuals_batch(Z, PHI)
+        R = _residuals(problem, Z, PHI)
         R = np.where(np.isfinite(R), R, 1.0)
         return ((R[1:] - R[0]) / h[:, None]).T
 

@@ -52,6 +52,8 @@ def add_arguments(p) -> None:
     p.add_argument("--min-transmission", type=float, default=None, metavar="DEG",
                    help="minimum transmission angle of every RRR dyad")
     p.add_argument("--max-ratio", type=float, default=None, help="longest / shortest link length at most this")
+    p.add_argument("--length-bounds", type=float, nargs=2, default=None, metavar=("LOW", "HIGH"),
+                   help="every link length (distance between two joints of a link, the frame's too) in [LOW, HIGH] m")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
@@ -79,7 +81,7 @@ def run(args) -> int:
     bar, cb = _progress(sys.stderr.isatty() and not args.json)
     kw = dict(seed=args.seed, budget=args.budget, method=args.method, tol=args.tol,
               full_rotation=args.full_rotation, min_transmission=args.min_transmission,
-              max_ratio=args.max_ratio, progress=cb)
+              max_ratio=args.max_ratio, length_bounds=args.length_bounds, progress=cb)
     if args.path:
         kw.update(path=args.path, point=args.point, shape_only=args.shape_only)
     elif args.function:
