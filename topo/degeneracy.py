@@ -13,7 +13,16 @@ routes are provided and cross-checked in the tests:
 * ``method="mincut"``: ``c(S) = Σ_J max(0, |S∩J| − 1) = max_y Σ_J y_J (|S∩J| − 1)``
   turns ``max_S 2c(S) − 3|S|`` into a supermodular maximisation, i.e. a minimum
   s–t cut, solved once for every pair of links that share a joint (any connected
-  S contains such a pair; a disconnected degenerate S has a degenerate component).
+  S contains such a pair; a disconnected degenerate S has a degenerate component);
+* ``method="pebble"``: the (2, 3) pebble game of Jacobs & Hendrickson (1997) on the
+  bar framework that stands for the links (:mod:`topo.pebble`; the count above is
+  Laman's count of that framework), O(n²); where it does not settle the question
+  (F <= 0, a link on one joint) the min-cut route answers.
+
+``method="auto"``: the exhaustive search up to 16 links (the fastest there); above,
+the pebble game first, and a chain it proves non-degenerate is done, while a
+degenerate one is named by the min-cut route (so the subset named does not depend on
+the pebble game).
 
 A chain is **fractionated** when its incidence graph has an articulation vertex:
 a *cut link* or a *cut joint*.
@@ -27,6 +36,7 @@ import numpy as np
 import rustworkx as rx
 
 from .model import Mechanism
+from .pebble import rigid_links
 
 __all__ = ["find_rigid_subchain", "is_degenerate", "rigid_subset_mask", "Fractionation", "fractionation",
            "subchain_deficit"]
@@ -217,20 +227,32 @@ def _minimise(m: Mechanism, subset: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(sorted(cur, key=order.__getitem__))
 
 
+def _pebble(m: Mechanism) -> tuple[str, ...] | None:
+    """The pebble game's subset, greedily minimised; the min-cut route where the game
+    does not settle it."""
+    found = rigid_links(m)
+    if found is None:
+        return None
+    if found == "unknown" or not (2 <= len(found) < m.n_links and subchain_deficit(m, found) <= 0):
+        return _mincut(m)
+    return _minimise(m, tuple(found))
+
+
 def find_rigid_subchain(m: Mechanism, method: str = "auto") -> tuple[str, ...] | None:
     """A rigid or over-constrained proper sub-chain (link names), or None.
 
     Parameters
     ----------
     m : Mechanism
-    method : {"auto", "exhaustive", "mincut"}
-        ``auto`` uses the exhaustive bit-mask search up to 16 links, min-cut above.
+    method : {"auto", "exhaustive", "mincut", "pebble"}
+        ``auto``: the exhaustive bit-mask search up to 16 links; above, the pebble
+        game decides and the min-cut route names a degenerate chain's subset.
 
     Returns
     -------
     tuple of str or None
-        For ``exhaustive`` the smallest offending subset; for ``mincut`` a
-        greedily minimised one.
+        For ``exhaustive`` (and ``auto`` up to 16 links) the smallest offending
+        subset; for ``mincut`` and ``pebble`` a greedily minimised one.
 
     Examples
     --------
@@ -240,12 +262,18 @@ def find_rigid_subchain(m: Mechanism, method: str = "auto") -> tuple[str, ...] |
     ('a', 'b', 'c')
     """
     if method == "auto":
-        method = "exhaustive" if m.n_links <= 16 else "mincut"
+        if m.n_links <= 16:           # the bit-mask search is the fastest there (2^n masks)
+            return _exhaustive(m)
+        if rigid_links(m) is None:
+            return None
+        method = "mincut"
     if method == "exhaustive":
         return _exhaustive(m)
     if method == "mincut":
         return _mincut(m)
-    raise ValueError(f"method: expected 'auto', 'exhaustive' or 'mincut', got {method!r}")
+    if method == "pebble":
+        return _pebble(m)
+    raise ValueError(f"method: expected 'auto', 'exhaustive', 'mincut' or 'pebble', got {method!r}")
 
 
 def is_degenerate(m: Mechanism, method: str = "auto") -> bool:

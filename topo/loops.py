@@ -535,8 +535,34 @@ def _minimum_faces(block, use_filter: bool, node_budget: int | None = None, whit
         return (s, s), 1
     if len(rb.keep) > 4 and not _planar(len(rb.keep), rb.pairs):
         return None, 0
+    if whitney and _three_connected(rb):
+        return _unique_faces(rb), 1
     search = _FaceSearch(rb, _face_candidates(rb, use_filter), MAX_EMBEDDINGS, node_budget)
-    return search.minimum(unique=whitney and _three_connected(rb)), search.count
+    return search.minimum(), search.count
+
+
+def _unique_faces(rb: _ReducedBlock) -> tuple[int, ...]:
+    """Face sizes (in links, ascending) of a planar 3-connected reduced block, read off
+    its one embedding (Whitney 1932) from networkx's planarity test: no cycle listing
+    and no search.  A face's size counts the link vertices on its corners and inside
+    its reduced edges."""
+    n = len(rb.keep)
+    weight = {frozenset(p): rb.edges[e][2] for e, p in enumerate(rb.pairs)}
+    g = nx.Graph()
+    g.add_nodes_from(range(n))
+    g.add_edges_from(rb.pairs)
+    planar, emb = nx.check_planarity(g)
+    assert planar, "reduced block tested planar above"
+    seen: set = set()
+    sizes = []
+    for u, v in emb.edges():
+        if (u, v) in seen:
+            continue
+        face = emb.traverse_face(u, v, mark_half_edges=seen)
+        corners = sum(1 for x in face if _is_link(rb.keep[x]))
+        inside = sum(weight[frozenset((face[i], face[(i + 1) % len(face)]))] for i in range(len(face)))
+        sizes.append(corners + inside)
+    return tuple(sorted(sizes))
 
 
 def _three_connected(rb: _ReducedBlock) -> bool:

@@ -132,7 +132,8 @@ def actual_mobility(m: Mechanism, tol: float = 1e-9) -> MobilityReport:
     formula = 3 * len(moving) - 2 * p
     redundant = []
     r0, row = 0, 0
-    for c in cons:
+    # full row rank: every prefix of independent rows is independent, so none is redundant
+    for c in (cons if rank < J.shape[0] else ()):
         k = c.n_equations
         sub = J[:row + k]
         r1 = int(np.linalg.matrix_rank(sub, tol=tol * scale))
