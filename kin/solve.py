@@ -754,10 +754,7 @@ def _solve_driver(sp: SolvePlan, st: StepPlan, G: "_Poses", X: np.ndarray):
 
 def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, notes, code) -> KinematicState:
     m = sp.mechanism
-    N = G.M
-    pos = np.empty((N, m.n_joints, 2))
-    for i, j in enumerate(m.joints):
-        pos[:, i] = G.point_k(sp.joint_host[i], np.asarray(j.at, float))
+    pos = _points(sp, G, sp.joint_host, "joints")
     vel = acc = om = ep = None
     if Zd is not None:
         host = np.asarray(sp.joint_host)
@@ -766,15 +763,32 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, notes, c
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = np.empty((N, len(m.points), 2))
-        for i, p in enumerate(m.points):
-            ppos[:, i] = G.point_k(ph[i], np.asarray(p.at, float))
+        ppos = _points(sp, G, sp.point_host, "points")
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
     return KinematicState(m, X, pos, np.stack(G.th, axis=1), status, vel, acc, om, ep,
                           rates_in, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
+
+
+def _points(sp: SolvePlan, G: "_Poses", hosts, which: str) -> np.ndarray:
+    """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
+    carried by its host link's pose (one vectorised rigid transport for all of them)."""
+    key = ("points", which)
+    hit = sp.extra.get(key)
+    if hit is None:
+        items = sp.mechanism.joints if which == "joints" else sp.mechanism.points
+        h = tuple(hosts)
+        r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
+        hit = sp.extra[key] = (h, r)
+    h, r = hit
+    col = lambda arrs: np.stack([np.broadcast_to(arrs[k], (G.M,)) for k in h], axis=1)  # noqa: E731
+    c, s = col(G.c), col(G.s)
+    out = np.empty((G.M, len(h), 2))
+    out[..., 0] = col(G.x) + c * r[:, 0] - s * r[:, 1]
+    out[..., 1] = col(G.y) + s * r[:, 0] + c * r[:, 1]
+    return out
 
 
 def _kernels():
@@ -938,6 +952,37 @@ def _known_on(st: StepPlan, joint: str) -> str:
     raise KeyError(joint)  # pragma: no cover
 
 
+@dataclass(frozen=True)
+class _RRRConstants:
+    """What an RRR step needs from its reference configuration, computed once per plan."""
+
+    known1: str
+    known2: str
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    la: float
+    lc: float
+    sign: float
+    dir1: np.ndarray
+    dir2: np.ndarray
+
+
+def _rrr_constants(sp: SolvePlan, st: StepPlan) -> _RRRConstants:
+    key = ("RRR", id(st))
+    hit = sp.extra.get(key)
+    if hit is None:
+        import multiloop.kin.groups as K
+        o1, inner, o2, _l1, _l2 = st.step.layout
+        m = sp.mechanism
+        A, B, C = (np.asarray(m.joint(j).at, float) for j in (o1, inner, o2))
+        la, lc = float(np.hypot(*(B - A))), float(np.hypot(*(B - C)))
+        hit = _RRRConstants(_known_on(st, o1), _known_on(st, o2), A, B, C, la, lc,
+                            float(K.rrr_branch(A, C, B)), _unit(B - A), _unit(B - C))
+        sp.extra[key] = hit
+    return hit
+
+
 def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
     """A dyad in closed form on the branch ``sign of the reference × factor``.
 
@@ -953,16 +998,16 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
     pr = None
     scale = sp.size
     if kind == "RRR":
-        Aref, Bref, Cref = G.at(o1), G.at(inner), G.at(o2)
-        A = G.point(_known_on(st, o1), Aref)
-        C = G.point(_known_on(st, o2), Cref)
-        la, lc = np.hypot(*(Bref - Aref)), np.hypot(*(Bref - Cref))
-        sgn0 = float(K.rrr_branch(Aref, Cref, Bref))
-        rs = K.rrr_position(A, C, la, lc, sgn0 * factor)
+        c = _rrr_constants(sp, st)
+        Aref, Bref, Cref, la, lc = c.A, c.B, c.C, c.la, c.lc
+        A = G.point(c.known1, Aref)
+        C = G.point(c.known2, Cref)
+        rs = K.rrr_position(A, C, la, lc, c.sign * factor)
         B = rs.B
-        ok = rs.ok.copy()
-        AC = C - A
-        d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
+        ok = rs.ok
+        if probe or not ok.all():
+            AC = C - A
+            d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
         if probe:
             gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / d
             pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1))
@@ -972,8 +1017,8 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
                                f"no assembly: |{o1}{o2}| = {d[n]:.6g} > {la:.6g} + {lc:.6g} (out of reach)"
                                if d[n] > la + lc else
                                f"no assembly: |{o1}{o2}| = {d[n]:.6g} < |{la:.6g} − {lc:.6g}| (out of reach)")
-        G.place_dir(l1, A, Aref, B - A, Bref - Aref)
-        G.place_dir(l2, C, Cref, B - C, Bref - Cref)
+        G.place_dir(l1, A, Aref, B - A, c.dir1)
+        G.place_dir(l2, C, Cref, B - C, c.dir2)
         det, rdet = rs.det, la * lc
     elif kind == "RRP":
         Aref, Bref, Pref = G.at(o1), G.at(inner), G.at(o2)
