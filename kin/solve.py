@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from multiloop.topo.assur import AssurGroup, AssurPlan, DriverStep, decompose, link_origins
+from multiloop.topo.assur import AssurGroup, AssurPlan, DriverStep, GroupKind, decompose
+from multiloop.topo.constraints import link_origins
 from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, SingularityWarning,
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
@@ -118,7 +119,8 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
             solver, label = "driver", f"driver {s.joint} (I{s.number})"
         else:
             solver = "dyad" if s.is_dyad else (
-                "triad" if s.kind == "triad" else ("class4" if s.kind == "class IV" and s.layout else "newton"))
+                "triad" if s.kind is GroupKind.TRIAD else
+                ("class4" if s.kind is GroupKind.CLASS_IV and s.layout else "newton"))
             label = s.describe()
         # regularity at the reference configuration
         cols = (3 * np.asarray(unknown)[:, None] + np.arange(3)).ravel()
@@ -127,7 +129,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         rel = abs(np.linalg.det(J)) / norms if norms > 0 else 0.0
         if rel < _SINGULAR:
             hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular" \
-                if isinstance(s, AssurGroup) and s.kind in ("PRP", "RPP") else \
+                if isinstance(s, AssurGroup) and s.kind in (GroupKind.PRP, GroupKind.RPP) else \
                 "move a joint so that the group is not at a dead centre / toggle position"
             raise SingularityError(explain(
                 label, expected="a regular group in the reference configuration",
@@ -797,10 +799,10 @@ def _kernels():
         import multiloop.kin.groups as K
     except ImportError:  # pragma: no cover - the kernels are part of the package
         return None
-    need = {"RRR": "rrr_position", "RRP": "rrp_position", "RPR": "rpr_position",
-            "PRP": "prp_position", "RPP": "rpp_position", "triad": "triad_track",
-            "class IV": "class4_track"}
-    special = {"triad": _closed_triad, "class IV": _closed_class4}
+    need = {GroupKind.RRR: "rrr_position", GroupKind.RRP: "rrp_position", GroupKind.RPR: "rpr_position",
+            GroupKind.PRP: "prp_position", GroupKind.RPP: "rpp_position", GroupKind.TRIAD: "triad_track",
+            GroupKind.CLASS_IV: "class4_track"}
+    special = {GroupKind.TRIAD: _closed_triad, GroupKind.CLASS_IV: _closed_class4}
     out = {k: special.get(k, _closed_dyad) for k, fn in need.items() if hasattr(K, fn)}
     return out
 
@@ -997,7 +999,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
     why: dict[int, tuple] = {}
     pr = None
     scale = sp.size
-    if kind == "RRR":
+    if kind is GroupKind.RRR:
         c = _rrr_constants(sp, st)
         Aref, Bref, Cref, la, lc = c.A, c.B, c.C, c.la, c.lc
         A = G.point(c.known1, Aref)
@@ -1020,7 +1022,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
         G.place_dir(l1, A, Aref, B - A, c.dir1)
         G.place_dir(l2, C, Cref, B - C, c.dir2)
         det, rdet = rs.det, la * lc
-    elif kind == "RRP":
+    elif kind is GroupKind.RRP:
         Aref, Bref, Pref = G.at(o1), G.at(inner), G.at(o2)
         kp = _known_on(st, o2)
         u_ref = G.axis(o2)
@@ -1043,7 +1045,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
         G.place_dir(l1, A, Aref, B - A, Bref - Aref)
         G.place_like(l2, B, Bref, kp)
         det, rdet = rs.det, la
-    elif kind == "RPR":
+    elif kind is GroupKind.RPR:
         # guide = the link of the P joint listed first; it is pivoted at X, the block at Y
         jp = m.joint(inner)
         guide = jp.links[0]
@@ -1069,7 +1071,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
         G.place_dir(guide, Xp, Xref, u, u_ref)
         G.place_like(blk, Yp, Yref, guide)
         det, rdet = rs.det, scale
-    elif kind == "PRP":
+    elif kind is GroupKind.PRP:
         Bref = G.at(inner)
         k1, k2 = _known_on(st, o1), _known_on(st, o2)
         u1r, u2r = G.axis(o1), G.axis(o2)
@@ -1081,7 +1083,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
         G.place_like(l1, B, Bref, k1)
         G.place_like(l2, B, Bref, k2)
         det, rdet = r.det, 1.0
-    elif kind == "RPP":
+    elif kind is GroupKind.RPP:
         Aref, Qref = G.at(o1), G.at(o2)
         kq = _known_on(st, o2)
         u_ref, w_ref = G.axis(o2), G.axis(inner)
@@ -1097,7 +1099,7 @@ def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1
         raise ValueError(kind)
     for n in np.flatnonzero(~ok):
         why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
-    tol = _PARALLEL_GUIDES if kind in ("PRP", "RPP") else _SINGULAR
+    tol = _PARALLEL_GUIDES if kind in (GroupKind.PRP, GroupKind.RPP) else _SINGULAR
     sing = ok & ~(np.abs(det) > tol * rdet)
     for n in np.flatnonzero(sing):
         why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
@@ -1115,7 +1117,7 @@ _TRIAD_STATUS = {1: (Status.OUT_OF_REACH, "no assembly (out of reach)"),
 def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
     import multiloop.kin.groups as K
     g: AssurGroup = st.step
-    tern, bins, outs, inns = g.layout
+    tern, bins, outs, inns = g.layout.ternary, g.layout.binaries, g.layout.outers, g.layout.inners
     Aref = np.array([G.at(o) for o in outs])
     b = np.array([G.at(i) for i in inns])
     lengths = np.hypot(*(b - Aref).T)
@@ -1142,9 +1144,10 @@ def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=
 def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
     """Class IV order 2 group by the kernel's tracker (mode of the reference)."""
     import multiloop.kin.groups as K
-    t1, t2, b0, b1, o1, o2, j1, j2, j3, j4 = st.step.layout
+    lay = st.step.layout
+    t1, t2, b0, b1, o1, o2 = lay.ternary1, lay.ternary2, lay.binary1, lay.binary2, lay.outer1, lay.outer2
     Oref = np.array([G.at(o1), G.at(o2)])
-    Jref = np.array([G.at(j) for j in (j1, j2, j3, j4)])
+    Jref = np.array([G.at(j) for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
     r = Jref - Oref[[0, 0, 1, 1]]
     lengths = np.array([np.hypot(*(Jref[2] - Jref[0])), np.hypot(*(Jref[3] - Jref[1]))])
     O = np.stack([G.point(_known_on(st, o1), Oref[0]), G.point(_known_on(st, o2), Oref[1])], axis=1)
@@ -1205,14 +1208,14 @@ def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
     def at(j):
         return np.asarray(m.joint(j).at, float)
 
-    if g.kind == "RRR":
+    if g.kind is GroupKind.RRR:
         A, vA, aA = R.point(_known_on(st, o1), at(o1))
         C, vC, aC = R.point(_known_on(st, o2), at(o2))
         B = R.point(l1, at(inner))[0]
         r = K.rrr_rates(A, C, B, vA, vC, aA, aC)
         R.set(l1, A, vA, aA, r.w2, r.e2)
         R.set(l2, C, vC, aC, r.w3, r.e3)
-    elif g.kind == "RRP":
+    elif g.kind is GroupKind.RRP:
         kp = _known_on(st, o2)
         A, vA, aA = R.point(_known_on(st, o1), at(o1))
         P, vP, aP = R.point(kp, at(o2))
@@ -1221,7 +1224,7 @@ def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
         r = K.rrp_rates(A, B, P, u, vA, vP, w, aA, aP, e)
         R.set(l1, A, vA, aA, r.w2, r.e2)
         R.set(l2, B, r.vB, r.aB, w, e)
-    elif g.kind == "RPR":
+    elif g.kind is GroupKind.RPR:
         guide = m.joint(inner).links[0]
         gx, bx = (o1, o2) if guide == l1 else (o2, o1)
         blk = l2 if guide == l1 else l1
@@ -1231,7 +1234,7 @@ def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
         r = K.rpr_rates(Yp, Xp, u, vY, vX, aY, aX)
         R.set(guide, Xp, vX, aX, r.w3, r.e3)
         R.set(blk, Yp, vY, aY, r.w3, r.e3)
-    elif g.kind == "PRP":
+    elif g.kind is GroupKind.PRP:
         k1, k2 = _known_on(st, o1), _known_on(st, o2)
         P1, vP1, aP1 = R.point(k1, at(o1))
         P2, vP2, aP2 = R.point(k2, at(o2))
@@ -1241,7 +1244,7 @@ def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
         r = K.prp_rates(B, P1, u1, P2, u2, vP1, w1, vP2, w2, aP1, e1, aP2, e2)
         R.set(l1, B, r.vB, r.aB, w1, e1)
         R.set(l2, B, r.vB, r.aB, w2, e2)
-    elif g.kind == "RPP":
+    elif g.kind is GroupKind.RPP:
         kq = _known_on(st, o2)
         alpha = float(_angle(_unit(m.joint(inner).axis)) - _angle(_unit(m.joint(o2).axis)))
         A, vA, aA = R.point(_known_on(st, o1), at(o1))

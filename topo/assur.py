@@ -49,6 +49,8 @@ References
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
+from typing import NamedTuple
 
 import networkx as nx
 import numpy as np
@@ -61,14 +63,79 @@ from .graphs import n_pairs, pin_pairs
 from .mobility import actual_mobility
 from .model import JointKind, Mechanism
 
-__all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS"]
+__all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS", "GroupKind",
+           "DyadLayout", "TriadLayout", "Class4Layout"]
 
 # Constraint, link_origins and reference_jacobian live in topo.constraints; the names
 # stay importable from here for existing callers.
 _ = link_origins
 
+class GroupKind(str, Enum):
+    """The kind of an Assur group: the five dyads by their joint sequence (outer–inner–
+    outer, Vasechkin et al. 2017), the class III triad, the class IV order-2 group, any
+    other group (``GENERAL``, solved by Newton) and a block with a driver inside
+    (``DRIVEN``).  A member is its string (``GroupKind.RRR == "RRR"``)."""
+
+    RRR = "RRR"
+    RRP = "RRP"
+    RPR = "RPR"
+    PRP = "PRP"
+    RPP = "RPP"
+    TRIAD = "triad"
+    CLASS_IV = "class IV"
+    GENERAL = "group"
+    DRIVEN = "driven group"
+
+    def __str__(self) -> str:
+        return self.value
+
+    def __format__(self, spec: str) -> str:
+        return format(self.value, spec)
+
+    @property
+    def is_dyad(self) -> bool:
+        return self.value in DYAD_KINDS
+
+
 #: dyad kind → number (вид) of Vasechkin et al. 2017
 DYAD_KINDS = {"RRR": 1, "RRP": 2, "RPR": 3, "PRP": 4, "RPP": 5}
+
+
+class DyadLayout(NamedTuple):
+    """A dyad's roles in outer–inner–outer order (joint and link names): ``link1``
+    carries ``outer1`` and ``inner``, ``link2`` carries ``inner`` and ``outer2``."""
+
+    outer1: str
+    inner: str
+    outer2: str
+    link1: str
+    link2: str
+
+
+class TriadLayout(NamedTuple):
+    """A class III triad: the ternary link, the three binaries, each binary's outer
+    joint (to a known link) and its inner joint (on the ternary), in the same order."""
+
+    ternary: str
+    binaries: tuple[str, ...]
+    outers: tuple[str, ...]
+    inners: tuple[str, ...]
+
+
+class Class4Layout(NamedTuple):
+    """A class IV order-2 group: two ternaries each on one outer joint, two binaries
+    closing the inner 4-loop; ``j_ab`` is the joint of ternary a with binary b."""
+
+    ternary1: str
+    ternary2: str
+    binary1: str
+    binary2: str
+    outer1: str
+    outer2: str
+    j11: str
+    j12: str
+    j21: str
+    j22: str
 
 _ROMAN = {1: "I", 2: "II", 3: "III", 4: "IV", 5: "V", 6: "VI", 7: "VII", 8: "VIII"}
 
@@ -96,9 +163,10 @@ class AssurGroup:
         Position among the groups (0-based, solving order).
     cls, order : int
         Class and order (module docstring).
-    kind : str
-        ``RRR``, ``RRP``, ``RPR``, ``PRP``, ``RPP``, ``triad``, ``class IV`` or
-        ``"<n>-link group"``; ``"driven <n>-link group"`` when a driver acts inside.
+    kind : GroupKind
+        ``RRR``, ``RRP``, ``RPR``, ``PRP``, ``RPP``, ``TRIAD``, ``CLASS_IV``,
+        ``GENERAL`` or ``DRIVEN`` (a driver acts inside); :attr:`kind_name` is the
+        printed name (``"<n>-link group"``, ``"driven <n>-link group"`` for the last two).
     links : tuple of str
         Real links of the group (unknown here), in file order.
     joints : tuple of (str, tuple of str)
@@ -111,11 +179,9 @@ class AssurGroup:
         The group's equations in pair form (3 per link in total, counted by rows).
     numbers : tuple of int
         Link numbers in the structure formula.
-    layout : tuple
-        Kind-specific roles used by the closed-form solvers (see ``kin.solve``):
-        for a dyad ``(outer1, inner, outer2, link1, link2)`` as joint/link names in
-        outer–inner–outer order; for a triad ``(ternary, (binary…), (outer…),
-        (inner…))``.
+    layout : DyadLayout, TriadLayout, Class4Layout or None
+        Kind-specific roles used by the closed-form solvers (``kin.solve``,
+        ``kin.check``, ``catalogue.dimensional``); None for other groups.
     drivers : tuple of int
         Drivers acting inside the group (driven blocks only).
     """
@@ -123,7 +189,7 @@ class AssurGroup:
     index: int
     cls: int
     order: int
-    kind: str
+    kind: GroupKind
     links: tuple[str, ...]
     joints: tuple[tuple[str, tuple[str, ...]], ...]
     inner_joints: tuple[str, ...]
@@ -131,12 +197,21 @@ class AssurGroup:
     known_links: tuple[str, ...]
     constraints: tuple[Constraint, ...]
     numbers: tuple[int, ...] = ()
-    layout: tuple = ()
+    layout: DyadLayout | TriadLayout | Class4Layout | None = None
     drivers: tuple[int, ...] = ()
 
     @property
     def is_dyad(self) -> bool:
-        return self.kind in DYAD_KINDS
+        return self.kind.is_dyad
+
+    @property
+    def kind_name(self) -> str:
+        """The printed kind: ``RRR`` … ``class IV``, ``"<n>-link group"``, ``"driven <n>-link group"``."""
+        if self.kind is GroupKind.GENERAL:
+            return f"{len(self.links)}-link group"
+        if self.kind is GroupKind.DRIVEN:
+            return f"driven {len(self.links)}-link group"
+        return self.kind.value
 
     @property
     def label(self) -> str:
@@ -144,14 +219,14 @@ class AssurGroup:
         roman = _ROMAN.get(self.cls, str(self.cls))
         if self.is_dyad:
             head = f"II{DYAD_KINDS[self.kind]}"
-        elif self.kind in ("triad", "class IV"):
+        elif self.kind in (GroupKind.TRIAD, GroupKind.CLASS_IV):
             head = roman
         else:
             head = f"G{len(self.links)}"
         return f"{head}({','.join(map(str, self.numbers))})"
 
     def describe(self) -> str:
-        return f"group {self.index + 1} {self.label} ({self.kind}; links {', '.join(self.links)})"
+        return f"group {self.index + 1} {self.label} ({self.kind_name}; links {', '.join(self.links)})"
 
 
 @dataclass(frozen=True)
@@ -218,7 +293,7 @@ class AssurPlan:
         groups = []
         for s in self.groups:
             groups.append({
-                "class": s.cls, "order": s.order, "kind": s.kind, "label": s.label,
+                "class": s.cls, "order": s.order, "kind": s.kind_name, "label": s.label,
                 "links": list(s.links),
                 "joints": sorted({j for _, js in s.joints for j in js},
                                  key=m.joint_names.index),
@@ -559,9 +634,9 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
                 longest = max(longest, len(cyc))
     cls = max(2, longest, deg)
     order = len(outer)
-    layout: tuple = ()
+    layout = None
     if drv:
-        kind = f"driven {len(links)}-link group"
+        kind = GroupKind.DRIVEN
     elif len(links) == 2 and len(inner) == 1 and len(outer) == 2 and \
             {outer[0].a, outer[0].b} & B != {outer[1].a, outer[1].b} & B:
         o1, o2 = outer
@@ -572,8 +647,8 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
         if s not in DYAD_KINDS:
             s = s[::-1]
             o1, o2, l1, l2 = o2, o1, l2, l1
-        kind = s if s in DYAD_KINDS else "2-link group"
-        layout = (o1.joint, inner[0].joint, o2.joint, l1, l2)
+        kind = GroupKind(s) if s in DYAD_KINDS else GroupKind.GENERAL
+        layout = DyadLayout(o1.joint, inner[0].joint, o2.joint, l1, l2) if s in DYAD_KINDS else None
         cls = 2
     elif len(links) == 4 and len(inner) == 3 and len(outer) == 3 and deg == 3 and \
             all(m.joint(c.joint).kind is JointKind.R for c in pair_cons):
@@ -581,9 +656,9 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
         bins = tuple(x for x in links if x != tern)
         outs = tuple(next(c.joint for c in outer if x in (c.a, c.b)) for x in bins)
         inns = tuple(next(c.joint for c in inner if x in (c.a, c.b)) for x in bins)
-        kind, layout = "triad", (tern, bins, outs, inns)
+        kind, layout = GroupKind.TRIAD, TriadLayout(tern, bins, outs, inns)
     elif len(links) == 4 and len(inner) == 4 and len(outer) == 2 and longest == 4:
-        kind = "class IV"
+        kind = GroupKind.CLASS_IV
         with_outer = [c.b if c.b in B else c.a for c in outer]
         bins = [x for x in links if x not in with_outer]
         if len(set(with_outer)) == 2 and len(bins) == 2 and \
@@ -595,9 +670,9 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
             o2 = next(c.joint for c in outer if t2 in (c.a, c.b))
             js = (_inner(t1, bins[0]), _inner(t1, bins[1]), _inner(t2, bins[0]), _inner(t2, bins[1]))
             if None not in js:
-                layout = (t1, t2, bins[0], bins[1], o1, o2) + js
+                layout = Class4Layout(t1, t2, bins[0], bins[1], o1, o2, *js)
     else:
-        kind = f"{len(links)}-link group"
+        kind = GroupKind.GENERAL
     return AssurGroup(index, cls, order, kind, tuple(links), full, inner_joints, outer_joints,
                       known_links, tuple(cons), numbers, layout, tuple(drv))
 

@@ -23,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.assur import AssurGroup, DriverStep, decompose
+from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 __all__ = ["DesignSpace", "Evaluator", "Poses", "design_space"]
 
-_CLOSED = ("RRR", "RRP", "RPR")
+_CLOSED = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)
 
 
 @dataclass(frozen=True)
@@ -145,8 +145,8 @@ class Evaluator:
         self.plan = decompose(m)
         self.links = {x: i for i, x in enumerate(m.link_names)}
         self.frame = self.links[m.frame]
-        self.slow = [s.kind for s in self.plan.steps
-                     if isinstance(s, AssurGroup) and s.kind not in _CLOSED + ("triad",)]
+        self.slow = [s.kind_name for s in self.plan.steps
+                     if isinstance(s, AssurGroup) and s.kind not in _CLOSED + (GroupKind.TRIAD,)]
         self._cols = {n: i for i, n in enumerate(space.names)}
         self.deadline: float | None = None      # time.perf_counter() value; see _per_candidate
 
@@ -186,7 +186,7 @@ class Evaluator:
         for step in self.plan.steps:
             if isinstance(step, DriverStep):
                 self._driver(step, X, phi, st)
-            elif step.kind == "triad":
+            elif step.kind is GroupKind.TRIAD:
                 self._triad(step, X, st)
             else:
                 getattr(self, "_" + step.kind.lower())(step, X, st)

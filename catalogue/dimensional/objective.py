@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
@@ -63,16 +64,16 @@ def transmission_angles(ev: Evaluator, X: np.ndarray, st: Poses) -> np.ndarray:
     out = np.full(st.ok.shape, np.inf)
     m = ev.mechanism
     for g in ev.plan.groups:
-        if g.kind not in ("RRR", "RRP", "RPR"):
+        if g.kind not in (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR):
             continue
         o1, inner, o2, l1, l2 = g.layout
-        if g.kind == "RRR":
+        if g.kind is GroupKind.RRR:
             k1, k2 = ev.links[l1], ev.links[l2]
             A, B = st.world(k1, ev.at(X, o1)), st.world(k1, ev.at(X, inner))
             a = _angle_deg(A - B, st.world(k2, ev.at(X, o2)) - B)
             q = np.minimum(a, 180.0 - a)
         else:
-            if g.kind == "RRP":
+            if g.kind is GroupKind.RRP:
                 pj, guide = o2, m.joint(o2).links[0]
                 k1 = ev.links[l1]
                 d = st.world(k1, ev.at(X, inner)) - st.world(k1, ev.at(X, o1))
@@ -381,14 +382,14 @@ class Problem:
         out = np.ones(X.shape[0])
         for g in ev.plan.groups:
             o1, inner, o2, l1, l2 = g.layout if g.is_dyad else (None,) * 5
-            if g.kind == "RRR":
+            if g.kind is GroupKind.RRR:
                 u, w = ev.at(X, inner) - ev.at(X, o1), ev.at(X, inner) - ev.at(X, o2)
                 r = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
                 r = r / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
-            elif g.kind == "RRP":
+            elif g.kind is GroupKind.RRP:
                 u = ev.at(X, inner) - ev.at(X, o1)
                 r = np.abs(np.sum(u * ev.axis(X, o2), 1)) / np.linalg.norm(u, axis=1)
-            elif g.kind == "RPR":
+            elif g.kind is GroupKind.RPR:
                 guide = ev.mechanism.joint(inner).links[0]
                 gx, bx = (o1, o2) if guide == l1 else (o2, o1)
                 d = ev.at(X, bx) - ev.at(X, gx)

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from multiloop.topo.assur import GroupKind
+
 from .report import GroupCircuit
 
 __all__ = ["group_circuits"]
@@ -25,15 +27,15 @@ def _modes(ap, g) -> int | None:
     m = ap.mechanism
     at = {j.name: np.asarray(j.at, float) for j in m.joints}
     try:
-        if g.kind == "triad":
-            _, _, outs, inns = g.layout
-            A = np.array([at[o] for o in outs])
-            b = np.array([at[i] for i in inns])
+        if g.kind is GroupKind.TRIAD:
+            lay = g.layout
+            A = np.array([at[o] for o in lay.outers])
+            b = np.array([at[i] for i in lay.inners])
             return int(K.triad_modes(A, b, np.hypot(*(b - A).T)).n_modes)
-        if g.kind == "class IV":
-            _, _, _, _, o1, o2, j1, j2, j3, j4 = g.layout
-            O = np.array([at[o1], at[o2]])
-            J = np.array([at[j] for j in (j1, j2, j3, j4)])
+        if g.kind is GroupKind.CLASS_IV:
+            lay = g.layout
+            O = np.array([at[lay.outer1], at[lay.outer2]])
+            J = np.array([at[j] for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
             r = J - O[[0, 0, 1, 1]]
             ll = np.array([np.hypot(*(J[2] - J[0])), np.hypot(*(J[3] - J[1]))])
             return int(K.class4_modes(O, r, ll).n_modes)
@@ -51,7 +53,7 @@ def group_circuits(ap, drivers) -> tuple[GroupCircuit, ...]:
         at_limit = [f"{dc.joint} limit" for dc in drivers for s in dc.limit_groups if s.startswith(lab)]
         at_branch = [f"{dc.joint} branch point" for dc in drivers for _, b in dc.branch_points if b == lab]
         if n is None:
-            out.append(GroupCircuit(lab, g.kind, None, None,
+            out.append(GroupCircuit(lab, g.kind_name, None, None,
                                     "modes not enumerated for this group (solved by Newton "
                                     "from the reference)"))
             continue
@@ -60,5 +62,5 @@ def group_circuits(ap, drivers) -> tuple[GroupCircuit, ...]:
         note = ("reference mode only; the others need disassembly" if reach == 1 and n > 1 else
                 "single mode" if n == 1 else
                 "reference mode and the mode met through " + ", ".join(sorted(set(via))))
-        out.append(GroupCircuit(lab, g.kind, n, reach, note))
+        out.append(GroupCircuit(lab, g.kind_name, n, reach, note))
     return tuple(out)

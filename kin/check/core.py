@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from multiloop.kin.solve import compile_plan, solve
-from multiloop.topo.assur import decompose
+from multiloop.topo.assur import GroupKind, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -65,22 +65,22 @@ def signed_dets(plan):
     """Dyads with a reach limit and their normalised signed determinant ``D(state)``:
     sin of the angle at B (RRR), cos of rod–guide angle (RRP), s/|CA| (RPR)."""
     m = plan.mechanism
-    groups = [g for g in plan.groups if g.kind in ("RRR", "RRP", "RPR")]
+    groups = [g for g in plan.groups if g.kind in (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)]
 
     def D(state):
         P = state.positions
         out = np.full((P.shape[0], len(groups)), np.nan)
         for c, g in enumerate(groups):
             o1, inner, o2, l1, _ = g.layout
-            if g.kind == "RRR":
+            if g.kind is GroupKind.RRR:
                 A, B, C = (P[:, state.joint_index(n)] for n in (o1, inner, o2))
                 u, v = A - B, C - B
                 out[:, c] = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (
                     np.hypot(*u.T) * np.hypot(*v.T))
                 continue
-            pj = o2 if g.kind == "RRP" else inner
+            pj = o2 if g.kind is GroupKind.RRP else inner
             guide = m.joint(pj).links[0]
-            if g.kind == "RRP":
+            if g.kind is GroupKind.RRP:
                 X, Y = P[:, state.joint_index(o1)], P[:, state.joint_index(inner)]
             else:
                 gx, bx = (o1, o2) if guide == l1 else (o2, o1)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import AssemblyError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -26,7 +27,9 @@ P_STEPS = 400            # grid steps over ± the mechanism's size
 #: groups with a closed-form or all-modes kernel; any other group is tracked by Newton
 #: at about a millisecond per position, so its mechanism gets a coarser P grid and
 #: fewer samples per zoom iteration (same 1e-10 tolerance, more iterations)
-_KERNELS = ("RRR", "RRP", "RPR", "PRP", "RPP", "triad", "class IV")
+#: the group kinds with a closed-form kernel
+_KERNELS = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR, GroupKind.PRP, GroupKind.RPP, GroupKind.TRIAD,
+            GroupKind.CLASS_IV)
 
 
 @dataclass(frozen=True)

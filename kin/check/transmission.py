@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.assur import AssurPlan
+from multiloop.topo.assur import AssurPlan, GroupKind
 
 __all__ = ["AngleSpec", "angle_specs", "angle_values"]
 
@@ -61,20 +61,20 @@ def angle_specs(plan: AssurPlan) -> tuple[AngleSpec, ...]:
     out: list[AngleSpec] = []
     for g in plan.groups:
         lab = g.describe()
-        if g.kind == "RRR":
+        if g.kind is GroupKind.RRR:
             o1, inner, o2, _, _ = g.layout
             out.append(AngleSpec(inner, "transmission", lab, g.kind, (o1, inner, o2)))
-        elif g.kind == "RRP":
+        elif g.kind is GroupKind.RRP:
             o1, inner, o2, _, _ = g.layout
             out.append(AngleSpec(inner, "pressure", lab, g.kind, (o1, inner),
                                  (o2, m.joint(o2).links[0])))
-        elif g.kind == "RPR":
+        elif g.kind is GroupKind.RPR:
             o1, inner, o2, l1, _ = g.layout
             guide = m.joint(inner).links[0]
             gx, bx = (o1, o2) if guide == l1 else (o2, o1)
             out.append(AngleSpec(inner, "pressure", lab, g.kind, (gx, bx), (inner, guide)))
-        elif g.kind == "triad":
-            _, _, outs, inns = g.layout
+        elif g.kind is GroupKind.TRIAD:
+            outs, inns = g.layout.outers, g.layout.inners
             for i in range(3):
                 j, k = (i + 1) % 3, (i + 2) % 3
                 out.append(AngleSpec(inns[i], "triad", lab, g.kind,
