@@ -33,7 +33,7 @@ Conventions
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -44,18 +44,18 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
 from multiloop.topo.model import JointKind, Mechanism
 
 from .continuation import Probe, Walk, walk
-from .groups.newton import ConstraintSystem, rates, track
+from .groups.newton import ConstraintSystem
+from .groups.registry import closed_form_step, newton_step
+from .groups.step import SINGULAR
+from .poses import PoseRates, Poses
 from .result import MESSAGES, Status
-from .rigid import move_point, perp, rotate, transport
+from .rigid import transport
 from .state import KinematicState
 
 __all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH"]
 
 METHODS = ("auto", "closed_form", "newton")
-_SINGULAR = 1e-9          # relative determinant below which a position is singular
-#: PRP/RPP: |det| = |sin(angle between the unit guides)| below which the guides count as
-#: parallel; nearer than this the slider positions exceed 1e6 × the offsets (change point)
-_PARALLEL_GUIDES = 1e-6
+_SINGULAR = SINGULAR       # relative determinant below which a position is singular
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,8 +65,10 @@ class StepPlan:
     step: object                      # DriverStep or AssurGroup
     system: ConstraintSystem
     unknown: tuple[int, ...]          # link indices
-    solver: str                       # "driver", "dyad", "triad", "newton"
+    solver: str                       # "driver", "dyad", "triad", "class4", "newton"
     label: str
+    closed: object = None             # its closed-form step (kin.groups.step protocol), if any
+    newton: object = None             # Newton with continuation: any step
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,6 +111,8 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
     org = link_origins(m)
     origins = np.array([org[x] for x in names])
     steps = []
+    xy = np.array([j.at for j in m.joints], float)
+    size = max(float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0, 1e-12)
     Z0 = np.zeros((1, len(names), 3))
     Z0[0, :, :2] = origins
     for k, s in enumerate(ap.steps):
@@ -134,7 +138,8 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
             raise SingularityError(explain(
                 label, expected="a regular group in the reference configuration",
                 got=f"a singular one (relative determinant {rel:.1e})", hint=hint))
-        steps.append(StepPlan(s, sysm, unknown, solver, label))
+        st = StepPlan(s, sysm, unknown, solver, label)
+        steps.append(replace(st, closed=closed_form_step(m, st, size), newton=newton_step(m, st, size)))
     solved = dict(ap.solved_by)
     host, hstep = [], []
     for j in m.joints:
@@ -145,9 +150,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         host.append(idx[cand[0]])
         hstep.append(solved.get(cand[0], -1))
     pts = tuple(idx[p.link] for p in m.points)
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
-    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), max(size, 1e-12), pts)
+    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), size, pts)
 
 
 # ---------------------------------------------------------------------------------
@@ -181,7 +184,7 @@ _AT_CROSSING = 1e-9
 class _Run:
     """Everything solved at a batch of inputs: poses, per-position codes and reasons."""
 
-    G: "_Poses"
+    G: "Poses"
     code: np.ndarray                  # (M,) int8 Status of the first failing group
     reason: dict                      # n -> text (the group's label and why)
     probes: dict                      # step index -> Probe (only when asked)
@@ -191,29 +194,14 @@ def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool 
     """Solve the steps ``steps`` at the inputs ``X`` (M, n_drivers), the closed-form dyads
     on the branch ``reference sign × signs[k]`` (default 1)."""
     M = X.shape[0]
-    G = _Poses(sp, M)
+    G = Poses(sp, M)
     code = np.zeros(M, np.int8)
     reason: dict[int, str] = {}
     probes = {}
     for k in steps:
         st = sp.steps[k]
-        u = list(st.unknown)
-        up = G.finite(np.setdiff1d(st.system.involved, u)) if probe else None
-        if st.solver == "driver" and _driver_closed_form(st):
-            okk, why = _solve_driver(sp, st, G, X)
-            pr = Probe(okk) if probe else None
-        elif st.solver in ("dyad", "triad", "class4") and kernels and st.step.kind in kernels:
-            okk, why, pr = kernels[st.step.kind](sp, st, G, X, signs.get(k, 1.0), probe)
-        else:
-            known = np.setdiff1d(st.system.involved, u)
-            Z = G.to_Z(known)
-            Z[:, u, :2] = sp.origins[u]
-            Z[:, u, 2] = 0.0
-            tr = track(st.system, Z, X, u, singular_tol=_SINGULAR)
-            G.from_Z(tr.Z, u)
-            okk = tr.ok
-            why = {int(n): (int(tr.code[n]), tr.reason[n]) for n in np.flatnonzero(~okk)}
-            pr = Probe(okk.copy()) if probe else None
+        up = G.finite(np.setdiff1d(st.system.involved, st.unknown)) if probe else None
+        okk, why, pr = _step(st, kernels).positions(G, X, signs.get(k, 1.0), probe)
         if probe:
             probes[k] = Probe(pr.ok, pr.gap, pr.pts, up)
         for n in np.flatnonzero(~okk & (code == 0)):
@@ -222,7 +210,7 @@ def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool 
                 continue
             code[n] = c
             reason[int(n)] = f"{st.label}: {w}"
-        G.invalidate(u, ~okk)
+        G.invalidate(st.unknown, ~okk)
     return _Run(G, code, reason, probes)
 
 
@@ -378,8 +366,7 @@ def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
 def _chartable(sp: SolvePlan, kernels) -> bool:
     if len(sp.mechanism.drivers) != 1 or not kernels:
         return False
-    return all((st.solver == "driver" and _driver_closed_form(st)) or
-               (st.solver == "dyad" and st.step.kind in kernels) for st in sp.steps)
+    return all(st.solver in ("driver", "dyad") and st.closed is not None for st in sp.steps)
 
 
 def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
@@ -584,7 +571,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
     needed = list(range(len(sp.steps))) if only is None else _needed_steps(sp, only)
-    kernels = _kernels() if method != "newton" else None
+    kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
     elif _chartable(sp, kernels):
@@ -664,15 +651,10 @@ def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
     rates_in = np.ones(nd) if input_rates is None else np.asarray(input_rates, float).reshape(nd)
     Zd = np.zeros_like(Z)
     Zdd = np.zeros_like(Z)
-    R = np.broadcast_to(rates_in, (N, nd))
+    R = PoseRates(sp, Z, Zd, Zdd)
     for k in needed:
-        st = sp.steps[k]
-        if st.solver == "dyad" and kernels and st.step.kind in kernels:
-            _dyad_rates(sp, st, Z, Zd, Zdd)       # closed form (one 2×2 system)
-        elif st.solver == "driver" and _driver_closed_form(st):
-            _driver_rates(sp, st, Z, Zd, Zdd, rates_in)
-        else:
-            Zd, Zdd = rates(st.system, Z, Zd, R, st.unknown, Zdd, None)
+        _step(sp.steps[k], kernels).rates(R, rates_in)
+    Zd, Zdd = R.Zd, R.Zdd
     solved = set(solved_links)
     unsolved = [k for k in range(m.n_links) if k not in solved and m.link_names[k] != m.frame]
     Zd[:, unsolved] = np.nan
@@ -712,49 +694,7 @@ def _needed_steps(sp: SolvePlan, only) -> list[int]:
     return list(sp.assur.upstream([w for w in want if w >= 0]))
 
 
-def _driver_closed_form(st: StepPlan) -> bool:
-    cons = st.step.constraints
-    drive = [c for c in cons if c.kind.startswith("drive")]
-    pins = [c for c in cons if c.kind == "R"]
-    sliders = [c for c in cons if c.kind == "P"]
-    if len(drive) != 1:
-        return False
-    if drive[0].kind == "drive_R":
-        return len(pins) == 1 and not sliders
-    return len(sliders) == 1 and not pins and {drive[0].a, drive[0].b} == {sliders[0].a, sliders[0].b}
-
-
-def _solve_driver(sp: SolvePlan, st: StepPlan, G: "_Poses", X: np.ndarray):
-    """Closed form for a one-link driver step (rotation about / slide along a known link)."""
-    m = sp.mechanism
-    cons = st.step.constraints
-    L = st.unknown[0]
-    names = m.link_names
-    d = next(c for c in cons if c.kind.startswith("drive"))
-    lk = names[L]
-    if d.kind == "drive_R":
-        p = next(c for c in cons if c.kind == "R")
-        other = d.a if d.b == lk else d.b
-        sgn = 1.0 if d.b == lk else -1.0
-        th = G.th[names.index(other)] + sgn * X[:, d.driver]
-        host = p.a if p.b == lk else p.b
-        r = np.asarray(m.joint(p.joint).at, float)
-        G.place_cs(lk, G.point(host, r), r, np.cos(th), np.sin(th), th)
-    else:
-        jt = m.joint(d.joint)
-        r = np.asarray(jt.at, float)
-        u = _unit(jt.axis)
-        if d.b == lk:       # the slider is the unknown
-            k = names.index(d.a)
-            P = G.point(d.a, r) + X[:, [d.driver]] * G.direction(d.a, u)
-        else:               # the guide is the unknown: the known slider sits at -s on it
-            k = names.index(d.b)
-            P = G.point(d.b, r) - X[:, [d.driver]] * G.direction(d.b, u)
-        G.place_cs(lk, P, r, G.c[k], G.s[k], G.th[k])
-    return np.isfinite(G.th[L]), {}
-
-
-def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, notes, code) -> KinematicState:
+def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, code) -> KinematicState:
     m = sp.mechanism
     pos = _points(sp, G, sp.joint_host, "joints")
     vel = acc = om = ep = None
@@ -774,7 +714,7 @@ def _state(sp: SolvePlan, X, G: "_Poses", Z, Zd, Zdd, status, rates_in, notes, c
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
 
 
-def _points(sp: SolvePlan, G: "_Poses", hosts, which: str) -> np.ndarray:
+def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
     carried by its host link's pose (one vectorised rigid transport for all of them)."""
     key = ("points", which)
@@ -785,505 +725,16 @@ def _points(sp: SolvePlan, G: "_Poses", hosts, which: str) -> np.ndarray:
         r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
         hit = sp.extra[key] = (h, r)
     h, r = hit
-    col = lambda arrs: np.stack([np.broadcast_to(arrs[k], (G.M,)) for k in h], axis=1)  # noqa: E731
-    c, s = col(G.c), col(G.s)
+    c, s = np.stack([G.c[k] for k in h], axis=1), np.stack([G.s[k] for k in h], axis=1)
     out = np.empty((G.M, len(h), 2))
-    out[..., 0] = col(G.x) + c * r[:, 0] - s * r[:, 1]
-    out[..., 1] = col(G.y) + s * r[:, 0] + c * r[:, 1]
+    out[..., 0] = np.stack([G.x[k] for k in h], axis=1) + c * r[:, 0] - s * r[:, 1]
+    out[..., 1] = np.stack([G.y[k] for k in h], axis=1) + s * r[:, 0] + c * r[:, 1]
     return out
 
 
-def _kernels():
-    """Closed-form group solvers, or None when :mod:`kin.groups` is not importable."""
-    try:
-        import multiloop.kin.groups as K
-    except ImportError:  # pragma: no cover - the kernels are part of the package
-        return None
-    need = {GroupKind.RRR: "rrr_position", GroupKind.RRP: "rrp_position", GroupKind.RPR: "rpr_position",
-            GroupKind.PRP: "prp_position", GroupKind.RPP: "rpp_position", GroupKind.TRIAD: "triad_track",
-            GroupKind.CLASS_IV: "class4_track"}
-    special = {GroupKind.TRIAD: _closed_triad, GroupKind.CLASS_IV: _closed_class4}
-    out = {k: special.get(k, _closed_dyad) for k, fn in need.items() if hasattr(K, fn)}
-    return out
-
-
-# ---------------------------------------------------------------------------------
-# closed-form adapters: body poses  <->  point-form kernels of kin.groups
-def _angle(v):
-    return np.arctan2(v[..., 1], v[..., 0])
-
-
-def _unit(v):
-    v = np.asarray(v, float)
-    return v / np.hypot(*v)
-
-
-def _nrm(u):
-    return np.stack([-u[..., 1], u[..., 0]], axis=-1)
-
-
-class _Poses:
-    """Working store of link poses: per link, contiguous arrays over the batch.
-
-    ``x[k], y[k]`` position of link k's reference point, ``th[k]`` its rotation,
-    ``c[k], s[k]`` = cos, sin of it (kept to avoid recomputing trigonometry).
-    Arrays are stored by reference (no copies); a link never solved is ``None``.
-    """
-
-    def __init__(self, sp: SolvePlan, M: int):
-        self.sp, self.m, self.M = sp, sp.mechanism, M
-        nl = self.m.n_links
-        self.idx = {x: i for i, x in enumerate(self.m.link_names)}
-        self.x = [None] * nl
-        self.y = [None] * nl
-        self.th = [None] * nl
-        self.c = [None] * nl
-        self.s = [None] * nl
-        self.frame_k = f = self.idx[self.m.frame]
-        z = np.zeros(M)
-        self.x[f], self.y[f], self.th[f], self.c[f], self.s[f] = z, z, z, np.ones(M), z
-
-    def finite(self, links) -> np.ndarray:
-        out = np.ones(self.M, bool)
-        for k in links:
-            out &= np.isfinite(self.th[k]) if self.th[k] is not None else False
-        return out
-
-    def unset_to_nan(self) -> None:
-        """Links never solved (``only=``) become NaN."""
-        nan = np.full(self.M, np.nan)
-        for k in range(self.m.n_links):
-            if self.th[k] is None:
-                self.x[k] = self.y[k] = self.th[k] = self.c[k] = self.s[k] = nan
-
-    def take(self, rows: np.ndarray) -> "_Poses":
-        """The poses at the given rows only."""
-        out = object.__new__(_Poses)
-        out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, len(rows), self.idx, self.frame_k
-        for name in ("x", "y", "th", "c", "s"):
-            setattr(out, name, [None if a is None else a[rows] for a in getattr(self, name)])
-        return out
-
-    # -- reading -------------------------------------------------------------------
-    def at(self, joint: str) -> np.ndarray:
-        return np.asarray(self.m.joint(joint).at, float)
-
-    def axis(self, joint: str) -> np.ndarray:
-        return _unit(self.m.joint(joint).axis)
-
-    def point_k(self, k: int, r) -> np.ndarray:
-        if k == self.frame_k:
-            return np.broadcast_to(np.asarray(r, float), (self.M, 2))
-        rx, ry = np.asarray(r, float) - self.sp.origins[k]
-        c, s = self.c[k], self.s[k]
-        out = np.empty((self.M, 2))
-        out[:, 0] = self.x[k] + c * rx - s * ry
-        out[:, 1] = self.y[k] + s * rx + c * ry
-        return out
-
-    def point(self, link: str, r) -> np.ndarray:
-        return self.point_k(self.idx[link], r)
-
-    def direction(self, link: str, v) -> np.ndarray:
-        k = self.idx[link]
-        vx, vy = v
-        out = np.empty((self.M, 2))
-        out[:, 0] = self.c[k] * vx - self.s[k] * vy
-        out[:, 1] = self.s[k] * vx + self.c[k] * vy
-        return out
-
-    def theta(self, link: str) -> np.ndarray:
-        return self.th[self.idx[link]]
-
-    # -- writing -------------------------------------------------------------------
-    def place_cs(self, link: str, P, r_ref, c, s, th) -> None:
-        """Pose of ``link`` whose material point at ``r_ref`` is at ``P``, rotated (c, s)."""
-        k = self.idx[link]
-        dx, dy = self.sp.origins[k] - np.asarray(r_ref, float)
-        self.c[k], self.s[k], self.th[k] = c, s, th
-        if dx == 0.0 and dy == 0.0:
-            self.x[k], self.y[k] = P[:, 0], P[:, 1]
-        else:
-            self.x[k] = P[:, 0] + c * dx - s * dy
-            self.y[k] = P[:, 1] + s * dx + c * dy
-
-    def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
-        """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""
-        cr, sr = _unit(d_ref)
-        dx, dy = d[:, 0], d[:, 1]
-        inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-        ca, sa = d[:, 0] * inv, d[:, 1] * inv
-        c, s = ca * cr + sa * sr, sa * cr - ca * sr
-        self.place_cs(link, P, r_ref, c, s, np.arctan2(s, c))
-
-    def place_like(self, link: str, P, r_ref, other: str) -> None:
-        k = self.idx[other]
-        self.place_cs(link, P, r_ref, self.c[k], self.s[k], self.th[k])
-
-    def invalidate(self, links, bad) -> None:
-        if np.any(bad):
-            for k in links:
-                for name in ("x", "y", "th", "c", "s"):
-                    arr = getattr(self, name)
-                    arr[k] = np.where(bad, np.nan, arr[k])
-
-    # -- conversion to / from the (M, n_links, 3) pose array --------------------------
-    def to_Z(self, links=None) -> np.ndarray:
-        nl = self.m.n_links
-        ks = range(nl) if links is None else list(links) + [self.frame_k]
-        Z = np.empty((self.M, nl, 3)) if links is None else np.full((self.M, nl, 3), np.nan)
-        for k in ks:
-            Z[:, k, 0], Z[:, k, 1], Z[:, k, 2] = self.x[k], self.y[k], self.th[k]
-        return Z
-
-    def from_Z(self, Z, links) -> None:
-        for k in links:
-            self.x[k], self.y[k], self.th[k] = Z[:, k, 0].copy(), Z[:, k, 1].copy(), Z[:, k, 2].copy()
-            self.c[k], self.s[k] = np.cos(self.th[k]), np.sin(self.th[k])
-
-
-def _known_on(st: StepPlan, joint: str) -> str:
-    """The known link that a group's outer joint attaches to."""
-    B = set(st.step.links)
-    for c in st.step.constraints:
-        if c.joint == joint and c.kind in ("R", "P"):
-            if c.a not in B:
-                return c.a
-            if c.b not in B:
-                return c.b
-    raise KeyError(joint)  # pragma: no cover
-
-
-@dataclass(frozen=True)
-class _RRRConstants:
-    """What an RRR step needs from its reference configuration, computed once per plan."""
-
-    known1: str
-    known2: str
-    A: np.ndarray
-    B: np.ndarray
-    C: np.ndarray
-    la: float
-    lc: float
-    sign: float
-    dir1: np.ndarray
-    dir2: np.ndarray
-
-
-def _rrr_constants(sp: SolvePlan, st: StepPlan) -> _RRRConstants:
-    key = ("RRR", id(st))
-    hit = sp.extra.get(key)
-    if hit is None:
-        import multiloop.kin.groups as K
-        o1, inner, o2, _l1, _l2 = st.step.layout
-        m = sp.mechanism
-        A, B, C = (np.asarray(m.joint(j).at, float) for j in (o1, inner, o2))
-        la, lc = float(np.hypot(*(B - A))), float(np.hypot(*(B - C)))
-        hit = _RRRConstants(_known_on(st, o1), _known_on(st, o2), A, B, C, la, lc,
-                            float(K.rrr_branch(A, C, B)), _unit(B - A), _unit(B - C))
-        sp.extra[key] = hit
-    return hit
-
-
-def _closed_dyad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
-    """A dyad in closed form on the branch ``sign of the reference × factor``.
-
-    Returns ``(ok, why, probe)``: ``why[n] = (Status, text)`` for the failed
-    positions, ``probe`` a :class:`~kin.continuation.Probe` when asked.
-    """
-    import multiloop.kin.groups as K
-    g: AssurGroup = st.step
-    o1, inner, o2, l1, l2 = g.layout
-    m = sp.mechanism
-    kind = g.kind
-    why: dict[int, tuple] = {}
-    pr = None
-    scale = sp.size
-    if kind is GroupKind.RRR:
-        c = _rrr_constants(sp, st)
-        Aref, Bref, Cref, la, lc = c.A, c.B, c.C, c.la, c.lc
-        A = G.point(c.known1, Aref)
-        C = G.point(c.known2, Cref)
-        rs = K.rrr_position(A, C, la, lc, c.sign * factor)
-        B = rs.B
-        ok = rs.ok
-        if probe or not ok.all():
-            AC = C - A
-            d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
-        if probe:
-            gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / d
-            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1))
-        for n in np.flatnonzero(~ok):
-            if np.isfinite(d[n]):
-                why[int(n)] = (Status.OUT_OF_REACH,
-                               f"no assembly: |{o1}{o2}| = {d[n]:.6g} > {la:.6g} + {lc:.6g} (out of reach)"
-                               if d[n] > la + lc else
-                               f"no assembly: |{o1}{o2}| = {d[n]:.6g} < |{la:.6g} − {lc:.6g}| (out of reach)")
-        G.place_dir(l1, A, Aref, B - A, c.dir1)
-        G.place_dir(l2, C, Cref, B - C, c.dir2)
-        det, rdet = rs.det, la * lc
-    elif kind is GroupKind.RRP:
-        Aref, Bref, Pref = G.at(o1), G.at(inner), G.at(o2)
-        kp = _known_on(st, o2)
-        u_ref = G.axis(o2)
-        h = float(_nrm(u_ref) @ (Bref - Pref))
-        A = G.point(_known_on(st, o1), Aref)
-        P, u = G.point(kp, Pref), G.direction(kp, u_ref)
-        la = np.hypot(*(Bref - Aref))
-        sgn0 = float(K.rrp_branch(Aref, Bref, u_ref))
-        rs = K.rrp_position(A, P, u, la, h, sgn0 * factor)
-        B = rs.B
-        ok = rs.ok.copy()
-        if probe:
-            gap = 2.0 * np.abs(np.sum((B - A) * u, axis=-1))
-            pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1))
-        dist = np.abs(np.sum((A - P) * _nrm(u), axis=-1) - h)
-        for n in np.flatnonzero(~ok):
-            if np.isfinite(dist[n]):
-                why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: {o1} is {dist[n]:.6g} from the track of "
-                               f"{inner}, longer than {l1} ({la:.6g}) (out of reach)")
-        G.place_dir(l1, A, Aref, B - A, Bref - Aref)
-        G.place_like(l2, B, Bref, kp)
-        det, rdet = rs.det, la
-    elif kind is GroupKind.RPR:
-        # guide = the link of the P joint listed first; it is pivoted at X, the block at Y
-        jp = m.joint(inner)
-        guide = jp.links[0]
-        gx, bx = (o1, o2) if guide == l1 else (o2, o1)      # guide pivot joint, block pivot joint
-        Xref, Yref = G.at(gx), G.at(bx)
-        u_ref = G.axis(inner)
-        h = float(_nrm(u_ref) @ (Yref - Xref))
-        Xp = G.point(_known_on(st, gx), Xref)
-        Yp = G.point(_known_on(st, bx), Yref)
-        sgn0 = float(K.rpr_branch(Yref, Xref, u_ref))
-        rs = K.rpr_position(Yp, Xp, h, sgn0 * factor)
-        u = rs.u
-        ok = rs.ok.copy()
-        if probe:
-            fs = Xp + rs.s[:, None] * u
-            pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1))
-        dist = np.hypot(*(Yp - Xp).T)
-        for n in np.flatnonzero(~ok):
-            if np.isfinite(dist[n]):
-                why[int(n)] = (Status.OUT_OF_REACH,
-                               f"no assembly: |{gx}{bx}| = {dist[n]:.6g} < offset {abs(h):.6g} (out of reach)")
-        blk = l2 if guide == l1 else l1
-        G.place_dir(guide, Xp, Xref, u, u_ref)
-        G.place_like(blk, Yp, Yref, guide)
-        det, rdet = rs.det, scale
-    elif kind is GroupKind.PRP:
-        Bref = G.at(inner)
-        k1, k2 = _known_on(st, o1), _known_on(st, o2)
-        u1r, u2r = G.axis(o1), G.axis(o2)
-        h1 = float(_nrm(u1r) @ (Bref - G.at(o1)))
-        h2 = float(_nrm(u2r) @ (Bref - G.at(o2)))
-        r = K.prp_position(G.point(k1, G.at(o1)), G.direction(k1, u1r), h1,
-                           G.point(k2, G.at(o2)), G.direction(k2, u2r), h2)
-        B, ok = r.B, r.ok.copy()
-        G.place_like(l1, B, Bref, k1)
-        G.place_like(l2, B, Bref, k2)
-        det, rdet = r.det, 1.0
-    elif kind is GroupKind.RPP:
-        Aref, Qref = G.at(o1), G.at(o2)
-        kq = _known_on(st, o2)
-        u_ref, w_ref = G.axis(o2), G.axis(inner)
-        alpha = float(_angle(w_ref) - _angle(u_ref))
-        h = float(_nrm(w_ref) @ (Aref - Qref))
-        A = G.point(_known_on(st, o1), Aref)
-        r = K.rpp_position(A, G.point(kq, Qref), G.direction(kq, u_ref), alpha, h)
-        ok = r.ok.copy()
-        G.place_like(l2, r.Q, Qref, kq)
-        G.place_like(l1, A, Aref, kq)
-        det, rdet = r.det, 1.0
-    else:  # pragma: no cover
-        raise ValueError(kind)
-    for n in np.flatnonzero(~ok):
-        why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
-    tol = _PARALLEL_GUIDES if kind in (GroupKind.PRP, GroupKind.RPP) else _SINGULAR
-    sing = ok & ~(np.abs(det) > tol * rdet)
-    for n in np.flatnonzero(sing):
-        why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
-    if pr is None and probe:       # PRP, RPP: one assembly; parallel guides are a pole, not a limit
-        pr = Probe(ok.copy())
-    ok &= ~sing
-    return ok, why, pr
-
-
-_TRIAD_STATUS = {1: (Status.OUT_OF_REACH, "no assembly (out of reach)"),
-                 2: (Status.SINGULAR, "assembly modes collide / ambiguous step (triad singular or turning point)"),
-                 3: (Status.MODE_LOST, "mode lost earlier in the path")}
-
-
-def _closed_triad(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
-    import multiloop.kin.groups as K
-    g: AssurGroup = st.step
-    tern, bins, outs, inns = g.layout.ternary, g.layout.binaries, g.layout.outers, g.layout.inners
-    Aref = np.array([G.at(o) for o in outs])
-    b = np.array([G.at(i) for i in inns])
-    lengths = np.hypot(*(b - Aref).T)
-    A = np.stack([G.point(_known_on(st, o), G.at(o)) for o in outs], axis=1)
-    N = G.M
-    good = np.all(np.isfinite(A.reshape(N, -1)), axis=1)
-    P = np.full((N, 3, 2), np.nan)
-    th = np.full(N, np.nan)
-    ok = np.zeros(N, bool)
-    why: dict[int, tuple] = {}
-    if good.any():
-        idx = np.flatnonzero(good)
-        r = K.triad_track(A[idx], b, lengths, b)
-        P[idx], th[idx], ok[idx] = r.P, r.theta, r.ok
-        for k, n in enumerate(idx):
-            if not r.ok[k]:
-                why[int(n)] = _TRIAD_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
-    G.place_cs(tern, P[:, 0], b[0], np.cos(th), np.sin(th), th)
-    for i, (lk, o) in enumerate(zip(bins, outs)):
-        G.place_dir(lk, A[:, i], Aref[i], P[:, i] - A[:, i], b[i] - Aref[i])
-    return ok, why, (Probe(ok.copy()) if probe else None)
-
-
-def _closed_class4(sp: SolvePlan, st: StepPlan, G: _Poses, X: np.ndarray, factor=1.0, probe=False):
-    """Class IV order 2 group by the kernel's tracker (mode of the reference)."""
-    import multiloop.kin.groups as K
-    lay = st.step.layout
-    t1, t2, b0, b1, o1, o2 = lay.ternary1, lay.ternary2, lay.binary1, lay.binary2, lay.outer1, lay.outer2
-    Oref = np.array([G.at(o1), G.at(o2)])
-    Jref = np.array([G.at(j) for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
-    r = Jref - Oref[[0, 0, 1, 1]]
-    lengths = np.array([np.hypot(*(Jref[2] - Jref[0])), np.hypot(*(Jref[3] - Jref[1]))])
-    O = np.stack([G.point(_known_on(st, o1), Oref[0]), G.point(_known_on(st, o2), Oref[1])], axis=1)
-    N = G.M
-    good = np.all(np.isfinite(O.reshape(N, -1)), axis=1)
-    J = np.full((N, 4, 2), np.nan)
-    th = np.full((N, 2), np.nan)
-    ok = np.zeros(N, bool)
-    why: dict[int, tuple] = {}
-    if good.any():
-        idx = np.flatnonzero(good)
-        res = K.class4_track(O[idx], r, lengths, np.zeros(2))
-        J[idx], th[idx], ok[idx] = res.J, res.theta, res.ok
-        for k, n in enumerate(idx):
-            if not res.ok[k]:
-                why[int(n)] = _TRIAD_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))
-    G.place_cs(t1, O[:, 0], Oref[0], np.cos(th[:, 0]), np.sin(th[:, 0]), th[:, 0])
-    G.place_cs(t2, O[:, 1], Oref[1], np.cos(th[:, 1]), np.sin(th[:, 1]), th[:, 1])
-    G.place_dir(b0, J[:, 0], Jref[0], J[:, 2] - J[:, 0], Jref[2] - Jref[0])
-    G.place_dir(b1, J[:, 1], Jref[1], J[:, 3] - J[:, 1], Jref[3] - Jref[1])
-    return ok, why, (Probe(ok.copy()) if probe else None)
-
-
-# ---------------------------------------------------------------------------------
-# closed-form rates of dyads (kernels' Cramer 2×2 systems) on the pose arrays
-class _Rates:
-    """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd."""
-
-    def __init__(self, sp: SolvePlan, Z, Zd, Zdd):
-        self.sp, self.Z, self.Zd, self.Zdd = sp, Z, Zd, Zdd
-        self.idx = {x: i for i, x in enumerate(sp.mechanism.link_names)}
-
-    def point(self, link: str, r):
-        """Position, velocity, acceleration of ``link``'s material point at reference ``r``."""
-        k = self.idx[link]
-        return move_point(self.Z[:, k, :2], self.Z[:, k, 2], np.asarray(r, float) - self.sp.origins[k],
-                          self.Zd[:, k, :2], self.Zd[:, k, 2], self.Zdd[:, k, :2], self.Zdd[:, k, 2])
-
-    def direction(self, link: str, v):
-        k = self.idx[link]
-        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], self.Zdd[:, k, 2]
-
-    def set(self, link: str, P, vP, aP, w, e) -> None:
-        """Rates of ``link`` from those of its point at P and its ω, ε."""
-        k = self.idx[link]
-        self.Zd[:, k, :2], self.Zdd[:, k, :2] = transport(self.Z[:, k, :2] - P, vP, aP, w, e)
-        self.Zd[:, k, 2] = w
-        self.Zdd[:, k, 2] = e
-
-
-def _dyad_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd) -> None:
-    import multiloop.kin.groups as K
-    g: AssurGroup = st.step
-    o1, inner, o2, l1, l2 = g.layout
-    m = sp.mechanism
-    R = _Rates(sp, Z, Zd, Zdd)
-
-    def at(j):
-        return np.asarray(m.joint(j).at, float)
-
-    if g.kind is GroupKind.RRR:
-        A, vA, aA = R.point(_known_on(st, o1), at(o1))
-        C, vC, aC = R.point(_known_on(st, o2), at(o2))
-        B = R.point(l1, at(inner))[0]
-        r = K.rrr_rates(A, C, B, vA, vC, aA, aC)
-        R.set(l1, A, vA, aA, r.w2, r.e2)
-        R.set(l2, C, vC, aC, r.w3, r.e3)
-    elif g.kind is GroupKind.RRP:
-        kp = _known_on(st, o2)
-        A, vA, aA = R.point(_known_on(st, o1), at(o1))
-        P, vP, aP = R.point(kp, at(o2))
-        u, w, e = R.direction(kp, _unit(m.joint(o2).axis))
-        B = R.point(l1, at(inner))[0]
-        r = K.rrp_rates(A, B, P, u, vA, vP, w, aA, aP, e)
-        R.set(l1, A, vA, aA, r.w2, r.e2)
-        R.set(l2, B, r.vB, r.aB, w, e)
-    elif g.kind is GroupKind.RPR:
-        guide = m.joint(inner).links[0]
-        gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-        blk = l2 if guide == l1 else l1
-        Xp, vX, aX = R.point(_known_on(st, gx), at(gx))
-        Yp, vY, aY = R.point(_known_on(st, bx), at(bx))
-        u = rotate(_unit(m.joint(inner).axis), Z[:, R.idx[guide], 2])
-        r = K.rpr_rates(Yp, Xp, u, vY, vX, aY, aX)
-        R.set(guide, Xp, vX, aX, r.w3, r.e3)
-        R.set(blk, Yp, vY, aY, r.w3, r.e3)
-    elif g.kind is GroupKind.PRP:
-        k1, k2 = _known_on(st, o1), _known_on(st, o2)
-        P1, vP1, aP1 = R.point(k1, at(o1))
-        P2, vP2, aP2 = R.point(k2, at(o2))
-        u1, w1, e1 = R.direction(k1, _unit(m.joint(o1).axis))
-        u2, w2, e2 = R.direction(k2, _unit(m.joint(o2).axis))
-        B = R.point(l1, at(inner))[0]
-        r = K.prp_rates(B, P1, u1, P2, u2, vP1, w1, vP2, w2, aP1, e1, aP2, e2)
-        R.set(l1, B, r.vB, r.aB, w1, e1)
-        R.set(l2, B, r.vB, r.aB, w2, e2)
-    elif g.kind is GroupKind.RPP:
-        kq = _known_on(st, o2)
-        alpha = float(_angle(_unit(m.joint(inner).axis)) - _angle(_unit(m.joint(o2).axis)))
-        A, vA, aA = R.point(_known_on(st, o1), at(o1))
-        P, vP, aP = R.point(kq, at(o2))
-        u, w, e = R.direction(kq, _unit(m.joint(o2).axis))
-        Q = R.point(l2, at(o2))[0]
-        r = K.rpp_rates(A, Q, P, u, alpha, vA, vP, w, aA, aP, e)
-        R.set(l2, Q, r.vQ, r.aQ, w, e)
-        R.set(l1, A, vA, aA, w, e)
-    else:  # pragma: no cover
-        raise ValueError(g.kind)
-
-
-def _driver_rates(sp: SolvePlan, st: StepPlan, Z, Zd, Zdd, rates_in) -> None:
-    """Rates of a one-link driver step: ω = ω_base ± rate (R) or the base's (P)."""
-    m = sp.mechanism
-    cons = st.step.constraints
-    lk = m.link_names[st.unknown[0]]
-    d = next(c for c in cons if c.kind.startswith("drive"))
-    R = _Rates(sp, Z, Zd, Zdd)
-    rate = rates_in[d.driver]
-    if d.kind == "drive_R":
-        p = next(c for c in cons if c.kind == "R")
-        other = d.a if d.b == lk else d.b
-        sgn = 1.0 if d.b == lk else -1.0
-        host = p.a if p.b == lk else p.b
-        P, vP, aP = R.point(host, m.joint(p.joint).at)
-        ko = R.idx[other]
-        R.set(lk, P, vP, aP, Zd[:, ko, 2] + sgn * rate, Zdd[:, ko, 2].copy())
-    else:
-        jt = m.joint(d.joint)
-        other = d.a if d.b == lk else d.b
-        sgn = 1.0 if d.b == lk else -1.0
-        P, vP, aP = R.point(other, jt.at)          # the known link's point at the joint
-        u, w, e = R.direction(other, _unit(jt.axis))
-        # the unknown link's material point at the joint sits at Q = P ± s u
-        Q = R.point(lk, jt.at)[0]
-        rel = Q - P
-        w2 = w[:, None]
-        vQ = vP + w2 * perp(rel) + sgn * rate * u
-        aQ = aP + e[:, None] * perp(rel) - w2 * w2 * rel + 2.0 * w2 * sgn * rate * perp(u)
-        R.set(lk, Q, vQ, aQ, w, e)
+def _step(st: StepPlan, closed: bool):
+    """The compiled step that solves ``st``: its closed form where it has one and closed
+    forms are allowed (a one-link driver's always), else Newton."""
+    if st.closed is not None and (closed or st.solver == "driver"):
+        return st.closed
+    return st.newton

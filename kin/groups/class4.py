@@ -25,9 +25,15 @@ import numpy as np
 
 from .base import cramer, is_singular, quiet
 from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, triad_modes
+from ..continuation import Probe
+from ..poses import known_on
+from ..result import Status
+from .newton import jacobian_rates
+from .step import GroupStep, Outcome
+from .triad import TRACK_STATUS
 
 __all__ = ["Class4Modes", "Class4Track", "Class4Rates", "class4_modes",
-           "class4_track", "class4_rates", "class4_points"]
+           "class4_track", "class4_rates", "class4_points", "Class4Step"]
 
 
 class Class4Modes(NamedTuple):
@@ -241,3 +247,38 @@ def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
     if ok.any():
         det[ok] = class4_rates(O[ok], J[ok], np.zeros_like(O[ok])).det
     return Class4Track(J, theta, ok, det, status)
+
+
+class Class4Step(GroupStep):
+    """A class IV order-2 group of a plan, tracked in the mode of the reference
+    (:func:`class4_track`); rates from the group's Jacobian."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        at = self.at
+        self.O = np.array([at(lay.outer1), at(lay.outer2)])
+        self.J = np.array([at(j) for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
+        self.r = self.J - self.O[[0, 0, 1, 1]]
+        self.lengths = np.array([np.hypot(*(self.J[2] - self.J[0])), np.hypot(*(self.J[3] - self.J[1]))])
+        self.known = (known_on(self.group, lay.outer1), known_on(self.group, lay.outer2))
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay, N, Oref, Jref = self.layout, G.M, self.O, self.J
+        O = np.stack([G.point(self.known[0], Oref[0]), G.point(self.known[1], Oref[1])], axis=1)
+        good = np.all(np.isfinite(O.reshape(N, -1)), axis=1)
+        J, th, ok = np.full((N, 4, 2), np.nan), np.full((N, 2), np.nan), np.zeros(N, bool)
+        why: dict[int, tuple] = {}
+        if good.any():
+            idx = np.flatnonzero(good)
+            res = class4_track(O[idx], self.r, self.lengths, np.zeros(2))
+            J[idx], th[idx], ok[idx] = res.J, res.theta, res.ok
+            for k in np.flatnonzero(~res.ok):
+                why[int(idx[k])] = TRACK_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))
+        for i, t in enumerate((lay.ternary1, lay.ternary2)):
+            G.place_cs(t, O[:, i], Oref[i], np.cos(th[:, i]), np.sin(th[:, i]), th[:, i])
+        G.place_dir(lay.binary1, J[:, 0], Jref[0], J[:, 2] - J[:, 0], Jref[2] - Jref[0])
+        G.place_dir(lay.binary2, J[:, 1], Jref[1], J[:, 3] - J[:, 1], Jref[3] - Jref[1])
+        return Outcome(ok, why, Probe(ok.copy()) if probe else None)
+
+    rates = jacobian_rates

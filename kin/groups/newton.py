@@ -29,8 +29,10 @@ import numpy as np
 from multiloop.topo.constraints import PairEquations
 
 from ..result import Status
+from ..continuation import Probe
+from .step import SINGULAR, GroupStep, Outcome
 
-__all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult"]
+__all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult", "NewtonStep", "jacobian_rates"]
 
 
 class ConstraintSystem(PairEquations):
@@ -366,3 +368,27 @@ def rates(sys: ConstraintSystem, Z: np.ndarray, Zd: np.ndarray, input_rates: np.
     Zdd[:, u] = a.reshape(N, len(u), 3)
     return Zd, Zdd
 
+
+def jacobian_rates(step: GroupStep, R, input_rates: np.ndarray) -> None:
+    """Rates of a step's links from its group's Jacobian (one linear system per
+    position; any group), written into ``R`` (:class:`~kin.poses.PoseRates`)."""
+    Rb = np.broadcast_to(input_rates, (R.Z.shape[0], len(input_rates)))
+    R.Zd, R.Zdd = rates(step.st.system, R.Z, R.Zd, Rb, step.st.unknown, R.Zdd, None)
+
+
+class NewtonStep(GroupStep):
+    """Any step solved by Newton with continuation (:func:`track`) from the reference
+    configuration; rates from the group's Jacobian."""
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        st = self.st
+        u = list(st.unknown)
+        Z = G.to_Z(np.setdiff1d(st.system.involved, u))
+        Z[:, u, :2] = G.sp.origins[u]
+        Z[:, u, 2] = 0.0
+        tr = track(st.system, Z, X, u, singular_tol=SINGULAR)
+        G.from_Z(tr.Z, u)
+        why = {int(n): (int(tr.code[n]), tr.reason[n]) for n in np.flatnonzero(~tr.ok)}
+        return Outcome(tr.ok, why, Probe(tr.ok.copy()) if probe else None)
+
+    rates = jacobian_rates

@@ -22,8 +22,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import cramer, is_singular, stack, xy, quiet
+from ..poses import known_on, normal, unit
+from .step import GroupStep, Outcome, dyad_outcome
 
-__all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates"]
+__all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates", "PRPStep"]
 
 
 class PRPPosition(NamedTuple):
@@ -139,3 +141,37 @@ def prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2,
         s1dd, s2dd, _ = cramer(u1x, u1y, -u2x, -u2y, g2x - g1x, g2y - g1y)
         aB = stack(g1x + s1dd * u1x, g1y + s1dd * u1y)
     return PRPRates(s1d, s2d, vB, s1dd, s2dd, aB, det, sing)
+
+
+class PRPStep(GroupStep):
+    """A PRP dyad of a plan: two sliders pinned together at B, each on the guide of a
+    known link; compiled once."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        at = self.at
+        self.B, self.P1, self.P2 = at(lay.inner), at(lay.outer1), at(lay.outer2)
+        self.k1, self.k2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
+        self.u1, self.u2 = unit(mechanism.joint(lay.outer1).axis), unit(mechanism.joint(lay.outer2).axis)
+        self.h1 = float(normal(self.u1) @ (self.B - self.P1))
+        self.h2 = float(normal(self.u2) @ (self.B - self.P2))
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay = self.layout
+        r = prp_position(G.point(self.k1, self.P1), G.direction(self.k1, self.u1), self.h1,
+                         G.point(self.k2, self.P2), G.direction(self.k2, self.u2), self.h2)
+        G.place_like(lay.link1, r.B, self.B, self.k1)
+        G.place_like(lay.link2, r.B, self.B, self.k2)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe)
+
+    def rates(self, R, input_rates) -> None:
+        lay = self.layout
+        P1, vP1, aP1 = R.point(self.k1, self.P1)
+        P2, vP2, aP2 = R.point(self.k2, self.P2)
+        u1, w1, e1 = R.direction(self.k1, self.u1)
+        u2, w2, e2 = R.direction(self.k2, self.u2)
+        B = R.point(lay.link1, self.B)[0]
+        r = prp_rates(B, P1, u1, P2, u2, vP1, w1, vP2, w2, aP1, e1, aP2, e2)
+        R.set(lay.link1, B, r.vB, r.aB, w1, e1)
+        R.set(lay.link2, B, r.vB, r.aB, w2, e2)

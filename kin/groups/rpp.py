@@ -22,8 +22,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import cramer, is_singular, stack, xy, quiet
+from ..poses import angle_of, known_on, normal, unit
+from .step import GroupStep, Outcome, dyad_outcome
 
-__all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates"]
+__all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates", "RPPStep"]
 
 
 class RPPPosition(NamedTuple):
@@ -145,3 +147,36 @@ def rpp_rates(A, Q, P, u, alpha, vA, vP, omega, aA=None, aP=None, eps=None) -> R
         aQ = stack(apx - eps * rqy - o2 * rqx - k * uy + s1dd * ux,
                    apy + eps * rqx - o2 * rqy + k * ux + s1dd * uy)
     return RPPRates(s1d, s2d, vQ, s1dd, s2dd, aQ, det, sing)
+
+
+class RPPStep(GroupStep):
+    """An RPP dyad of a plan: link1 pinned at outer1 and sliding in the block link2,
+    which slides on the guide of the known link at outer2; compiled once."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        self.A, self.Q = (self.at(j) for j in (lay.outer1, lay.outer2))
+        self.k1, self.kq = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
+        self.u = unit(mechanism.joint(lay.outer2).axis)
+        w = unit(mechanism.joint(lay.inner).axis)
+        self.alpha = float(angle_of(w) - angle_of(self.u))
+        self.h = float(normal(w) @ (self.A - self.Q))
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay = self.layout
+        A = G.point(self.k1, self.A)
+        r = rpp_position(A, G.point(self.kq, self.Q), G.direction(self.kq, self.u), self.alpha, self.h)
+        G.place_like(lay.link2, r.Q, self.Q, self.kq)
+        G.place_like(lay.link1, A, self.A, self.kq)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe)
+
+    def rates(self, R, input_rates) -> None:
+        lay = self.layout
+        A, vA, aA = R.point(self.k1, self.A)
+        P, vP, aP = R.point(self.kq, self.Q)
+        u, w, e = R.direction(self.kq, self.u)
+        Q = R.point(lay.link2, self.Q)[0]
+        r = rpp_rates(A, Q, P, u, self.alpha, vA, vP, w, aA, aP, e)
+        R.set(lay.link2, Q, r.vQ, r.aQ, w, e)
+        R.set(lay.link1, A, vA, aA, w, e)

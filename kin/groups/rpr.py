@@ -23,8 +23,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from ..continuation import Probe
+from ..poses import known_on, normal, unit
+from ..result import Status
+from .step import GroupStep, Outcome, dyad_outcome
 
-__all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates"]
+__all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates", "RPRStep"]
 
 
 class RPRPosition(NamedTuple):
@@ -143,3 +147,46 @@ def rpr_rates(A, C, u, vA, vC, aA=None, aC=None) -> RPRRates:
         b2 = aay - acy + w3s * ry - cor * ux
         sdd, e3, _ = cramer(ux, uy, c2x, c2y, b1, b2)
     return RPRRates(sd, w3, sdd, e3, det, sing)
+
+
+class RPRStep(GroupStep):
+    """An RPR dyad of a plan: the guide (the P joint's first link) pivoted at X, the
+    block at Y; compiled once."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        self.guide = mechanism.joint(lay.inner).links[0]
+        self.gx, self.bx = (lay.outer1, lay.outer2) if self.guide == lay.link1 else (lay.outer2, lay.outer1)
+        self.block = lay.link2 if self.guide == lay.link1 else lay.link1
+        self.X, self.Y = (self.at(j) for j in (self.gx, self.bx))
+        self.kx, self.ky = known_on(self.group, self.gx), known_on(self.group, self.bx)
+        self.u = unit(mechanism.joint(lay.inner).axis)
+        self.h = float(normal(self.u) @ (self.Y - self.X))
+        self.sign = float(rpr_branch(self.Y, self.X, self.u))
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        Xp, Yp = G.point(self.kx, self.X), G.point(self.ky, self.Y)
+        rs = rpr_position(Yp, Xp, self.h, self.sign * factor)
+        u, ok = rs.u, rs.ok
+        why, pr = {}, None
+        if probe:
+            fs = Xp + rs.s[:, None] * u
+            pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1))
+        if not ok.all():
+            dist = np.hypot(*(Yp - Xp).T)
+            for n in np.flatnonzero(~ok):
+                if np.isfinite(dist[n]):
+                    why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: |{self.gx}{self.bx}| = {dist[n]:.6g} < "
+                                   f"offset {abs(self.h):.6g} (out of reach)")
+        G.place_dir(self.guide, Xp, self.X, u, self.u)
+        G.place_like(self.block, Yp, self.Y, self.guide)
+        return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe)
+
+    def rates(self, R, input_rates) -> None:
+        Xp, vX, aX = R.point(self.kx, self.X)
+        Yp, vY, aY = R.point(self.ky, self.Y)
+        u = R.direction(self.guide, self.u)[0]
+        r = rpr_rates(Yp, Xp, u, vY, vX, aY, aX)
+        R.set(self.guide, Xp, vX, aX, r.w3, r.e3)
+        R.set(self.block, Yp, vY, aY, r.w3, r.e3)

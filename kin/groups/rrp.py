@@ -24,8 +24,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from ..continuation import Probe
+from ..poses import known_on, normal, unit
+from ..result import Status
+from .step import GroupStep, Outcome, dyad_outcome
 
-__all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates"]
+__all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates", "RRPStep"]
 
 
 class RRPPosition(NamedTuple):
@@ -168,3 +172,49 @@ def rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates
         e2, sdd, _ = cramer(c1x, c1y, c2x, c2y, b1, b2)
         aB = stack(aax + e2 * c1x - w2s * rax, aay + e2 * c1y - w2s * ray)
     return RRPRates(w2, sd, vB, e2, sdd, aB, det, sing)
+
+
+class RRPStep(GroupStep):
+    """An RRP dyad of a plan (link1 pinned at outer1 and at the slider's pin, the slider
+    link2 on the guide of the known link at outer2): compiled once."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        at = self.at
+        self.A, self.B, self.P = at(lay.outer1), at(lay.inner), at(lay.outer2)
+        self.known1, self.kp = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
+        self.u = unit(mechanism.joint(lay.outer2).axis)
+        self.h = float(normal(self.u) @ (self.B - self.P))
+        self.la = float(np.hypot(*(self.B - self.A)))
+        self.sign = float(rrp_branch(self.A, self.B, self.u))
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay = self.layout
+        A = G.point(self.known1, self.A)
+        P, u = G.point(self.kp, self.P), G.direction(self.kp, self.u)
+        rs = rrp_position(A, P, u, self.la, self.h, self.sign * factor)
+        B, ok = rs.B, rs.ok
+        why, pr = {}, None
+        if probe:
+            gap = 2.0 * np.abs(np.sum((B - A) * u, axis=-1))
+            pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1))
+        if not ok.all():
+            dist = np.abs(np.sum((A - P) * normal(u), axis=-1) - self.h)
+            for n in np.flatnonzero(~ok):
+                if np.isfinite(dist[n]):
+                    why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: {lay.outer1} is {dist[n]:.6g} from the track of "
+                                   f"{lay.inner}, longer than {lay.link1} ({self.la:.6g}) (out of reach)")
+        G.place_dir(lay.link1, A, self.A, B - A, self.B - self.A)
+        G.place_like(lay.link2, B, self.B, self.kp)
+        return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe)
+
+    def rates(self, R, input_rates) -> None:
+        lay = self.layout
+        A, vA, aA = R.point(self.known1, self.A)
+        P, vP, aP = R.point(self.kp, self.P)
+        u, w, e = R.direction(self.kp, self.u)
+        B = R.point(lay.link1, self.B)[0]
+        r = rrp_rates(A, B, P, u, vA, vP, w, aA, aP, e)
+        R.set(lay.link1, A, vA, aA, r.w2, r.e2)
+        R.set(lay.link2, B, r.vB, r.aB, w, e)

@@ -26,8 +26,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from ..continuation import Probe
+from ..poses import known_on, unit
+from ..result import Status
+from .step import GroupStep, Outcome, dyad_outcome
 
-__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates"]
+__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep"]
 
 
 class RRRPosition(NamedTuple):
@@ -170,3 +174,46 @@ def rrr_rates(A, C, B, vA, vC, aA=None, aC=None) -> RRRRates:
         e2, e3, _ = cramer(c1x, c1y, c2x, c2y, b1, b2)
         aB = stack(aax + e2 * c1x - w2s * rax, aay + e2 * c1y - w2s * ray)
     return RRRRates(w2, w3, vB, e2, e3, aB, det, sing)
+
+
+class RRRStep(GroupStep):
+    """An RRR dyad of a plan: lengths, branch sign and reference directions compiled
+    once; positions by :func:`rrr_position`, rates by :func:`rrr_rates`."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        self.known1, self.known2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
+        self.A, self.B, self.C = (self.at(j) for j in (lay.outer1, lay.inner, lay.outer2))
+        self.la, self.lc = float(np.hypot(*(self.B - self.A))), float(np.hypot(*(self.B - self.C)))
+        self.sign = float(rrr_branch(self.A, self.C, self.B))
+        self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay, la, lc = self.layout, self.la, self.lc
+        A, C = G.point(self.known1, self.A), G.point(self.known2, self.C)
+        rs = rrr_position(A, C, la, lc, self.sign * factor)
+        B, ok = rs.B, rs.ok
+        why, pr = {}, None
+        if probe or not ok.all():
+            AC = C - A
+            d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
+        if probe:
+            gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / d
+            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1))
+        for n in np.flatnonzero(~ok):
+            if np.isfinite(d[n]):
+                rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
+                why[int(n)] = (Status.OUT_OF_REACH,
+                               f"no assembly: |{lay.outer1}{lay.outer2}| = {d[n]:.6g} {rel} (out of reach)")
+        G.place_dir(lay.link1, A, self.A, B - A, self.dir1)
+        G.place_dir(lay.link2, C, self.C, B - C, self.dir2)
+        return dyad_outcome(ok, why, rs.det, la * lc, False, pr, probe)
+
+    def rates(self, R, input_rates) -> None:
+        lay = self.layout
+        A, vA, aA = R.point(self.known1, self.A)
+        C, vC, aC = R.point(self.known2, self.C)
+        r = rrr_rates(A, C, R.point(lay.link1, self.B)[0], vA, vC, aA, aC)
+        R.set(lay.link1, A, vA, aA, r.w2, r.e2)
+        R.set(lay.link2, C, vC, aC, r.w3, r.e3)

@@ -35,9 +35,14 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import SINGULAR_RTOL, quiet
+from ..continuation import Probe
+from ..poses import known_on
+from ..result import Status
+from .newton import jacobian_rates
+from .step import GroupStep, Outcome
 
 __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
-           "triad_rates", "follow_modes", "MAX_MODES"]
+           "triad_rates", "follow_modes", "MAX_MODES", "TriadStep"]
 
 #: maximum number of real assembly modes of a triad / class IV group.
 MAX_MODES = 6
@@ -513,6 +518,46 @@ def _full_follow(A, bb, l, P_start):
     return m, idx, status
 
 
+def _refine(A, b, l, c, kmax, todo, Pc, P, th, status) -> None:
+    """Phase 3 of :func:`_track`: follow the refused coarse intervals ``todo`` (and the
+    tail after ``c[kmax]``) at full resolution, in place; a loss inside an interval, or
+    arriving in another mode than the coarse point's, loses the rest."""
+    N = A.shape[0]
+    for k in todo:
+        lo = c[k]
+        hi = N - 1 if k >= kmax else c[k + 1]
+        if status[lo] != 0:
+            break                                      # lost before this interval
+        m, idx, st = _full_follow(A[lo:hi + 1], b, l[lo:hi + 1], P[lo])
+        ok = idx >= 0
+        rows = np.flatnonzero(ok)
+        P[lo + rows] = m.P[rows, idx[ok]]
+        th[lo + rows] = m.theta[rows, idx[ok]]
+        status[lo:hi + 1] = st
+        consistent = ok[-1] and k < kmax and _dist(P[hi], Pc[k + 1]) <= 1e-9 * np.max(l)
+        if not consistent:                             # lost inside: the rest is lost
+            P[hi + 1:] = np.nan
+            th[hi + 1:] = np.nan
+            status[hi + 1:] = 3
+            if ok[-1] and k < kmax:                    # reached another mode: refuse it
+                status[hi] = 2
+                P[hi] = np.nan
+                th[hi] = np.nan
+            break
+
+
+def _first_failure_final(P, th, status) -> None:
+    """After the first failed position every later one is lost (in place)."""
+    lost = np.flatnonzero(status != 0)
+    if lost.size:
+        i = lost[0]
+        if status[i] != 1:
+            status[i] = 2
+        status[i + 1:] = 3
+        P[i:] = np.nan
+        th[i:] = np.nan
+
+
 def _track(A, b, l, start, stride):
     """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`."""
     N = A.shape[0]
@@ -564,35 +609,8 @@ def _track(A, b, l, start, stride):
     todo = [k for k in np.flatnonzero(bad_int)]
     if kmax < len(c) - 1:
         todo.append(kmax)                              # c[kmax] .. N-1
-    for k in sorted(set(todo)):
-        lo = c[k]
-        hi = N - 1 if k >= kmax else c[k + 1]
-        if status[lo] != 0:
-            break                                      # lost before this interval
-        m, idx, st = _full_follow(A[lo:hi + 1], b, l[lo:hi + 1], P[lo])
-        ok = idx >= 0
-        rows = np.flatnonzero(ok)
-        P[lo + rows] = m.P[rows, idx[ok]]
-        th[lo + rows] = m.theta[rows, idx[ok]]
-        status[lo:hi + 1] = st
-        consistent = ok[-1] and k < kmax and _dist(P[hi], Pc[k + 1]) <= 1e-9 * np.max(l)
-        if not consistent:                             # lost inside: the rest is lost
-            P[hi + 1:] = np.nan
-            th[hi + 1:] = np.nan
-            status[hi + 1:] = 3
-            if ok[-1] and k < kmax:                    # reached another mode: refuse it
-                status[hi] = 2
-                P[hi] = np.nan
-                th[hi] = np.nan
-            break
-    lost = np.flatnonzero(status != 0)
-    if lost.size:                                      # first failure is final
-        i = lost[0]
-        if status[i] != 1:
-            status[i] = 2
-        status[i + 1:] = 3
-        P[i:] = np.nan
-        th[i:] = np.nan
+    _refine(A, b, l, c, kmax, sorted(set(todo)), Pc, P, th, status)
+    _first_failure_final(P, th, status)
     return P, th, status
 
 
@@ -640,3 +658,42 @@ def triad_track(A, b, l, start, *, stride=32) -> TriadTrack:
     if ok.any():
         det[ok] = _det(A[ok], P[ok])
     return TriadTrack(P, th, ok, det, status)
+
+
+#: triad/class IV tracker codes -> (Status, reason)
+TRACK_STATUS = {1: (Status.OUT_OF_REACH, "no assembly (out of reach)"),
+                2: (Status.SINGULAR, "assembly modes collide / ambiguous step (triad singular or turning point)"),
+                3: (Status.MODE_LOST, "mode lost earlier in the path")}
+
+
+class TriadStep(GroupStep):
+    """A class III triad of a plan, tracked in the mode of the reference
+    (:func:`triad_track`); rates from the group's Jacobian."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        at = self.at
+        self.A = np.array([at(o) for o in lay.outers])
+        self.b = np.array([at(i) for i in lay.inners])
+        self.lengths = np.hypot(*(self.b - self.A).T)
+        self.known = [known_on(self.group, o) for o in lay.outers]
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lay, N = self.layout, G.M
+        A = np.stack([G.point(k, a) for k, a in zip(self.known, self.A)], axis=1)
+        good = np.all(np.isfinite(A.reshape(N, -1)), axis=1)
+        P, th, ok = np.full((N, 3, 2), np.nan), np.full(N, np.nan), np.zeros(N, bool)
+        why: dict[int, tuple] = {}
+        if good.any():
+            idx = np.flatnonzero(good)
+            r = triad_track(A[idx], self.b, self.lengths, self.b)
+            P[idx], th[idx], ok[idx] = r.P, r.theta, r.ok
+            for k in np.flatnonzero(~r.ok):
+                why[int(idx[k])] = TRACK_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
+        G.place_cs(lay.ternary, P[:, 0], self.b[0], np.cos(th), np.sin(th), th)
+        for i, lk in enumerate(lay.binaries):
+            G.place_dir(lk, A[:, i], self.A[i], P[:, i] - A[:, i], self.b[i] - self.A[i])
+        return Outcome(ok, why, Probe(ok.copy()) if probe else None)
+
+    rates = jacobian_rates

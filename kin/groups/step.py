@@ -1,0 +1,78 @@
+"""One compiled step of a mechanism's plan, behind one small protocol.
+
+Every step of a plan (a driver, a dyad, a triad, a class IV group, any other group)
+is compiled once into an object with
+
+* ``positions(G, X, factor=1.0, probe=False) -> Outcome``: place the step's links in
+  the pose store ``G`` (:class:`~kin.poses.Poses`) at the inputs ``X`` (N, n_drivers),
+  on the branch ``reference sign × factor``; ``Outcome.why[n] = (Status, text)`` for
+  each failed position, ``Outcome.probe`` a :class:`~kin.continuation.Probe` when asked;
+* ``rates(R, input_rates)``: velocities and accelerations of its links into
+  ``R`` (:class:`~kin.poses.PoseRates`).
+
+The closed-form kinds keep their adapter next to their kernel (``rrr.RRRStep`` …,
+``triad.TriadStep``, ``class4.Class4Step``, ``driver.DriverStepSolver``);
+:class:`~kin.groups.newton.NewtonStep` solves any group by continuation, and its rates
+(the group's Jacobian, one linear system per position, exact for any group) serve the
+triad and class IV steps too.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..continuation import Probe
+from ..result import Status
+
+__all__ = ["Outcome", "GroupStep", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES"]
+
+#: relative determinant below which a position is singular
+SINGULAR = 1e-9
+#: PRP/RPP: |det| = |sin(angle between the unit guides)| below which the guides count as
+#: parallel; nearer than this the slider positions exceed 1e6 × the offsets (change point)
+PARALLEL_GUIDES = 1e-6
+
+
+class Outcome(NamedTuple):
+    """What :meth:`GroupStep.positions` found: ``ok`` (N,), ``why`` {n: (Status, text)}
+    for the failed positions, ``probe`` (or None)."""
+
+    ok: np.ndarray
+    why: dict
+    probe: Probe | None
+
+
+class GroupStep:
+    """Base of the compiled steps, built once per plan from the ``mechanism``, the step's
+    :class:`~kin.solve.StepPlan` ``st`` (its Assur step, constraint system and unknown
+    links) and the mechanism's ``size`` (m, for tolerances)."""
+
+    def __init__(self, mechanism, st, size: float):
+        self.mechanism, self.st, self.size = mechanism, st, size
+        self.group = st.step
+        self.label = st.label
+
+    def at(self, joint: str) -> np.ndarray:
+        """A joint's reference position."""
+        return np.asarray(self.mechanism.joint(joint).at, float)
+
+    def positions(self, G, X: np.ndarray, factor: float = 1.0, probe: bool = False) -> Outcome:
+        raise NotImplementedError
+
+    def rates(self, R, input_rates: np.ndarray) -> None:
+        raise NotImplementedError
+
+
+def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, probe: bool) -> Outcome:
+    """The common end of a dyad's ``positions``: a generic reason for every failure not
+    explained yet, and singular positions (``|det| <= tol · rdet``) marked and removed."""
+    for n in np.flatnonzero(~ok):
+        why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
+    tol = PARALLEL_GUIDES if parallel else SINGULAR
+    sing = ok & ~(np.abs(det) > tol * rdet)
+    for n in np.flatnonzero(sing):
+        why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
+    if probe_obj is None and probe:       # PRP, RPP: one assembly; parallel guides are a pole, not a limit
+        probe_obj = Probe(ok.copy())
+    return Outcome(ok & ~sing, why, probe_obj)
