@@ -287,6 +287,22 @@ class AssurPlan:
             stack.extend(solved.get(x, -1) for x in known)
         return tuple(sorted(need))
 
+    def to_text(self) -> str:
+        """Readable plan: formula, drivers, then one block per group (``multiloop decompose``)."""
+        d = self.as_dict()
+        lines = [f"structure formula: {d['formula']}",
+                 "link numbers: " + ", ".join(f"{n}={k}" for k, n in d["link_numbers"].items())]
+        for dr in d["drivers"]:
+            lines.append(f"I{tuple(dr['numbers'])}: driver {dr['joint']} ({dr['kind']}) moves "
+                         f"{dr['links'][1]} relative to {dr['links'][0]}")
+        for i, g in enumerate(d["groups"], 1):
+            lines.append(f"group {i}: {g['label']}  class {g['class']}, order {g['order']}, kind {g['kind']}")
+            for lk, js in g["link_joints"].items():
+                lines.append(f"    link {lk}: joints {', '.join(js)}")
+            lines.append(f"    outer joints {', '.join(g['outer_joints'])} → known links "
+                         f"{', '.join(g['known_links'])}; inner joints {', '.join(g['inner_joints'])}")
+        return "\n".join(lines)
+
     def as_dict(self) -> dict:
         """JSON-ready description (the documented JSON keys (README) ``decompose --json``)."""
         m = self.mechanism

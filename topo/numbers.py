@@ -185,8 +185,44 @@ class StructuralReport:
         from .svg import report_html  # noqa: PLC0415 - only when a notebook asks
         return report_html(self)
 
+    def to_text(self) -> str:
+        """A readable table in the order of Pozhbelko & Kuts 2020's bullet list (``multiloop analyse``)."""
+        la = "-".join(map(str, self.La)) if self.La is not None else "— (non-planar)"
+        rows = [
+            ("name", self.name or "(unnamed)"),
+            ("links n", self.n),
+            ("joints / pairs p", f"{self.n_joints} / {self.p}"),
+            ("link assortment [LA]", "[" + " ".join(f"n{i + 2}={c}" for i, c in enumerate(self.LA) if c) + "]"),
+            ("multiple-joint assortment [MJA]", "[" + (" ".join(f"V{j + 2}={c}" for j, c in enumerate(self.MJA) if c) or "none") + "]"),
+            ("MJ factor V", self.V),
+            ("loops K (graph / formula)", f"{self.K} / {self.K_formula:g}"),
+            ("all loops L = K + 1", self.L),
+            ("AVC", f"{self.AVC:g}" + ("  (assembly check passed)" if self.AVC == 0 else "  (INCONSISTENT data)")),
+            ("mobility F (3 routes)", " = ".join(f"{x:g}" for x in self.F_routes)),
+            ("drivers N", self.N),
+            ("redundant constraints rc = N - F", self.rc),
+            ("sides of all loops SL (2 routes)", f"{self.SL} / {self.SL_formula}"),
+            ("loop assortment [La]", la + (f"  (L0 = {self.L0})" if self.L0 is not None else "")),
+            ("code", self.code),
+            ("code*", self.code_star),
+            ("planar", "yes" if self.planar else "no"),
+            ("degenerate", ("yes: rigid sub-chain {" + ", ".join(self.rigid_subchain) + "}") if self.degenerate else "no"),
+            ("fractionated", ("yes: " + ", ".join([f"cut link {x}" for x in self.cut_links] + [f"cut joint {x}" for x in self.cut_joints])) if self.fractionated else "no"),
+            ("existence domain (j <= K, V <= 2(K-1))", ("ok" if self.existence_ok else "VIOLATED") + f"  (j_max = {self.j_max}, V = {self.V}, K = {self.K})"),
+            (f"mobility in λ = {self.lam} space / redundant", f"{self.F_space} / {self.rc_space}"),
+        ]
+        if self.actual_F is not None:
+            rows.append(("actual mobility (Jacobian rank)", str(self.actual_F) + (f"; redundant: {', '.join(self.redundant)}" if self.redundant else "")))
+        rows.append(("canonical form", self.canonical if len(self.canonical) <= 60 else self.canonical[:57] + "..."))
+        width = max(len(k) for k, _ in rows)
+        lines = [f"  {k:<{width}}  {v}" for k, v in rows]
+        lines.append(f"  [La] rule: {self.la_rule}")
+        for w in self.warnings:
+            lines.append(f"  warning: {w}")
+        return "\n".join(lines)
+
     def as_dict(self) -> dict:
-        """The JSON keys of the documented JSON keys (README) (and a few more, documented in the README)."""
+        """The stable JSON of ``multiloop analyse --json`` (and a few more, documented in the README)."""
         d = asdict(self)
         out = {k: d[k] for k in ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc",
                                  "SL", "La", "L0", "code", "code_star", "planar", "degenerate",

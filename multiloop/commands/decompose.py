@@ -15,7 +15,7 @@ import json
 from multiloop.topo.assur import decompose
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
-__all__ = ["add_arguments", "run", "format_plan"]
+__all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p) -> None:
@@ -23,27 +23,10 @@ def add_arguments(p) -> None:
     p.add_argument("--json", action="store_true", help="print the stable JSON plan")
 
 
-def format_plan(plan) -> str:
-    """Readable plan: formula, drivers, then one block per group."""
-    d = plan.as_dict()
-    lines = [f"structure formula: {d['formula']}",
-             "link numbers: " + ", ".join(f"{n}={k}" for k, n in d["link_numbers"].items())]
-    for dr in d["drivers"]:
-        lines.append(f"I{tuple(dr['numbers'])}: driver {dr['joint']} ({dr['kind']}) moves "
-                     f"{dr['links'][1]} relative to {dr['links'][0]}")
-    for i, g in enumerate(d["groups"], 1):
-        lines.append(f"group {i}: {g['label']}  class {g['class']}, order {g['order']}, kind {g['kind']}")
-        for lk, js in g["link_joints"].items():
-            lines.append(f"    link {lk}: joints {', '.join(js)}")
-        lines.append(f"    outer joints {', '.join(g['outer_joints'])} → known links "
-                     f"{', '.join(g['known_links'])}; inner joints {', '.join(g['inner_joints'])}")
-    return "\n".join(lines)
-
-
 def run(args) -> int:
     plan = decompose(load(args.file))
     if args.json:
         print(json.dumps(plan.as_dict(), indent=2, ensure_ascii=False))
     else:
-        print(format_plan(plan))
+        print(plan.to_text())
     return 0
