@@ -22,6 +22,8 @@ Conventions
 """
 from __future__ import annotations
 
+import csv
+import io
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +33,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from .result import BatchStatus
 from .rigid import move_point
 
-__all__ = ["KinematicState"]
+__all__ = ["KinematicState", "doc_csv", "doc_text"]
 
 
 @dataclass(frozen=True)
@@ -166,3 +168,47 @@ def _state_dict(state, formula=None, inputs_cli=None) -> dict:
         points[name] = e
     doc.update(joints=joints, links=links, points=points, notes=list(state.notes))
     return doc
+
+
+def doc_csv(doc: dict) -> str:
+    """CSV of a state document (:meth:`KinematicState.as_dict`): one row per position,
+    columns ``input[_joint]``, ``status``, ``<joint>.x`` … in the document's order."""
+    cols: list[tuple[str, list]] = []
+    inp = doc["input"]
+    if doc["drivers"] and len(doc["drivers"]) > 1:
+        for k, d in enumerate(doc["drivers"]):
+            cols.append((f"input_{d['joint']}", [r[k] for r in inp]))
+    else:
+        cols.append(("input", inp))
+    cols.append(("status", doc["status"]))
+    for table in ("joints", "links", "points"):
+        for name, e in doc[table].items():
+            for key, vals in e.items():
+                cols.append((f"{name}.{key}", vals))
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([c for c, _ in cols])
+    for row in zip(*[v for _, v in cols]):
+        w.writerow(["" if v is None else (repr(v) if isinstance(v, float) else v) for v in row])
+    return buf.getvalue()
+
+
+def doc_text(doc: dict) -> str:
+    """Readable table of a state document: joint coordinates per position, failed rows
+    with their reason, then the notes."""
+    names = list(doc["joints"])
+    units = sorted({d["unit"] for d in doc["drivers"]})
+    unit = "/".join(units) + (" each driver" if len(doc["drivers"]) > 1 else "")
+    head = [f"input ({unit})"] + [f"{n}.{c}" for n in names for c in "xy"]
+    lines = [f"{doc['mechanism'] or 'mechanism'}: {doc['formula']}", "  ".join(f"{h:>12}" for h in head)]
+    for i, s in enumerate(doc["status"]):
+        x = doc["input"][i]
+        x = x[0] if isinstance(x, list) else x
+        if s != "ok":
+            lines.append(f"{x:>12.6g}  {s}")
+            continue
+        vals = [doc["joints"][n][c][i] for n in names for c in "xy"]
+        lines.append(f"{x:>12.6g}  " + "  ".join(f"{v:>12.6g}" for v in vals))
+    for n in doc["notes"]:
+        lines.append(f"note: {n}")
+    return "\n".join(lines)

@@ -21,7 +21,7 @@ from pathlib import Path
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import Mechanism
 
-__all__ = ["resolve", "load_mechanism", "PYSLVS_SUFFIXES"]
+__all__ = ["resolve", "load_mechanism", "load_mechanism_or_engine", "PYSLVS_SUFFIXES"]
 
 #: suffixes read as Pyslvs input (project YAML, or a bare expression)
 PYSLVS_SUFFIXES = (".pyslvs", ".expr")
@@ -60,3 +60,19 @@ def load_mechanism(arg: str | Path) -> Mechanism:
         return read_pyslvs(p)
     from multiloop.topo.io import load  # noqa: PLC0415
     return load(p)
+
+
+def load_mechanism_or_engine(path: str | Path) -> Mechanism:
+    """:func:`load_mechanism`, or an engine file (``[engine]`` table) built as a mechanism
+    with its gas forces as 1° force tables against the crank angle."""
+    from multiloop.topo.io import read_document  # noqa: PLC0415
+    p = resolve(path)
+    if p.suffix.lower() in (".toml", ".json") and p.exists():
+        doc = read_document(p)
+        if isinstance(doc, dict) and "engine" in doc:
+            from multiloop.kin.engine import engine_from_dict, engine_mechanism  # noqa: PLC0415
+            try:
+                return engine_mechanism(engine_from_dict(doc), gas_loads=True)
+            except InputError as exc:
+                raise InputError(f"{p}: {exc}") from None
+    return load_mechanism(p)

@@ -20,9 +20,9 @@ import json
 
 import numpy as np
 
-from multiloop.commands.solve import input_values
-from multiloop.kin.forces import VP_TOL, forces, has_loads, reduce_inputs, table_period
-from multiloop.inputs import resolve
+from multiloop.kin.forces import VP_TOL, forces, has_loads, table_period
+from multiloop.kin.sweep import cycle_inputs
+from multiloop.inputs import load_mechanism_or_engine
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
@@ -39,61 +39,15 @@ def add_arguments(p) -> None:
     p.add_argument("--plot", default=None, metavar="OUT.png", help="plot balancing and reactions against the input")
 
 
-def load_any(path: str):
-    """A mechanism from a mechanism file, or built from an engine file."""
-    from multiloop.topo.io import read_document  # noqa: PLC0415
-    p = resolve(path)
-    if p.suffix.lower() in (".toml", ".json") and p.exists():
-        doc = read_document(p)
-        if isinstance(doc, dict) and "engine" in doc:
-            from multiloop.kin.engine import engine_from_dict, engine_mechanism  # noqa: PLC0415
-            try:
-                return engine_mechanism(engine_from_dict(doc), gas_loads=True)
-            except InputError as exc:
-                raise InputError(f"{p}: {exc}") from None
-    from multiloop.inputs import load_mechanism  # noqa: PLC0415
-    return load_mechanism(p)
-
-
-#: most positions a run computes (--steps)
-MAX_STEPS = 100_000
-
-
-def _inputs(m, at: str | None, steps: int) -> np.ndarray:
-    """Driver inputs in API units (rad, m), shape (N, n_drivers)."""
-    nd = len(m.drivers)
-    kinds = [m.joint(d.joint).kind for d in m.drivers]
-    if at is not None:
-        try:
-            vals = [float(x) for x in str(at).split(",")]
-        except ValueError:
-            raise InputError(explain("--at", expected="a number (deg or m) per driver, comma-separated",
-                                     got=repr(at))) from None
-        if len(vals) != nd:
-            raise InputError(explain("--at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"))
-        return reduce_inputs(m, [vals], degrees=True)
-    if not 1 <= steps <= MAX_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=repr(steps)))
-    q = np.zeros((steps, nd))
-    if kinds[0] is JointKind.R:
-        q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
-    elif set(kinds) == {JointKind.P}:
-        q[:] = input_values(m, steps, None, None)[:, None]   # the solve command's default stroke
-    else:
-        raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
-                                 got="no default sweep"))
-    return q
-
-
 def run(args) -> int:
     outs = Outputs("multiloop forces")
     if args.plot is not None:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
-    m = load_any(args.file)
+    m = load_mechanism_or_engine(args.file)
     if not m.drivers:
         raise InputError(explain("[[driver]]", expected="at least one driver", got="none",
                                  hint="kinetostatics needs the input joint(s)"))
-    q = _inputs(m, args.at, args.steps)
+    q = cycle_inputs(m, args.at, args.steps)
     fr = forces(m, q, method=args.method)
     kinds = [m.joint(d.joint).kind for d in m.drivers]
     q_user = fr.inputs_user

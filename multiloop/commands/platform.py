@@ -13,7 +13,6 @@ import argparse
 import json
 import math
 
-import numpy as np
 
 from multiloop.kin.spatial.platform import load_platform
 from multiloop.kin.spatial.report import platform_report

@@ -29,8 +29,6 @@ Files are written only after the whole solve and all figures succeeded.
 """
 from __future__ import annotations
 
-import csv
-import io
 import json
 import sys
 from pathlib import Path
@@ -38,11 +36,9 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
-from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
-from multiloop.topo.model import JointKind
 
-__all__ = ["add_arguments", "run", "state_to_dict", "input_values"]
+__all__ = ["add_arguments", "run", "state_to_dict"]
 
 
 def add_arguments(p) -> None:
@@ -72,93 +68,17 @@ def add_arguments(p) -> None:
     p.add_argument("--dxf", metavar="OUT.dxf", default=None, help="the same drawing as DXF (ezdxf, mm)")
 
 
-#: largest --steps accepted
-MAX_STEPS = 1_000_000
-
-
-def input_values(m, steps: int | None, start: float | None, stop: float | None) -> np.ndarray:
-    """CLI inputs in CLI units (deg / m), shape (N,): exactly ``from + k·step``."""
-    if steps is not None and not 1 <= steps <= MAX_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
-    if (start is None) != (stop is None):
-        raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
-    for name, v in (("--from", start), ("--to", stop)):
-        if v is not None and not np.isfinite(v):
-            raise InputError(explain(name, expected="a finite number", got=str(v)))
-    n = steps if steps is not None else 36
-    if start is not None:
-        if n == 1:
-            return np.array([start])
-        out = start + np.arange(n) * ((stop - start) / (n - 1))
-        out[-1] = stop
-        return out
-    kinds = {m.joint(d.joint).kind for d in m.drivers}
-    if kinds == {JointKind.R}:
-        return np.arange(n) * (360.0 / n)
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
-    if kinds == {JointKind.P}:
-        return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
-    raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",
-                             got="no range"))
-
-
-def _to_api(m, x_cli: np.ndarray) -> np.ndarray:
-    cols = []
-    for d in m.drivers:
-        cols.append(np.radians(x_cli) if m.joint(d.joint).kind is JointKind.R else x_cli)
-    return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
-
-
 def state_to_dict(state, plan=None, inputs_cli=None) -> dict:
     """The JSON document of a state: :meth:`KinematicState.as_dict` (kept for callers)."""
     return state.as_dict(plan.formula if plan is not None else None, inputs_cli)
-
-
-def _csv(doc: dict) -> str:
-    cols: list[tuple[str, list]] = []
-    inp = doc["input"]
-    if doc["drivers"] and len(doc["drivers"]) > 1:
-        for k, d in enumerate(doc["drivers"]):
-            cols.append((f"input_{d['joint']}", [r[k] for r in inp]))
-    else:
-        cols.append(("input", inp))
-    cols.append(("status", doc["status"]))
-    for table in ("joints", "links", "points"):
-        for name, e in doc[table].items():
-            for key, vals in e.items():
-                cols.append((f"{name}.{key}", vals))
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow([c for c, _ in cols])
-    for row in zip(*[v for _, v in cols]):
-        w.writerow(["" if v is None else (repr(v) if isinstance(v, float) else v) for v in row])
-    return buf.getvalue()
-
-
-def _table(doc: dict) -> str:
-    names = list(doc["joints"])
-    units = sorted({d["unit"] for d in doc["drivers"]})
-    unit = "/".join(units) + (" each driver" if len(doc["drivers"]) > 1 else "")
-    head = [f"input ({unit})"] + [f"{n}.{c}" for n in names for c in "xy"]
-    lines = [f"{doc['mechanism'] or 'mechanism'}: {doc['formula']}", "  ".join(f"{h:>12}" for h in head)]
-    for i, s in enumerate(doc["status"]):
-        x = doc["input"][i]
-        x = x[0] if isinstance(x, list) else x
-        if s != "ok":
-            lines.append(f"{x:>12.6g}  {s}")
-            continue
-        vals = [doc["joints"][n][c][i] for n in names for c in "xy"]
-        lines.append(f"{x:>12.6g}  " + "  ".join(f"{v:>12.6g}" for v in vals))
-    for n in doc["notes"]:
-        lines.append(f"note: {n}")
-    return "\n".join(lines)
 
 
 def run(args) -> int:
     import warnings
 
     from multiloop.kin.solve import compile_plan, solve
+    from multiloop.kin.state import doc_csv, doc_text
+    from multiloop.kin.sweep import input_range, si_inputs
 
     m = load(args.file)
     outs = Outputs("multiloop solve")
@@ -170,11 +90,11 @@ def run(args) -> int:
         if path is not None:
             outs.target(path, flag, formats=(flag[2:],))
     plan = compile_plan(m)
-    x_cli = input_values(m, args.steps, args.start, args.stop)
+    x_cli = input_range(m, args.steps, args.start, args.stop)
     want_der = args.derivatives or args.plot is not None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        state = solve(m, _to_api(m, x_cli), derivatives=want_der, plan=plan, method=args.method,
+        state = solve(m, si_inputs(m, x_cli), derivatives=want_der, plan=plan, method=args.method,
                       assemble=args.assemble)
     doc_state = state
     if want_der and not args.derivatives:
@@ -201,9 +121,9 @@ def run(args) -> int:
     if args.json:
         text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
     elif args.csv:
-        text = _csv(doc)
+        text = doc_csv(doc)
     else:
-        text = _table(doc)
+        text = doc_text(doc)
     outs.commit()
     print(text)
     if not state.success:

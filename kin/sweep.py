@@ -1,0 +1,102 @@
+"""Input sweeps: the driver values a run visits, in user units (deg, m) and in SI.
+
+The command line and the façade take inputs in degrees for an R driver and metres for
+a P driver; the solvers take radians and metres.  :func:`input_range` is the sweep of
+``multiloop solve``, :func:`cycle_inputs` that of ``multiloop forces`` (one load
+period).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .forces import reduce_inputs, table_period
+
+__all__ = ["MAX_STEPS", "MAX_CYCLE_STEPS", "input_range", "si_inputs", "cycle_inputs"]
+
+
+#: most positions :func:`input_range` gives
+MAX_STEPS = 1_000_000
+
+
+def input_range(m: Mechanism, steps: int | None = None, start: float | None = None,
+                stop: float | None = None) -> np.ndarray:
+    """Inputs in user units (deg for R drivers, m for P drivers), shape (N,).
+
+    ``steps`` alone (default 36): one full turn from the reference, the first being the
+    reference itself (0, 360/N, …); for P drivers a stroke from 0 to +10 % of the
+    mechanism's size (the largest extent of its reference joints), N points.
+    ``start``/``stop``: N points from ``start`` to ``stop`` inclusive, exactly
+    ``start + k·step``.  Every driver takes the same values.
+    """
+    if steps is not None and not 1 <= steps <= MAX_STEPS:
+        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
+    if (start is None) != (stop is None):
+        raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
+    for name, v in (("--from", start), ("--to", stop)):
+        if v is not None and not np.isfinite(v):
+            raise InputError(explain(name, expected="a finite number", got=str(v)))
+    n = steps if steps is not None else 36
+    if start is not None:
+        if n == 1:
+            return np.array([start])
+        out = start + np.arange(n) * ((stop - start) / (n - 1))
+        out[-1] = stop
+        return out
+    kinds = {m.joint(d.joint).kind for d in m.drivers}
+    if kinds == {JointKind.R}:
+        return np.arange(n) * (360.0 / n)
+    xy = np.array([j.at for j in m.joints], float)
+    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    if kinds == {JointKind.P}:
+        return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
+    raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",
+                             got="no range"))
+
+
+def si_inputs(m: Mechanism, x_user: np.ndarray) -> np.ndarray:
+    """The inputs of :func:`input_range` in radians (R) and metres (P): ``(N,)`` for one
+    driver, ``(N, n_drivers)`` for several (what :func:`~kin.solve.solve` takes)."""
+    cols = []
+    for d in m.drivers:
+        cols.append(np.radians(x_user) if m.joint(d.joint).kind is JointKind.R else x_user)
+    return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
+
+
+#: most positions :func:`cycle_inputs` gives
+MAX_CYCLE_STEPS = 100_000
+
+
+def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.ndarray:
+    """Driver inputs for kinetostatics in radians and metres, shape (N, n_drivers).
+
+    ``at``: one position, comma-separated user values (deg / m) per driver, R inputs
+    reduced into one load period (:func:`~kin.forces.reduce_inputs`).  Otherwise
+    ``steps`` positions over one load period of the first driver (360 deg, or 720 deg
+    when a force table runs past 360 deg), or :func:`input_range`'s stroke when every
+    driver is a P joint.
+    """
+    nd = len(m.drivers)
+    kinds = [m.joint(d.joint).kind for d in m.drivers]
+    if at is not None:
+        try:
+            vals = [float(x) for x in str(at).split(",")]
+        except ValueError:
+            raise InputError(explain("--at", expected="a number (deg or m) per driver, comma-separated",
+                                     got=repr(at))) from None
+        if len(vals) != nd:
+            raise InputError(explain("--at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"))
+        return reduce_inputs(m, [vals], degrees=True)
+    if not 1 <= steps <= MAX_CYCLE_STEPS:
+        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
+    q = np.zeros((steps, nd))
+    if kinds[0] is JointKind.R:
+        q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
+    elif set(kinds) == {JointKind.P}:
+        q[:] = input_range(m, steps)[:, None]   # the solve command's default stroke
+    else:
+        raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
+                                 got="no default sweep"))
+    return q
