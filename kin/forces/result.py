@@ -161,6 +161,40 @@ class ForceResult(BatchStatus):
             out[p.name] = entry
         return out
 
+    def to_text(self, notes=()) -> str:
+        """Readable report (``multiloop forces``): balancing and virtual-power residual per
+        position, every pair's reaction for a single position; ``notes`` are printed
+        under the title."""
+        m, q_user, n_drivers = self.mechanism, self.inputs_user, len(self.mechanism.drivers)
+        tag = f" ({'; '.join(self.notes)})" if self.notes else ""
+        lines = [f"{m.name or 'mechanism'}: kinetostatics, {self.n_positions} position(s), method {self.method}{tag}"]
+        lines += [f"  note: {n}" for n in notes]
+        lines.append("  blocks solved: " + " <- ".join("{" + ", ".join(b) + "}" for b in self.blocks))
+        heads = ["input"] + [("Mb" if m.joint(d.joint).kind is JointKind.R else "Fb") + f"[{d.joint}]"
+                             for d in m.drivers] + ["VP residual", "status"]
+        lines.append("  " + "  ".join(f"{h:>14}" for h in heads))
+        for n in range(self.n_positions):
+            row = [f"{q_user[n, 0]:14.4f}"] + [f"{self.balancing[n, i]:14.6g}" for i in range(n_drivers)] \
+                + [f"{self.virtual_power_residual[n]:14.3g}", f"{self.status[n]:>14}"]
+            lines.append("  " + "  ".join(row))
+        if self.n_positions == 1:
+            lines.append("  reactions (force of 'from' on 'on', N):")
+            for i, p in enumerate(self.pairs):
+                extra = ""
+                if p.kind == "P":
+                    extra = (f"  normal {self.normal_forces[0, i] + 0.0:.6g} N, "
+                             f"couple {self.pair_moments[0, i] + 0.0:.6g} N m")
+                lines.append(f"    {p.name:<28} Fx {self.reactions[0, i, 0] + 0.0:14.6g}  "
+                             f"Fy {self.reactions[0, i, 1] + 0.0:14.6g}{extra}")
+        bad = int(np.sum(~self.ok))
+        if bad:
+            lines.append(f"  {bad} position(s) failed: {self.message}")
+        any_ok = self.ok.any()
+        worst = np.nanmax(np.abs(self.virtual_power_residual)) if any_ok else float("nan")
+        worst_rel = np.nanmax(self.relative_residual) if any_ok else float("nan")
+        lines.append(f"  max |virtual power residual| = {worst:.3g} W (relative {worst_rel:.3g}; ok up to {VP_TOL:g})")
+        return "\n".join(lines)
+
     def as_dict(self) -> dict:
         """The JSON-ready report (keys documented in docs/forces.md)."""
         m = self.mechanism

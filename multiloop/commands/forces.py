@@ -20,12 +20,11 @@ import json
 
 import numpy as np
 
-from multiloop.kin.forces import VP_TOL, forces, has_loads, table_period
+from multiloop.kin.forces import forces, has_loads, table_period
 from multiloop.kin.sweep import cycle_inputs
 from multiloop.inputs import load_mechanism_or_engine
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind
 
 
 def add_arguments(p) -> None:
@@ -49,7 +48,6 @@ def run(args) -> int:
                                  hint="kinetostatics needs the input joint(s)"))
     q = cycle_inputs(m, args.at, args.steps)
     fr = forces(m, q, method=args.method)
-    kinds = [m.joint(d.joint).kind for d in m.drivers]
     q_user = fr.inputs_user
     note = None if has_loads(m) else "no loads (no link mass, no [[force]]): every reaction and balancing value is 0"
     if args.plot is not None:
@@ -63,30 +61,8 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(fr.as_dict()))
         return 0
-    print(f"{m.name or 'mechanism'}: kinetostatics, {fr.n_positions} position(s), method {fr.method}"
-          + (f" ({'; '.join(fr.notes)})" if fr.notes else ""))
-    if note:
-        print(f"  note: {note}")
+    notes = [note] if note else []
     if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):
-        print(f"  note: R inputs reduced modulo {table_period(m):g} deg (one load period)")
-    print("  blocks solved: " + " <- ".join("{" + ", ".join(b) + "}" for b in fr.blocks))
-    heads = ["input"] + [f"Mb[{d.joint}]" if k is JointKind.R else f"Fb[{d.joint}]" for d, k in zip(m.drivers, kinds)] \
-        + ["VP residual", "status"]
-    print("  " + "  ".join(f"{h:>14}" for h in heads))
-    for n in range(fr.n_positions):
-        row = [f"{q_user[n, 0]:14.4f}"] + [f"{fr.balancing[n, i]:14.6g}" for i in range(len(m.drivers))] \
-            + [f"{fr.virtual_power_residual[n]:14.3g}", f"{fr.status[n]:>14}"]
-        print("  " + "  ".join(row))
-    if fr.n_positions == 1:
-        print("  reactions (force of 'from' on 'on', N):")
-        for i, p in enumerate(fr.pairs):
-            extra = ""
-            if p.kind == "P":
-                extra = f"  normal {fr.normal_forces[0, i] + 0.0:.6g} N, couple {fr.pair_moments[0, i] + 0.0:.6g} N m"
-            print(f"    {p.name:<28} Fx {fr.reactions[0, i, 0] + 0.0:14.6g}  Fy {fr.reactions[0, i, 1] + 0.0:14.6g}{extra}")
-    bad = int(np.sum(~fr.ok))
-    if bad:
-        print(f"  {bad} position(s) failed: {fr.message}")
-    print(f"  max |virtual power residual| = {np.nanmax(np.abs(fr.virtual_power_residual)) if fr.ok.any() else float('nan'):.3g} W"
-          f" (relative {np.nanmax(fr.relative_residual) if fr.ok.any() else float('nan'):.3g}; ok up to {VP_TOL:g})")
+        notes.append(f"R inputs reduced modulo {table_period(m):g} deg (one load period)")
+    print(fr.to_text(notes))
     return 0
