@@ -64,7 +64,7 @@ from __future__ import annotations
 
 from .degenerate import _degenerate_by_definition, joint_masks_degenerate  # noqa: F401 (tests)
 from .enumeration import brute_force_chains, count_task, iter_chains, run_task
-from .mechanisms import MechanismChoices, mechanism_choices
+from .mechanisms import MechanismChoices, mechanism_choices, record_choices
 from .nauty import (  # noqa: F401 (private helpers used by the tests and benchmarks)
     _decode_bipartite, _decode_simple, _generator_command, _tool, nauty_available,
 )
@@ -76,5 +76,5 @@ __all__ = [
     "SynthesisOptions", "Task", "ChainRecord", "AssortmentRow", "MechanismChoices", "n_pairs",
     "nauty_available", "plan_tasks", "run_task", "count_task", "LITERATURE_SJ_F1", "iter_chains",
     "brute_force_chains", "number_synthesis", "universal_table", "chain_record",
-    "canonical_string", "mechanism_choices", "joint_masks_degenerate",
+    "canonical_string", "mechanism_choices", "record_choices", "joint_masks_degenerate",
 ]

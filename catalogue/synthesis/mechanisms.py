@@ -71,3 +71,8 @@ def mechanism_choices(n: int, joints: Sequence[int]) -> MechanismChoices:
             for x in _orbit_reps(n, joints, (f, jv), others):
                 drivers.append((f, jv - n, x))
     return MechanismChoices(tuple(frames), tuple(drivers), float(order))
+
+
+def record_choices(record) -> MechanismChoices:
+    """:func:`mechanism_choices` of an atlas :class:`~.records.ChainRecord`."""
+    return mechanism_choices(record.n, [sum(1 << x for x in j) for j in record.joints])

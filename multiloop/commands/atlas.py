@@ -61,7 +61,7 @@ def _options(args):
 
 def run(args) -> int:
     from multiloop.catalogue.atlas import Atlas
-    from multiloop.catalogue.synthesis import mechanism_choices, universal_table
+    from multiloop.catalogue.synthesis import record_choices, universal_table
 
     for flag, value in (("--html-limit", args.html_limit), ("--workers", args.workers)):
         if value is not None and value <= 0:
@@ -96,16 +96,10 @@ def run(args) -> int:
         out["count"] = count
         chains = list(atlas.chains(opts, args.query, limit=args.limit))
         if args.json:
-            items = []
-            for r in chains:
-                d = {"canonical": r.canonical, "LA": list(r.LA), "MJA": list(r.MJA), "V": r.V,
-                     "K": r.K, "n": r.n, "F": r.F, "code": r.code, "code_star": r.code_star,
-                     "planar": r.planar, "fractionated": r.fractionated,
-                     "La": None if r.La is None else list(r.La), "joints": r.joint_lists}
-                if args.mechanisms:
-                    c = mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints])
+            items = [r.as_dict() for r in chains]
+            if args.mechanisms:
+                for d, c in zip(items, map(record_choices, chains)):
                     d["frames"], d["drivers"] = c.n_frames, c.n_drivers
-                items.append(d)
             out["chains"] = items
             if args.mechanisms:
                 out["mechanisms"] = {"frames": sum(d["frames"] for d in items),
@@ -142,7 +136,7 @@ def run(args) -> int:
 
 
 def _print_text(opts, args, count, chains, table, built) -> None:
-    from multiloop.catalogue.synthesis import mechanism_choices
+    from multiloop.catalogue.synthesis import record_choices
 
     head = f"n = {opts.n}, F = {opts.F}: " if opts is not None else ""
     print(f"{head}{count} chains" + (f" matching {args.query}" if args.query else ""))
@@ -156,14 +150,14 @@ def _print_text(opts, args, count, chains, table, built) -> None:
         print(f"{sum(1 for r in table if r['realisable'])} of {len(table)} assortments are realisable")
         return
     if args.mechanisms:
-        cs = [mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints]) for r in chains]
+        cs = [record_choices(r) for r in chains]
         print(f"  mechanisms: {sum(c.n_frames for c in cs)} distinct frames, "
               f"{sum(c.n_drivers for c in cs)} distinct (frame, driver) choices")
     if args.limit is not None or args.query or count <= 50:
         for i, r in enumerate(chains, 1):
             extra = ""
             if args.mechanisms:
-                c = mechanism_choices(r.n, [sum(1 << x for x in j) for j in r.joints])
+                c = record_choices(r)
                 extra = f"  frames {c.n_frames} drivers {c.n_drivers}"
             la = "-".join(map(str, r.La)) if r.La else ("non-planar" if r.planar is False else "")
             print(f"{i:>5} {r.code_star:<26} V={r.V} K={r.K} La={la:<16}{extra} "
