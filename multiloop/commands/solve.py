@@ -1,30 +1,12 @@
 """``multiloop solve FILE [--steps N] [--from A --to B] [--derivatives] [--json|--csv]
 [--plot out.png] [--animate out.gif]``: positions, velocities, accelerations.
 
-Inputs on the command line are **degrees** for an R driver and **metres** for a
-P driver.  ``--steps N`` alone: one full turn from the reference in N equal steps,
-the first being the reference itself (0, 360/N, …, 360(N−1)/N degrees); for a P
-driver the default range is a stroke from 0 to +10 % of the mechanism's size
-(the largest extent of its reference joint positions), N points.  ``--from A
---to B``: N points from A to B inclusive.  With several drivers every driver
-takes the same values.
+Inputs on the command line are **degrees** for an R driver and **metres** for a P
+driver; the default sweeps are those of :func:`multiloop.kin.sweep.input_range`.
 
-JSON layout (stable; NaN is ``null``)::
-
-    {"mechanism": name, "formula": "I(0,1) → II1(2,3)",
-     "drivers": [{"joint": "O", "kind": "R", "unit": "deg"}],
-     "input": [...]            # one driver: a list; several: a list of lists
-     "status": ["ok", ...],
-     "joints": {"A": {"x": [...], "y": [...], "vx", "vy", "ax", "ay"}},
-     "links":  {"crank": {"angle": [...], "omega": [...], "epsilon": [...]}},
-     "points": {"M": {"x", "y", "vx", "vy", "ax", "ay"}},
-     "notes": [...]}
-
-``x, y`` in m; ``angle`` in degrees (rotation from the reference);
-``vx…ay``, ``omega``, ``epsilon`` only with ``--derivatives``: time derivatives
-for the driver at 1 rad/s (or 1 m/s) with zero acceleration, i.e. the analogues
-d/dφ and d²/dφ² (m, m, rad, rad per rad of input).  CSV: one row per position,
-columns ``input[_joint]``, ``status``, ``<joint>.x``, … in the same order.
+The JSON (:meth:`KinematicState.as_dict`, NaN is ``null``) and the CSV columns are
+documented in docs/kinematics.md, section 3; derivatives (``--derivatives``) are for
+the driver at 1 rad/s (or 1 m/s): the analogues d/dφ and d²/dφ².
 Files are written only after the whole solve and all figures succeeded.
 """
 from __future__ import annotations
