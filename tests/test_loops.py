@@ -102,3 +102,32 @@ def test_cycle_lists_two_routes():
                 a = {mask: set(p) for mask, p in _simple_cycles_dfs(keep, edges)}
                 b = {mask: set(p) for mask, p in _simple_cycles_nx(keep, edges)}
                 assert a == b
+
+
+def test_faces_of_three_connected_blocks_two_routes():
+    # Tutte 1963: the faces of a 3-connected planar graph are its peripheral cycles;
+    # against the faces read off networkx's embedding and the full enumeration
+    import random
+
+    import networkx as nx
+
+    from multiloop.topo.graphs import incidence_graph
+    from multiloop.topo.loops import (_embedding_faces, _peripheral_faces, _planar, _reduced_block,
+                                      _three_connected, block_embeddings)
+    from tests.common import random_joint_lists
+
+    rng = random.Random(11)
+    checked = 0
+    for _ in range(300):
+        m = chain_from_joint_lists(random_joint_lists(rng, rng.randint(6, 14), rng.randint(1, 6), 0.3))
+        g = incidence_graph(m)
+        for block in nx.biconnected_components(g):
+            sub = {v: list(g.subgraph(block)[v]) for v in block}
+            rb = _reduced_block(sub)
+            if len(rb.keep) < 4 or not _three_connected(rb) or not _planar(len(rb.keep), rb.pairs):
+                continue
+            faces = _peripheral_faces(rb)
+            assert faces == _embedding_faces(rb)
+            assert {faces} == set(block_embeddings(sub, use_filter=False))
+            checked += 1
+    assert checked >= 20

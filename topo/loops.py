@@ -542,10 +542,57 @@ def _minimum_faces(block, use_filter: bool, node_budget: int | None = None, whit
 
 
 def _unique_faces(rb: _ReducedBlock) -> tuple[int, ...]:
-    """Face sizes (in links, ascending) of a planar 3-connected reduced block, read off
-    its one embedding (Whitney 1932) from networkx's planarity test: no cycle listing
-    and no search.  A face's size counts the link vertices on its corners and inside
-    its reduced edges."""
+    """Face sizes (in links, ascending) of a planar 3-connected reduced block: its
+    embedding is unique (Whitney 1932), so no search.  Small blocks read the faces as
+    the peripheral cycles (:func:`_peripheral_faces`, Tutte 1963), larger ones off
+    networkx's planarity embedding; the tests compare both routes."""
+    faces = _peripheral_faces(rb) if len(rb.keep) <= DFS_CYCLES_MAX else None
+    return faces if faces is not None else _embedding_faces(rb)
+
+
+def _face_size(rb: _ReducedBlock, corners, edge_mask: int) -> int:
+    """Links on a face: the link vertices on its corners and inside its reduced edges."""
+    inside = sum(rb.edges[e][2] for e in range(len(rb.edges)) if edge_mask >> e & 1)
+    return sum(1 for x in corners if _is_link(rb.keep[x])) + inside
+
+
+def _peripheral_faces(rb: _ReducedBlock) -> tuple[int, ...] | None:
+    """Face sizes of a 3-connected planar reduced block from its cycles alone.
+
+    In a 3-connected planar graph the face boundaries are exactly the peripheral
+    cycles: induced (chordless) cycles whose removal leaves the graph connected
+    (Tutte 1963, Theorem 2.5).  Returns None when their number is not Euler's
+    ``E − V + 2`` (the block is then not 3-connected planar; the caller falls back).
+    """
+    n = len(rb.keep)
+    near = [0] * n
+    for a, b in rb.pairs:
+        near[a] |= 1 << b
+        near[b] |= 1 << a
+    everyone = (1 << n) - 1
+    sizes = []
+    for edge_mask, path in _simple_cycles_dfs(range(n), rb.pairs):
+        on = sum(1 << v for v in path)
+        if sum(1 for a, b in rb.pairs if on >> a & 1 and on >> b & 1) != len(path):
+            continue                                  # a chord
+        rest = everyone & ~on
+        reach = rest & -rest
+        while True:                                   # grow one component of the rest
+            grown = reach
+            for v in range(n):
+                if reach >> v & 1:
+                    grown |= near[v] & rest
+            if grown == reach:
+                break
+            reach = grown
+        if reach == rest:
+            sizes.append(_face_size(rb, path, edge_mask))
+    return tuple(sorted(sizes)) if len(sizes) == rb.n_faces else None
+
+
+def _embedding_faces(rb: _ReducedBlock) -> tuple[int, ...]:
+    """Face sizes of a planar 3-connected reduced block read off networkx's planarity
+    embedding (its faces by half-edge traversal)."""
     n = len(rb.keep)
     weight = {frozenset(p): rb.edges[e][2] for e, p in enumerate(rb.pairs)}
     g = nx.Graph()
