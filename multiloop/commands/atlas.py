@@ -61,7 +61,7 @@ def _options(args):
 
 def run(args) -> int:
     from multiloop.catalogue.atlas import Atlas
-    from multiloop.catalogue.synthesis import record_choices, universal_table
+    from multiloop.catalogue.listing import atlas_listing, listing_text
 
     for flag, value in (("--html-limit", args.html_limit), ("--workers", args.workers)):
         if value is not None and value <= 0:
@@ -86,31 +86,14 @@ def run(args) -> int:
             loops = args.loops if args.loops is not None else opts.n <= 10
             built = atlas.build(opts, loops=loops, workers=args.workers, scheduler=args.scheduler,
                                 progress=not args.no_progress)
-        out: dict = {}
-        if args.table:
-            if opts is None:
-                raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
-            rows = universal_table(opts, atlas.chains(opts))
-            out["table"] = [r.as_dict() for r in rows]
-        count = atlas.count(opts, args.query)
-        out["count"] = count
-        chains = list(atlas.chains(opts, args.query, limit=args.limit))
+        if args.table and opts is None:
+            raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built)
         if args.json:
-            items = [r.as_dict() for r in chains]
-            if args.mechanisms:
-                for d, c in zip(items, map(record_choices, chains)):
-                    d["frames"], d["drivers"] = c.n_frames, c.n_drivers
-            out["chains"] = items
-            if args.mechanisms:
-                out["mechanisms"] = {"frames": sum(d["frames"] for d in items),
-                                     "drivers": sum(d["drivers"] for d in items)}
-            if built is not None:
-                out["build"] = {"tasks_run": built.tasks_run, "tasks_total": built.tasks_total,
-                                "seconds": round(built.seconds, 3)}
-            json.dump(out, sys.stdout, indent=1)
+            json.dump(doc, sys.stdout, indent=1)
             sys.stdout.write("\n")
         else:
-            _print_text(opts, args, count, chains, out.get("table"), built)
+            print(listing_text(doc, opts, args.query, args.limit))
         if args.html is not None:
             from multiloop.catalogue.html import gallery_files
 
@@ -133,32 +116,3 @@ def run(args) -> int:
         if args.charts is not None:
             print(f"charts: {args.charts}", file=sys.stderr)
     return 0
-
-
-def _print_text(opts, args, count, chains, table, built) -> None:
-    from multiloop.catalogue.synthesis import record_choices
-
-    head = f"n = {opts.n}, F = {opts.F}: " if opts is not None else ""
-    print(f"{head}{count} chains" + (f" matching {args.query}" if args.query else ""))
-    if built is not None:
-        print(f"  tasks run {built.tasks_run}/{built.tasks_total} in {built.seconds:.2f} s")
-    if table is not None:
-        print(f"{'Code*':<28}{'[LA]':<22}{'[MJA]':<14}{'V':>3}{'K':>3}{'chains':>8}")
-        for r in table:
-            print(f"{r['code_star']:<28}{str(r['LA']):<22}{str(r['MJA']):<14}{r['V']:>3}{r['K']:>3}"
-                  f"{r['chains']:>8}")
-        print(f"{sum(1 for r in table if r['realisable'])} of {len(table)} assortments are realisable")
-        return
-    if args.mechanisms:
-        cs = [record_choices(r) for r in chains]
-        print(f"  mechanisms: {sum(c.n_frames for c in cs)} distinct frames, "
-              f"{sum(c.n_drivers for c in cs)} distinct (frame, driver) choices")
-    if args.limit is not None or args.query or count <= 50:
-        for i, r in enumerate(chains, 1):
-            extra = ""
-            if args.mechanisms:
-                c = record_choices(r)
-                extra = f"  frames {c.n_frames} drivers {c.n_drivers}"
-            la = "-".join(map(str, r.La)) if r.La else ("non-planar" if r.planar is False else "")
-            print(f"{i:>5} {r.code_star:<26} V={r.V} K={r.K} La={la:<16}{extra} "
-                  f"joints={r.joint_lists}")
