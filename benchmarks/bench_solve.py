@@ -440,20 +440,20 @@ def bare_four_bar(m):
 
     def run(x):
         c, s = np.cos(x), np.sin(x)
-        P = np.empty((len(x), 4, 2))
-        P[:, 0], P[:, 3] = O, C
+        P = np.empty((4, 2, len(x)))                  # joint-major, returned transposed
+        P[0], P[3] = O[:, None], C[:, None]
         ax, ay = O[0] + c * r[0] - s * r[1], O[1] + s * r[0] + c * r[1]
         dx, dy = C[0] - ax, C[1] - ay
         d2 = dx * dx + dy * dy
         t = 0.5 * (la2 / d2 + 1.0 - lc2 / d2)
         k = sign * np.sqrt(la2 / d2 - t * t)
         bx, by = ax + t * dx - k * dy, ay + t * dy + k * dx
-        P[:, 1, 0], P[:, 1, 1], P[:, 2, 0], P[:, 2, 1] = ax, ay, bx, by
-        ang = np.empty((len(x), 4))
-        ang[:, 0], ang[:, 1] = 0.0, x
-        ang[:, 2] = np.arctan2(by - ay, bx - ax) - th1
-        ang[:, 3] = np.arctan2(by - C[1], bx - C[0]) - th2
-        return P, ang
+        P[1, 0], P[1, 1], P[2, 0], P[2, 1] = ax, ay, bx, by
+        ang = np.empty((4, len(x)))
+        ang[0], ang[1] = 0.0, x
+        ang[2] = np.arctan2(by - ay, bx - ax) - th1
+        ang[3] = np.arctan2(by - C[1], bx - C[0]) - th2
+        return P.transpose(2, 0, 1), ang.T
     return run
 
 

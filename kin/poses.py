@@ -151,12 +151,14 @@ class Poses:
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
+        """The ``(M, n_links, 3)`` pose array, stored link-major (a transposed view of
+        ``(n_links, 3, M)``: each link's arrays are copied contiguously)."""
         nl = self.m.n_links
         ks = range(nl) if links is None else list(links) + [self.frame_k]
-        Z = np.empty((self.M, nl, 3)) if links is None else np.full((self.M, nl, 3), np.nan)
+        T = np.empty((nl, 3, self.M)) if links is None else np.full((nl, 3, self.M), np.nan)
         for k in ks:
-            Z[:, k, 0], Z[:, k, 1], Z[:, k, 2] = self.x[k], self.y[k], self.th[k]
-        return Z
+            T[k, 0], T[k, 1], T[k, 2] = self.x[k], self.y[k], self.th[k]
+        return T.transpose(2, 0, 1)
 
     def from_Z(self, Z, links) -> None:
         for k in links:

@@ -204,6 +204,8 @@ def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool 
         okk, why, pr = _step(st, kernels).positions(G, X, signs.get(k, 1.0), probe)
         if probe:
             probes[k] = Probe(pr.ok, pr.gap, pr.pts, up)
+        if okk.all():
+            continue
         for n in np.flatnonzero(~okk & (code == 0)):
             c, w = why.get(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
             if c == Status.UPSTREAM:
@@ -436,6 +438,8 @@ def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     """One driver, closed-form groups: the cached chart gives each input's branch."""
     x = X[:, 0]
     ch = _chart(sp, kernels, x)
+    if ch.period is not None and not ch.crossings and not any(ch.flips.values()):
+        return _run(sp, X, needed, {}, kernels), []      # a full turn on one branch
     xr, reach = ch.reduce(x)
     signs = {k: ch.factor(k, xr) for k in ch.flips if ch.flips[k]}
     run = _run(sp, X, needed, signs, kernels)
@@ -646,7 +650,6 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
 
 def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
     m = sp.mechanism
-    N = Z.shape[0]
     nd = len(m.drivers)
     rates_in = np.ones(nd) if input_rates is None else np.asarray(input_rates, float).reshape(nd)
     Zd = np.zeros_like(Z)
@@ -708,7 +711,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
         ppos = _points(sp, G, sp.point_host, "points")
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
-    return KinematicState(m, X, pos, np.stack(G.th, axis=1), status, vel, acc, om, ep,
+    return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,
                           rates_in, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
@@ -716,20 +719,28 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
 
 def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
-    carried by its host link's pose (one vectorised rigid transport for all of them)."""
+    carried by its host link's pose: written point by point into one array (a point on
+    the frame is its reference position, a link's reference point its pose)."""
     key = ("points", which)
     hit = sp.extra.get(key)
     if hit is None:
         items = sp.mechanism.joints if which == "joints" else sp.mechanism.points
         h = tuple(hosts)
-        r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
-        hit = sp.extra[key] = (h, r)
-    h, r = hit
-    c, s = np.stack([G.c[k] for k in h], axis=1), np.stack([G.s[k] for k in h], axis=1)
-    out = np.empty((G.M, len(h), 2))
-    out[..., 0] = np.stack([G.x[k] for k in h], axis=1) + c * r[:, 0] - s * r[:, 1]
-    out[..., 1] = np.stack([G.y[k] for k in h], axis=1) + s * r[:, 0] + c * r[:, 1]
-    return out
+        at = np.array([j.at for j in items], float).reshape(-1, 2)
+        r = at - sp.origins[list(h)]
+        hit = sp.extra[key] = (h, at, tuple(map(tuple, r)))
+    h, at, r = hit
+    out = np.empty((len(h), 2, G.M))                 # point-major, returned transposed
+    for i, (k, (rx, ry)) in enumerate(zip(h, r)):
+        if k == G.frame_k:
+            out[i] = at[i][:, None]
+        elif rx == 0.0 and ry == 0.0:
+            out[i, 0], out[i, 1] = G.x[k], G.y[k]
+        else:
+            c, s = G.c[k], G.s[k]
+            out[i, 0] = G.x[k] + c * rx - s * ry
+            out[i, 1] = G.y[k] + s * rx + c * ry
+    return out.transpose(2, 0, 1)
 
 
 def _step(st: StepPlan, closed: bool):
