@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 from hypothesis import given
+from hypothesis import strategies as st
 
-from multiloop.topo.degeneracy import find_rigid_subchain, fractionation, subchain_deficit
+from multiloop.topo.degeneracy import find_rigid_subchain, fractionation, rigid_subset_mask, subchain_deficit
 from multiloop.topo.model import chain_from_joint_lists
 from tests.common import chains
 
@@ -16,6 +17,21 @@ def test_exhaustive_and_mincut_agree(m):
     for sub in (a, b):
         if sub is not None:
             assert 2 <= len(sub) < m.n_links and subchain_deficit(m, sub) <= 0
+
+
+@given(st.integers(2, 9).flatmap(lambda n: st.tuples(
+    st.just(n), st.lists(st.sets(st.integers(0, n - 1), min_size=2, max_size=4), min_size=1, max_size=2 * n))))
+def test_subset_transform_matches_the_definition(case):
+    """rigid_subset_mask's array transform against c(S) summed joint by joint, subset by subset."""
+    n, joints = case
+    masks = [sum(1 << i for i in j) for j in joints]
+
+    def deficit(S):
+        c = sum(max(0, bin(S & jm).count("1") - 1) for jm in masks)
+        return 3 * (bin(S).count("1") - 1) - 2 * c
+    rigid = [S for S in range(1 << n) if 2 <= bin(S).count("1") < n and deficit(S) <= 0]
+    expected = min(rigid, key=lambda S: (bin(S).count("1"), S)) if rigid else None
+    assert rigid_subset_mask(n, masks) == expected
 
 
 def test_two_links_on_two_joints_are_rigid():

@@ -400,23 +400,27 @@ class _FaceSearch:
                 links[e1].remove(e2)
                 links[e2].remove(e1)
 
-    def _allowed(self, c: int) -> bool:
-        # lower[e] >= 0 only for edges already covered once, so no test of used1 is needed
-        return max(self._lower_of[c](self.lower)) < c
-
     def _branch_edge(self, used1: int, used2: int) -> tuple[int, list[int]]:
         """The uncovered edge with the fewest candidate faces (edges covered once need
         exactly one more face: most constrained, looked at first)."""
-        masks, by_edge = self.cand.masks, self.cand.by_edge
-        best_e, best_opts = -1, None
+        masks, by_edge, lower_of, lower = self.cand.masks, self.cand.by_edge, self._lower_of, self.lower
+        best_e, best_opts, cap = -1, None, len(masks) + 1
         once = used1 & ~used2
         for e in (range(self.n_edges) if not once else [e for e in range(self.n_edges) if (once >> e) & 1]):
             if (used2 >> e) & 1:
                 continue
-            opts = [c for c in by_edge[e] if not (masks[c] & used2) and self._allowed(c)]
-            if best_opts is None or len(opts) < len(best_opts):
-                best_e, best_opts = e, opts
-                if len(opts) <= 1:
+            # a face c is allowed when it comes after the first face chosen for each of its
+            # edges (lower[e] >= 0 only for edges covered once: no test of used1 needed);
+            # the scan stops as soon as this edge cannot beat the best
+            opts = []
+            for c in by_edge[e]:
+                if not (masks[c] & used2) and max(lower_of[c](lower)) < c:
+                    opts.append(c)
+                    if len(opts) >= cap:
+                        break
+            if len(opts) < cap:
+                best_e, best_opts, cap = e, opts, len(opts)
+                if cap <= 1:
                     break
         return best_e, best_opts or []
 
