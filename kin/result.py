@@ -1,5 +1,6 @@
 """Batch statuses: integer codes with one message table, and the shared behaviour of
-batch results (``ok`` / ``success`` / ``message``).
+batch results (``ok`` / ``success`` / ``message``), and :func:`json_ready`, the
+conversion every result's ``as_dict`` ends with.
 
 A batch result carries ``status`` (one readable message per position: ``"ok"`` or the
 reason, naming the group) and, from :mod:`kin.solve`, ``codes`` (one :class:`Status`
@@ -7,11 +8,30 @@ per position).  Callers test the codes, never the text: ``state.codes == Status.
 """
 from __future__ import annotations
 
+import math
 from enum import IntEnum
 
 import numpy as np
 
-__all__ = ["Status", "MESSAGES", "BatchStatus", "status_text"]
+__all__ = ["Status", "MESSAGES", "BatchStatus", "status_text", "json_ready"]
+
+
+def json_ready(o):
+    """``o`` with NumPy arrays as lists, NumPy scalars as Python numbers and every
+    non-finite float as ``None`` (JSON null), through dicts, lists and tuples."""
+    if isinstance(o, dict):
+        return {k: json_ready(v) for k, v in o.items()}
+    if isinstance(o, np.ndarray):
+        return json_ready(o.tolist())
+    if isinstance(o, (list, tuple)):
+        return [json_ready(v) for v in o]
+    if isinstance(o, (float, np.floating)):
+        return float(o) if math.isfinite(o) else None
+    if isinstance(o, np.bool_):
+        return bool(o)
+    if isinstance(o, np.integer):
+        return int(o)
+    return o
 
 
 class Status(IntEnum):

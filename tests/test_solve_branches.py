@@ -8,6 +8,7 @@ with crank = rod (slider at 2 r cos θ on the reference mode), the parallelogram
 """
 from __future__ import annotations
 
+import json
 import math
 import warnings
 from pathlib import Path
@@ -17,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from multiloop.kin.result import Status
+from multiloop.kin.result import Status, json_ready
 from multiloop.kin.solve import solve
 from multiloop.topo.errors import InputError
 from multiloop.topo.io import load
@@ -173,3 +174,12 @@ def test_tracked_route_past_a_limit_reports_it_without_crashing():
     bad = np.flatnonzero(~st.ok)
     assert st.ok[0] and bad.size and np.all(st.codes[bad[0]:] == Status.LIMIT)
     assert "unreachable: limit at" in st.status[bad[0]]
+
+
+def test_json_ready_makes_strict_json():
+    """Every result's as_dict ends with json_ready: NaN/inf -> null, NumPy -> Python."""
+    doc = json_ready({"a": np.array([[1.0, np.nan], [np.inf, 2.0]]), "b": (np.float64(-np.inf), np.int64(3)),
+                      "c": [np.bool_(True), "x", None], "d": np.float32(0.5)})
+    assert doc == {"a": [[1.0, None], [None, 2.0]], "b": [None, 3], "c": [True, "x", None], "d": 0.5}
+    assert type(doc["b"][1]) is int and type(doc["c"][0]) is bool
+    json.dumps(doc, allow_nan=False)

@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..result import json_ready
 from .events import Extreme
 
 __all__ = ["AngleResult", "DriverCheck", "GroupCircuit", "CheckReport"]
@@ -136,7 +137,7 @@ class CheckReport:
         return not self.verdict
 
     def as_dict(self) -> dict:
-        """JSON-ready dict with the documented keys."""
+        """JSON-ready dict with the documented keys (NaN and infinities as ``None``)."""
         first = self.drivers[0] if self.drivers else None
         trans, press, triad, dead = {}, {}, {}, {}
         table = {"transmission": trans, "pressure": press, "triad": triad}
@@ -153,7 +154,7 @@ class CheckReport:
                                     "quantity": a.quantity, "driver": dc.joint}
         if first is not None:
             dead = {k: sorted(first.value(x) for x in xs) for k, xs in first.dead_centres}
-        return {
+        return json_ready({
             "mechanism": self.mechanism, "formula": self.formula,
             "min_transmission": self.min_transmission,
             "drivers": {dc.joint: dc.as_dict() for dc in self.drivers},
@@ -171,4 +172,4 @@ class CheckReport:
                                      for dc in self.drivers},
             "verdict": list(self.verdict),
             "ok": self.ok,
-        }
+        })

@@ -1,14 +1,13 @@
 """The result of the kinetostatics, :class:`ForceResult`, and its JSON form."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from multiloop.topo.model import JointKind, Mechanism
 
-from ..result import BatchStatus
+from ..result import BatchStatus, json_ready
 from ..state import KinematicState
 from .plan import Pair
 
@@ -20,11 +19,7 @@ VP_TOL = 1e-6
 
 def json_list(a) -> list:
     """A nested list of floats with every non-finite value as ``None`` (JSON null)."""
-    a = np.asarray(a, float)
-    if a.ndim == 0:
-        v = float(a)
-        return v if math.isfinite(v) else None
-    return [json_list(x) if a.ndim > 1 else (float(x) if math.isfinite(x) else None) for x in a]
+    return json_ready(np.asarray(a, float))
 
 
 @dataclass(frozen=True)

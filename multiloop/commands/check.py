@@ -93,21 +93,9 @@ def run(args) -> int:
                     outs.add_figure(d / name, fig, "--html")
                 outs.add(d / "index.html", html_page(rep, list(figs)), "--html")
     if args.json:
-        print(json.dumps(_clean(rep.as_dict()), indent=1, allow_nan=False))
+        print(json.dumps(rep.as_dict(), indent=1, allow_nan=False))
     else:
         print(format_report(rep), end="")
     outs.commit()
     return 0
 
-
-def _clean(o):
-    """NaN and infinities become ``null``; numpy scalars become Python numbers."""
-    if isinstance(o, dict):
-        return {k: _clean(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_clean(v) for v in o]
-    if isinstance(o, (np.floating, float)):
-        return float(o) if math.isfinite(o) else None
-    if isinstance(o, np.integer):
-        return int(o)
-    return o
