@@ -72,7 +72,7 @@ def rigid_subset_mask(n: int, joint_masks) -> int | None:
         raise ValueError("exhaustive search is limited to 20 links; use method='mincut'")
     full = 1 << n
     jm = np.asarray([int(j) for j in joint_masks], dtype=np.int64)
-    degree = [int(np.count_nonzero(jm >> i & 1)) for i in range(n)]
+    degree = ((jm[:, None] >> np.arange(n)) & 1).sum(axis=0).tolist()
     # c(S) = Σ_J |S ∩ J| − #{J : S ∩ J ≠ ∅}; the first sum is Σ_{l ∈ S} deg(l), built by
     # doubling; #{J ⊆ T} for every T is the subset-sum (zeta) transform of the joints'
     # masks, and J misses S exactly when J ⊆ complement(S), the reversed array.
