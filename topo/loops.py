@@ -149,8 +149,10 @@ def _blocks(adjacency) -> list[set]:
 
 def _planar(n: int, edges) -> bool:
     """Planarity of a (multi)graph on vertices ``0 … n−1`` (rustworkx's compiled
-    left-right test; the same answer as networkx's ``check_planarity``)."""
-    g = rx.PyGraph()
+    left-right test; the same answer as networkx's ``check_planarity``).  Parallel
+    edges never change planarity and are merged first: rustworkx 0.18's test can
+    answer "not planar" for a planar multigraph, depending on the edge order."""
+    g = rx.PyGraph(multigraph=False)
     g.add_nodes_from(range(n))
     g.add_edges_from_no_data(list(edges))
     return rx.is_planar(g)
