@@ -22,7 +22,8 @@ def test_exhaustive_and_mincut_agree(m):
 @given(st.integers(2, 9).flatmap(lambda n: st.tuples(
     st.just(n), st.lists(st.sets(st.integers(0, n - 1), min_size=2, max_size=4), min_size=1, max_size=2 * n))))
 def test_subset_transform_matches_the_definition(case):
-    """rigid_subset_mask's array transform against c(S) summed joint by joint, subset by subset."""
+    """rigid_subset_mask (NumPy, all subsets at once) against a pure-Python count of c(S),
+    subset by subset."""
     n, joints = case
     masks = [sum(1 << i for i in j) for j in joints]
 

@@ -29,7 +29,6 @@ a *cut link* or a *cut joint*.
 """
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -57,11 +56,9 @@ def _joint_masks(m: Mechanism) -> tuple[list[str], list[int]]:
 
 
 def rigid_subset_mask(n: int, joint_masks) -> int | None:
-    """The definition over every subset at once: the smallest link subset S (bit mask over
-    links ``0 … n−1``, ties by mask value) with ``2 <= |S| < n`` and
-    ``3(|S| − 1) − 2c(S) <= 0``, where ``c(S) = Σ_J max(0, |S ∩ J| − 1)``; None when there
-    is none (n <= 20).  ``c`` is evaluated for all 2ⁿ subsets in O(n 2ⁿ) array work, as
-    ``Σ_{l∈S} deg(l) − #{J : J ⊄ S̄}`` (a subset-sum transform of the joints' masks).
+    """The definition, subset by subset: the smallest link subset S (bit mask over links
+    ``0 … n−1``, ties by mask value) with ``2 <= |S| < n`` and ``3(|S| − 1) − 2c(S) <= 0``,
+    where ``c(S) = Σ_J max(0, |S ∩ J| − 1)``; None when there is none (n <= 20).
 
     Examples
     --------
@@ -70,33 +67,16 @@ def rigid_subset_mask(n: int, joint_masks) -> int | None:
     """
     if n > 20:
         raise ValueError("exhaustive search is limited to 20 links; use method='mincut'")
-    full = 1 << n
-    jm = np.asarray([int(j) for j in joint_masks], dtype=np.int64)
-    degree = ((jm[:, None] >> np.arange(n)) & 1).sum(axis=0).tolist()
-    # c(S) = Σ_J |S ∩ J| − #{J : S ∩ J ≠ ∅}; the first sum is Σ_{l ∈ S} deg(l), built by
-    # doubling; #{J ⊆ T} for every T is the subset-sum (zeta) transform of the joints'
-    # masks, and J misses S exactly when J ⊆ complement(S), the reversed array.
-    pairs = np.zeros(full, dtype=np.int64)
-    inside = np.bincount(jm, minlength=full).astype(np.int64)
-    for i in range(n):
-        pairs[1 << i: 2 << i] = pairs[: 1 << i] + degree[i]
-        half = inside.reshape(-1, 2, 1 << i)
-        half[:, 1, :] += half[:, 0, :]
-    c = pairs - (len(jm) - inside[::-1])
-    size = _popcounts(n)
+    masks = np.arange(1 << n, dtype=np.uint32)
+    size = np.bitwise_count(masks).astype(np.int64)
+    c = np.zeros(1 << n, dtype=np.int64)
+    for jm in joint_masks:
+        c += np.maximum(np.bitwise_count(masks & np.uint32(int(jm))).astype(np.int64) - 1, 0)
     bad = (3 * (size - 1) - 2 * c <= 0) & (size >= 2) & (size < n)
     idx = np.flatnonzero(bad)
     if idx.size == 0:
         return None
     return int(idx[np.lexsort((idx, size[idx]))[0]])
-
-
-@functools.lru_cache(maxsize=21)
-def _popcounts(n: int) -> np.ndarray:
-    """Number of links in every subset mask ``0 … 2ⁿ − 1`` (read-only, cached)."""
-    size = np.bitwise_count(np.arange(1 << n, dtype=np.uint32)).astype(np.int64)
-    size.flags.writeable = False
-    return size
 
 
 def _exhaustive(m: Mechanism) -> tuple[str, ...] | None:
