@@ -96,12 +96,23 @@ class Poses:
     def point_k(self, k: int, r) -> np.ndarray:
         if k == self.frame_k:
             return np.broadcast_to(np.asarray(r, float), (self.M, 2))
-        rx, ry = np.asarray(r, float) - self.sp.origins[k]
-        c, s = self.c[k], self.s[k]
         out = np.empty((self.M, 2))
-        out[:, 0] = self.x[k] + c * rx - s * ry
-        out[:, 1] = self.y[k] + s * rx + c * ry
+        self.write_point(k, np.asarray(r, float) - self.sp.origins[k], out[:, 0], out[:, 1])
         return out
+
+    def write_point(self, k: int, r_local, out_x, out_y) -> None:
+        """Write into ``out_x, out_y`` (M,) the material point of link k at ``r_local``
+        from the link's reference point: a point on the frame is constant, the reference
+        point itself is the pose (no arithmetic), any other is rigidly carried."""
+        rx, ry = r_local
+        if k == self.frame_k:
+            out_x[...], out_y[...] = rx, ry
+        elif rx == 0.0 and ry == 0.0:
+            out_x[...], out_y[...] = self.x[k], self.y[k]
+        else:
+            c, s = self.c[k], self.s[k]
+            out_x[...] = self.x[k] + c * rx - s * ry
+            out_y[...] = self.y[k] + s * rx + c * ry
 
     def point(self, link: str, r) -> np.ndarray:
         return self.point_k(self.idx[link], r)

@@ -272,6 +272,12 @@ class _Chart:
     limits: dict
     is_r: bool
 
+    @property
+    def one_branch(self) -> bool:
+        """Every input is reached on the reference branch of every group: a full turn
+        with no sign flip and no crossing (no input needs reducing to the chart)."""
+        return self.period is not None and not self.crossings and not any(self.flips.values())
+
     def covers(self, x: np.ndarray) -> bool:
         return self.is_r or (x.size == 0 or (self.lo_req <= x.min() and x.max() <= self.hi_req))
 
@@ -438,8 +444,8 @@ def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     """One driver, closed-form groups: the cached chart gives each input's branch."""
     x = X[:, 0]
     ch = _chart(sp, kernels, x)
-    if ch.period is not None and not ch.crossings and not any(ch.flips.values()):
-        return _run(sp, X, needed, {}, kernels), []      # a full turn on one branch
+    if ch.one_branch:
+        return _run(sp, X, needed, {}, kernels), []
     xr, reach = ch.reduce(x)
     signs = {k: ch.factor(k, xr) for k in ch.flips if ch.flips[k]}
     run = _run(sp, X, needed, signs, kernels)
@@ -719,27 +725,19 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
 
 def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
-    carried by its host link's pose: written point by point into one array (a point on
-    the frame is its reference position, a link's reference point its pose)."""
+    carried by its host link's pose (:meth:`Poses.write_point`), written point-major into
+    one array and returned transposed."""
     key = ("points", which)
     hit = sp.extra.get(key)
     if hit is None:
         items = sp.mechanism.joints if which == "joints" else sp.mechanism.points
         h = tuple(hosts)
-        at = np.array([j.at for j in items], float).reshape(-1, 2)
-        r = at - sp.origins[list(h)]
-        hit = sp.extra[key] = (h, at, tuple(map(tuple, r)))
-    h, at, r = hit
-    out = np.empty((len(h), 2, G.M))                 # point-major, returned transposed
-    for i, (k, (rx, ry)) in enumerate(zip(h, r)):
-        if k == G.frame_k:
-            out[i] = at[i][:, None]
-        elif rx == 0.0 and ry == 0.0:
-            out[i, 0], out[i, 1] = G.x[k], G.y[k]
-        else:
-            c, s = G.c[k], G.s[k]
-            out[i, 0] = G.x[k] + c * rx - s * ry
-            out[i, 1] = G.y[k] + s * rx + c * ry
+        r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
+        hit = sp.extra[key] = (h, tuple(map(tuple, r.tolist())))
+    h, r = hit
+    out = np.empty((len(h), 2, G.M))
+    for i, k in enumerate(h):
+        G.write_point(k, r[i], out[i, 0], out[i, 1])
     return out.transpose(2, 0, 1)
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from multiloop.topo.model import JointKind, Mechanism
 
-from .result import BatchStatus
+from .result import BatchStatus, json_ready
 from .rigid import move_point
 
 __all__ = ["KinematicState", "doc_csv", "doc_text"]
@@ -123,8 +123,7 @@ class KinematicState(BatchStatus):
 
 
 def _list(a) -> list:
-    a = np.asarray(a, float)
-    return [None if not np.isfinite(v) else float(v) for v in a.ravel()]
+    return json_ready(np.asarray(a, float).ravel())
 
 
 def _state_dict(state, formula=None, inputs_cli=None) -> dict:
