@@ -13,7 +13,7 @@ import numpy as np
 
 from .rigid import move_point, rotate, transport
 
-__all__ = ["Poses", "PoseRates", "unit", "normal", "angle_of", "known_on"]
+__all__ = ["Poses", "PoseRates", "unit", "normal", "columns", "angle_of", "known_on"]
 
 
 def angle_of(v):
@@ -25,6 +25,13 @@ def unit(v):
     """A 2-vector scaled to length 1."""
     v = np.asarray(v, float)
     return v / np.hypot(*v)
+
+
+def columns(x, y, M: int) -> np.ndarray:
+    """An ``(M, 2)`` array of the components ``x, y`` (arrays (M,) or floats)."""
+    out = np.empty((M, 2))
+    out[:, 0], out[:, 1] = x, y
+    return out
 
 
 def normal(u):
@@ -45,25 +52,30 @@ def known_on(group, joint: str) -> str:
 
 
 class Poses:
-    """Working store of link poses: per link, contiguous arrays over the batch.
+    """Working store of link poses: one preallocated ``(n_links, 3, M)`` array.
 
-    ``x[k], y[k]`` position of link k's reference point, ``th[k]`` its rotation,
-    ``c[k], s[k]`` = cos, sin of it (kept to avoid recomputing trigonometry).
-    Arrays are stored by reference (no copies); a link never solved is ``None``.
+    ``T[k] = (x, y, th)`` over the batch: the position of link k's reference point
+    and its rotation; ``x[k], y[k], th[k]`` are views of those rows once link k is
+    placed (``None`` before), ``c[k], s[k]`` its cos and sin (kept to avoid recomputing
+    trigonometry; stored by reference).  Material points computed while solving are
+    kept per link (``points[k]``) so the joints' positions reuse them.
     """
 
     def __init__(self, sp, M: int):
         self.sp, self.m, self.M = sp, sp.mechanism, M
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
+        self.T = np.empty((nl, 3, M))
         self.x = [None] * nl
         self.y = [None] * nl
         self.th = [None] * nl
         self.c = [None] * nl
         self.s = [None] * nl
+        self.points = [{} for _ in range(nl)]
         self.frame_k = f = self.idx[self.m.frame]
-        z = np.zeros(M)
-        self.x[f], self.y[f], self.th[f], self.c[f], self.s[f] = z, z, z, np.ones(M), z
+        self.T[f] = 0.0
+        self.x[f], self.y[f], self.th[f] = self.T[f]
+        self.c[f], self.s[f] = np.ones(M), np.zeros(M)
 
     def finite(self, links) -> np.ndarray:
         out = np.ones(self.M, bool)
@@ -76,14 +88,19 @@ class Poses:
         nan = np.full(self.M, np.nan)
         for k in range(self.m.n_links):
             if self.th[k] is None:
-                self.x[k] = self.y[k] = self.th[k] = self.c[k] = self.s[k] = nan
+                self.T[k] = np.nan
+                self.x[k], self.y[k], self.th[k] = self.T[k]
+                self.c[k] = self.s[k] = nan
 
     def take(self, rows: np.ndarray) -> "Poses":
         """The poses at the given rows only."""
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, len(rows), self.idx, self.frame_k
-        for name in ("x", "y", "th", "c", "s"):
-            setattr(out, name, [None if a is None else a[rows] for a in getattr(self, name)])
+        out.T = self.T[:, :, rows]
+        out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
+                                for i, name in enumerate(("x", "y", "th")))
+        out.c, out.s = ([None if a is None else a[rows] for a in getattr(self, name)] for name in ("c", "s"))
+        out.points = [{} for _ in self.points]
         return out
 
     # -- reading -------------------------------------------------------------------
@@ -96,23 +113,50 @@ class Poses:
     def point_k(self, k: int, r) -> np.ndarray:
         if k == self.frame_k:
             return np.broadcast_to(np.asarray(r, float), (self.M, 2))
-        out = np.empty((self.M, 2))
-        self.write_point(k, np.asarray(r, float) - self.sp.origins[k], out[:, 0], out[:, 1])
-        return out
+        return columns(*self.point_xy(k, r), self.M)
+
+    def _local(self, k: int, r) -> tuple:
+        """Reference position ``r`` relative to link k's reference point (the key of
+        ``points[k]``)."""
+        return float(r[0]) - self.sp.origins[k][0], float(r[1]) - self.sp.origins[k][1]
+
+    def point_xy(self, k: int, r):
+        """Components ``(x, y)`` of link k's material point at the reference position
+        ``r``: floats on the frame, the pose's rows at the reference point, else
+        rigidly carried (and kept in ``points[k]``)."""
+        rx, ry = self._local(k, r)
+        if k == self.frame_k:
+            return float(r[0]), float(r[1])
+        if rx == 0.0 and ry == 0.0:
+            return self.x[k], self.y[k]
+        hit = self.points[k].get((rx, ry))
+        if hit is None:
+            c, s = self.c[k], self.s[k]
+            hit = self.points[k][rx, ry] = (self.x[k] + (c * rx - s * ry), self.y[k] + (s * rx + c * ry))
+        return hit
+
+    def keep_point(self, k: int, r, px, py) -> None:
+        """Record that link k's material point at the reference position ``r`` is at
+        ``(px, py)`` (solved there directly): :meth:`point_xy` and :meth:`write_point`
+        then reuse it until the link is placed again or invalidated."""
+        self.points[k][self._local(k, r)] = (px, py)
 
     def write_point(self, k: int, r_local, out_x, out_y) -> None:
         """Write into ``out_x, out_y`` (M,) the material point of link k at ``r_local``
         from the link's reference point: a point on the frame is constant, the reference
-        point itself is the pose (no arithmetic), any other is rigidly carried."""
+        point itself is the pose, a point met while solving is copied, any other is
+        rigidly carried."""
         rx, ry = r_local
         if k == self.frame_k:
             out_x[...], out_y[...] = rx, ry
         elif rx == 0.0 and ry == 0.0:
             out_x[...], out_y[...] = self.x[k], self.y[k]
+        elif (rx, ry) in self.points[k]:
+            out_x[...], out_y[...] = self.points[k][rx, ry]
         else:
             c, s = self.c[k], self.s[k]
-            out_x[...] = self.x[k] + c * rx - s * ry
-            out_y[...] = self.y[k] + s * rx + c * ry
+            np.add(self.x[k], c * rx - s * ry, out=out_x)
+            np.add(self.y[k], s * rx + c * ry, out=out_y)
 
     def point(self, link: str, r) -> np.ndarray:
         return self.point_k(self.idx[link], r)
@@ -129,25 +173,43 @@ class Poses:
         return self.th[self.idx[link]]
 
     # -- writing -------------------------------------------------------------------
-    def place_cs(self, link: str, P, r_ref, c, s, th) -> None:
-        """Pose of ``link`` whose material point at ``r_ref`` is at ``P``, rotated (c, s)."""
-        k = self.idx[link]
-        dx, dy = self.sp.origins[k] - np.asarray(r_ref, float)
-        self.c[k], self.s[k], self.th[k] = c, s, th
+    def place_k(self, k: int, px, py, r_ref, c, s, th=None) -> None:
+        """Pose of link k whose material point at ``r_ref`` is at ``(px, py)`` (arrays
+        (M,) or floats), rotated by (c, s); the angle ``th`` is ``arctan2(s, c)`` unless
+        given."""
+        T = self.T[k]
+        dx, dy = self.sp.origins[k][0] - float(r_ref[0]), self.sp.origins[k][1] - float(r_ref[1])
         if dx == 0.0 and dy == 0.0:
-            self.x[k], self.y[k] = P[:, 0], P[:, 1]
+            T[0], T[1] = px, py
         else:
-            self.x[k] = P[:, 0] + c * dx - s * dy
-            self.y[k] = P[:, 1] + s * dx + c * dy
+            np.add(px, c * dx - s * dy, out=T[0])
+            np.add(py, s * dx + c * dy, out=T[1])
+        if th is None:
+            np.arctan2(s, c, out=T[2])
+        else:
+            T[2] = th
+        self.x[k], self.y[k], self.th[k] = T
+        self.c[k], self.s[k] = c, s
+        self.points[k] = {}
+
+    def place_cs(self, link: str, P, r_ref, c, s, th) -> None:
+        """Pose of ``link`` whose material point at ``r_ref`` is at ``P`` (M, 2), rotated (c, s)."""
+        self.place_k(self.idx[link], P[:, 0], P[:, 1], r_ref, c, s, th)
+
+    def place_dir_xy(self, k: int, px, py, r_ref, dx, dy, d_ref, length=None) -> None:
+        """As :meth:`place_k`, the rotation taking direction ``d_ref`` to ``(dx, dy)``;
+        ``length``, when given, is ``|(dx, dy)|`` (exact), which saves normalising."""
+        cr, sr = unit(d_ref)
+        if length is None:
+            inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+            dx, dy = dx * inv, dy * inv
+        else:
+            cr, sr = cr / length, sr / length
+        self.place_k(k, px, py, r_ref, dx * cr + dy * sr, dy * cr - dx * sr)
 
     def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
         """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""
-        cr, sr = unit(d_ref)
-        dx, dy = d[:, 0], d[:, 1]
-        inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-        ca, sa = d[:, 0] * inv, d[:, 1] * inv
-        c, s = ca * cr + sa * sr, sa * cr - ca * sr
-        self.place_cs(link, P, r_ref, c, s, np.arctan2(s, c))
+        self.place_dir_xy(self.idx[link], P[:, 0], P[:, 1], r_ref, d[:, 0], d[:, 1], d_ref)
 
     def place_like(self, link: str, P, r_ref, other: str) -> None:
         k = self.idx[other]
@@ -156,25 +218,31 @@ class Poses:
     def invalidate(self, links, bad) -> None:
         if np.any(bad):
             for k in links:
-                for name in ("x", "y", "th", "c", "s"):
-                    arr = getattr(self, name)
-                    arr[k] = np.where(bad, np.nan, arr[k])
+                if self.th[k] is not None:
+                    self.T[k][:, bad] = np.nan
+                    self.c[k], self.s[k] = np.where(bad, np.nan, self.c[k]), np.where(bad, np.nan, self.s[k])
+                    self.points[k] = {}
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
-        """The ``(M, n_links, 3)`` pose array, stored link-major (a transposed view of
-        ``(n_links, 3, M)``: each link's arrays are copied contiguously)."""
-        nl = self.m.n_links
-        ks = range(nl) if links is None else list(links) + [self.frame_k]
-        T = np.empty((nl, 3, self.M)) if links is None else np.full((nl, 3, self.M), np.nan)
-        for k in ks:
-            T[k, 0], T[k, 1], T[k, 2] = self.x[k], self.y[k], self.th[k]
+        """The ``(M, n_links, 3)`` pose array: with ``links`` None (every link placed),
+        the store itself as a transposed view of ``(n_links, 3, M)``; else a copy with
+        only ``links`` and the frame (the others NaN)."""
+        if links is None:
+            return self.T.transpose(2, 0, 1)
+        T = np.full(self.T.shape, np.nan)
+        for k in list(links) + [self.frame_k]:
+            T[k] = self.T[k]
         return T.transpose(2, 0, 1)
 
     def from_Z(self, Z, links) -> None:
         for k in links:
-            self.x[k], self.y[k], self.th[k] = Z[:, k, 0].copy(), Z[:, k, 1].copy(), Z[:, k, 2].copy()
-            self.c[k], self.s[k] = np.cos(self.th[k]), np.sin(self.th[k])
+            th = Z[:, k, 2]
+            c, s = np.cos(th), np.sin(th)
+            self.T[k, 0], self.T[k, 1], self.T[k, 2] = Z[:, k, 0], Z[:, k, 1], th
+            self.x[k], self.y[k], self.th[k] = self.T[k]
+            self.c[k], self.s[k] = c, s
+            self.points[k] = {}
 
 
 class PoseRates:

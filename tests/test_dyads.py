@@ -13,6 +13,7 @@ from multiloop.kin.groups import (prp_position, prp_rates, rpp_position, rpp_rat
                         rpr_position, rpr_rates, rrp_branch, rrp_position, rrp_rates,
                         rrr_branch, rrr_position, rrr_rates)
 from multiloop.topo.errors import SingularityError
+from multiloop.kin.groups.rrr import rrr_xy
 
 H = 1e-4
 
@@ -154,6 +155,17 @@ def test_rrr_out_of_reach_and_singular():
         assert not rrr_position([0.0, 0.0], [0.1, 0.0], 1.0, 0.5).ok
     with pytest.raises(SingularityError):
         rrr_branch([0.0, 0.0], [2.0, 0.0], [1.0, 0.0])
+
+
+def test_rrr_components_flags():
+    """rrr_xy: a NaN pin or coincident pins fail; ``exact`` is False only where a
+    position was clamped to the tangent, and True means |B-A| = l2, |B-C| = l3."""
+    bx, by, ok, det, exact = rrr_xy(np.array([0.0, np.nan, 0.0]), 0.0, np.array([1.5, 1.5, 0.0]), 0.0, 1.0, 1.0)
+    assert ok.tolist() == [True, False, False] and exact
+    close(np.hypot(bx[0], by[0]), 1.0, 1e-15)
+    assert np.isnan(bx[1:]).all() and np.isnan(det[1:]).all()
+    *_, ok_t, _, exact_t = rrr_xy(0.0, 0.0, 2.0 * (1 + 1e-14), 0.0, 1.0, 1.0)
+    assert ok_t and not exact_t                    # beyond reach by 1e-14: clamped
 
 
 def test_rrr_scalar_and_array_sign():

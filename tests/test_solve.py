@@ -51,6 +51,28 @@ def _cycle(n=73):
 
 @pytest.mark.parametrize("name", sorted(MECHS))
 @pytest.mark.parametrize("method", ["closed_form", "newton"])
+def test_joint_positions_agree_with_every_link_pose(name, method):
+    """Second route to the reported joint points: carry each R joint's reference point
+    by the pose of every link on it (the solver reuses points it met while solving)."""
+    m = MECHS[name]()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = solve(m, _cycle(), method=method)
+    origins = compile_plan(m).origins
+    size = np.ptp(np.array([j.at for j in m.joints]), axis=0).max()
+    ok = st.ok
+    for i, j in enumerate(m.joints):
+        for lk in (j.links if j.kind.value == "R" else ()):
+            k = m.link_names.index(lk)
+            r = np.asarray(j.at, float) - origins[k]
+            th = st.poses[ok, k, 2]
+            P = st.poses[ok, k, :2] + np.stack([np.cos(th) * r[0] - np.sin(th) * r[1],
+                                                  np.sin(th) * r[0] + np.cos(th) * r[1]], -1)
+            assert np.max(np.abs(P - st.positions[ok, i])) <= 1e-12 * size, (j.name, lk)
+
+
+@pytest.mark.parametrize("name", sorted(MECHS))
+@pytest.mark.parametrize("method", ["closed_form", "newton"])
 def test_full_cycle_closure_to_round_off(name, method):
     m = MECHS[name]()
     with warnings.catch_warnings():

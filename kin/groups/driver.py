@@ -54,8 +54,9 @@ class DriverStepSolver(GroupStep):
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         x = X[:, self.drive.driver]
         if self.u is None:
-            th = G.theta(self.other) + self.sign * x
-            G.place_cs(self.link, G.point(self.host, self.r), self.r, np.cos(th), np.sin(th), th)
+            ko = G.idx[self.other]
+            th = self.sign * x if ko == G.frame_k else G.th[ko] + self.sign * x
+            G.place_k(G.idx[self.link], *G.point_xy(G.idx[self.host], self.r), self.r, np.cos(th), np.sin(th), th)
         else:          # the unknown slider sits at +s on the known guide (or the guide at −s)
             k = G.idx[self.other]
             P = G.point(self.other, self.r) + (self.sign * x)[:, None] * G.direction(self.other, self.u)

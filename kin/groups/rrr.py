@@ -27,7 +27,7 @@ import numpy as np
 
 from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
 from ..continuation import Probe
-from ..poses import known_on, unit
+from ..poses import columns, known_on, unit
 from ..result import Status
 from .step import GroupStep, Outcome, dyad_outcome
 
@@ -90,21 +90,34 @@ def rrr_position(A, C, l2, l3, sign=1.0) -> RRRPosition:
     """
     ax, ay = xy(A)
     cx, cy = xy(C)
+    bx, by, ok, det, _ = rrr_xy(ax, ay, cx, cy, l2, l3, sign)
+    return RRRPosition(stack(bx, by), ok, det)
+
+
+def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
+    """:func:`rrr_position` on components: ``bx, by, ok, det, exact``.
+
+    ``exact`` is True when no position was clamped to the tangent, so that
+    ``|B - A| = l2`` and ``|B - C| = l3`` hold to rounding (a caller may then divide
+    by the lengths instead of normalising).  ``det = cross(B-C, B-A)`` is ``-k d²``
+    (with ``B - A = t d + k perp(d)``, ``B - C = (t-1) d + k perp(d)``); a NaN pin or
+    ``A = C`` gives ``ok = False``.
+    """
     dx = cx - ax
     dy = cy - ay
     d2 = dx * dx + dy * dy
-    l2s = np.square(l2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        r = l2s / d2
+        r = np.square(l2) / d2
         t = 0.5 * (r + 1.0 - np.square(l3) / d2)
         q = r - t * t
-        ok = q >= -REACH_RTOL * r
-        k = np.sqrt(np.where(ok, np.maximum(q, 0.0), np.nan)) * sign
+        ok = q >= -REACH_RTOL * r            # False where q is NaN (A = C, NaN pins)
+        exact = not np.any(q < 0.0)
+        k = np.sqrt(np.maximum(q, 0.0)) * sign
+        if not ok.all():
+            k = np.where(ok, k, np.nan)
     bx = ax + t * dx - k * dy
     by = ay + t * dy + k * dx
-    ok = ok & np.isfinite(bx) & np.isfinite(by)
-    det = (bx - cx) * (by - ay) - (by - cy) * (bx - ax)
-    return RRRPosition(stack(bx, by), ok, det)
+    return bx, by, ok, -k * d2, exact
 
 
 def rrr_branch(A, C, B):
@@ -188,14 +201,17 @@ class RRRStep(GroupStep):
         self.la, self.lc = float(np.hypot(*(self.B - self.A))), float(np.hypot(*(self.B - self.C)))
         self.sign = float(rrr_branch(self.A, self.C, self.B))
         self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
+        self.k1, self.k2, self.l1, self.l2 = (mechanism.link_names.index(x) for x in
+                                              (self.known1, self.known2, lay.link1, lay.link2))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay, la, lc = self.layout, self.la, self.lc
-        A, C = G.point(self.known1, self.A), G.point(self.known2, self.C)
-        rs = rrr_position(A, C, la, lc, self.sign * factor)
-        B, ok = rs.B, rs.ok
+        ax, ay = G.point_xy(self.k1, self.A)
+        cx, cy = G.point_xy(self.k2, self.C)
+        bx, by, ok, det, exact = rrr_xy(ax, ay, cx, cy, la, lc, self.sign * factor)
         why, pr = {}, None
         if probe or not ok.all():
+            A, C, B = (columns(u, v, G.M) for u, v in ((ax, ay), (cx, cy), (bx, by)))
             AC = C - A
             d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
         if probe:
@@ -206,9 +222,11 @@ class RRRStep(GroupStep):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH,
                                f"no assembly: |{lay.outer1}{lay.outer2}| = {d[n]:.6g} {rel} (out of reach)")
-        G.place_dir(lay.link1, A, self.A, B - A, self.dir1)
-        G.place_dir(lay.link2, C, self.C, B - C, self.dir2)
-        return dyad_outcome(ok, why, rs.det, la * lc, False, pr, probe)
+        G.place_dir_xy(self.l1, ax, ay, self.A, bx - ax, by - ay, self.dir1, la if exact else None)
+        G.place_dir_xy(self.l2, cx, cy, self.C, bx - cx, by - cy, self.dir2, lc if exact else None)
+        G.keep_point(self.l1, self.B, bx, by)
+        G.keep_point(self.l2, self.B, bx, by)
+        return dyad_outcome(ok, why, det, la * lc, False, pr, probe)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout
