@@ -55,7 +55,7 @@ class DriverStepSolver(GroupStep):
         x = X[:, self.drive.driver]
         if self.u is None:
             ko = G.idx[self.other]
-            th = self.sign * x if ko == G.frame_k else G.th[ko] + self.sign * x
+            th = (x if self.sign > 0 else -x) if ko == G.frame_k else G.th[ko] + self.sign * x
             G.place_k(G.idx[self.link], *G.point_xy(G.idx[self.host], self.r), self.r, np.cos(th), np.sin(th), th)
         else:          # the unknown slider sits at +s on the known guide (or the guide at −s)
             k = G.idx[self.other]

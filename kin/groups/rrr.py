@@ -25,6 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from multiloop.topo.constraints import link_origins
+
 from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
@@ -106,9 +108,11 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
     dx = cx - ax
     dy = cy - ay
     d2 = dx * dx + dy * dy
+    l2s = np.square(l2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.square(l2) / d2
-        t = 0.5 * (r + 1.0 - np.square(l3) / d2)
+        inv = 1.0 / d2
+        r = l2s * inv                        # l2²/d², and t = (l2² + d² - l3²)/(2d²)
+        t = 0.5 + (0.5 * (l2s - np.square(l3))) * inv
         q = r - t * t
         ok = q >= -REACH_RTOL * r            # False where q is NaN (A = C, NaN pins)
         exact = not np.any(q < 0.0)
@@ -117,7 +121,7 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
             k = np.where(ok, k, np.nan)
     bx = ax + t * dx - k * dy
     by = ay + t * dy + k * dx
-    return bx, by, ok, -k * d2, exact
+    return bx, by, ok, -(k * d2), exact
 
 
 def rrr_branch(A, C, B):
@@ -203,6 +207,8 @@ class RRRStep(GroupStep):
         self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
         self.k1, self.k2, self.l1, self.l2 = (mechanism.link_names.index(x) for x in
                                               (self.known1, self.known2, lay.link1, lay.link2))
+        org = link_origins(mechanism)        # a link whose reference point is B is placed from B
+        self.from_B1, self.from_B2 = (bool(np.all(org[x] == self.B)) for x in (lay.link1, lay.link2))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay, la, lc = self.layout, self.la, self.lc
@@ -222,8 +228,11 @@ class RRRStep(GroupStep):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH,
                                f"no assembly: |{lay.outer1}{lay.outer2}| = {d[n]:.6g} {rel} (out of reach)")
-        G.place_dir_xy(self.l1, ax, ay, self.A, bx - ax, by - ay, self.dir1, la if exact else None)
-        G.place_dir_xy(self.l2, cx, cy, self.C, bx - cx, by - cy, self.dir2, lc if exact else None)
+        ux, uy, vx, vy = bx - ax, by - ay, bx - cx, by - cy
+        G.place_dir_xy(self.l1, *((bx, by, self.B) if self.from_B1 else (ax, ay, self.A)), ux, uy, self.dir1,
+                       la if exact else None)
+        G.place_dir_xy(self.l2, *((bx, by, self.B) if self.from_B2 else (cx, cy, self.C)), vx, vy, self.dir2,
+                       lc if exact else None)
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
         return dyad_outcome(ok, why, det, la * lc, False, pr, probe)
