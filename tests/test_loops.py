@@ -106,26 +106,29 @@ def test_strip_of_quadrilaterals():
     assert loop_assortment(load_named("linkage_24")).sizes == (4,) * 11 + (22,)
 
 
-def test_cycle_lists_two_routes():
-    # the path search and networkx's simple_cycles list the same cycles (edge masks)
+def test_cycle_lists_three_routes():
+    # the path search, the cycle space and networkx's simple_cycles list the same cycles
     import random
 
     import networkx as nx
 
     from multiloop.topo.graphs import incidence_graph
-    from multiloop.topo.loops import _reduce, _simple_cycles_dfs, _simple_cycles_nx
+    from multiloop.topo.loops import _reduce, _simple_cycles_dfs, _simple_cycles_nx, _simple_cycles_space
+    from multiloop.catalogue.named import load_named
     from tests.common import random_joint_lists
 
     rng = random.Random(3)
-    for _ in range(40):
-        m = chain_from_joint_lists(random_joint_lists(rng, rng.randint(4, 12), rng.randint(1, 6), 0.3))
+    chains = [chain_from_joint_lists(random_joint_lists(rng, rng.randint(4, 12), rng.randint(1, 6), 0.3))
+              for _ in range(40)]
+    for m in chains + [load_named("linkage_24")]:          # its block: 20 vertices, 66 cycles
         g = incidence_graph(m)
         for block in nx.biconnected_components(g):
             if len(block) >= 3:
                 keep, edges = _reduce({v: list(g.subgraph(block)[v]) for v in block})
                 a = {mask: set(p) for mask, p in _simple_cycles_dfs(keep, edges)}
                 b = {mask: set(p) for mask, p in _simple_cycles_nx(keep, edges)}
-                assert a == b
+                c = {mask: set(p) for mask, p in _simple_cycles_space(keep, edges)}
+                assert a == b == c
 
 
 def test_faces_of_three_connected_blocks_two_routes():

@@ -39,6 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from operator import itemgetter
 
+import numpy as np
 import networkx as nx
 import rustworkx as rx
 
@@ -217,11 +218,72 @@ def _reduced_block(block) -> _ReducedBlock:
 DFS_CYCLES_MAX = 10
 
 
+#: larger blocks with at most this cyclomatic number (and 64 edges) list their cycles
+#: from the cycle space (2**beta elements, vectorised)
+CYCLE_SPACE_MAX = 14
+
+
 def _simple_cycles(vertices, edges):
     """All simple cycles of a multigraph as (edge bitmask, vertex tuple)."""
-    if len(vertices) > DFS_CYCLES_MAX:
-        return _simple_cycles_nx(vertices, edges)
-    return _simple_cycles_dfs(vertices, edges)
+    if len(vertices) <= DFS_CYCLES_MAX:
+        return _simple_cycles_dfs(vertices, edges)
+    if len(edges) <= 64 and len(edges) - len(vertices) + 1 <= CYCLE_SPACE_MAX:
+        return _simple_cycles_space(vertices, edges)
+    return _simple_cycles_nx(vertices, edges)
+
+
+def _simple_cycles_space(vertices, edges):
+    """The same list from the cycle space of a connected multigraph (Welch 1966; Mateti
+    & Deo 1976 survey the method): every element is an edge-disjoint union of cycles;
+    one with every vertex degree at most 2 is a vertex-disjoint union, and it is one
+    simple cycle iff it holds no smaller simple cycle (taken by increasing size).  The ``2**beta`` elements
+    (beta = E - V + 1) are built from the fundamental cycles of a BFS tree and tested
+    as 64-bit edge masks in NumPy.  Vertex tuples are in index order."""
+    index = {v: i for i, v in enumerate(vertices)}
+    n = len(vertices)
+    if n == 0:
+        return []
+    ends = [(index[u], index[v]) for u, v, *_rest in edges]
+    adj: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+    for e, (a, b) in enumerate(ends):
+        adj[a].append((b, e))
+        adj[b].append((a, e))
+    to_root = [0] * n                        # edge mask of the tree path to vertex 0
+    seen, order = [False] * n, [0]
+    seen[0] = True
+    for x in order:
+        for y, e in adj[x]:
+            if not seen[y]:
+                seen[y] = True
+                to_root[y] = to_root[x] | 1 << e
+                order.append(y)
+    tree = 0
+    for x in order[1:]:
+        tree |= to_root[x]
+    space = np.zeros(1, np.uint64)
+    for e, (a, b) in enumerate(ends):
+        if not tree >> e & 1:
+            space = np.concatenate([space, space ^ np.uint64(to_root[a] ^ to_root[b] | 1 << e)])
+    incident = np.zeros(n, np.uint64)
+    for e, (a, b) in enumerate(ends):
+        incident[a] |= np.uint64(1 << e)
+        incident[b] |= np.uint64(1 << e)
+    space = space[1:]
+    thin = np.ones(len(space), bool)
+    for v in range(n):
+        thin &= np.bitwise_count(space & incident[v]) <= 2
+    F = space[thin]
+    size = np.bitwise_count(F)
+    order_ = np.argsort(size, kind="stable")
+    F, size = F[order_], size[order_]
+    cuts = np.flatnonzero(np.diff(size)) + 1
+    simple = np.zeros(0, np.uint64)
+    for level in np.split(F, cuts):          # by size: a union of cycles holds a smaller one
+        holds = ((simple[None, :] & ~level[:, None]) == 0).any(axis=1)
+        simple = np.concatenate([simple, level[~holds]])
+    F = simple
+    on = np.bitwise_count(F[:, None] & incident[None, :]) == 2
+    return [(int(mk), tuple(np.flatnonzero(row).tolist())) for mk, row in zip(F, on)]
 
 
 def _simple_cycles_nx(vertices, edges):
