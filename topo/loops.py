@@ -368,29 +368,41 @@ def _face_candidates(rb: _ReducedBlock, use_filter: bool) -> _FaceCandidates:
     """Every simple cycle of the reduced block (that passes the apex test when
     ``use_filter``), with its size in links and its corners."""
     keep, edges = rb.keep, rb.edges
-    n_edges = len(edges)
-    vertex_edges: dict = {v: [] for v in keep}
-    for e, (u, v, *_rest) in enumerate(edges):
-        vertex_edges[u].append(e)
-        vertex_edges[v].append(e)
-    sizes, masks, corners = [], [], []
+    inside = [w for _u, _v, w, *_rest in edges]              # link vertices inside each edge
+    is_link = [_is_link(v) for v in keep]
+    at_vertex = [0] * len(keep)                               # edge mask at each vertex
+    for e, (a, b) in enumerate(rb.pairs):
+        at_vertex[a] |= 1 << e
+        at_vertex[b] |= 1 << e
+    sizes, masks, corners, cycle_edges = [], [], [], []
+    by_edge: list[list[int]] = [[] for _ in edges]
     for mask, path in _simple_cycles(keep, edges):
         if use_filter and not _can_be_face(len(keep), rb.pairs, mask, path):
             continue
+        ce = _bits(mask)
+        for e in ce:
+            by_edge[e].append(len(masks))
+        cycle_edges.append(ce)
         # interior link vertices of its edges + link vertices of the cycle
-        w = sum(edges[e][2] for e in range(n_edges) if (mask >> e) & 1)
-        sizes.append(w + sum(1 for v in path if _is_link(keep[v])))
+        sizes.append(sum(inside[e] for e in ce) + sum(is_link[v] for v in path))
         masks.append(mask)
-        cs = []
-        for v_idx in path:
-            pair = [e for e in vertex_edges[keep[v_idx]] if (mask >> e) & 1]
-            # (two parallel edges closing a 2-cycle both sit at v: pair has 2 entries)
-            cs.append((v_idx, pair[0], pair[-1]))
-        corners.append(tuple(cs))
-    cycle_edges = tuple(tuple(e for e in range(n_edges) if (mk >> e) & 1) for mk in masks)
-    by_edge = tuple(tuple(sorted((c for c in range(len(masks)) if (masks[c] >> e) & 1),
-                                 key=sizes.__getitem__)) for e in range(n_edges))
+        # the corner at v: its lowest and highest edge on the cycle (two parallel edges
+        # closing a 2-cycle both sit at v)
+        corners.append(tuple((v, (m & -m).bit_length() - 1, m.bit_length() - 1)
+                             for v in path for m in (mask & at_vertex[v],)))
+    by_edge = tuple(tuple(sorted(cs, key=sizes.__getitem__)) for cs in by_edge)
+    cycle_edges = tuple(cycle_edges)
     return _FaceCandidates(tuple(sizes), tuple(masks), cycle_edges, by_edge, tuple(corners))
+
+
+def _bits(mask: int) -> tuple[int, ...]:
+    """The positions of the set bits of ``mask``, ascending."""
+    out = []
+    while mask:
+        low = mask & -mask
+        out.append(low.bit_length() - 1)
+        mask ^= low
+    return tuple(out)
 
 
 class _BudgetExceeded(Exception):
@@ -402,8 +414,9 @@ class _FaceSearch:
 
     A face set is an embedding when it covers every reduced edge exactly twice, has
     ``E − V + 2`` faces, and at every vertex the corners close into one wheel (the
-    rotation).  ``partner[v][e]`` holds the edges joined to ``e`` by the corners chosen
-    so far at ``v``; ``lower[e]`` is the first face chosen *for* edge ``e`` while it was
+    rotation).  The corners chosen so far at ``v`` join its edges into chains:
+    ``end[v][e]`` is the other end of the chain ending at edge ``e`` and ``size[v][e]``
+    its number of edges (kept for chain ends only, undone in stack order); ``lower[e]`` is the first face chosen *for* edge ``e`` while it was
     uncovered: the other face through ``e`` must come later in the candidate order,
     so every face set is reached along exactly one branch.
     """
@@ -417,10 +430,12 @@ class _FaceSearch:
         for u, v in rb.pairs:
             self.degree[u] += 1
             self.degree[v] += 1
-        self.partner: list[dict[int, list[int]]] = [{} for _ in rb.keep]
+        self.end: list[dict[int, int]] = [{} for _ in rb.keep]
+        self.size: list[dict[int, int]] = [{} for _ in rb.keep]
         for e, (u, v) in enumerate(rb.pairs):
-            self.partner[u][e] = []
-            self.partner[v][e] = []
+            self.end[u][e] = self.end[v][e] = e
+            self.size[u][e] = self.size[v][e] = 1
+        self.undo: list[tuple] = []
         self.lower = [-1] * self.n_edges
         self._lower_of = [itemgetter(*edges, edges[0]) for edges in cand.cycle_edges]
         self.count = 0
@@ -431,38 +446,31 @@ class _FaceSearch:
         self.smin = min(cand.sizes, default=0)
         self.total = 0
 
-    def _path_end(self, v_idx: int, start: int) -> tuple[int, int]:
-        """Follow corners from edge ``start`` at vertex v; return (end edge, edges seen)."""
-        links = self.partner[v_idx]
-        prev, cur, seen = -1, start, 1
-        while True:
-            nxt = [e for e in links[cur] if e != prev]
-            if not nxt:
-                return cur, seen
-            prev, cur = cur, nxt[0]
-            seen += 1
-            if cur == start:
-                return cur, seen - 1
-
     def _corners_ok(self, c: int) -> bool:
-        """Adding cycle c must not close a wheel early at any vertex."""
+        """Adding cycle c must not close a wheel early at any vertex: a corner joining
+        the two ends of one chain closes it, allowed only when the chain holds every
+        edge of the vertex."""
+        end, size, degree = self.end, self.size, self.degree
         for v_idx, e1, e2 in self.cand.corners[c]:
-            if self.degree[v_idx] < 3:
-                continue
-            end, seen = self._path_end(v_idx, e1)
-            if end == e2 and seen < self.degree[v_idx]:
+            if end[v_idx][e1] == e2 and size[v_idx][e1] < degree[v_idx] and degree[v_idx] >= 3:
                 return False
         return True
 
     def _toggle(self, c: int, on: bool) -> None:
+        """Join (``on``) the chains at cycle c's corners, or undo the last join of c."""
+        if not on:
+            for _ in self.cand.corners[c]:
+                v_idx, a, b, end_a, end_b, size_a, size_b = self.undo.pop()
+                end, size = self.end[v_idx], self.size[v_idx]
+                end[a], end[b], size[a], size[b] = end_a, end_b, size_a, size_b
+            return
         for v_idx, e1, e2 in self.cand.corners[c]:
-            links = self.partner[v_idx]
-            if on:
-                links[e1].append(e2)
-                links[e2].append(e1)
-            else:
-                links[e1].remove(e2)
-                links[e2].remove(e1)
+            end, size = self.end[v_idx], self.size[v_idx]
+            a, b = end[e1], end[e2]
+            self.undo.append((v_idx, a, b, end[a], end[b], size[a], size[b]))
+            n = size[e1] if a == e2 else size[e1] + size[e2]      # a closed wheel keeps its size
+            end[a], end[b] = b, a
+            size[a] = size[b] = n
 
     def _branch_edge(self, used1: int, used2: int) -> tuple[int, list[int]]:
         """The uncovered edge with the fewest candidate faces (edges covered once need
