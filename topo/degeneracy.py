@@ -68,11 +68,15 @@ def rigid_subset_mask(n: int, joint_masks) -> int | None:
     if n > 20:
         raise ValueError("exhaustive search is limited to 20 links; use method='mincut'")
     masks = np.arange(1 << n, dtype=np.uint32)
-    size = np.bitwise_count(masks).astype(np.int64)
-    c = np.zeros(1 << n, dtype=np.int64)
+    size = np.bitwise_count(masks)
+    small = np.int16 if len(joint_masks) * n < 2 ** 15 else np.int32    # bounds the sum below
+    c = np.zeros(1 << n, dtype=small)
+    meet = np.empty(1 << n, np.uint32)
     for jm in joint_masks:
-        c += np.maximum(np.bitwise_count(masks & np.uint32(int(jm))).astype(np.int64) - 1, 0)
-    bad = (3 * (size - 1) - 2 * c <= 0) & (size >= 2) & (size < n)
+        np.bitwise_and(masks, np.uint32(int(jm)), out=meet)
+        c += np.maximum(np.bitwise_count(meet), np.uint8(1))
+    c -= len(joint_masks)                     # sum over J of max(|S ∩ J|, 1) − 1 is c(S)
+    bad = (3 * (size.astype(small) - 1) - 2 * c <= 0) & (size >= 2) & (size < n)
     idx = np.flatnonzero(bad)
     if idx.size == 0:
         return None
