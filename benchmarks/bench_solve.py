@@ -124,6 +124,17 @@ def _best(f, repeat=3):
     return best, out
 
 
+def _faults(f, repeat=5) -> float:
+    """Minor page faults per call of ``f`` (memory taken fresh from the OS: in a VM each
+    costs microseconds, and how often the allocator hands memory back depends on the
+    process's history, so the same code can differ by 2x between processes)."""
+    import resource
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(repeat):
+        f()
+    return (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before) / repeat
+
+
 # ----------------------------------------------------------------------------- peers
 def pylinkage_run(m, x):
     """pylinkage for crank + RRR dyads built from the mechanism (None if unsupported)."""
@@ -478,7 +489,8 @@ def ratios() -> None:
         print(f"{n} positions: ours {ours * 1e3:.3f} ms, pylinkage step_fast {pl * 1e3:.3f} ms, "
               f"ratio {ours / pl:.2f} (goal <= {goal}) -> {'MET' if ours / pl <= goal else 'NOT MET'}; "
               f"floor (bare NumPy pass, same outputs, no continuity or status) {floor * 1e3:.3f} ms = "
-              f"{floor / pl:.2f}x pylinkage")
+              f"{floor / pl:.2f}x pylinkage; page faults per call: ours {_faults(lambda: solve(m, x)):.0f}, "
+              f"floor {_faults(lambda: bare(x)):.0f}")
 
 
 def main(argv=None):
