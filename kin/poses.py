@@ -124,9 +124,9 @@ class Poses:
         """Components ``(x, y)`` of link k's material point at the reference position
         ``r``: floats on the frame, the pose's rows at the reference point, else
         rigidly carried (and kept in ``points[k]``)."""
-        rx, ry = self._local(k, r)
         if k == self.frame_k:
             return float(r[0]), float(r[1])
+        rx, ry = self._local(k, r)
         if rx == 0.0 and ry == 0.0:
             return self.x[k], self.y[k]
         hit = self.points[k].get((rx, ry))

@@ -39,8 +39,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from operator import itemgetter
 
-import numpy as np
 import networkx as nx
+import numpy as np
 import rustworkx as rx
 
 from .errors import TopologyError, explain
@@ -236,9 +236,10 @@ def _simple_cycles_space(vertices, edges):
     """The same list from the cycle space of a connected multigraph (Welch 1966; Mateti
     & Deo 1976 survey the method): every element is an edge-disjoint union of cycles;
     one with every vertex degree at most 2 is a vertex-disjoint union, and it is one
-    simple cycle iff it holds no smaller simple cycle (taken by increasing size).  The ``2**beta`` elements
-    (beta = E - V + 1) are built from the fundamental cycles of a BFS tree and tested
-    as 64-bit edge masks in NumPy.  Vertex tuples are in index order."""
+    simple cycle iff it holds no smaller simple cycle (taken by increasing size).  The
+    ``2**beta`` elements (beta = E - V + 1) are built from the fundamental cycles of a
+    BFS tree and tested as 64-bit edge masks in NumPy.  Vertex tuples are in index
+    order."""
     index = {v: i for i, v in enumerate(vertices)}
     n = len(vertices)
     if n == 0:
@@ -416,9 +417,11 @@ class _FaceSearch:
     ``E − V + 2`` faces, and at every vertex the corners close into one wheel (the
     rotation).  The corners chosen so far at ``v`` join its edges into chains:
     ``end[v][e]`` is the other end of the chain ending at edge ``e`` and ``size[v][e]``
-    its number of edges (kept for chain ends only, undone in stack order); ``lower[e]`` is the first face chosen *for* edge ``e`` while it was
-    uncovered: the other face through ``e`` must come later in the candidate order,
-    so every face set is reached along exactly one branch.
+    its number of edges (kept for chain ends only, undone in stack order; an edge that
+    is not a chain end already has its two faces and is never asked).  ``lower[e]`` is
+    the first face chosen *for* edge ``e`` while it was uncovered: the other face
+    through ``e`` must come later in the candidate order, so every face set is reached
+    along exactly one branch.
     """
 
     def __init__(self, rb: _ReducedBlock, cand: _FaceCandidates, limit: int,
