@@ -51,6 +51,14 @@ def known_on(group, joint: str) -> str:
     raise KeyError(joint)  # pragma: no cover
 
 
+def _origins_xy(sp) -> tuple:
+    """The links' reference points as Python floats, kept on the plan (``sp.extra``)."""
+    hit = sp.extra.get("origins_xy")
+    if hit is None:
+        hit = sp.extra["origins_xy"] = tuple(map(tuple, np.asarray(sp.origins, float).tolist()))
+    return hit
+
+
 class Poses:
     """Working store of link poses: one preallocated ``(n_links, 3, M)`` array.
 
@@ -72,6 +80,7 @@ class Poses:
         self.c = [None] * nl
         self.s = [None] * nl
         self.points = [{} for _ in range(nl)]
+        self.org = _origins_xy(sp)
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
         self.x[f], self.y[f], self.th[f] = self.T[f]
@@ -85,9 +94,10 @@ class Poses:
 
     def unset_to_nan(self) -> None:
         """Links never solved (``only=``) become NaN."""
-        nan = np.full(self.M, np.nan)
+        nan = None
         for k in range(self.m.n_links):
             if self.th[k] is None:
+                nan = np.full(self.M, np.nan) if nan is None else nan
                 self.T[k] = np.nan
                 self.x[k], self.y[k], self.th[k] = self.T[k]
                 self.c[k] = self.s[k] = nan
@@ -95,7 +105,7 @@ class Poses:
     def take(self, rows: np.ndarray) -> "Poses":
         """The poses at the given rows only."""
         out = object.__new__(Poses)
-        out.sp, out.m, out.M, out.idx, out.frame_k = self.sp, self.m, len(rows), self.idx, self.frame_k
+        out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
@@ -118,7 +128,7 @@ class Poses:
     def _local(self, k: int, r) -> tuple:
         """Reference position ``r`` relative to link k's reference point (the key of
         ``points[k]``)."""
-        return float(r[0]) - self.sp.origins[k][0], float(r[1]) - self.sp.origins[k][1]
+        return float(r[0]) - self.org[k][0], float(r[1]) - self.org[k][1]
 
     def point_xy(self, k: int, r):
         """Components ``(x, y)`` of link k's material point at the reference position
@@ -178,7 +188,7 @@ class Poses:
         (M,) or floats), rotated by (c, s); the angle ``th`` is ``arctan2(s, c)`` unless
         given."""
         T = self.T[k]
-        dx, dy = self.sp.origins[k][0] - float(r_ref[0]), self.sp.origins[k][1] - float(r_ref[1])
+        dx, dy = self.org[k][0] - float(r_ref[0]), self.org[k][1] - float(r_ref[1])
         if dx == 0.0 and dy == 0.0:
             T[0], T[1] = px, py
         else:
@@ -196,16 +206,16 @@ class Poses:
         """Pose of ``link`` whose material point at ``r_ref`` is at ``P`` (M, 2), rotated (c, s)."""
         self.place_k(self.idx[link], P[:, 0], P[:, 1], r_ref, c, s, th)
 
-    def place_dir_xy(self, k: int, px, py, r_ref, dx, dy, d_ref, length=None) -> None:
-        """As :meth:`place_k`, the rotation taking direction ``d_ref`` to ``(dx, dy)``;
-        ``length``, when given, is ``|(dx, dy)|`` (exact), which saves normalising."""
-        cr, sr = unit(d_ref)
-        if length is None:
-            inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-            dx, dy = dx * inv, dy * inv
-        else:
-            cr, sr = cr / length, sr / length
+    def place_rot(self, k: int, px, py, r_ref, dx, dy, cr: float, sr: float) -> None:
+        """As :meth:`place_k`, rotated by ``(dx cr + dy sr, dy cr − dx sr)``: the rotation
+        taking the unit direction ``(cr, sr) · L`` to ``(dx, dy)`` when ``|(dx, dy)| = L``
+        (a link of known length L, the reference direction divided by L once)."""
         self.place_k(k, px, py, r_ref, dx * cr + dy * sr, dy * cr - dx * sr)
+
+    def place_dir_xy(self, k: int, px, py, r_ref, dx, dy, d_ref) -> None:
+        """As :meth:`place_k`, the rotation taking direction ``d_ref`` to ``(dx, dy)``."""
+        inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+        self.place_rot(k, px, py, r_ref, dx * inv, dy * inv, *unit(d_ref).tolist())
 
     def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
         """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""

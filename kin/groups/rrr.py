@@ -108,14 +108,14 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
     dx = cx - ax
     dy = cy - ay
     d2 = dx * dx + dy * dy
-    l2s = np.square(l2)
+    l2s = np.square(l2)                      # (NumPy scalars: no ZeroDivisionError below)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / d2
         r = l2s * inv                        # l2²/d², and t = (l2² + d² - l3²)/(2d²)
         t = 0.5 + (0.5 * (l2s - np.square(l3))) * inv
         q = r - t * t
         ok = q >= -REACH_RTOL * r            # False where q is NaN (A = C, NaN pins)
-        exact = not np.any(q < 0.0)
+        exact = not (q < 0.0).any()
         k = np.sqrt(np.maximum(q, 0.0)) * sign
         if not ok.all():
             k = np.where(ok, k, np.nan)
@@ -205,6 +205,7 @@ class RRRStep(GroupStep):
         self.la, self.lc = float(np.hypot(*(self.B - self.A))), float(np.hypot(*(self.B - self.C)))
         self.sign = float(rrr_branch(self.A, self.C, self.B))
         self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
+        self.rot1, self.rot2 = tuple((self.dir1 / self.la).tolist()), tuple((self.dir2 / self.lc).tolist())
         self.k1, self.k2, self.l1, self.l2 = (mechanism.link_names.index(x) for x in
                                               (self.known1, self.known2, lay.link1, lay.link2))
         org = link_origins(mechanism)        # a link whose reference point is B is placed from B
@@ -228,11 +229,14 @@ class RRRStep(GroupStep):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH,
                                f"no assembly: |{lay.outer1}{lay.outer2}| = {d[n]:.6g} {rel} (out of reach)")
-        ux, uy, vx, vy = bx - ax, by - ay, bx - cx, by - cy
-        G.place_dir_xy(self.l1, *((bx, by, self.B) if self.from_B1 else (ax, ay, self.A)), ux, uy, self.dir1,
-                       la if exact else None)
-        G.place_dir_xy(self.l2, *((bx, by, self.B) if self.from_B2 else (cx, cy, self.C)), vx, vy, self.dir2,
-                       lc if exact else None)
+        at1 = (bx, by, self.B) if self.from_B1 else (ax, ay, self.A)
+        at2 = (bx, by, self.B) if self.from_B2 else (cx, cy, self.C)
+        if exact:                          # |B - A| = la, |B - C| = lc: no normalising
+            G.place_rot(self.l1, *at1, bx - ax, by - ay, *self.rot1)
+            G.place_rot(self.l2, *at2, bx - cx, by - cy, *self.rot2)
+        else:
+            G.place_dir_xy(self.l1, *at1, bx - ax, by - ay, self.dir1)
+            G.place_dir_xy(self.l2, *at2, bx - cx, by - cy, self.dir2)
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
         return dyad_outcome(ok, why, det, la * lc, False, pr, probe)
