@@ -632,12 +632,14 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     N = X.shape[0]
     code = run.code
     solved_links = [i for s in needed for i in sp.steps[s].unknown]
-    finite = G.finite(solved_links)
-    code[(code == 0) & ~finite] = Status.UPSTREAM
+    lost = ~G.finite(solved_links)
+    all_ok = not (lost.any() or code.any())
+    if not all_ok:
+        code[(code == 0) & lost] = Status.UPSTREAM
     okm = code == 0
     status = np.empty(N, dtype=object)
     status.fill("ok")                       # (np.full with an object is ~30x slower)
-    for n in np.flatnonzero(~okm):
+    for n in ([] if all_ok else np.flatnonzero(~okm)):
         status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
     Z = G.to_Z()
     Zd = Zdd = rates_in = None
@@ -649,7 +651,7 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
         if code[0] == Status.SINGULAR:
             raise SingularityError(msg)
         raise AssemblyError(msg)
-    if not single and np.any(code == Status.SINGULAR):
+    if not single and not all_ok and np.any(code == Status.SINGULAR):
         warnings.warn("singular positions met: marked in status", SingularityWarning, stacklevel=3)
     return state
 

@@ -72,9 +72,10 @@ def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, pro
             why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
     tol = PARALLEL_GUIDES if parallel else SINGULAR
     sing = ok & ~(np.abs(det) > tol * rdet)
-    if sing.any():
-        for n in np.flatnonzero(sing):
-            why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
     if probe_obj is None and probe:       # PRP, RPP: one assembly; parallel guides are a pole, not a limit
         probe_obj = Probe(ok.copy())
+    if not sing.any():
+        return Outcome(ok, why, probe_obj)
+    for n in np.flatnonzero(sing):
+        why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
     return Outcome(ok & ~sing, why, probe_obj)
