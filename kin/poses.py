@@ -132,11 +132,16 @@ class Poses:
 
     def point_xy(self, k: int, r):
         """Components ``(x, y)`` of link k's material point at the reference position
-        ``r``: floats on the frame, the pose's rows at the reference point, else
-        rigidly carried (and kept in ``points[k]``)."""
+        ``r`` (:meth:`carry` of its offset from the link's reference point)."""
+        return self.carry(k, *self._local(k, r))
+
+    def carry(self, k: int, rx: float, ry: float):
+        """The material point of link k at ``(rx, ry)`` from the link's reference point:
+        floats on the frame (whose reference point is the origin), the pose's rows at the
+        reference point, a point met while solving as kept, else rigidly carried (and
+        kept in ``points[k]``)."""
         if k == self.frame_k:
-            return float(r[0]), float(r[1])
-        rx, ry = self._local(k, r)
+            return rx, ry
         if rx == 0.0 and ry == 0.0:
             return self.x[k], self.y[k]
         hit = self.points[k].get((rx, ry))
@@ -147,26 +152,9 @@ class Poses:
 
     def keep_point(self, k: int, r, px, py) -> None:
         """Record that link k's material point at the reference position ``r`` is at
-        ``(px, py)`` (solved there directly): :meth:`point_xy` and :meth:`write_point`
-        then reuse it until the link is placed again or invalidated."""
+        ``(px, py)`` (solved there directly): :meth:`carry` then reuses it until the link
+        is placed again or invalidated."""
         self.points[k][self._local(k, r)] = (px, py)
-
-    def write_point(self, k: int, r_local, out_x, out_y) -> None:
-        """Write into ``out_x, out_y`` (M,) the material point of link k at ``r_local``
-        from the link's reference point: a point on the frame is constant, the reference
-        point itself is the pose, a point met while solving is copied, any other is
-        rigidly carried."""
-        rx, ry = r_local
-        if k == self.frame_k:
-            out_x[...], out_y[...] = rx, ry
-        elif rx == 0.0 and ry == 0.0:
-            out_x[...], out_y[...] = self.x[k], self.y[k]
-        elif (rx, ry) in self.points[k]:
-            out_x[...], out_y[...] = self.points[k][rx, ry]
-        else:
-            c, s = self.c[k], self.s[k]
-            np.add(self.x[k], c * rx - s * ry, out=out_x)
-            np.add(self.y[k], s * rx + c * ry, out=out_y)
 
     def point(self, link: str, r) -> np.ndarray:
         return self.point_k(self.idx[link], r)

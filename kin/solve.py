@@ -639,8 +639,9 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     okm = code == 0
     status = np.empty(N, dtype=object)
     status.fill("ok")                       # (np.full with an object is ~30x slower)
-    for n in ([] if all_ok else np.flatnonzero(~okm)):
-        status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
+    if not all_ok:
+        for n in np.flatnonzero(~okm):
+            status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
     Z = G.to_Z()
     Zd = Zdd = rates_in = None
     if derivatives:
@@ -727,8 +728,8 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
 
 def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
-    carried by its host link's pose (:meth:`Poses.write_point`), written point-major into
-    one array and returned transposed."""
+    carried by its host link's pose (:meth:`Poses.carry`), written point-major into one
+    array and returned transposed."""
     key = ("points", which)
     hit = sp.extra.get(key)
     if hit is None:
@@ -739,7 +740,7 @@ def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
     h, r = hit
     out = np.empty((len(h), 2, G.M))
     for i, k in enumerate(h):
-        G.write_point(k, r[i], out[i, 0], out[i, 1])
+        out[i, 0], out[i, 1] = G.carry(k, *r[i])
     return out.transpose(2, 0, 1)
 
 

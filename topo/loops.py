@@ -240,35 +240,25 @@ def _simple_cycles_space(vertices, edges):
     ``2**beta`` elements (beta = E - V + 1) are built from the fundamental cycles of a
     BFS tree and tested as 64-bit edge masks in NumPy.  Vertex tuples are in index
     order."""
-    index = {v: i for i, v in enumerate(vertices)}
     n = len(vertices)
     if n == 0:
         return []
-    ends = [(index[u], index[v]) for u, v, *_rest in edges]
-    adj: list[list[tuple[int, int]]] = [[] for _ in range(n)]
-    for e, (a, b) in enumerate(ends):
-        adj[a].append((b, e))
-        adj[b].append((a, e))
+    ends, adj = _indexed_adjacency(vertices, edges)
     to_root = [0] * n                        # edge mask of the tree path to vertex 0
-    seen, order = [False] * n, [0]
+    seen, order, tree = [False] * n, [0], 0
     seen[0] = True
     for x in order:
         for y, e in adj[x]:
             if not seen[y]:
                 seen[y] = True
                 to_root[y] = to_root[x] | 1 << e
+                tree |= 1 << e
                 order.append(y)
-    tree = 0
-    for x in order[1:]:
-        tree |= to_root[x]
     space = np.zeros(1, np.uint64)
     for e, (a, b) in enumerate(ends):
         if not tree >> e & 1:
             space = np.concatenate([space, space ^ np.uint64(to_root[a] ^ to_root[b] | 1 << e)])
-    incident = np.zeros(n, np.uint64)
-    for e, (a, b) in enumerate(ends):
-        incident[a] |= np.uint64(1 << e)
-        incident[b] |= np.uint64(1 << e)
+    incident = np.array([sum(1 << e for _, e in adj[v]) for v in range(n)], np.uint64)
     space = space[1:]
     thin = np.ones(len(space), bool)
     for v in range(n):
@@ -303,13 +293,20 @@ def _simple_cycles_nx(vertices, edges):
     return out
 
 
+def _indexed_adjacency(vertices, edges):
+    """Edge ends as vertex indices and, per vertex index, its ``(neighbour, edge)`` pairs."""
+    index = {v: i for i, v in enumerate(vertices)}
+    ends = [(index[u], index[v]) for u, v, *_rest in edges]
+    adj: list[list[tuple[int, int]]] = [[] for _ in vertices]
+    for e, (a, b) in enumerate(ends):
+        adj[a].append((b, e))
+        adj[b].append((a, e))
+    return ends, adj
+
+
 def _simple_cycles_dfs(vertices, edges):
     """All simple cycles by a path search from each vertex through larger vertices."""
-    index = {v: i for i, v in enumerate(vertices)}
-    adj: dict[int, list[tuple[int, int]]] = {i: [] for i in range(len(vertices))}
-    for e, (u, v, *_rest) in enumerate(edges):
-        adj[index[u]].append((index[v], e))
-        adj[index[v]].append((index[u], e))
+    _ends, adj = _indexed_adjacency(vertices, edges)
     cycles = []
     for s in range(len(vertices)):
         # paths from s through vertices > s, closing back at s
