@@ -46,6 +46,8 @@ FLOOR = 1e-10
 DELTA = 1e-6
 #: certification margin: branch gap > KAPPA × motion of the group's points
 KAPPA = 4.0
+#: the bound on |margin''| over an interval: CURV_SAFETY × the larger of its ends' values
+CURV_SAFETY = 2.0
 
 
 @dataclass(frozen=True)
@@ -55,13 +57,26 @@ class Probe:
     ``ok`` (n,): assembled (the group and everything upstream); ``gap`` (n,): distance
     between the group's two assembly branches (``None`` for a group without
     branches); ``pts`` (n, k, 2): the group's signature points (first) and the known
-    points it hangs from, whose motion bounds the change of ``gap``.
+    points it hangs from (the tangent rule predicts the first).
+
+    ``margin`` (n,): the group's reach margin, positive where the group assembles with
+    its two branches apart and zero on its singular set (limits and crossings alike);
+    ``lip`` (n, k, 2): points whose displacement bounds the change of ``margin``: it is
+    1-Lipschitz in them, or, when ``lip_scale`` (their length) is given, quadratic in
+    them (an RRR dyad: ``margin = min((l₂ + l₃)² − d², d² − (l₂ − l₃)²)`` with
+    ``d = |lip| = |C − A|``, smooth even where A meets C).  ``curv``: |margin''| along
+    the path; ``tol``: the margin's rounding.
     """
 
     ok: np.ndarray
     gap: np.ndarray | None = None
     pts: np.ndarray | None = None
     up: np.ndarray | None = None        # (n,) everything upstream assembled (default: all)
+    margin: np.ndarray | None = None
+    lip: np.ndarray | None = None
+    curv: np.ndarray | None = None      # (n,) |d²margin/ds²| along the path, where known
+    tol: np.ndarray | None = None       # (n,) rounding of ``margin``
+    lip_scale: np.ndarray | None = None  # (n,) |lip| when the margin is quadratic in ``lip``
 
 
 @dataclass(frozen=True)
@@ -100,27 +115,83 @@ def _at(P: np.ndarray, s_nodes: np.ndarray, s: np.ndarray) -> np.ndarray:
 
 
 def _problems(pr: Probe, s: np.ndarray, handled: list, kappa: float):
-    """Per interval: (limit mask, uncertified mask), cut after the first limit."""
+    """Per interval: (limit mask, uncertified mask, flat mask), cut after the first limit.
+
+    An interval is certified when its group's reach margin stays positive over it: the
+    smaller end value exceeds both ``kappa`` × the displacement of the points the margin
+    is 1-Lipschitz in, or the interpolation bound ``M w²/8`` (M bounds |margin''|), and
+    the margin's rounding ``tol``.  ``flat``: both ends within ``tol`` of zero (the
+    group is numerically on its singular set there; refining further cannot help).
+    """
     ok = pr.ok
     ds = np.diff(s)
     lim = ok[:-1] & ~ok[1:]
     if pr.up is not None:
         lim &= pr.up[1:]
     unc = np.zeros_like(lim)
-    if pr.gap is not None:
+    flat = np.zeros_like(lim)
+    if pr.margin is not None or pr.gap is not None:
         both = ok[:-1] & ok[1:] & (ds > 0)
-        mot = np.sum(np.sqrt(np.sum(np.square(np.diff(pr.pts, axis=0)), axis=-1)), axis=-1)
-        g = np.minimum(pr.gap[:-1], pr.gap[1:])
+        value, pts = (pr.margin, pr.lip) if pr.margin is not None else (pr.gap, pr.pts)
+        mot = np.sum(np.sqrt(np.sum(np.square(np.diff(pts, axis=0)), axis=-1)), axis=-1)
+        if pr.margin is not None and pr.lip_scale is not None:      # | |r|² change | ≤ |Δr| (|r_a| + |r| )
+            mot = mot * (2.0 * np.fmax(pr.lip_scale[:-1], pr.lip_scale[1:]) + mot)
+        g = np.minimum(value[:-1], value[1:])
         with np.errstate(invalid="ignore"):
-            unc = both & ~(g > kappa * mot)
-        for h in handled:               # a crossing already resolved by the tangent rule
-            near = (s[:-1] <= h + DELTA) & (s[1:] >= h - DELTA)
+            cert = g > kappa * mot
+            if pr.margin is not None and pr.curv is not None:
+                # |margin − chord| ≤ M w²/8 with M ≥ |margin''| on the interval: a touch
+                # (a crossing, margin ~ c t²) is approached in O(log) bisections
+                M = CURV_SAFETY * np.fmax(pr.curv[:-1], pr.curv[1:])
+                cert |= g > M * ds * ds / 8.0
+            if pr.tol is not None:
+                cert &= g > np.fmax(pr.tol[:-1], pr.tol[1:])
+                flat = both & (np.fmax(value[:-1], value[1:]) <= np.fmax(pr.tol[:-1], pr.tol[1:]))
+            unc = both & ~cert
+        for lo, hi in handled:          # a crossing already resolved by the tangent rule
+            near = (s[:-1] <= hi) & (s[1:] >= lo)
             unc &= ~near
+            flat &= ~near
     first = np.flatnonzero(lim)
     if first.size:
         lim[first[0] + 1:] = False
         unc[first[0] + 1:] = False
-    return lim, unc
+        flat[first[0] + 1:] = False
+    return lim, unc, flat
+
+
+def _zero_run(pr: Probe, s: np.ndarray, i: int) -> tuple[float, float]:
+    """The parameters ``(lo, hi)`` of the run of samples around interval ``i`` where the
+    margin is within its rounding of zero (the interval itself when there is none)."""
+    lo, hi = i, i + 1
+    if pr.margin is None or pr.tol is None:
+        return s[lo], s[hi]
+    z = pr.ok & (pr.margin <= pr.tol)
+    while lo > 0 and z[lo - 1]:
+        lo -= 1
+    while hi < len(s) - 1 and z[hi + 1]:
+        hi += 1
+    return s[lo], s[hi]
+
+
+def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, rounds: int = 16):
+    """The limit of group ``g`` in ``[a, b]`` (assembled at ``a``, not at ``b``) to the
+    precision of its reach margin: a zoom search on the sign of the margin, ``n`` points
+    per evaluation (the bracket shrinks ``n + 1``-fold a round), down to rounding."""
+    for _ in range(rounds):
+        if b - a <= 4.0 * np.finfo(float).eps * max(abs(a), abs(b), 1.0):
+            break
+        q = a + (b - a) * np.arange(1, n + 1) / (n + 1)
+        pr = evaluate(_at(P, s_nodes, q), {k: sign_factor(f, q) for k, f in flips.items()})[g]
+        if pr.margin is None:
+            return a, b
+        pos = np.flatnonzero(~(pr.margin > 0))
+        if pos.size == 0:
+            a = q[-1]
+            continue
+        j = int(pos[0])
+        a, b = (q[j - 1] if j > 0 else a), q[j]
+    return a, b
 
 
 def _resolve(evaluate, P, s_nodes, flips, k, s_star, delta):
@@ -162,16 +233,14 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         event = None                         # (interval, group, is_limit)
         refine = np.zeros(len(s) - 1, bool)
         for g in groups:
-            lim, unc = _problems(probes[g], s, handled[g], kappa)
-            if not refine_limits and probes[g].gap is None:
+            lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
+            if not refine_limits and probes[g].gap is None and probes[g].margin is None:
                 continue                     # a tracked group: its own tracker reports failures
-            else:
-                lim_floor = lim & (width <= floor)
-            bad = lim | unc
-            at_floor = np.flatnonzero(lim_floor | (unc & (width <= floor)))
+            lim_floor = lim & (width <= floor)
+            at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
             if at_floor.size and (event is None or at_floor[0] < event[0]):
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
-            refine |= bad & (width > floor) & ~lim_floor
+            refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
         if event is not None:
             refine[event[0]:] = False
         if refine.any():
@@ -182,15 +251,19 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             return Walk(s, _frozen(flips), tuple(crossings), None, rounds)
         i, g, is_limit = event
         if is_limit:
-            return Walk(s, _frozen(flips), tuple(crossings), (s[i], s[i + 1], g), rounds)
-        s_star = 0.5 * (s[i] + s[i + 1])
-        d = min(delta, 0.25 * (s_star - s[0])) if s_star > s[0] else delta
+            a, b = _limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+            return Walk(s, _frozen(flips), tuple(crossings), (a, b, g), rounds)
+        lo, hi = _zero_run(probes[g], s, i)
+        s_star = 0.5 * (lo + hi)
+        d = max(delta, hi - lo)
+        d = min(d, 0.25 * (s_star - s[0])) if s_star > s[0] else d
         rule = _resolve(evaluate, P, s_nodes, flips, g, s_star, d)
         if rule == "limit":                  # a turning point within delta: the motion stops
-            return Walk(s, _frozen(flips), tuple(crossings), (s[i + 1], s_star + d, g), rounds)
+            a, b = _limit_root(evaluate, P, s_nodes, flips, g, lo, s_star + d)
+            return Walk(s, _frozen(flips), tuple(crossings), (a, b, g), rounds)
         if rule == "flip":
             flips[g].append(s_star)
-        handled[g].append(s_star)
+        handled[g].append((lo - d, hi + d))
         crossings.append((s_star, g))
     raise RuntimeError("continuation did not settle")  # pragma: no cover
 

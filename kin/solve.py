@@ -203,7 +203,7 @@ def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool 
         up = G.finite(np.setdiff1d(st.system.involved, st.unknown)) if probe else None
         okk, why, pr = _step(st, kernels).positions(G, X, signs.get(k, 1.0), probe)
         if probe:
-            probes[k] = Probe(pr.ok, pr.gap, pr.pts, up)
+            probes[k] = replace(pr, up=up)
         if okk.all():
             continue
         for n in np.flatnonzero(~okk & (code == 0)):
@@ -243,6 +243,24 @@ def _fill(nodes: np.ndarray, max_step: float) -> tuple[np.ndarray, np.ndarray]:
     return out, idx
 
 
+def _with_curvatures(sp: SolvePlan, run: _Run, kernels, scale: np.ndarray) -> dict:
+    """The probes of ``run`` with each dyad's |d²margin/ds²| (s: the scaled input of a
+    one-driver mechanism; the second derivative along a line does not depend on its
+    direction).  Mechanisms with several drivers keep their probes as they are."""
+    probes = run.probes
+    curved = [k for k, pr in probes.items() if pr.margin is not None
+              and hasattr(_step(sp.steps[k], kernels), "margin_curvature")]
+    if len(sp.mechanism.drivers) != 1 or not curved:
+        return probes
+    Z = run.G.to_Z()
+    R = PoseRates(sp, Z, np.zeros_like(Z), np.zeros_like(Z))
+    with np.errstate(all="ignore"):
+        for k in range(max(curved) + 1):
+            _step(sp.steps[k], kernels).rates(R, np.ones(1))
+        return {**probes, **{k: replace(probes[k], curv=_step(sp.steps[k], kernels).margin_curvature(R)
+                                        * scale[0] ** 2) for k in curved}}
+
+
 def _walk_on(sp: SolvePlan, kernels, P_scaled: np.ndarray) -> Walk:
     """:func:`kin.continuation.walk` of the whole mechanism along ``P_scaled``."""
     scale = _scale(sp)
@@ -250,7 +268,7 @@ def _walk_on(sp: SolvePlan, kernels, P_scaled: np.ndarray) -> Walk:
     groups = [k for k in steps if sp.steps[k].solver != "driver"]
 
     def evaluate(Xs, signs):
-        return _run(sp, Xs * scale, steps, signs, kernels, probe=True).probes
+        return _with_curvatures(sp, _run(sp, Xs * scale, steps, signs, kernels, probe=True), kernels, scale)
     return walk(evaluate, P_scaled, groups)
 
 
@@ -472,7 +490,7 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     def evaluate(Xs, signs):
         last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
         last["n"] = Xs.shape[0]
-        return last["run"].probes
+        return _with_curvatures(sp, last["run"], kernels, scale)
     w = walk(evaluate, P, groups, refine_limits=False)
     s_nodes = path_parameter(P)
     s = w.s

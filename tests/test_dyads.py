@@ -164,8 +164,8 @@ def test_rrr_components_flags():
     assert ok.tolist() == [True, False, False] and exact
     close(np.hypot(bx[0], by[0]), 1.0, 1e-15)
     assert np.isnan(bx[1:]).all() and np.isnan(det[1:]).all()
-    *_, ok_t, _, exact_t = rrr_xy(0.0, 0.0, 2.0 * (1 + 1e-14), 0.0, 1.0, 1.0)
-    assert ok_t and not exact_t                    # beyond reach by 1e-14: clamped
+    *_, ok_t, _, exact_t = rrr_xy(0.0, 0.0, 2.0 * (1 + 2e-15), 0.0, 1.0, 1.0)
+    assert ok_t and not exact_t                    # beyond reach by 2e-15 (rounding): clamped
 
 
 def test_rrr_scalar_and_array_sign():

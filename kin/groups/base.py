@@ -29,8 +29,9 @@ __all__ = ["SINGULAR_RTOL", "REACH_RTOL", "xy", "stack", "cramer", "is_singular"
 #: of the singular configuration; the velocity error grows like eps/det_rel² before
 #: that (see ``docs/groups.md``), and callers may apply their own threshold on ``det``.
 SINGULAR_RTOL = 1e-8
-#: a distance beyond reach by at most this relative amount is clamped (tangency).
-REACH_RTOL = 1e-12
+#: a distance beyond reach by at most this relative amount (rounding) is clamped (tangency);
+#: more is a failure, so a dead zone deeper than rounding is never assembled through.
+REACH_RTOL = 1e-14
 
 
 def quiet(func):
@@ -92,3 +93,23 @@ def sign_of(value, scale, what):
             got=f"a singular reference at {int(np.count_nonzero(bad))} position(s)",
             hint="move the reference so that the group's links are not collinear"))
     return np.where(value > 0, 1.0, -1.0)
+
+
+def square_curvature(rel, vrel, arel):
+    """|d²(|rel|²)/dx²| = 2 |ṙ·ṙ + r·r̈| along a motion with rates ``vrel``, ``arel``
+    (all (N, 2))."""
+    return 2.0 * np.abs(np.sum(vrel * vrel, axis=-1) + np.sum(rel * arel, axis=-1))
+
+
+#: rounding of a reach margin, in units of eps × the magnitudes it is computed from
+MARGIN_ROUNDING = 16.0
+
+
+def margin_tol(P, Q, lengths: float, squared: bool = False) -> np.ndarray:
+    """Rounding of a reach margin computed from the points ``P``, ``Q`` (N, 2) and link
+    lengths summing to ``lengths`` (a margin in m, or in m² when ``squared``): below it
+    the margin is numerically zero (the tolerance follows the coordinates' magnitude:
+    translating a mechanism far from the origin coarsens it, as it coarsens every
+    coordinate)."""
+    mag = np.abs(P).sum(axis=-1) + np.abs(Q).sum(axis=-1) + lengths
+    return MARGIN_ROUNDING * np.finfo(float).eps * (mag * mag if squared else mag)

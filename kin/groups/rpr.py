@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
@@ -172,7 +172,10 @@ class RPRStep(GroupStep):
         why, pr = {}, None
         if probe:
             fs = Xp + rs.s[:, None] * u
-            pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1))
+            rel = Yp - Xp                                    # margin |XY|² − h², smooth where X meets Y
+            d = np.hypot(rel[:, 0], rel[:, 1])
+            pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1), margin=d * d - self.h ** 2,
+                       lip=rel[:, None], tol=margin_tol(Xp, Yp, abs(self.h), squared=True), lip_scale=d)
         if not ok.all():
             dist = np.hypot(*(Yp - Xp).T)
             for n in np.flatnonzero(~ok):
@@ -182,6 +185,12 @@ class RPRStep(GroupStep):
         G.place_dir(self.guide, Xp, self.X, u, self.u)
         G.place_like(self.block, Yp, self.Y, self.guide)
         return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe)
+
+    def margin_curvature(self, R) -> np.ndarray:
+        """|d²margin/dx²| along the motion of ``R`` (margin ``|XY|² − h²``)."""
+        Xp, vX, aX = R.point(self.kx, self.X)
+        Yp, vY, aY = R.point(self.ky, self.Y)
+        return square_curvature(Yp - Xp, vY - vX, aY - aX)
 
     def rates(self, R, input_rates) -> None:
         Xp, vX, aX = R.point(self.kx, self.X)

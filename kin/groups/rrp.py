@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
@@ -198,7 +198,11 @@ class RRPStep(GroupStep):
         why, pr = {}, None
         if probe:
             gap = 2.0 * np.abs(np.sum((B - A) * u, axis=-1))
-            pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1))
+            # A in the guide's frame: its distance from the track changes no faster than it
+            loc = np.stack([np.sum((A - P) * u, axis=-1), np.sum((A - P) * normal(u), axis=-1)], axis=-1)
+            margin = self.la - np.abs(loc[:, 1] - self.h)
+            pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1), margin=margin, lip=loc[:, None],
+                       tol=margin_tol(A, P, self.la + abs(self.h)))
         if not ok.all():
             dist = np.abs(np.sum((A - P) * normal(u), axis=-1) - self.h)
             for n in np.flatnonzero(~ok):
@@ -208,6 +212,19 @@ class RRPStep(GroupStep):
         G.place_dir(lay.link1, A, self.A, B - A, self.B - self.A)
         G.place_like(lay.link2, B, self.B, self.kp)
         return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe)
+
+    def margin_curvature(self, R) -> np.ndarray:
+        """|d²margin/dx²| along the motion of ``R``: the margin is ``l − |y − h|`` with
+        ``y = (A − P)·n`` the distance of A from the guide line (n = e_z × u, ṅ = −ω u)."""
+        A, vA, aA = R.point(self.known1, self.A)
+        P, vP, aP = R.point(self.kp, self.P)
+        u, w, e = R.direction(self.kp, self.u)
+        n = normal(u)
+        r, vr, ar = A - P, vA - vP, aA - aP
+        w2 = w[:, None]
+        ydd = (np.sum(ar * n, axis=-1) - 2.0 * w * np.sum(vr * u, axis=-1)
+               - np.sum(r * (e[:, None] * u + w2 * w2 * n), axis=-1))
+        return np.abs(ydd)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

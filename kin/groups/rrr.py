@@ -27,7 +27,7 @@ import numpy as np
 
 from multiloop.topo.constraints import link_origins
 
-from .base import REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
@@ -223,7 +223,11 @@ class RRRStep(GroupStep):
             d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
         if probe:
             gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / d
-            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1))
+            # in squares (smooth where A meets C, the change point of a kite)
+            d2 = d * d
+            margin = np.minimum((la + lc) ** 2 - d2, d2 - (la - lc) ** 2)
+            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=AC[:, None],
+                       tol=margin_tol(A, C, la + lc, squared=True), lip_scale=d)
         for n in np.flatnonzero(~ok):
             if np.isfinite(d[n]):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
@@ -240,6 +244,13 @@ class RRRStep(GroupStep):
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
         return dyad_outcome(ok, why, det, la * lc, False, pr, probe)
+
+    def margin_curvature(self, R) -> np.ndarray:
+        """|d²margin/dx²| along the motion of ``R`` (the reach margin of the probe is
+        ±|C − A|² plus a constant)."""
+        A, vA, aA = R.point(self.known1, self.A)
+        C, vC, aC = R.point(self.known2, self.C)
+        return square_curvature(C - A, vC - vA, aC - aA)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

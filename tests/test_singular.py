@@ -1,0 +1,157 @@
+"""Trust at singular and limit positions: every change point kept, every dead zone found.
+
+Oracles are closed forms written here, independent of the kernels:
+
+* a parallelogram's coupler translates (B − A equals the frame vector O4 − O2) and its
+  flat positions are where the crank is collinear with the frame;
+* a four-bar's crank limits follow from the law of cosines on the triangle frame–crank–
+  diagonal: the diagonal |O4 − A| equals coupler + rocker or |coupler − rocker|
+  (Norton, Design of Machinery, 2012, ch. 4, the Grashof condition).
+"""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from multiloop.kin.solve import solve
+from multiloop.topo.model import MechanismBuilder
+
+
+def four_bar(O2, A, B, O4, name="fb"):
+    b = MechanismBuilder(name)
+    b.add_link("frame", frame=True)
+    for lk in ("crank", "coupler", "rocker"):
+        b.add_link(lk)
+    b.add_joint("O2", "R", ("frame", "crank"), at=tuple(O2))
+    b.add_joint("A", "R", ("crank", "coupler"), at=tuple(A))
+    b.add_joint("B", "R", ("coupler", "rocker"), at=tuple(B))
+    b.add_joint("O4", "R", ("rocker", "frame"), at=tuple(O4))
+    b.add_driver("O2")
+    return b.build()
+
+
+def _solve(m, x, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return solve(m, x, **kw)
+
+
+def parallelogram(ratio, ref_deg, scale):
+    """Frame 1 along x, crank = rocker = ``ratio``, coupler 1, crank at ``ref_deg``."""
+    r, t = ratio * scale, math.radians(ref_deg)
+    A = (r * math.cos(t), r * math.sin(t))
+    return four_bar((0.0, 0.0), A, (A[0] + scale, A[1]), (scale, 0.0))
+
+
+PARALLELOGRAMS = [(r, a, s) for r in (0.2, 0.4, 0.6, 0.8) for a in (30, 60, 90, 135) for s in (0.1, 1.0, 100.0)]
+
+
+@pytest.mark.parametrize("ratio,ref,scale", PARALLELOGRAMS)
+def test_parallelogram_keeps_its_mode_through_every_change_point(ratio, ref, scale):
+    m = parallelogram(ratio, ref, scale)
+    x = np.radians(np.arange(0.0, 721.0, 10.0))          # two turns, 36 steps a turn
+    st = _solve(m, x)
+    P = st.positions
+    iA, iB = st.joint_index("A"), st.joint_index("B")
+    ok = st.ok
+    # flat positions: crank angle ref + x ≡ 0 (mod 180°); only rows exactly there may fail
+    flat = np.isclose(np.mod(ref + np.degrees(x) + 1e-9, 180.0), 1e-9, atol=1e-6)
+    assert ok[~flat].all(), st.status[~ok & ~flat]
+    assert all("singular" in s for s in st.status[~ok])
+    assert np.allclose(P[ok & ~flat, iB] - P[ok & ~flat, iA], [scale, 0.0], atol=1e-9 * scale)
+    # exactly at a flat position the two modes coincide; the position is known to √eps
+    assert np.allclose(P[ok & flat, iB] - P[ok & flat, iA], [scale, 0.0], atol=1e-7 * scale)
+    # a full turn returns to the reference
+    assert np.allclose(P[36], P[0], atol=1e-9 * scale) and np.allclose(P[72], P[0], atol=1e-9 * scale)
+    # every crossing noted: two a turn
+    crossings = [n for n in st.notes if "branches meet" in n]
+    assert len(crossings) == 4, st.notes
+
+
+@pytest.mark.parametrize("ref", [30, 60, 90, 135])
+@pytest.mark.parametrize("scale", [0.1, 1.0, 100.0])
+def test_kite_turns_continuously_and_returns_to_the_reference(ref, scale):
+    """Deltoid: frame = crank = a, coupler = rocker = b; A passes over O4 (a change point).
+    Kept in its kite mode the follower turns once for every two turns of the crank (the
+    Galloway mechanism; Hartenberg & Denavit, Kinematic Synthesis of Linkages, 1964, §3),
+    so the motion is periodic in 720°, not 360°."""
+    a, bb = 0.5 * scale, 1.2 * scale
+    t = math.radians(ref)
+    A = np.array([a * math.cos(t), a * math.sin(t)])
+    O4 = np.array([a, 0.0])
+    d = np.hypot(*(O4 - A))
+    mid, h = 0.5 * (A + O4), math.sqrt(bb * bb - d * d / 4)
+    n = np.array([-(O4 - A)[1], (O4 - A)[0]]) / d
+    m = four_bar((0, 0), A, mid + h * n, O4)
+    x = np.radians(np.arange(0.0, 720.5, 0.5))
+    st = _solve(m, x)
+    P = st.positions
+    ok = st.ok
+    assert ok.sum() >= len(x) - 2
+    assert np.allclose(P[-1], P[0], atol=1e-9 * scale)
+    assert not np.allclose(P[720], P[0], atol=1e-3 * scale)
+    iB = st.joint_index("B")
+    rows = np.flatnonzero(ok)
+    steps = np.hypot(*np.diff(P[rows, iB], axis=0).T)
+    assert steps.max() < 0.1 * scale                    # continuous: no jump to the other mode
+    assert any("branches meet" in n for n in st.notes)
+
+
+def _limits_law_of_cosines(a, b, c, d, side_ref):
+    """Crank angles (frame along +x, crank a, coupler b, rocker c, frame d) where the
+    diagonal |O4 − A| = b + c or |b − c|."""
+    out = []
+    for L in (b + c, abs(b - c)):
+        cs = (a * a + d * d - L * L) / (2 * a * d)
+        if abs(cs) <= 1:
+            out += [math.acos(cs), -math.acos(cs)]
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(zone=st.floats(1e-4, 1.0), lo_side=st.booleans(), ref=st.floats(0.15, 0.85))
+def test_dead_zones_of_any_width_are_found_with_exact_limits(zone, lo_side, ref):
+    """A non-Grashof four-bar whose crank stops in a dead zone ``zone`` degrees wide
+    around θ = 0 (inner limit, |O4 − A| = b − c) or θ = π (outer limit, b + c).
+
+    A dead zone sits where the diagonal is stationary, so its depth in the reach
+    condition is ``a d (w/2)² / 2``: below about 1e-5° it is under the rounding of
+    binary64 coordinates (docs/kinematics.md, "certified floor") and the limits'
+    condition number is ``1 / (a d sin(w/2))``: the tolerance below is that bound."""
+    a, d = 0.3, 1.0
+    half = math.radians(zone) / 2
+    theta_lim = half if lo_side else math.pi - half
+    L = math.sqrt(a * a + d * d - 2 * a * d * math.cos(theta_lim))   # diagonal at the limit
+    # near θ = 0 the diagonal is shortest: b − c = L there (and b + c never binds);
+    # near θ = π it is longest: b + c = L there (and |b − c| never binds)
+    b, c = (1.2, 1.2 - L) if lo_side else (0.8, L - 0.8)
+    th0 = ref * (2 * math.pi - 2 * half) + half if lo_side else math.pi + half + ref * (2 * math.pi - 2 * half)
+    th0 = math.atan2(math.sin(th0), math.cos(th0))
+    A = np.array([a * math.cos(th0), a * math.sin(th0)])
+    O4 = np.array([d, 0.0])
+    dd = np.hypot(*(O4 - A))
+    x = (b * b + dd * dd - c * c) / (2 * dd)
+    u = (O4 - A) / dd
+    B = A + x * u + math.sqrt(max(b * b - x * x, 0.0)) * np.array([-u[1], u[0]])
+    m = four_bar((0, 0), A, B, O4)
+    st = _solve(m, np.radians(np.arange(0.0, 360.0, 10.0)))
+    # the motion cannot pass the zone: some requested inputs are beyond a limit
+    from multiloop.kin.solve import plan_of, _chart
+    ch = _chart(plan_of(m), True, np.zeros(1))
+    assert ch.period is None, "a crank with a dead zone cannot turn fully"
+    lims = sorted(np.mod(np.array(_limits_law_of_cosines(a, b, c, d, 1)) - th0, 2 * np.pi))
+    hi = ch.hi
+    lo = ch.lo + 2 * np.pi
+    tol = max(math.radians(1e-9), 64 * np.finfo(float).eps * 4.0 / (a * d * math.sin(half)))
+    assert min(abs(hi - v) for v in lims) < tol
+    assert min(abs(lo - v) for v in lims) < tol
+    assert lo - hi == pytest.approx(math.radians(zone), abs=2 * tol)
+    beyond = (np.radians(np.arange(0.0, 360.0, 10.0)) > hi) & (np.radians(np.arange(0.0, 360.0, 10.0)) < lo)
+    assert not st.ok[beyond].any()
+    assert st.ok[~beyond].all()
+    assert all("limit" in s for s in st.status[beyond])
