@@ -48,6 +48,8 @@ DELTA = 1e-6
 KAPPA = 4.0
 #: the bound on |margin''| over an interval: CURV_SAFETY × the larger of its ends' values
 CURV_SAFETY = 2.0
+#: a bracket of a limit is split into this many parts a round (a zoom search)
+LIMIT_ZOOM = 8
 
 
 @dataclass(frozen=True)
@@ -232,6 +234,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         width = np.diff(s)
         event = None                         # (interval, group, is_limit)
         refine = np.zeros(len(s) - 1, bool)
+        zoom = np.zeros(len(s) - 1, bool)     # a limit's bracket: split in LIMIT_ZOOM
         for g in groups:
             lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
             if not refine_limits and probes[g].gap is None and probes[g].margin is None:
@@ -241,11 +244,18 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             if at_floor.size and (event is None or at_floor[0] < event[0]):
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
             refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
+            zoom |= lim & (width > floor)
         if event is not None:
             refine[event[0]:] = False
+            if event[2] and event[0] + 2 < len(s):
+                s = s[: event[0] + 2]         # nothing beyond the first limit matters
         if refine.any():
-            mid = 0.5 * (s[:-1] + s[1:])[refine]
-            s = np.sort(np.concatenate([s, mid]))
+            zoom = zoom[: len(s) - 1] & refine[: len(s) - 1]
+            refine = refine[: len(s) - 1]
+            mid = 0.5 * (s[:-1] + s[1:])[refine & ~zoom]
+            t = np.arange(1, LIMIT_ZOOM) / LIMIT_ZOOM
+            sub = (s[:-1][zoom, None] + np.diff(s)[zoom, None] * t).ravel()
+            s = np.sort(np.concatenate([s, mid, sub]))
             continue
         if event is None:
             return Walk(s, _frozen(flips), tuple(crossings), None, rounds)

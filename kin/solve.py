@@ -303,12 +303,15 @@ class _Chart:
         """Chart coordinate of each input and whether the motion reaches it."""
         if self.period is not None:
             return np.mod(x, self.period), np.ones(x.shape, bool)
-        if self.is_r:
+        if self.is_r:                 # inside the range as it is, else the nearest turn into it
             t = 2 * np.pi
-            xr = x + t * np.ceil((self.lo - x) / t)
-            with np.errstate(invalid="ignore"):
-                reach = xr <= self.hi
-            return np.where(reach, xr, x), reach
+            inside = (x >= self.lo) & (x <= self.hi)
+            up = x + t * np.ceil((self.lo - x) / t)
+            dn = x - t * np.ceil((x - self.hi) / t)
+            up_ok, dn_ok = up <= self.hi, dn >= self.lo
+            pick = np.where(up_ok & (~dn_ok | (np.abs(up - x) <= np.abs(dn - x))), up, dn)
+            reach = inside | up_ok | dn_ok
+            return np.where(inside, x, np.where(reach, pick, x)), reach
         return x, (x >= self.lo) & (x <= self.hi)
 
     def factor(self, k: int, xr: np.ndarray):
@@ -477,6 +480,56 @@ def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     return run, notes
 
 
+def _solve_ranged(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
+    """One driver with tracked groups (triads, class IV, Newton): the cached chart gives
+    the certified motion range; inputs outside it are marked with the limit, the others
+    are reached by one continuous path from the reference through them, in order."""
+    x = X[:, 0]
+    ch = _chart(sp, kernels, x)
+    if ch.period is not None:
+        return _solve_path(sp, X, needed, kernels)
+    xr, reach = ch.reduce(x)
+    if reach.all():
+        run, notes = _solve_path(sp, xr[:, None], needed, kernels)
+        _turn_drivers(sp, run, x - xr)
+        return run, notes
+    rows = np.flatnonzero(reach)
+    if rows.size:
+        sub, notes = _solve_path(sp, xr[rows, None], needed, kernels)
+    else:
+        sub, notes = _run(sp, np.zeros((1, 1)), needed, {}, kernels), []
+    where = np.zeros(len(x), int)
+    where[rows] = np.arange(rows.size)
+    run = _take(sub, where)
+    _turn_drivers(sp, run, np.where(reach, x - xr, 0.0))
+    run.code[~reach] = 0
+    for n in np.flatnonzero(~reach):
+        run.reason.pop(int(n), None)
+    _mark_unreachable(sp, ch, run, X, ~reach, kernels)
+    return run, notes
+
+
+def _turn_drivers(sp: SolvePlan, run: _Run, turns: np.ndarray) -> None:
+    """Add whole turns ``turns`` (input − its chart coordinate) to the angles of the
+    driven links, so that a pose solved at the chart coordinate reports the input asked."""
+    if not np.any(turns):
+        return
+    m = sp.mechanism
+    names = m.link_names
+    turned = {names[k] for st in sp.steps if st.solver == "driver" for k in st.unknown}
+    grow = True                          # links on a P joint with a turned link turn with it
+    while grow:
+        grow = False
+        for j in m.joints:
+            if j.kind is JointKind.P and (set(j.links) & turned) and not set(j.links) <= turned \
+                    and m.frame not in j.links:
+                turned |= set(j.links)
+                grow = True
+    for k in (names.index(x) for x in turned):
+        if run.G.th[k] is not None:
+            run.G.T[k, 2] += turns
+
+
 def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     """Any plan: follow the path reference → inputs[0] → inputs[1] … with certified steps."""
     from .continuation import path_parameter, sign_factor
@@ -491,7 +544,7 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
         last["n"] = Xs.shape[0]
         return _with_curvatures(sp, last["run"], kernels, scale)
-    w = walk(evaluate, P, groups, refine_limits=False)
+    w = walk(evaluate, P, groups, refine_limits=kernels)   # method="newton": its tracker decides
     s_nodes = path_parameter(P)
     s = w.s
     if only_all(sp, needed) and last.get("n") == len(s) and w.block is None:
@@ -604,6 +657,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         run, notes = _run(sp, X, needed, {}, kernels), []
     elif _chartable(sp, kernels):
         run, notes = _solve_chart(sp, X, needed, kernels)
+    elif len(m.drivers) == 1 and kernels:
+        run, notes = _solve_ranged(sp, X, needed, kernels)
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels)

@@ -155,3 +155,101 @@ def test_dead_zones_of_any_width_are_found_with_exact_limits(zone, lo_side, ref)
     assert not st.ok[beyond].any()
     assert st.ok[~beyond].all()
     assert all("limit" in s for s in st.status[beyond])
+
+
+# --------------------------------------------------------------------------- triads
+def limited_triad():
+    """The catalogue's Stephenson III triad mechanism with the rocker's frame pivot moved
+    to (0.2, 0.12): its crank's motion is limited on both sides (a triad turning point)."""
+    from multiloop.catalogue.named import load_named
+    base = load_named("stephenson_3_triad")
+    b = MechanismBuilder("limited_triad")
+    for lk in base.links:
+        b.add_link(lk.name, frame=lk.is_frame)
+    for j in base.joints:
+        at = (0.2, 0.12) if j.name == "O2" else j.at
+        b.add_joint(j.name, "R", j.links, at=at)
+    b.add_driver("O1")
+    return b.build()
+
+
+def _fine_triad_path(m, lo, hi, step_deg=0.05):
+    """Independent route: every mode of the triad at each crank angle (the all-modes
+    kernel), followed from the reference by nearest neighbour in 0.05° steps; returns
+    the angle grid and the triad's inner pins along it."""
+    from multiloop.kin.groups.triad import triad_modes
+    from multiloop.topo.assur import decompose
+    g = decompose(m).groups[0]
+    lay = g.layout
+    at = {j.name: np.array(j.at, float) for j in m.joints}
+    O1 = at["O1"]
+
+    def anchors(th):
+        c, s = np.cos(th), np.sin(th)
+        out = []
+        for o in lay.outers:
+            p = at[o] - O1
+            moving = "crank" in m.joint(o).links
+            out.append(O1 + (np.stack([c * p[0] - s * p[1], s * p[0] + c * p[1]], -1) if moving
+                             else np.broadcast_to(p, (len(th), 2))))
+        return np.stack(out, axis=1)
+
+    b = np.array([at[i] for i in lay.inners])
+    lengths = np.hypot(*(b - np.array([at[o] for o in lay.outers])).T)
+    out = {}
+    for end in (lo, hi):
+        th = np.radians(np.arange(0.0, np.degrees(end), np.sign(end) * step_deg))
+        modes = triad_modes(anchors(th), b, lengths)
+        P, cur = [], b
+        for n in range(len(th)):
+            cand = modes.P[n][np.isfinite(modes.theta[n])]
+            cur = cand[np.argmin(np.sum((cand - cur) ** 2, axis=(1, 2)))]
+            P.append(cur)
+        out[end] = (th, np.array(P))
+    return out, lay.inners
+
+
+def test_triad_is_reached_from_anywhere_in_any_order():
+    m = limited_triad()
+    from multiloop.kin.solve import plan_of, _chart
+    ch = _chart(plan_of(m), True, np.zeros(1))
+    assert ch.period is None and np.isfinite(ch.lo) and np.isfinite(ch.hi)
+    lo, hi = ch.lo, ch.hi
+    ref, inner = _fine_triad_path(m, lo, hi)
+    rng = np.random.default_rng(21)
+    inside = rng.uniform(lo, hi, 25)
+    near = np.array([lo + 1e-6, hi - 1e-6, lo + 1e-3, hi - 1e-3, 1e-5, -1e-5])
+    outside = np.array([hi + 1e-4, lo - 1e-4, hi + 0.5, lo - 0.5])
+    x = np.concatenate([inside, near, outside])
+    rng.shuffle(x)
+    for order in (x, x[::-1]):
+        st = _solve(m, order)
+        is_in = (order >= lo) & (order <= hi)
+        assert st.ok[is_in].all(), st.status[is_in & ~st.ok]
+        assert not st.ok[~is_in].any()
+        assert all("limit" in s for s in st.status[~is_in])
+    # at the fine path's own angles, asked in random order: every pin to 1e-9 of the size
+    for end in (lo, hi):
+        th, P = ref[end]
+        pick = th[:: max(1, len(th) // 15)]
+        st2 = _solve(m, pick[rng.permutation(len(pick))])
+        want = P[:: max(1, len(th) // 15)]
+        order2 = np.argsort(st2.inputs[:, 0]) if end > 0 else np.argsort(-st2.inputs[:, 0])
+        got = np.stack([st2.positions[order2][:, st2.joint_index(i)] for i in inner], axis=1)
+        assert np.allclose(got, want, atol=1e-9 * 0.2)
+
+
+def test_triad_limits_are_turning_points():
+    """At a limit the triad is singular: its three leg lines are concurrent, so every
+    triad transmission angle is zero there (to the bracket's √ width)."""
+    m = limited_triad()
+    from multiloop.kin.solve import plan_of, _chart
+    from multiloop.kin.check.transmission import angle_specs, angle_values
+    from multiloop.topo.assur import decompose
+    ch = _chart(plan_of(m), True, np.zeros(1))
+    specs = angle_specs(decompose(m))
+    for x in (ch.lo, ch.hi):
+        st = _solve(m, np.array([x]))
+        assert st.ok.all(), st.status
+        ang = angle_values(st, specs)
+        assert np.all(ang < 0.01), ang
