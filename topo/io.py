@@ -423,7 +423,9 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
     if m.loads:
         doc["force"] = []
         for ld in m.loads:
-            t = {"link": ld.link, "value": list(ld.value)}
+            t = {"link": ld.link}
+            if ld.table is None:
+                t["value"] = list(ld.value)
             if ld.at is not None:
                 t["at"] = list(ld.at)
             if ld.table is not None:
