@@ -62,3 +62,142 @@ def test_massless_link_inertia_loads_the_balancing_moment():
     # and the tiny-mass route agrees with the massless one
     tiny = forces(_rocker_inertia_only(1e-9), q, accelerations=np.zeros(1))
     np.testing.assert_allclose(tiny.balancing[ok], fr.balancing[ok], atol=1e-6)
+
+
+# --- 3-5. the .pyslvs writer: names, frame-second drivers, what is lost ------------------
+def _four_bar_edit(old: str, new: str, count: int = -1) -> str:
+    text = FOUR_BAR.read_text()
+    assert old in text
+    return text.replace(old, new, count)
+
+
+@pytest.mark.parametrize("bad", ["cou,pler", "cou]pler", "cou pler", "9coupler"])
+def test_pyslvs_writer_refuses_names_pyslvs_would_read_differently(tmp_path, capsys, bad):
+    f = tmp_path / "m.toml"
+    f.write_text(_four_bar_edit('"coupler"', json.dumps(bad)))
+    out = tmp_path / "m.pyslvs"
+    assert main(["convert", str(f), str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "Pyslvs link name" in err and str(f) in err and not out.exists()
+
+
+def test_point_named_like_a_joint_is_refused(tmp_path, capsys):
+    f = tmp_path / "m.toml"
+    f.write_text(_four_bar_edit('name = "P"', 'name = "A"'))
+    assert main(["solve", str(f)]) == 2
+    assert "[[point]] 'A': expected a name no joint has" in capsys.readouterr().err
+
+
+def test_frame_second_driver_is_exported_with_the_input_negated(tmp_path, capsys):
+    f = tmp_path / "m.toml"
+    f.write_text(_four_bar_edit('joint = "O2"', 'joint = "O2"\nlinks = ["crank", "frame"]'))
+    out = tmp_path / "m.pyslvs"
+    assert main(["convert", str(f), str(out)]) == 0
+    assert "input is negated" in capsys.readouterr().err
+    back = load_mechanism(out)
+    assert back.drivers[0].links == ("ground", "crank")
+    q = np.radians([[10.0], [50.0]])
+    mine, theirs = solve(load(f), -q), solve(back, q)
+    np.testing.assert_allclose(mine.positions, theirs.positions, atol=1e-9)
+
+
+def test_pyslvs_export_names_what_it_drops(tmp_path, capsys):
+    out = tmp_path / "m.pyslvs"
+    assert main(["convert", "crank_slider_loaded", str(out)]) == 0
+    err = capsys.readouterr().err
+    for word in ("masses", "forces", "joint names"):
+        assert word in err, err
+    assert main(["convert", str(out), str(tmp_path / "again.pyslvs")]) == 0
+    assert "does not keep" not in capsys.readouterr().err     # nothing more to lose
+
+
+def test_convert_of_a_bare_chain_names_the_file(tmp_path, capsys):
+    f = tmp_path / "chain.toml"
+    f.write_text('joints = [["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]\n')
+    assert main(["convert", str(f), str(tmp_path / "x.pyslvs")]) == 2
+    err = capsys.readouterr().err
+    assert str(f) in err and "'None'" not in err
+
+
+# --- 6-8, 10. readers that trusted their input -------------------------------------------
+EXPR = ("M[J[R, color[Green], P[0, 0], L[ground, L1]], J[R, color[Green], P[10, 0], L[L1, L2]], "
+        "J[R, color[Green], P[30, 20], L[L2, L3]], J[R, color[Green], P[40, 0], L[ground, L3]]]")
+PYSLVS_BAD = {
+    "nan": ("mechanism: " + EXPR.replace("P[0, 0]", "P[nan, 0]") + "\ninput: [[0, 1]]\n", "finite"),
+    "inf_angle": ("mechanism: " + EXPR.replace("J[R, color[Green], P[10", "J[P, A[inf], color[Green], P[10")
+                  + "\ninput: [[0, 1]]\n", "finite"),
+    "input_5": ("mechanism: " + EXPR + "\ninput: 5\n", "joint-index pairs"),
+    "input_bool": ("mechanism: " + EXPR + "\ninput: [[true, 1]]\n", "joint indices"),
+    "input_negative": ("mechanism: " + EXPR + "\ninput: [[-4, 1]]\n", "joint indices"),
+    "deep": ("[" * 100_000 + "]" * 100_000, "nested at most"),
+    "alias_bomb": ("a: &a [x, x, x, x, x, x, x, x, x]\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a]\n"
+                   "c: &c [*b, *b, *b, *b, *b, *b, *b, *b, *b]\nd: [*c, *c, *c, *c, *c, *c, *c, *c, *c]\n"
+                   "mechanism: x\n", "without anchors or aliases"),
+    "huge_int": ("mechanism: " + EXPR + "\ninput: [[0, 1" + "0" * 5000 + "]]\n", "unreadable"),
+    "latin1": ("mechanism: caf\xe9\n".encode("latin-1"), "UTF-8"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PYSLVS_BAD))
+def test_pyslvs_reader_refuses_with_exit_2(tmp_path, capsys, case):
+    text, words = PYSLVS_BAD[case]
+    f = tmp_path / "m.pyslvs"
+    f.write_bytes(text if isinstance(text, bytes) else text.encode())
+    assert main(["convert", str(f), str(tmp_path / "out.toml")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and len(err) < 10_000, err[:500]
+    assert not (tmp_path / "out.toml").exists()
+
+
+@pytest.mark.parametrize("suffix,text", [
+    (".toml", _four_bar_edit("at = [0.1, 0.0]", "at = [1" + "0" * 400 + ", 0.0]")),
+    (".json", '{"joints": [["a", "b"], ["b", "a"]], "gravity": [1' + "0" * 400 + ", 0]}"),
+    (".json", '{"joints": [["a", "b"], ["b", "a"]], "gravity": [1' + "0" * 5000 + ", 0]}"),
+    (".toml", "gravity = [1" + "0" * 5000 + ", 0]\n"),
+])
+def test_integers_beyond_the_float_range_exit_2(tmp_path, capsys, suffix, text):
+    f = tmp_path / f"m{suffix}"
+    f.write_text(text)
+    assert main(["analyse", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "internal error" not in err and ("float range" in err or "sensible size" in err), err
+
+
+def test_non_regular_input_files_are_refused(tmp_path, capsys):
+    import os
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)
+    zero = tmp_path / "zero.pyslvs"
+    zero.symlink_to("/dev/zero")
+    for f in (fifo, zero):
+        assert main(["analyse", str(f)]) == 2
+        assert "expected a regular file" in capsys.readouterr().err
+    big = tmp_path / "big.toml"
+    big.write_bytes(b"# " + b"x" * (9 << 20))
+    assert main(["analyse", str(big)]) == 2
+    assert "at most 8 MiB" in capsys.readouterr().err
+
+
+def test_two_thousand_coincident_joints_give_a_short_message(tmp_path, capsys):
+    lines = [f'[[joint]]\nname = "J{i}"\nlinks = ["a{i}", "a{i + 1}"]\nat = [0.0, 0.0]\n' for i in range(2000)]
+    f = tmp_path / "pile.toml"
+    f.write_text("\n".join(lines))
+    assert main(["analyse", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert len(err) < 10_000 and "or more problems" in err and "... and" in err, err[:300]
+
+
+def test_lone_surrogate_and_non_utf8_terminal(tmp_path, capsys, monkeypatch):
+    import io
+    import sys
+    f = tmp_path / "m.json"
+    f.write_text('{"joints": [["a\\ud800", "b"], ["b", "c"], ["c", "a"]]}')
+    assert main(["analyse", str(f)]) == 2
+    assert "lone surrogate" in capsys.readouterr().err
+    latin = io.TextIOWrapper(io.BytesIO(), encoding="ascii")
+    monkeypatch.setattr(sys, "stdout", latin)
+    g = tmp_path / "u.toml"
+    g.write_text(_four_bar_edit('"coupler"', '"шатун"'))
+    assert main(["solve", str(g), "--steps", "3"]) == 0
+    latin.flush()
+    assert b"\\u2192" in latin.buffer.getvalue()   # the arrow of the structure formula
