@@ -348,7 +348,7 @@ def pyslvs_losses(m: Mechanism) -> list[str]:
     --------
     >>> from multiloop.inputs import load_mechanism
     >>> pyslvs_losses(load_mechanism("crank_slider_loaded"))[:2]
-    ['masses and inertias (crank, rod, slider)', 'forces (gas)']
+    ['masses and inertias (crank, rod, piston)', 'forces (gas)']
     """
     out = []
     heavy = [lk.name for lk in m.links if lk.mass is not None or lk.inertia is not None or lk.cg is not None]
