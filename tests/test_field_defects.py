@@ -201,3 +201,52 @@ def test_lone_surrogate_and_non_utf8_terminal(tmp_path, capsys, monkeypatch):
     assert main(["solve", str(g), "--steps", "3"]) == 0
     latin.flush()
     assert b"\\u2192" in latin.buffer.getvalue()   # the arrow of the structure formula
+
+
+# --- 7. huge numbers on the command line ---------------------------------------------------
+@pytest.mark.parametrize("argv,words", [
+    (["solve", "four_bar", "--from", "0", "--to", "1e308", "--steps", "5"], "at most 1e+09 deg"),
+    (["solve", "stephenson_3_triad", "--from", "1e20", "--to", "1e20"], "at most 1e+09 deg"),
+    (["solve", "dyad_rrp", "--from", "0", "--to", "1e12"], "at most"),
+    (["atlas", "--links", "6", "--dof", "1", "--limit", str(2 ** 63)], "--limit"),
+    (["atlas", "--links", "6", "--dof", "1", "--limit", "-1"], "--limit"),
+    (["atlas", "--links", "6", "--dof", str(2 ** 63)], "--dof"),
+    (["atlas", "--links", "6", "--dof", "1", "--max-multiplicity", str(2 ** 63)], "--max-multiplicity"),
+    (["atlas", "--links", "6", "--dof", "1", "--max-link-degree", str(2 ** 64)], "--max-link-degree"),
+    (["atlas", "--links", "6", "--dof", "1", "--workers", str(2 ** 63)], "--workers"),
+    (["atlas", "--links", "6", "--dof", "1", "--html", "h", "--html-limit", str(2 ** 63)], "--html-limit"),
+    (["atlas", "--links", "6", "--dof", "1", "--query", "K ="], "--query"),
+])
+def test_out_of_range_numbers_exit_2_and_create_nothing(tmp_path, monkeypatch, capsys, argv, words):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv + (["--db", "a.sqlite"] if argv[0] == "atlas" else [])) == 2
+    err = capsys.readouterr().err
+    assert words in err and "internal" not in err, err
+    assert not list(tmp_path.iterdir()), "a rejected run created a file"
+
+
+def test_dof_hint_covers_every_f(capsys):
+    assert main(["atlas", "--links", "6", "--dof", "4", "--db", ":memory:"]) == 2
+    assert "an even F (2, 4, …) an odd n" in capsys.readouterr().err
+
+
+def test_atlas_disk_full_is_reported_as_disk_full(tmp_path):
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+    from multiloop.topo.errors import OutputError
+    with Atlas(tmp_path / "full.sqlite") as atlas:
+        pages = atlas.con.execute("PRAGMA page_count").fetchone()[0]
+        atlas.con.execute(f"PRAGMA max_page_count = {pages + 2}")   # SQLITE_FULL, as a full disk
+        with pytest.raises(OutputError, match="disk full"):
+            atlas.build(SynthesisOptions(10, 1), progress=False, workers=1)
+
+
+def test_atlas_list_columns_match_the_printed_form(tmp_path, capsys):
+    db = str(tmp_path / "a.sqlite")
+    assert main(["atlas", "--links", "8", "--dof", "1", "--db", db, "--no-progress", "--json"]) == 0
+    capsys.readouterr()
+    counts = []
+    for q in ("La = '4-4-6-6'", "La = '[4, 4, 6, 6]'", "LA = '4-4'"):
+        assert main(["atlas", "--db", db, "--query", q, "--json"]) == 0
+        counts.append(json.loads(capsys.readouterr().out)["count"])
+    assert counts[0] == counts[1] > 0 and counts[2] > 0
