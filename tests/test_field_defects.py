@@ -250,3 +250,13 @@ def test_atlas_list_columns_match_the_printed_form(tmp_path, capsys):
         assert main(["atlas", "--db", db, "--query", q, "--json"]) == 0
         counts.append(json.loads(capsys.readouterr().out)["count"])
     assert counts[0] == counts[1] > 0 and counts[2] > 0
+
+
+def test_engine_json_has_no_bare_nan():
+    import dataclasses
+    from multiloop.catalogue.engines import single_cylinder_spec
+    from multiloop.kin.engine import analyse_engine
+    res = analyse_engine(single_cylinder_spec(), 72, check=False)
+    bad = dataclasses.replace(res, balancing=np.full_like(res.balancing, np.nan), cycle_integral=math.nan)
+    doc = json.loads(json.dumps(bad.as_dict(), allow_nan=False))
+    assert doc["balancing"][0] is None and doc["cycle_integral"] is None
