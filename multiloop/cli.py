@@ -74,8 +74,11 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
+    from multiloop.outputs import quiet_warnings  # noqa: PLC0415
+
     try:
-        return int(args._run(args) or 0)
+        with quiet_warnings(f"multiloop {args.command}"):   # one line per warning, no source path
+            return int(args._run(args) or 0)
     except LinkageError as exc:
         print(f"multiloop {args.command}: error: {cap_message(str(exc))}", file=sys.stderr)
         return 2

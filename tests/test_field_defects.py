@@ -317,3 +317,40 @@ def test_newton_tracks_dyad_rpr_at_any_scale(k, monkeypatch):
 def test_dyad_rpr_solves_at_scale_1e_minus_8():
     m = _moved(load_mechanism("dyad_rpr"), 1e-8, (0.0, 0.0))
     assert solve(m, np.radians(np.arange(0.0, 360.0, 10.0))).ok.all()
+
+
+# --- 12. names with $ in plots, log-axis ticks, warnings -----------------------------------
+@pytest.mark.parametrize("cmd", ["solve", "forces", "check"])
+def test_dollar_names_plot(tmp_path, capsys, cmd):
+    f = tmp_path / "d.toml"
+    f.write_text(FOUR_BAR.read_text().replace('"O2"', '"$O_2$"').replace('"coupler"', '"$x^{$"')
+                 .replace('name = "P"', 'name = "$\\\\alpha"'))
+    out = tmp_path / "p.png"
+    assert main([cmd, str(f), "--plot", str(out)]) == 0, capsys.readouterr().err
+    assert out.stat().st_size > 0
+
+
+def test_log_axis_ticks_stay_mathtext_and_names_literal():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from multiloop.kin.figures.style import no_mathtext
+    fig, ax = plt.subplots()
+    ax.plot([1, 2, 3], [10, 100, 1000], label="$x^{$")
+    ax.set_yscale("log")
+    ax.legend()
+    ax.set_title("cost $5 $6")
+    no_mathtext(fig)
+    fig.canvas.draw()
+    ticks = [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
+    assert ticks and all("mathdefault" in t for t in ticks)
+    assert ax.get_title() == "cost \\$5 \\$6"
+    assert ax.get_legend().get_texts()[0].get_text() == "\\$x^{\\$"
+    plt.close(fig)
+
+
+def test_warnings_are_one_line_without_source_paths(capsys):
+    assert main(["forces", "dyad_prp", "--steps", "360"]) == 0
+    err = capsys.readouterr().err
+    assert "multiloop forces: warning: singular positions" in err
+    assert ".py:" not in err and "SingularityWarning" not in err
