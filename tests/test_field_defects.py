@@ -354,3 +354,45 @@ def test_warnings_are_one_line_without_source_paths(capsys):
     err = capsys.readouterr().err
     assert "multiloop forces: warning: singular positions" in err
     assert ".py:" not in err and "SingularityWarning" not in err
+
+
+# --- Smaller -------------------------------------------------------------------------------
+def test_readme_pyslvs_example_is_shipped_and_prints_what_the_readme_shows(monkeypatch, capsys):
+    readme = (ROOT / "README.md").read_text()
+    monkeypatch.chdir(ROOT / "docs/examples")
+    assert main(["decompose", "crank_slider_rp.pyslvs"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first in readme and first.startswith("structure formula: I(0,1)")
+
+
+def test_convert_writes_one_line_per_vector(tmp_path):
+    out = tmp_path / "c.toml"
+    assert main(["convert", "crank_slider_loaded", str(out)]) == 0
+    text = out.read_text()
+    assert "\nat = [" in text and "at = [\n" not in text and "links = [\n" not in text
+    assert _canonical(load(out)) == _canonical(load_mechanism("crank_slider_loaded"))
+
+
+def test_check_options(tmp_path, capsys):
+    chain = tmp_path / "chain.toml"
+    chain.write_text('joints = [["a", "b"], ["b", "c"], ["c", "d"], ["d", "a"]]\n')
+    assert main(["check", str(chain)]) == 2
+    assert str(chain) in capsys.readouterr().err
+    assert main(["check", "four_bar", "--min-transmission", "100"]) == 2
+    assert "between 0 and 90" in capsys.readouterr().err
+    assert main(["check", "four_bar", "--output", "B", "--json"]) == 0
+    assert "joint B" in json.dumps(json.loads(capsys.readouterr().out))
+    for argv in (["--positions", "-60", "120"], ["--positions=-60,120"], ["--positions", "30,60"]):
+        assert main(["check", "four_bar", "--json", *argv]) == 0, argv
+        json.loads(capsys.readouterr().out)
+
+
+def test_solve_plot_draws_a_regular_pose(tmp_path, monkeypatch):
+    from multiloop.kin.figures import mechanism as fm
+    shown = []
+    real = fm.plot_mechanism
+    monkeypatch.setattr(fm, "plot_mechanism", lambda st, index=0, **kw: shown.append(index) or real(st, index, **kw))
+    # dyad_prp's guides are parallel (singular) at 120 deg: a sweep starting there
+    assert main(["solve", "dyad_prp", "--from", "120", "--to", "150", "--steps", "4",
+                 "--plot", str(tmp_path / "p.png")]) == 0
+    assert shown == [1]

@@ -490,10 +490,42 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
     return doc
 
 
+def _toml_value(v: Any) -> str:
+    """One TOML value on one line: a string, bool, number or (nested) array."""
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")  # TOML escapes DEL too
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+
+
+def _toml_pair(key: str, v: Any) -> str:
+    """``key = value``; an array of arrays (a force table) gets one row per line."""
+    if isinstance(v, list) and v and all(isinstance(x, list) for x in v):
+        return f"{key} = [\n" + "".join(f"    {_toml_value(x)},\n" for x in v) + "]"
+    return f"{key} = {_toml_value(v)}"
+
+
 def dumps_toml(m: Mechanism) -> str:
-    """TOML text of a mechanism."""
-    import tomli_w
-    return tomli_w.dumps(mechanism_to_dict(m))
+    """TOML text of a mechanism in the layout of the catalogue files: the header keys,
+    then one ``[[link]]``, ``[[joint]]``, … table per item, every pair and vector on
+    one line (round-trips through :func:`loads`).
+
+    Examples
+    --------
+    >>> print(dumps_toml(loads('joints = [["a", "b"], ["b", "c"], ["c", "a"]]')).splitlines()[12])
+    links = ["a", "b"]
+    """
+    doc = mechanism_to_dict(m)
+    lines = [_toml_pair(k, v) for k, v in doc.items() if not isinstance(v, list) or k == "gravity"]
+    for key, tables in doc.items():
+        if key == "gravity" or not isinstance(tables, list):
+            continue
+        for t in tables:
+            lines += ["", f"[[{key}]]"] + [_toml_pair(k, v) for k, v in t.items()]
+    return "\n".join(lines).lstrip("\n") + "\n"
 
 
 def dumps_json(m: Mechanism) -> str:
