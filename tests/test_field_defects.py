@@ -396,3 +396,24 @@ def test_solve_plot_draws_a_regular_pose(tmp_path, monkeypatch):
     assert main(["solve", "dyad_prp", "--from", "120", "--to", "150", "--steps", "4",
                  "--plot", str(tmp_path / "p.png")]) == 0
     assert shown == [1]
+
+
+# --- found by the fuzzing stage ----------------------------------------------------------
+@pytest.mark.parametrize("seed,old,new", [
+    ("platforms/doronin_platform.toml", "center = [-2.0, -1.5, 0.0]", "center = [-2.0, -1e308, 0.0]"),
+    ("platforms/doronin_platform.toml", "g = 9.81", "g = 1e308"),
+    ("platforms/doronin_platform.toml", "weight = 2500.0", "weight = 1e-320"),
+    ("engines/single_cylinder.toml", "bore = 0.072", "bore = 1e308"),
+    ("engines/single_cylinder.toml", "rod_length = 0.110", "rod_length = 1e308"),
+    ("engines/single_cylinder.toml", "compression_ratio = 10.0", "compression_ratio = 1e308"),
+    ("engines/single_cylinder.toml", "n_compression = 1.35", "n_compression = 1e308"),
+])
+def test_extreme_engine_and_platform_numbers_exit_2(tmp_path, capsys, seed, old, new):
+    text = (ROOT / "catalogue" / seed).read_text()
+    assert old in text
+    f = tmp_path / "x.toml"
+    f.write_text(text.replace(old, new))
+    argv = ["platform", str(f)] if seed.startswith("platforms") else ["engine", str(f), "--steps", "16"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "internal error" not in err and err.startswith("multiloop"), err
