@@ -57,7 +57,7 @@ from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder
 
 __all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs",
            "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs", "pyslvs_losses",
-           "MAX_BYTES"]
+           "MAX_YAML_DEPTH"]
 
 GROUND = "ground"
 _JOINT = re.compile(r"J\[\s*(RP|R|P)\s*,(?P<body>[^J]*?)L\[(?P<links>[^\]]*)\]\s*\]")
