@@ -56,7 +56,7 @@ _REQUIRED = {"link": ("name",), "joint": ("name", "links"), "driver": ("joint",)
 #: deepest nesting of tables and arrays a document may have (a mechanism needs 4)
 MAX_DEPTH = 64
 
-#: largest input file read (bytes); the biggest bundled file is under 40 kB
+#: largest input file read (bytes); the biggest bundled mechanism file is under 5 kB
 MAX_INPUT_BYTES = 8 << 20
 
 
