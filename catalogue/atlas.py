@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, OutputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
 
@@ -115,6 +115,10 @@ def _tokens(text: str) -> list[tuple[str, str]]:
     return out
 
 
+#: columns stored as JSON lists; a query may give them as printed (``La = '4-4-5-5-5'``)
+_LIST_COLUMNS = {"LA", "MJA", "loops"}
+_DASHED = re.compile(r"\d+(-\d+)*")
+
 #: limits of a query: nested parentheses, comparisons, integer magnitude (SQLite INTEGER)
 MAX_QUERY_DEPTH = 50
 MAX_QUERY_TERMS = 200
@@ -141,7 +145,8 @@ def parse_query(text: str) -> tuple[str, list]:
     Grammar: ``expr := term (OR term)*``, ``term := factor (AND factor)*``,
     ``factor := NOT factor | '(' expr ')' | column op value``; ``op`` is one of
     ``= == != <> < <= > >=``, ``value`` an integer, a quoted string or
-    ``true``/``false``.
+    ``true``/``false``.  A list column (``LA``, ``MJA``, ``La``) matches its stored
+    text (``'[4, 4, 5, 5, 5]'``) or the form the listing prints (``'4-4-5-5-5'``).
 
     Raises
     ------
@@ -154,6 +159,8 @@ def parse_query(text: str) -> tuple[str, list]:
     ('("V" = ?) AND ("K" = ?)', [2, 4])
     >>> parse_query("code_star = '[8110]/[3-0-0]' or not planar = true")
     ('("code_star" = ?) OR (NOT ("planar" = ?))', ['[8110]/[3-0-0]', 1])
+    >>> parse_query("La = '4-4-5-5-5'")[1]
+    ['[4, 4, 5, 5, 5]']
     """
     toks = _tokens(text)
     _check_size(toks)
@@ -219,7 +226,10 @@ class _QueryParser:
             self.bad("a comparison operator")
         self.pos += 1
         op = {"==": "=", "<>": "!="}.get(op, op)
-        self.params.append(self.value())
+        value = self.value()
+        if col in _LIST_COLUMNS and isinstance(value, str) and _DASHED.fullmatch(value.strip()):
+            value = json.dumps([int(v) for v in value.strip().split("-")])   # 4-4-5 as printed
+        self.params.append(value)
         self.pos += 1
         return f'("{col}" {op} ?)'
 
@@ -285,13 +295,28 @@ class Atlas:
 
     @contextmanager
     def _tx(self):
+        """One write transaction; a full disk is an :class:`OutputError` naming the file
+        (the rollback that follows it must not hide it)."""
         try:
             self.con.execute("BEGIN IMMEDIATE")
             yield self.con
             self.con.execute("COMMIT")
-        except BaseException:
-            self.con.execute("ROLLBACK")
+        except sqlite3.OperationalError as exc:
+            self._rollback()
+            if "full" in str(exc):     # SQLITE_FULL: "database or disk is full"
+                raise OutputError(explain(f"--db {self.path!r}", expected="room to store the atlas",
+                                          got="disk full", hint="free some space and run again: the "
+                                          "build resumes from the tasks already stored")) from None
             raise
+        except BaseException:
+            self._rollback()
+            raise
+
+    def _rollback(self) -> None:
+        try:
+            self.con.execute("ROLLBACK")
+        except sqlite3.Error:   # SQLite already rolled back (a full disk does)
+            pass
 
     # ------------------------------------------------------------------ build
     def _build_id(self, opts: SynthesisOptions, loops: bool) -> int:

@@ -13,6 +13,7 @@ from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .forces import reduce_inputs, table_period
+from .forces.solver import MAX_ANGLE_DEG, MAX_SLIDE_SIZES
 
 __all__ = ["MAX_STEPS", "MAX_CYCLE_STEPS", "input_range", "si_inputs", "cycle_inputs"]
 
@@ -30,14 +31,31 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
     mechanism's size (the largest extent of its reference joints), N points.
     ``start``/``stop``: N points from ``start`` to ``stop`` inclusive, exactly
     ``start + k·step``.  Every driver takes the same values.
+
+    Raises
+    ------
+    InputError
+        ``steps`` outside 1…:data:`MAX_STEPS`; only one of ``start``/``stop``; a
+        non-finite one, or one beyond the limits of the ``forces`` and ``check`` commands
+        (1e9 deg for an R driver, 100 × the mechanism's size for a P driver).
     """
     if steps is not None and not 1 <= steps <= MAX_STEPS:
         raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
     if (start is None) != (stop is None):
         raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
+    kinds = {m.joint(d.joint).kind for d in m.drivers}
+    xy = np.array([j.at for j in m.joints if j.at is not None], float).reshape(-1, 2)
+    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    limit = min(MAX_ANGLE_DEG if JointKind.R in kinds else np.inf,
+                MAX_SLIDE_SIZES * size if JointKind.P in kinds else np.inf)
     for name, v in (("--from", start), ("--to", stop)):
         if v is not None and not np.isfinite(v):
             raise InputError(explain(name, expected="a finite number", got=str(v)))
+        if v is not None and abs(v) > limit:
+            raise InputError(explain(name, expected=f"a magnitude of at most {limit:.6g}"
+                                     + (" deg" if JointKind.R in kinds and limit == MAX_ANGLE_DEG else
+                                        f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
+                                     got=f"{v:g}"))
     n = steps if steps is not None else 36
     if start is not None:
         if n == 1:
@@ -45,11 +63,8 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
         out = start + np.arange(n) * ((stop - start) / (n - 1))
         out[-1] = stop
         return out
-    kinds = {m.joint(d.joint).kind for d in m.drivers}
     if kinds == {JointKind.R}:
         return np.arange(n) * (360.0 / n)
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
     if kinds == {JointKind.P}:
         return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
     raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",

@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-from multiloop.topo.errors import LinkageError
+from multiloop.topo.errors import LinkageError, cap_message
 
 COMMANDS = {
     "analyse": "structural report of a chain or mechanism (Pozhbelko & Kuts 2020 numbers)",
@@ -56,16 +56,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _tolerant_streams() -> None:
+    """Print what the terminal cannot encode as escapes (a Latin-1 or ASCII terminal, a
+    lone surrogate in a name) instead of failing with UnicodeEncodeError."""
+    for stream in (sys.stdout, sys.stderr):
+        if hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # pragma: no cover - a detached or closed stream
+                pass
+
+
 def main(argv: list[str] | None = None) -> int:
+    _tolerant_streams()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2
+    from multiloop.outputs import quiet_warnings  # noqa: PLC0415
+
     try:
-        return int(args._run(args) or 0)
+        with quiet_warnings(f"multiloop {args.command}"):   # one line per warning, no source path
+            return int(args._run(args) or 0)
     except LinkageError as exc:
-        print(f"multiloop {args.command}: error: {exc}", file=sys.stderr)
+        print(f"multiloop {args.command}: error: {cap_message(str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
@@ -74,12 +89,12 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     except OSError as exc:   # the environment refused a file: not a bug of multiloop
         where = f"'{exc.filename}'" if exc.filename else "a file"
-        print(f"multiloop {args.command}: error: {where}: {exc.strerror or exc}", file=sys.stderr)
+        print(cap_message(f"multiloop {args.command}: error: {where}: {exc.strerror or exc}"), file=sys.stderr)
         return 2
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         if args.debug:
             raise
-        print(f"multiloop {args.command}: internal error: {type(exc).__name__}: {exc} "
+        print(f"multiloop {args.command}: internal error: {type(exc).__name__}: {cap_message(str(exc))} "
               "(run with --debug for the traceback, and please report it)", file=sys.stderr)
         return 1
 

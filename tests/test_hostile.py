@@ -206,3 +206,39 @@ def test_case_count():
     """The issue asks for a run of 50 or more hostile files and argument sets."""
     assert len(CASES) >= 50
     json.dumps([c[0] for c in CASES])
+
+
+# --- the fuzzing stage ----------------------------------------------------------------------
+#: cases of the fuzzing stage: a few hundred in CI, thousands with MULTILOOP_FUZZ=5000
+FUZZ_CASES = int(os.environ.get("MULTILOOP_FUZZ", "300"))
+FUZZ_SEED = int(os.environ.get("MULTILOOP_FUZZ_SEED", "22"))
+#: address-space cap of the child (MB): a runaway allocation fails there, not in CI
+FUZZ_MEMORY_MB = 3000
+
+
+def _memory_cap():
+    import resource
+    limit = FUZZ_MEMORY_MB << 20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def test_fuzzing_stage():
+    """Seeded mutations of TOML, JSON and .pyslvs files, engine and platform files, huge
+    integers and out-of-range numbers on the command line, non-regular and oversized
+    inputs, and ``convert`` round trips compared by canonical form (tests/fuzz.py), in a
+    child process whose address space is capped with ``resource.setrlimit``.  Every case
+    exits 0 or 2 with no traceback, a message under 10 kB and nothing destroyed."""
+    import subprocess
+    import sys
+
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MPLBACKEND="Agg")
+    proc = subprocess.run([sys.executable, str(ROOT / "tests/fuzz.py"), str(FUZZ_CASES), str(FUZZ_SEED)],
+                          capture_output=True, text=True, env=env, preexec_fn=_memory_cap,
+                          timeout=120 + FUZZ_CASES)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    summary = json.loads(proc.stdout.strip().splitlines()[-1])
+    print(json.dumps({k: summary[k] for k in ("cases", "seed", "by_exit_code", "by_kind")}))
+    assert summary["cases"] == FUZZ_CASES
+    assert not summary["failures"], json.dumps(summary["failures"][:5], indent=1)
+    assert set(summary["by_exit_code"]) <= {"0", "2"}
+    assert int(summary["by_exit_code"].get("0", 0)) > FUZZ_CASES // 10, "too few cases got past the readers"

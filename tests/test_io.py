@@ -275,9 +275,14 @@ def test_unreadable_input_is_exit_2_naming_the_path(tmp_path, capsys, monkeypatc
     f = tmp_path / "locked.toml"
     f.write_text(BARE)
 
-    def denied(self):
-        raise PermissionError(13, "Permission denied", str(self))
-    monkeypatch.setattr(Path, "read_bytes", denied)
+    import os
+    real_open = os.open
+
+    def denied(path, *args, **kwargs):   # the tests run as root, where chmod 000 still reads
+        if Path(path) == f:
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+    monkeypatch.setattr(os, "open", denied)
     for command in ("analyse", "decompose", "solve"):
         assert main([command, str(f)]) == 2
         err = capsys.readouterr().err

@@ -37,7 +37,16 @@ __all__ = [
     "OutputError",
     "SingularityWarning",
     "explain",
+    "list_problems",
+    "cap_message",
+    "MAX_MESSAGE",
 ]
+
+#: longest message the command line prints (characters)
+MAX_MESSAGE = 8000
+
+#: problems named one by one in a message; the rest are counted
+MAX_LISTED = 8
 
 
 def explain(what: str, expected: str | None = None, got: str | None = None,
@@ -59,6 +68,52 @@ def explain(what: str, expected: str | None = None, got: str | None = None,
     if hint:
         msg += f"; hint: {hint}"
     return msg
+
+
+def list_problems(problems: list[str], where: str = "the mechanism", more: bool = False) -> str:
+    """One message for a list of problems: the first :data:`MAX_LISTED` named, the rest counted.
+
+    ``more`` says the search stopped early, so the count is a lower bound.
+
+    Examples
+    --------
+    >>> list_problems(["a: bad"])
+    'a: bad'
+    >>> print(list_problems([f"p{i}" for i in range(10)]))
+    10 problems in the mechanism (the first 8 shown):
+      - p0
+      - p1
+      - p2
+      - p3
+      - p4
+      - p5
+      - p6
+      - p7
+      - ... and 2 more
+    """
+    if len(problems) == 1 and not more:
+        return cap_message(problems[0])
+    n = f"{len(problems)}{' or more' if more else ''}"
+    shown = problems[:MAX_LISTED]
+    head = f"{n} problems in {where}" + (f" (the first {len(shown)} shown)" if len(problems) > len(shown) else "")
+    rest = len(problems) - len(shown)
+    lines = [cap_message(p, MAX_MESSAGE // (MAX_LISTED + 2)) for p in shown]
+    if rest or more:
+        lines.append(f"... and {rest}{' or more' if more else ''} more")
+    return head + ":\n  - " + "\n  - ".join(lines)
+
+
+def cap_message(text: str, limit: int = MAX_MESSAGE) -> str:
+    """``text`` cut to at most about ``limit`` characters, saying how much was cut.
+
+    Examples
+    --------
+    >>> cap_message("x" * 50, 20)
+    'xxxxxxxxxxxxxxxxxxxx… (30 more characters)'
+    """
+    if len(text) <= limit:
+        return text
+    return text[:limit] + f"… ({len(text) - limit} more characters)"
 
 
 class LinkageError(Exception):

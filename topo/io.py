@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import stat
 import sys
 from pathlib import Path
 from typing import Any, Iterable
@@ -35,7 +37,8 @@ from .model import Driver, Joint, JointKind, Link, Load, Mechanism, MechanismBui
 
 __all__ = ["load", "loads", "mechanism_from_dict", "mechanism_to_dict", "dumps_toml",
            "dumps_json", "read_document", "read_number", "read_vector", "read_string", "read_bool",
-           "read_names", "read_table", "read_tables", "table_label", "MAX_DEPTH"]
+           "read_names", "read_table", "read_tables", "table_label", "read_input_bytes", "MAX_DEPTH",
+           "MAX_INPUT_BYTES"]
 
 _TOP_KEYS = {"name", "description", "source", "joints", "link", "joint", "driver", "point",
              "force", "gravity", "reconstruction", "notes"}
@@ -52,6 +55,9 @@ _REQUIRED = {"link": ("name",), "joint": ("name", "links"), "driver": ("joint",)
 
 #: deepest nesting of tables and arrays a document may have (a mechanism needs 4)
 MAX_DEPTH = 64
+
+#: largest input file read (bytes); the biggest bundled mechanism file is under 5 kB
+MAX_INPUT_BYTES = 8 << 20
 
 
 def read_document(path: str | Path) -> dict[str, Any]:
@@ -77,10 +83,20 @@ def read_document(path: str | Path) -> dict[str, Any]:
     return _parse_json(text, str(p)) if suffix == ".json" else _parse_toml(text, str(p))
 
 
-def _read_text(p: Path) -> str:
-    """The file's text as UTF-8 (a leading byte-order mark is dropped)."""
+def read_input_bytes(path: str | Path, limit: int = MAX_INPUT_BYTES) -> bytes:
+    """The bytes of a regular input file of at most ``limit`` bytes.
+
+    A FIFO, a device (``/dev/zero``), a socket or a directory is refused before anything
+    is read, so a bad path can neither hang the reader nor exhaust the memory.
+
+    Raises
+    ------
+    InputError
+        Missing, unreadable or non-regular file; a file larger than ``limit``.
+    """
+    p = Path(path)
     try:
-        data = p.read_bytes()
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except FileNotFoundError:
         raise InputError(explain(f"file '{p}'", expected="an existing file", got="nothing there")) from None
     except IsADirectoryError:
@@ -91,6 +107,27 @@ def _read_text(p: Path) -> str:
     except OSError as exc:
         raise InputError(explain(f"file '{p}'", expected="a readable file",
                                  got=exc.strerror or type(exc).__name__)) from None
+    with os.fdopen(fd, "rb") as f:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a regular file")
+            raise InputError(explain(f"file '{p}'", expected="a regular file", got=kind,
+                                     hint="save the input to a file first"))
+        try:
+            data = f.read(limit + 1)
+        except OSError as exc:
+            raise InputError(explain(f"file '{p}'", expected="a readable file",
+                                     got=exc.strerror or type(exc).__name__)) from None
+    if len(data) > limit:
+        raise InputError(explain(f"file '{p}'", expected=f"at most {limit >> 20} MiB",
+                                 got="a larger file", hint="an input file describes one mechanism"))
+    return data
+
+
+def _read_text(p: Path) -> str:
+    """The file's text as UTF-8 (a leading byte-order mark is dropped)."""
+    data = read_input_bytes(p)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -119,6 +156,8 @@ def _parse_toml(text: str, where: str) -> dict[str, Any]:
         doc = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{where}: TOML syntax error: {exc}") from None
+    except ValueError as exc:   # an integer of more than 4300 digits
+        raise InputError(explain(where, expected="numbers of a sensible size", got=str(exc)[:120])) from None
     except RecursionError:
         raise _too_deep(where) from None
     _check_depth(doc, where)
@@ -142,6 +181,10 @@ def _parse_json(text: str, where: str) -> dict[str, Any]:
         doc = json.loads(text.removeprefix("\ufeff"), object_pairs_hook=_unique_keys(where))
     except json.JSONDecodeError as exc:
         raise InputError(f"{where}: JSON syntax error: {exc.msg} at line {exc.lineno} column {exc.colno}") from None
+    except InputError:
+        raise
+    except ValueError as exc:   # an integer of more than 4300 digits
+        raise InputError(explain(where, expected="numbers of a sensible size", got=str(exc)[:120])) from None
     except RecursionError:
         raise _too_deep(where) from None
     if not isinstance(doc, dict):
@@ -199,7 +242,11 @@ def read_number(value: Any, where: str, *, positive: bool = False, non_negative:
     noun += f" ({unit})" if unit else ""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise InputError(explain(where, expected=noun, got=repr(value)[:60]))
-    f = float(value)
+    try:
+        f = float(value)
+    except OverflowError:   # an integer beyond the float range
+        raise InputError(explain(where, expected=noun.replace("a ", "a finite ", 1),
+                                 got=f"an integer of {int(value).bit_length()} bits, beyond the float range")) from None
     if not math.isfinite(f):
         raise InputError(explain(where, expected=noun.replace("a ", "a finite ", 1), got=repr(value)[:60]))
     if (positive and f <= 0) or (non_negative and f < 0):
@@ -229,6 +276,11 @@ def read_string(value: Any, where: str, *, allow_empty: bool = False) -> str:
     if not isinstance(value, str) or not (value or allow_empty):
         raise InputError(explain(where, expected="a string" if allow_empty else "a non-empty string",
                                  got=repr(value)[:60]))
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:   # a lone surrogate (JSON "\ud800") cannot be written back
+        raise InputError(explain(where, expected="a string of Unicode characters",
+                                 got=f"a lone surrogate in {ascii(value)[:60]}")) from None
     return value
 
 
@@ -423,7 +475,9 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
     if m.loads:
         doc["force"] = []
         for ld in m.loads:
-            t = {"link": ld.link, "value": list(ld.value)}
+            t = {"link": ld.link}
+            if ld.table is None:
+                t["value"] = list(ld.value)
             if ld.at is not None:
                 t["at"] = list(ld.at)
             if ld.table is not None:
@@ -436,10 +490,42 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
     return doc
 
 
+def _toml_value(v: Any) -> str:
+    """One TOML value on one line: a string, bool, number or (nested) array."""
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")  # TOML escapes DEL too
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+
+
+def _toml_pair(key: str, v: Any) -> str:
+    """``key = value``; an array of arrays (a force table) gets one row per line."""
+    if isinstance(v, list) and v and all(isinstance(x, list) for x in v):
+        return f"{key} = [\n" + "".join(f"    {_toml_value(x)},\n" for x in v) + "]"
+    return f"{key} = {_toml_value(v)}"
+
+
 def dumps_toml(m: Mechanism) -> str:
-    """TOML text of a mechanism."""
-    import tomli_w
-    return tomli_w.dumps(mechanism_to_dict(m))
+    """TOML text of a mechanism in the layout of the catalogue files: the header keys,
+    then one ``[[link]]``, ``[[joint]]``, … table per item, every pair and vector on
+    one line (round-trips through :func:`loads`).
+
+    Examples
+    --------
+    >>> print(dumps_toml(loads('joints = [["a", "b"], ["b", "c"], ["c", "a"]]')).splitlines()[12])
+    links = ["a", "b"]
+    """
+    doc = mechanism_to_dict(m)
+    lines = [_toml_pair(k, v) for k, v in doc.items() if not isinstance(v, list) or k == "gravity"]
+    for key, tables in doc.items():
+        if key == "gravity" or not isinstance(tables, list):
+            continue
+        for t in tables:
+            lines += ["", f"[[{key}]]"] + [_toml_pair(k, v) for k, v in t.items()]
+    return "\n".join(lines).lstrip("\n") + "\n"
 
 
 def dumps_json(m: Mechanism) -> str:

@@ -24,7 +24,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
-from .errors import InputError, TopologyError, explain
+from .errors import InputError, TopologyError, explain, list_problems
 
 __all__ = [
     "JointKind",
@@ -342,11 +342,11 @@ class MechanismBuilder:
         joints = _collect_joints(self.joints, links, problems)
         problems += _geometry_problems(joints)
         drivers = _collect_drivers(self.drivers, joints, links, problems)
-        problems += _attachment_problems(self.points, self.loads, links)
+        problems += _attachment_problems(self.points, self.loads, links, {j.name for j in joints})
         problems += _mass_problems(links.values())
         if problems:
-            raise InputError("; ".join(problems) if len(problems) == 1 else
-                             f"{len(problems)} problems in the mechanism:\n  - " + "\n  - ".join(problems))
+            more = _CUT in problems
+            raise InputError(list_problems([p for p in problems if p != _CUT], more=more))
         comps = _components(list(links), joints)
         if len(comps) > 1:
             desc = " | ".join("{" + ", ".join(sorted(c)) + "}" for c in comps)
@@ -439,17 +439,27 @@ def _geometry_problems(joints: Sequence[Joint]) -> list[str]:
     if with_at and len(with_at) != len(joints):
         missing = [j.name for j in joints if j.at is None]
         return [explain("geometry", expected="'at' on every joint or on none", got=f"missing on {', '.join(missing)}")]
-    pins = [j for j in with_at if j.kind is JointKind.R]
+    order = {j.name: i for i, j in enumerate(joints)}
+    pins = sorted((j for j in with_at if j.kind is JointKind.R), key=lambda j: j.at[0])
     if len(pins) < 2:
         return []
     xs, ys = [j.at[0] for j in with_at], [j.at[1] for j in with_at]
     tol = 1e-9 * max(max(xs) - min(xs), max(ys) - min(ys))
-    out = []
-    for i, a in enumerate(pins):
+    out: list[str] = []
+    for i, a in enumerate(pins):      # a sweep along x: only pins within tol in x are compared
         for b in pins[i + 1:]:
+            if b.at[0] - a.at[0] > tol:
+                break
             if math.dist(a.at, b.at) <= tol:
-                out.append(_coincident_pins(a, b))
+                if len(out) == _MAX_PAIRS:
+                    return out + [_CUT]
+                out.append(_coincident_pins(*sorted((a, b), key=lambda j: order[j.name])))
     return out
+
+
+#: coincident pairs reported before the search stops (a pile of pins has n² pairs)
+_MAX_PAIRS = 200
+_CUT = "\x00more"
 
 
 def _coincident_pins(a: Joint, b: Joint) -> str:
@@ -491,8 +501,9 @@ def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, 
 
 
 def _attachment_problems(points: Iterable[TracerPoint], loads: Iterable[Load],
-                         links: dict[str, Link]) -> list[str]:
-    """Tracer points and loads sit on known links; point names are unique."""
+                         links: dict[str, Link], joint_names: set[str] = frozenset()) -> list[str]:
+    """Tracer points and loads sit on known links; point names are unique and no point
+    takes a joint's name (a point and a joint share the output columns of a solve)."""
     out: list[str] = []
     seen: set[str] = set()
     for p in points:
@@ -500,6 +511,9 @@ def _attachment_problems(points: Iterable[TracerPoint], loads: Iterable[Load],
             out.append(explain(f"[[point]] '{p.name}' link", expected="a known link", got=repr(p.link)))
         if p.name in seen:
             out.append(explain(f"[[point]] '{p.name}'", expected="a unique name", got="a duplicate"))
+        elif p.name in joint_names:
+            out.append(explain(f"[[point]] '{p.name}'", expected="a name no joint has",
+                               got="the name of a [[joint]]", hint="rename the point"))
         seen.add(p.name)
     for ld in loads:
         if ld.link not in links:

@@ -61,7 +61,7 @@ class SynthesisOptions:
             problems.append(explain(f"n = {self.n}, F = {self.F}",
                                     expected="3(n − 1) − F even (p = (3(n − 1) − F)/2 pairs)",
                                     got=f"3(n − 1) − F = {3 * (self.n - 1) - self.F}",
-                                    hint="F = 1 and 3 need an even n, F = 2 an odd n"))
+                                    hint="an odd F (1, 3, 5, …) needs an even n, an even F (2, 4, …) an odd n"))
         if problems:
             raise InputError("; ".join(problems))
 

@@ -43,6 +43,7 @@ from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 
 from ..forces import PointLoad, forces
 from ..forces.result import json_list
+from ..result import json_ready
 from .files import engine_from_dict, load_engine
 from .gas import STROKES, IndicatorDiagram
 from .model import Cylinder, EngineSpec
@@ -461,16 +462,17 @@ class EngineResult:
         return "\n".join(f"  {k:<{width}}  {v}" for k, v in rows)
 
     def as_dict(self) -> dict:
-        """The JSON-ready report (keys documented in docs/forces.md)."""
+        """The JSON-ready report (keys documented in docs/forces.md); every non-finite
+        number, scalar or in an array, is ``None`` (JSON null)."""
         s = self.spec
-        return {"name": s.name, "rpm": s.rpm, "omega": s.omega, "lambda": s.lam, "stroke": s.stroke,
+        return json_ready({"name": s.name, "rpm": s.rpm, "omega": s.omega, "lambda": s.lam, "stroke": s.stroke,
                 "swept_volume": s.swept_volume, "compression_ratio": s.compression_ratio,
                 "phi": json_list(self.phi_deg), "cylinders": self._cylinder_dicts(),
                 "balancing": json_list(self.balancing), "reactions": self._reaction_dicts(),
                 "virtual_power_residual": json_list(self.virtual_power_residual),
                 "approx_error": self.approx_error, "cyclogram": self.cyclogram,
                 "indicated_work": float(self.indicated_work.sum()), "cycle_integral": self.cycle_integral,
-                "general_check": self.general_check}
+                "general_check": self.general_check})
 
 
 #: most crank positions :func:`analyse_engine` computes

@@ -93,7 +93,12 @@ class IndicatorDiagram:
             if not getattr(self, key) >= 0.0:
                 raise InputError(explain(f"{where} {key}", expected="an absolute pressure >= 0 (Pa)",
                                          got=repr(getattr(self, key))))
-        p_c = self.intake_pressure * self.compression_ratio ** self.n_compression
+        try:
+            p_c = self.intake_pressure * self.compression_ratio ** self.n_compression
+        except OverflowError:
+            raise InputError(explain(f"{where} compression_ratio and n_compression",
+                                     expected="an end-of-compression pressure p·ε^n within the float range",
+                                     got=f"ε = {self.compression_ratio:g}, n = {self.n_compression:g}")) from None
         if self.peak_pressure < p_c:
             raise InputError(explain(
                 f"{where} peak_pressure",

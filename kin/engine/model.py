@@ -13,7 +13,11 @@ from multiloop.topo.errors import InputError, explain
 
 from .gas import IndicatorDiagram, PressureTable
 
-__all__ = ["Cylinder", "EngineSpec"]
+__all__ = ["Cylinder", "EngineSpec", "MAX_LENGTH"]
+
+#: largest engine length accepted (m): the limit of the commands' inputs, far beyond any
+#: engine, and small enough that squares and volumes stay finite
+MAX_LENGTH = 1e9
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,9 +104,11 @@ class EngineSpec:
     def validate(self) -> None:
         r, l, e = self.crank_radius, self.rod_length, self.offset
         for key in ("crank_radius", "rod_length", "bore"):
-            if not getattr(self, key) > 0:
-                raise InputError(explain(f"[engine] {key}", expected="a length > 0 (m)",
+            if not 0 < getattr(self, key) <= MAX_LENGTH:
+                raise InputError(explain(f"[engine] {key}", expected=f"a length > 0 and <= {MAX_LENGTH:g} (m)",
                                          got=repr(getattr(self, key))))
+        if not abs(e) <= MAX_LENGTH:
+            raise InputError(explain("[engine] offset", expected=f"|offset| <= {MAX_LENGTH:g} m", got=repr(e)))
         if not r + abs(e) < l:
             raise InputError(explain("[engine] rod_length", expected=f"> crank_radius + |offset| = {r + abs(e):g} m "
                                      "(the crank must turn fully)", got=repr(l)))

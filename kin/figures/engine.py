@@ -22,7 +22,7 @@ import numpy as np
 
 from multiloop.topo.model import JointKind
 
-from .style import no_mathtext
+from .style import escape_math, no_mathtext
 
 __all__ = ["engine_figures", "engine_plots", "plot_forces"]
 
@@ -49,8 +49,9 @@ def _xaxis(ax):
 
 def _save(fig, name):
     """Lay out a figure; returns ``(name, fig)``."""
+    no_mathtext(fig)
     fig.tight_layout()
-    return name, no_mathtext(fig)
+    return name, fig
 
 
 def engine_plots(res, outdir) -> list[Path]:
@@ -149,7 +150,7 @@ def _cyclogram(res):
             ax.text(mid, y, name, ha="center", va="center", fontsize=7)
         ax.plot([row["firing"]], [y], marker="*", color="red", ms=10)
     ax.set_yticks(range(len(names)))
-    ax.set_yticklabels([f"cyl {n}" for n in reversed(names)])
+    ax.set_yticklabels([escape_math(f"cyl {n}") for n in reversed(names)])
     for j, tick in enumerate(reversed(ax.get_yticklabels())):
         tick.set_color(_cyl(j))
     ax.set_xlabel("crank angle φ (deg); * firing")
@@ -226,8 +227,8 @@ def plot_forces(fr, x, out=None):
     axs[1].legend(fontsize=7, ncol=2)
     axs[0].set_title(f"{m.name or 'mechanism'}: kinetostatics ({fr.method}); "
                      f"max relative virtual-power residual {np.nanmax(fr.relative_residual):.2g}", fontsize=9)
-    fig.tight_layout()
     no_mathtext(fig)
+    fig.tight_layout()
     if out is None:
         return fig
     p = Path(out)

@@ -189,8 +189,9 @@ def plot_analogues(state: KinematicState):
     for a in axs[1]:
         a.set_xlabel(label)
     fig.suptitle(f"{m.name or 'mechanism'}: analogues (driver at unit rate)")
+    no_mathtext(fig)
     fig.tight_layout()
-    return no_mathtext(fig)
+    return fig
 
 
 def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -> None:

@@ -52,7 +52,8 @@ Defaults
 Driver speed: ``Driver.speed`` from the file, else 1 rad/s (1 m/s); driver
 acceleration: ``Driver.acceleration``, else 0.  A link's centre of mass defaults to the
 centroid of its joints' reference points, its inertia to 0; a link without ``mass``
-carries no weight and no inertia.  A ``[[force]]`` without ``at`` acts at the centre
+carries no weight and no inertia force, but a moment of inertia ``J_G`` it is given
+still loads it with the couple ``−J_G ε``.  A ``[[force]]`` without ``at`` acts at the centre
 of mass.  A ``[[force]]`` table is interpolated linearly against the first driver's
 input (deg), periodic over 360 deg, or over 720 deg when a row lies beyond 360 deg.
 

@@ -7,7 +7,8 @@ reduced to the centre of mass G.  The power of these loads feeds the virtual-pow
 check of :func:`~kin.forces.forces`.
 
 Defaults: a link's centre of mass is the centroid of its joints' reference points, its
-inertia 0; a link without ``mass`` carries no weight and no inertia; a ``[[force]]``
+inertia 0; a link without ``mass`` carries no weight and no inertia force, but its
+moment of inertia still gives the couple ``−J_G ε``; a ``[[force]]``
 without ``at`` acts at G; a force table is interpolated linearly against the first
 driver's input (deg), periodic over 360 deg, or over 720 deg when a row lies beyond
 360 deg.
@@ -99,7 +100,7 @@ def check_mass_data(m: Mechanism) -> None:
 def has_loads(m: Mechanism) -> bool:
     """True when the mechanism carries any load: a link mass or a ``[[force]]``
     (without them every reaction and balancing moment is zero)."""
-    return bool(m.loads) or any(lk.mass for lk in m.links if not lk.is_frame)
+    return bool(m.loads) or any(lk.mass or lk.inertia for lk in m.links if not lk.is_frame)
 
 
 def table_period(m: Mechanism) -> float:
@@ -212,12 +213,12 @@ def _inertia_columns(state: KinematicState, cols: StateColumns, g: np.ndarray) -
         G, vG, aG = _point_motion(cols, m, k, state._anchor(lk.name), cg_ref(m, lk.name))
         out.G[k] = G
         out.power[k], out.abs_power[k] = 0.0, 0.0
-        mass = lk.mass or 0.0
-        if not mass:
+        mass, inertia = lk.mass or 0.0, lk.inertia or 0.0
+        if not mass and not inertia:
             out.fx[k], out.fy[k], out.mz[k] = 0.0, 0.0, 0.0
             continue
         fix, fiy = -mass * aG[0], -mass * aG[1]
-        mi = -(lk.inertia or 0.0) * cols.get("epsilons", k)
+        mi = -inertia * cols.get("epsilons", k)
         out.inertia[k] = (fix, fiy, mi)
         out.fx[k], out.fy[k], out.mz[k] = fix + mass * g[0], fiy + mass * g[1], mi
         p1 = fix * vG[0] + fiy * vG[1]
@@ -300,10 +301,10 @@ def kinetic_energy(state: KinematicState) -> np.ndarray:
     m = state.mechanism
     T = np.zeros(state.n_positions)
     for k, lk in enumerate(m.links):
-        if lk.is_frame or not lk.mass:
+        if lk.is_frame or not (lk.mass or lk.inertia):
             continue
         _, v, _ = state.point_on_link(lk.name, cg_ref(m, lk.name))
-        T += 0.5 * lk.mass * np.einsum("ni,ni->n", v, v) + 0.5 * (lk.inertia or 0.0) * state.omegas[:, k] ** 2
+        T += 0.5 * (lk.mass or 0.0) * np.einsum("ni,ni->n", v, v) + 0.5 * (lk.inertia or 0.0) * state.omegas[:, k] ** 2
     return T
 
 

@@ -32,7 +32,7 @@ from ..result import Status
 from ..continuation import Probe
 from .step import SINGULAR, GroupStep, Outcome
 
-__all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult", "NewtonStep", "jacobian_rates"]
+__all__ = ["ConstraintSystem", "newton", "track", "rates", "TrackResult", "NewtonStep", "jacobian_rates", "relative_det"]
 
 
 class ConstraintSystem(PairEquations):
@@ -167,9 +167,29 @@ def newton(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown,
     return Z, ok, it
 
 
-def _relative_det(J: np.ndarray) -> np.ndarray:
-    norms = np.prod(np.linalg.norm(J, axis=-2), axis=-1)
-    return np.abs(np.linalg.det(J)) / np.where(norms > 0, norms, 1.0)
+def relative_det(J: np.ndarray) -> np.ndarray:
+    """``|det J|`` of pair-equation Jacobian(s) ``J`` (..., m, m) made dimensionless, in [0, 1].
+
+    The columns come in ``(x, y, θ)`` triples, one per unknown link; the rows mix
+    lengths (a pin's closure) with pure numbers (a P pair's angle).  The plain
+    ``|det J| / Π |column|`` therefore shrinks with the mechanism's size.  Here the
+    rotation columns are divided by the group's longest lever arm ``L`` (the largest
+    rotation entry of the rows that also hold translations), then every row and every
+    column is scaled to unit 2-norm (one pass of Sinkhorn & Knopp's 1967 alternating
+    scaling); the value is unchanged when the mechanism is scaled or moved and is at
+    most 1 (Hadamard's inequality).
+    """
+    A = np.array(J, dtype=float)
+    rot = np.arange(A.shape[-1]) % 3 == 2
+    trans_rows = np.any(A[..., :, ~rot] != 0.0, axis=-1, keepdims=True)
+    L = np.max(np.abs(np.where(trans_rows, A, 0.0)[..., :, rot]), axis=(-2, -1))
+    A[..., :, rot] /= np.where(L > 0, L, 1.0)[..., None, None]
+    r = np.linalg.norm(A, axis=-1, keepdims=True)
+    A = A / np.where(r > 0, r, 1.0)
+    c = np.linalg.norm(A, axis=-2, keepdims=True)
+    A = A / np.where(c > 0, c, 1.0)
+    return np.abs(np.linalg.det(A))
+
 
 
 @dataclass(frozen=True)
@@ -246,7 +266,7 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
                 ok[n] = True
         if ok[n]:
             J = sys.jacobian(Z[n:n + 1])[:, :, cols]
-            rel[n] = _relative_det(J)[0]
+            rel[n] = relative_det(J)[0]
             if rel[n] < singular_tol:
                 reason[n] = f"singular position (relative det {rel[n]:.1e})"
                 code[n] = Status.SINGULAR

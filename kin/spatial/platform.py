@@ -665,7 +665,8 @@ def platform_modes(platform: Platform) -> PlatformModes:
     Raises
     ------
     InputError
-        A strut without stiffness, or no body.
+        A strut without stiffness, no body, or a body so far away or so heavy that the
+        matrices overflow.
     """
     c = platform.stiffnesses
     if c is None:
@@ -681,7 +682,17 @@ def platform_modes(platform: Platform) -> PlatformModes:
     C = Lc.T @ (c[:, None] * Lc)
     C = 0.5 * (C + C.T)
     A = body.inertia_matrix
-    w, V = scipy.linalg.eigh(C, A)
+    if not (np.all(np.isfinite(C)) and np.all(np.isfinite(A))):
+        raise InputError(explain(f"platform {platform.name!r} [body]", expected="a centre, mass and inertia of a "
+                                 "size that keeps the stiffness and inertia matrices finite",
+                                 got=f"center {list(body.center)}", hint="give the coordinates in metres"))
+    try:
+        w, V = scipy.linalg.eigh(C, A)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise InputError(explain(f"platform {platform.name!r} [body]", expected="a mass and inertia the "
+                                 "eigenproblem C φ = k² A φ can be solved with",
+                                 got=f"{type(exc).__name__} ({str(exc)[:80]})",
+                                 hint="check the body's weight, g, box and inertia")) from None
     k = np.sqrt(np.clip(w, 0.0, None))
     # deterministic sign: largest kinetic-energy component positive
     energy = np.diag(A)[:, None] * V ** 2

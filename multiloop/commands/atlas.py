@@ -59,13 +59,35 @@ def _options(args):
                             no_fractionated=args.no_fractionated)
 
 
+#: the integer options and their ranges (SQLite and C ints stop at 2**63 and 2**31)
+_INT_RANGES = {"--dof": ("dof", 1, 2 ** 31 - 1),
+               "--max-multiplicity": ("max_multiplicity", 1, 2 ** 31 - 1),
+               "--max-link-degree": ("max_link_degree", 2, 2 ** 31 - 1),
+               "--workers": ("workers", 1, 1024), "--limit": ("limit", 0, 2 ** 63 - 1),
+               "--html-limit": ("html_limit", 1, 2 ** 63 - 1)}
+
+
+def _check_options(args) -> None:
+    """Every integer option within its range, the query well formed: all before the
+    atlas file is opened (a rejected run creates no file)."""
+    from multiloop.catalogue.atlas import parse_query
+
+    for flag, (attr, lo, hi) in _INT_RANGES.items():
+        value = getattr(args, attr)
+        if value is not None and not lo <= value <= hi:
+            raise InputError(explain(flag, expected=f"an integer from {lo} to {hi}",
+                                     got=str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"))
+    if args.query is not None:
+        parse_query(args.query)
+    if args.table and args.links is None:
+        raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+
+
 def run(args) -> int:
     from multiloop.catalogue.atlas import Atlas
     from multiloop.catalogue.listing import atlas_listing, listing_text
 
-    for flag, value in (("--html-limit", args.html_limit), ("--workers", args.workers)):
-        if value is not None and value <= 0:
-            raise InputError(explain(flag, expected="a positive integer", got=str(value)))
+    _check_options(args)
     if args.links is None and not Path(args.db).exists():
         raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
                                  got=repr(args.db)))

@@ -34,12 +34,13 @@ def add_arguments(p) -> None:
     p.add_argument("--min-transmission", type=float, default=40.0, metavar="DEG",
                    help="flag transmission angles below DEG (default 40)")
     p.add_argument("--output", metavar="LINK", default=None,
-                   help="output link or tracer point of the velocity ratio / mechanical advantage")
+                   help="output link, tracer point or joint of the velocity ratio / mechanical advantage")
     p.add_argument("--at", type=float, default=None, metavar="DEG",
                    help="driver value of the instant-centre figure (deg or m; default the reference)")
-    p.add_argument("--positions", default=None, metavar="V,V,…",
-                   help="driver values the design must reach (deg or m, first driver): "
-                        "unreachable ones are flagged (circuit defect)")
+    p.add_argument("--positions", default=None, nargs="+", metavar="V,V,…",
+                   help="driver values the design must reach (deg or m, first driver), comma- or "
+                        "space-separated: unreachable ones are flagged (circuit defect); a list "
+                        "starting with a negative value: --positions -60 120, or --positions=-60,120")
 
 
 def _to_api(m, v: float, k: int = 0) -> float:
@@ -55,6 +56,7 @@ def _finite(v: float, what: str) -> float:
 def _positions(m, text):
     if text is None:
         return None
+    text = ",".join(text) if isinstance(text, list) else text
     try:
         vals = [float(s) for s in text.split(",") if s.strip()]
     except ValueError:
@@ -64,11 +66,32 @@ def _positions(m, text):
     return {m.drivers[0].joint: [_to_api(m, _finite(v, "--positions")) for v in vals]}
 
 
+def _joint_as_point(m, name):
+    """``m`` and the output name: a joint given as ``--output`` becomes a tracer point
+    ``joint <name>`` at the joint on its last link (a pin moves with every link on it)."""
+    if name is None or name in m.link_names or any(p.name == name for p in m.points) \
+            or name not in m.joint_names:
+        return m, name
+    from multiloop.topo.model import MechanismBuilder, TracerPoint
+    j = m.joint(name)
+    b = MechanismBuilder.from_mechanism(m)
+    point = f"joint {name}"
+    b.points.append(TracerPoint(point, j.links[-1], j.at))
+    return b.build(), point
+
+
 def run(args) -> int:
     from multiloop.kin.check import check, format_report
 
     m = load(args.file)
-    _finite(args.min_transmission, "--min-transmission")
+    if not m.drivers:
+        raise InputError(explain(f"{args.file}: [[driver]]", expected="at least one driver", got="none",
+                                 hint="the design check follows the motion of the input joint(s)"))
+    if not 0.0 < _finite(args.min_transmission, "--min-transmission") < 90.0:
+        raise InputError(explain("--min-transmission", expected="an angle between 0 and 90 deg",
+                                 got=f"{args.min_transmission:g}",
+                                 hint="a transmission angle lies in [0, 90] deg"))
+    m, output = _joint_as_point(m, args.output)
     outs = Outputs("multiloop check")
     if args.plot:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
@@ -78,7 +101,7 @@ def run(args) -> int:
     if args.at is not None and m.drivers:
         at = np.zeros(len(m.drivers))
         at[0] = _to_api(m, _finite(args.at, "--at"))
-    rep = check(m, min_transmission=args.min_transmission, output=args.output, at=at,
+    rep = check(m, min_transmission=args.min_transmission, output=output, at=at,
                 positions=_positions(m, args.positions))
     if args.plot or args.html:
         from multiloop.kin.check.figures import html_page, overview_figure, report_figures

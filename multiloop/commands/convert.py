@@ -4,10 +4,12 @@ IN may be any input the other commands take (a ``.toml``/``.json``/``.pyslvs``/`
 file or a catalogue name); the format of OUT follows its suffix: ``.toml``, ``.json``,
 ``.pyslvs`` (Pyslvs project YAML: ``mechanism`` expression and ``input`` pairs) or
 ``.expr`` (a bare Pyslvs expression).  The mapping to and from Pyslvs is documented in
-:mod:`multiloop.exchange.pyslvs`.  Nothing is written when the conversion fails.
+:mod:`multiloop.exchange.pyslvs`; what a Pyslvs file cannot keep (masses, loads, gravity,
+joint names, ...) is named on stderr.  Nothing is written when the conversion fails.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from multiloop.inputs import load_mechanism
@@ -39,8 +41,17 @@ def run(args) -> int:
         raise InputError(explain(f"output '{args.output}'", expected="a suffix among " + ", ".join(FORMATS),
                                  got=repr(suffix or "none")))
     m = load_mechanism(args.input)
-    text = render(m, suffix)
+    try:
+        text = render(m, suffix)
+    except InputError as exc:
+        raise InputError(f"{args.input}: {exc}") from None
     outs = Outputs("multiloop convert")
     outs.add(args.output, text, "OUT")
     outs.commit()
+    if suffix in (".pyslvs", ".expr"):
+        from multiloop.exchange.pyslvs import pyslvs_losses  # noqa: PLC0415
+        lost = pyslvs_losses(m) + (["the inputs (a bare expression has none)"] if suffix == ".expr" and m.drivers
+                                   else [])
+        if lost:
+            print(f"multiloop convert: note: {args.output} does not keep " + "; ".join(lost), file=sys.stderr)
     return 0

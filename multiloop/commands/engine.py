@@ -45,7 +45,7 @@ def run(args) -> int:
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))
     if args.json:
-        print(json.dumps(res.as_dict()))
+        print(json.dumps(res.as_dict(), allow_nan=False))
         return 0
     print(res.to_text())
     return 0

@@ -59,7 +59,7 @@ def run(args) -> int:
             outs.add_figure(args.plot, fig, dpi=110)
         outs.commit()
     if args.json:
-        print(json.dumps(fr.as_dict()))
+        print(json.dumps(fr.as_dict(), allow_nan=False))
         return 0
     notes = [note] if note else []
     if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):

@@ -42,7 +42,7 @@ def add_arguments(p) -> None:
     out.add_argument("--json", action="store_true", help="print the stable JSON (see docs/kinematics.md)")
     out.add_argument("--csv", action="store_true", help="print CSV, one row per position")
     p.add_argument("--plot", metavar="OUT.png", default=None,
-                   help="mechanism in its reference position with tracer paths; "
+                   help="mechanism at its first regular position with tracer paths; "
                         "the analogues go to OUT_analogues.png")
     p.add_argument("--animate", metavar="OUT.gif", default=None, help="one cycle as a GIF")
     p.add_argument("--svg", metavar="OUT.svg", default=None,
@@ -89,7 +89,8 @@ def run(args) -> int:
         from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
         p = Path(args.plot)
         with quiet_warnings("multiloop solve"):
-            outs.add_figure(p, plot_mechanism(state))
+            shown = np.flatnonzero(state.ok)    # the first regular pose, not a degenerate one
+            outs.add_figure(p, plot_mechanism(state, int(shown[0]) if shown.size else 0))
             outs.add_figure(p.with_name(p.stem + "_analogues" + (p.suffix or ".png")), plot_analogues(state))
     if args.animate is not None:
         from multiloop.kin.figures.mechanism import animate

@@ -27,7 +27,12 @@ Mapping to the multiloop model (read and written the same way):
 * coordinates are taken as they are (Pyslvs stores no unit).
 
 A P joint on more than two links (several links fixed to one slider) has no
-multiloop equivalent and is refused with a message.
+multiloop equivalent and is refused with a message.  Writing refuses a link name that
+is not a Pyslvs name (letters, digits and ``_``, not starting with a digit: a ``,`` or
+``]`` would change the chain read back) and names what the format cannot keep
+(:func:`pyslvs_losses`): masses, loads, gravity, driver speeds, joint and point names.
+A driver written frame-second (``links = [b, frame]``) is exported as ``b`` driven
+relative to the frame; its input is the negative of the file's.
 
 Examples
 --------
@@ -51,10 +56,12 @@ from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder
 
 __all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs",
-           "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs"]
+           "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs", "pyslvs_losses",
+           "MAX_YAML_DEPTH"]
 
 GROUND = "ground"
 _JOINT = re.compile(r"J\[\s*(RP|R|P)\s*,(?P<body>[^J]*?)L\[(?P<links>[^\]]*)\]\s*\]")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _FIELD = {"A": re.compile(r"(?<![A-Za-z_])A\[([^\]]*)\]"),
           "P": re.compile(r"(?<![A-Za-z_])P\[([^\]]*)\]"),
           "color": re.compile(r"color\[([^\]]*)\]")}
@@ -77,8 +84,8 @@ def _floats(text: str, n: int, where: str) -> list[float]:
         vals = [float(v) for v in text.split(",")]
     except ValueError:
         vals = []
-    if len(vals) != n:
-        raise InputError(explain(where, expected=f"{n} number(s)", got=repr(text)))
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        raise InputError(explain(where, expected=f"{n} finite number(s)", got=repr(text[:60])))
     return vals
 
 
@@ -138,11 +145,16 @@ def _add_joint(b: MechanismBuilder, i: int, j: PyslvsJoint) -> None:
 
 def _add_driver(b: MechanismBuilder, joints: list[PyslvsJoint], pair) -> None:
     try:
-        base, drv = (int(v) for v in list(pair)[:2])
+        if not isinstance(pair, (list, tuple)) or len(pair) < 2 \
+                or not all(isinstance(v, int) and not isinstance(v, bool) for v in pair[:2]):
+            raise TypeError
+        base, drv = pair[0], pair[1]
         jb, jd = joints[base], joints[drv]
+        if base < 0 or drv < 0:
+            raise IndexError
     except (TypeError, ValueError, IndexError):
         raise InputError(explain("Pyslvs input", expected=f"[base, driver] joint indices < {len(joints)}",
-                                 got=repr(pair))) from None
+                                 got=repr(pair)[:60])) from None
     where = f"Pyslvs input [{base}, {drv}]"
     if base == drv:
         if jb.kind == "R":
@@ -170,34 +182,77 @@ def mechanism_from_expression(expr: str, inputs=(), name: str | None = None) -> 
         _add_joint(b, i, j)
     for lk in (f"P{i}_block" for i, j in enumerate(joints) if j.kind == "RP"):
         b.add_link(lk)
-    for pair in inputs or ():
+    if not isinstance(inputs, (list, tuple)):
+        raise InputError(explain("Pyslvs input", expected="a list of [base, driver] joint-index pairs",
+                                 got=repr(inputs)[:60]))
+    for pair in inputs:
         _add_driver(b, joints, pair)
     return b.build()
 
 
-def read_pyslvs(path: str | Path) -> Mechanism:
-    """A mechanism from a ``.pyslvs`` project (YAML) or a file holding a bare expression."""
+#: deepest YAML nesting read (a project needs 3)
+MAX_YAML_DEPTH = 32
+
+
+def _yaml_document(text: str, where: str):
+    """The YAML document of ``text``, refusing aliases and nesting beyond
+    :data:`MAX_YAML_DEPTH` before anything is built (an alias bomb expands a few
+    hundred bytes into gigabytes; deep nesting exhausts the recursion)."""
     import yaml  # noqa: PLC0415 - only needed for Pyslvs files
+
+    depth = 0
+    try:
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+                raise InputError(explain(where, expected="a Pyslvs YAML project without anchors or aliases",
+                                         got=f"an {'alias' if isinstance(event, yaml.AliasEvent) else 'anchor'}",
+                                         hint="Pyslvs writes none; write the values out"))
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_YAML_DEPTH:
+                    raise InputError(explain(where, expected=f"YAML nested at most {MAX_YAML_DEPTH} deep",
+                                             got="deeper nesting"))
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+        return yaml.safe_load(text)
+    except InputError:
+        raise
+    except yaml.YAMLError as exc:
+        raise InputError(explain(where, expected="a Pyslvs YAML project",
+                                 got=f"invalid YAML ({str(exc).splitlines()[0][:120]})")) from None
+    except (RecursionError, ValueError, OverflowError) as exc:
+        raise InputError(explain(where, expected="a Pyslvs YAML project",
+                                 got=f"unreadable YAML ({type(exc).__name__})")) from None
+
+
+def read_pyslvs(path: str | Path) -> Mechanism:
+    """A mechanism from a ``.pyslvs`` project (YAML) or a file holding a bare expression.
+
+    Raises
+    ------
+    InputError
+        A non-regular or oversized file (:func:`~topo.io.read_input_bytes`), non-UTF-8
+        text, YAML with anchors, aliases or deep nesting, or a faulty expression or input.
+    """
+    from multiloop.topo.io import read_input_bytes  # noqa: PLC0415
 
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(explain(f"file '{p}'", expected="a readable UTF-8 file", got=str(exc))) from None
-    if text.lstrip().startswith("M["):
-        return mechanism_from_expression(text, name=p.stem)
+        text = read_input_bytes(p).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(explain(f"file '{p}'", expected="UTF-8 text", got=f"undecodable bytes ({exc.reason})")) from None
     try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InputError(explain(f"file '{p}'", expected="a Pyslvs YAML project",
-                                 got=f"invalid YAML ({str(exc).splitlines()[0]})")) from None
-    if not isinstance(doc, dict) or not isinstance(doc.get("mechanism"), str):
-        raise InputError(explain(f"file '{p}'", expected="a YAML mapping with a 'mechanism' expression",
-                                 got=type(doc).__name__ if not isinstance(doc, dict) else "no 'mechanism' key"))
-    try:
-        return mechanism_from_expression(doc["mechanism"], doc.get("input") or (), name=p.stem)
+        if text.lstrip().startswith("M["):
+            return mechanism_from_expression(text, name=p.stem)
+        doc = _yaml_document(text, f"file '{p}'")
+        if not isinstance(doc, dict) or not isinstance(doc.get("mechanism"), str):
+            raise InputError(explain(f"file '{p}'", expected="a YAML mapping with a 'mechanism' expression",
+                                     got=type(doc).__name__ if not isinstance(doc, dict) else "no 'mechanism' key"))
+        inputs = doc.get("input")
+        return mechanism_from_expression(doc["mechanism"], () if inputs is None else inputs, name=p.stem)
     except InputError as exc:
-        raise InputError(f"{p}: {exc}") from None
+        msg = str(exc)
+        raise InputError(msg if msg.startswith(f"file '{p}'") else f"{p}: {msg}") from None
 
 
 def _fmt(v: float) -> str:
@@ -226,11 +281,18 @@ def _ground(m: Mechanism, name: str) -> str:
 def _entries(m: Mechanism) -> tuple[list[str], dict[str, int]]:
     """The ``J[...]`` items and the index of every joint / point name."""
     if not m.has_geometry or m.frame is None:
-        raise InputError(explain(f"mechanism '{m.name}'", expected="a frame and every joint's position",
+        raise InputError(explain(f"mechanism '{m.name}'" if m.name else "the mechanism",
+                                 expected="a frame and every joint's position",
                                  got="a bare chain", hint="Pyslvs needs positions and a ground link"))
     if m.frame != GROUND and GROUND in m.link_names:
         raise InputError(explain("link 'ground'", expected="the frame (Pyslvs's fixed link)",
                                  got=f"a moving link while the frame is '{m.frame}'"))
+    bad = [lk for lk in m.link_names if lk != m.frame and not _NAME.fullmatch(lk)]
+    if bad:
+        raise InputError(explain(f"link '{bad[0][:60]}'" + (f" and {len(bad) - 1} more" if len(bad) > 1 else ""),
+                                 expected="a Pyslvs link name (letters, digits and '_', not starting with a digit)",
+                                 got="other characters",
+                                 hint="rename the link: Pyslvs would read a different chain"))
     blocks = _blocks(m)
     absorbed = set(blocks.values())
     items, index = [], {}
@@ -264,18 +326,51 @@ def _inputs(m: Mechanism, index: dict[str, int]) -> list[tuple[int, int]]:
         if j.kind is JointKind.P:
             pairs.append((index[j.name], index[j.name]))
             continue
-        if d.links[0] != m.frame:
+        if m.frame not in d.links:
             raise InputError(explain(f"driver '{d.joint}'", expected="a link driven relative to the frame",
                                      got=f"relative to '{d.links[0]}'",
                                      hint="Pyslvs inputs are absolute link angles"))
-        others = [index[o.name] for o in m.joints_of(d.links[1]) if o.name != j.name and o.name in index]
-        others += [index[p.name] for p in m.points if p.link == d.links[1]]
+        driven = d.links[1] if d.links[0] == m.frame else d.links[0]
+        others = [index[o.name] for o in m.joints_of(driven) if o.name != j.name and o.name in index]
+        others += [index[p.name] for p in m.points if p.link == driven]
         others = [i for i in others if i != index[j.name]]
         if not others:
             raise InputError(explain(f"driver '{d.joint}'", expected="a second joint on the driven link",
                                      got="none"))
         pairs.append((index[j.name], min(others)))
     return pairs
+
+
+def pyslvs_losses(m: Mechanism) -> list[str]:
+    """What a Pyslvs project cannot keep of ``m``, one phrase each (empty: nothing lost).
+
+    Examples
+    --------
+    >>> from multiloop.inputs import load_mechanism
+    >>> pyslvs_losses(load_mechanism("crank_slider_loaded"))[:2]
+    ['masses and inertias (crank, rod, piston)', 'forces (gas)']
+    """
+    out = []
+    heavy = [lk.name for lk in m.links if lk.mass is not None or lk.inertia is not None or lk.cg is not None]
+    loads = [ld.name or f"on '{ld.link}'" for ld in m.loads]
+    named = [j.name for j in m.joints if not re.fullmatch(r"P\d+(_slot)?", j.name)]
+    points = [p.name for p in m.points if not re.fullmatch(r"P\d+", p.name)]
+    rates = [d.joint for d in m.drivers if d.speed is not None or d.acceleration is not None]
+    reversed_ = [d.joint for d in m.drivers if m.frame is not None and d.links[1] == m.frame]
+    for what, names in (("masses and inertias", heavy), ("forces", loads), ("joint names", named),
+                        ("tracer point names", points), ("driver speeds and accelerations", rates),
+                        ("link colours", [lk.name for lk in m.links if lk.color])):
+        if names:
+            shown = ", ".join(n[:40] for n in names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+            out.append(f"{what} ({shown})")
+    if m.gravity is not None:
+        out.append("gravity")
+    if m.frame is not None and m.frame != GROUND:
+        out.append(f"the frame's name ('{m.frame[:40]}' becomes 'ground')")
+    if reversed_:
+        out.append(f"the input sense of driver(s) {', '.join(reversed_[:5])} (written frame-second, "
+                   "exported frame-first: the input is negated)")
+    return out
 
 
 def expression_of(m: Mechanism) -> tuple[str, list[tuple[int, int]]]:
