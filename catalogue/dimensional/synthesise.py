@@ -303,9 +303,16 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     left = end - time.perf_counter()
     res = global_search(problem, method=method, seed=seed, budget=0.75 * left, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
-    (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance",
-                                              deadline=end)
-    notes = [n for n in (sampled, start_note) if n] + notes
+    best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", deadline=end)
+    return _result(problem, res, best, [sampled, start_note], task, target, method, seed, t0)
+
+
+def _result(problem: Problem, res, best, notes0: list, task: str, target, method: str, seed: int,
+            t0: float) -> SynthesisResult:
+    """The :class:`SynthesisResult` of the chosen design ``best`` (see :func:`_best`)."""
+    (rel, ang, ok), z, phi, n2, notes = best
+    notes = [n for n in notes0 if n] + notes
+    ev = problem.ev
     with _unbounded(ev):
         achieved, wanted = _achieved(problem, z, phi)
         report = tuple(constraint_report(problem, z, phi, ok))
