@@ -301,7 +301,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     polished: list = []
     probe = _prober(problem, polished, end, tol)
     left = end - time.perf_counter()
-    res = global_search(problem, method=method, seed=seed, budget=0.75 * left, tol=tol, popsize=popsize,
+    res = global_search(problem, method=method, seed=seed, budget=0.6 * left, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
     best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", deadline=end)
     return _result(problem, res, best, [sampled, start_note], task, target, method, seed, t0)
@@ -349,7 +349,7 @@ def _prober(problem: Problem, polished: list, end: float, tol: float):
             return False
         with _unbounded(problem.ev):
             phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=end)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=100, deadline=end)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0
@@ -410,7 +410,7 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, d
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
     if not skip and (deadline is None or time.perf_counter() < deadline):
-        z2, phi2, n = polish(problem, z, phi, max_nfev=300, deadline=deadline)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=3000, deadline=deadline)
         cands.append((_assess(problem, z2, phi2), z2, phi2, n))
         if not cands[-1][0][2]:
             notes.append("the local polish left the continuous branch")
