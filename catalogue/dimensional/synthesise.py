@@ -404,20 +404,30 @@ def _closed_form(problem: Problem) -> str | None:
 
 def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, deadline: float | None = None):
     """The best of the global design, its polish and the probes' polished designs:
-    a design meeting the targets on the continuous branch beats one that does not."""
+    a design meeting the targets on the continuous branch beats one that does not.
+
+    The time left is split: the global design is polished for half of it, then the
+    best candidate so far (often a probe's polished design) for the rest.  When the
+    search stopped at the tolerance (``skip``), only the best candidate is polished, a
+    little (100 evaluations: near a solution the steps converge quickly)."""
     with _unbounded(problem.ev):
         phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
-    if not skip and (deadline is None or time.perf_counter() < deadline):
-        z2, phi2, n = polish(problem, z, phi, max_nfev=3000, deadline=deadline)
-        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
-        if not cands[-1][0][2]:
-            notes.append("the local polish left the continuous branch")
 
     def key(c):
         return (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
                 float(np.sqrt(np.mean(c[0][0] ** 2))))
+    for half in ((False,) if skip else (True, False)):
+        now = time.perf_counter()
+        if deadline is not None and now >= deadline:
+            break
+        stop = None if deadline is None else (now + 0.5 * (deadline - now) if half else deadline)
+        _, zs, phis, _ = cands[0] if half else min(cands, key=key)
+        z2, phi2, n = polish(problem, zs, phis, max_nfev=100 if skip else 1500, deadline=stop)
+        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
+        if half and not cands[-1][0][2]:
+            notes.append("the local polish left the continuous branch")
     a, zb, phib, _ = min(cands, key=key)
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
