@@ -221,3 +221,51 @@ def test_description_is_replaced_not_appended(tmp_path):
     assert m.description and m.description not in d and "synthesised" in d and f"{len(T)} targets" in d
     r2 = synthesise(r.mechanism, path=T, point="P", budget=0.5)
     assert r2.mechanism.description.count("synthesised") == 1
+
+
+# ---------------------------------------------------------------------------------
+# 4. the comparison with plain DE (benchmarks/bench_synthesis_literature.py)
+def _bench():
+    import importlib.util
+    from pathlib import Path
+    f = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_synthesis_literature.py"
+    spec = importlib.util.spec_from_file_location("bench_synthesis_literature", f)
+    mod = importlib.util.module_from_spec(spec)
+    import sys
+    sys.modules[spec.name] = mod           # (its dataclasses look their module up)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_textbook_four_bar_equals_kin_solve():
+    """Two routes: the benchmark's textbook closed form (Cabrera et al. 2002) and
+    kin.solve trace the same coupler points for the catalogue four-bar."""
+    B = _bench()
+    m = load_named("four_bar")
+    j = {x.name: np.array(x.at) for x in m.joints}
+    P = np.array(m.points[0].at)
+    ang = lambda v: np.arctan2(v[1], v[0])  # noqa: E731
+    t3 = ang(j["B"] - j["A"])
+    c, s = np.cos(-t3), np.sin(-t3)
+    rc = np.array([[c, -s], [s, c]]) @ (P - j["A"])
+    V = np.array([[np.linalg.norm(j["O4"] - j["O2"]), np.linalg.norm(j["A"] - j["O2"]),
+                   np.linalg.norm(j["B"] - j["A"]), np.linalg.norm(j["B"] - j["O4"]), rc[0], rc[1],
+                   j["O2"][0], j["O2"][1], ang(j["O4"] - j["O2"])]])
+    phi = np.radians(np.arange(0.0, 360.0, 30.0))
+    pts, ok = B._four_bar_points(V, (ang(j["A"] - j["O2"]) + phi)[None, :])
+    assert ok.all()
+    np.testing.assert_allclose(pts[0], solve(m, phi).point_positions[:, 0], atol=1e-12)
+
+
+@pytest.mark.benchmark
+def test_search_is_at_least_as_good_as_plain_de():
+    """The default search's median SSD is no worse than plain SciPy DE's at equal wall time."""
+    B = _bench()
+    cs = B.cases()
+    for name in ("line6", "arc5", "ellipse"):
+        ours, de = [], []
+        for seed in range(3):
+            e, wall = B.ours(cs[name], 1.5, seed)
+            ours.append(e)
+            de.append(B.plain_de(cs[name], wall, seed)[0])
+        assert np.median(ours) <= np.median(de), (name, ours, de)

@@ -30,6 +30,9 @@ __all__ = ["SearchResult", "global_search", "polish", "METHODS"]
 
 METHODS = ("de", "cmaes")
 
+#: how many distinct good designs the probe polishes during the search
+ELITE = 3
+
 
 @dataclass(frozen=True)
 class SearchResult:
@@ -49,10 +52,12 @@ class _Counter:
 
     def __init__(self, problem: Problem, budget: float, tol: float, progress=None, probe=None):
         self.p, self.budget, self.tol, self.progress, self.probe = problem, budget, tol, progress, probe
-        self.probed_f, self.probed_t, self.done, self.probe_time = np.inf, 0.0, False, 0.0
+        self.probed_t, self.done, self.probe_time = 0.0, False, 0.0
         self.lo, self.span = problem.lower, problem.upper - problem.lower
         self.n = 0
         self.best_f, self.best_z = np.inf, problem.x0.copy()
+        self.elite_f, self.elite_u = np.empty(0), np.empty((0, len(problem.x0)))
+        self.probed: set = set()
         self.t0 = time.perf_counter()
         self.history: list[tuple[float, float, int]] = []
 
@@ -63,7 +68,23 @@ class _Counter:
         k = int(np.argmin(f))
         if f[k] < self.best_f:
             self.best_f, self.best_z = float(f[k]), Z[k].copy()
+        self._keep(np.atleast_2d(U), f)
         return f
+
+    def _keep(self, U: np.ndarray, f: np.ndarray, k: int = ELITE, gap: float = 0.05) -> None:
+        """The ``k`` best designs seen that differ pairwise by more than ``gap`` in some
+        unit-box coordinate (the designs the probe polishes)."""
+        F = np.concatenate([self.elite_f, f])
+        A = np.vstack([self.elite_u, U])
+        keep: list[int] = []
+        for i in np.argsort(F, kind="stable"):
+            if not np.isfinite(F[i]):
+                break
+            if all(np.max(np.abs(A[i] - A[j])) > gap for j in keep):
+                keep.append(int(i))
+                if len(keep) == k:
+                    break
+        self.elite_f, self.elite_u = F[keep], A[keep]
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -74,13 +95,18 @@ class _Counter:
         self.history.append((t, self.best_f, self.n))
         if self.progress is not None:
             self.progress(min(t / self.budget, 1.0), self.best_f)
-        if self.probe is not None and self.best_f < self.probed_f and t - self.probed_t >= 0.05 * self.budget \
-                and self.probe_time <= 0.25 * t:
-            # the grid objective cannot reach the tolerance (sampling); ask the polish,
-            # spending at most a quarter of the time on it
-            self.probed_f, self.probed_t = self.best_f, t
-            self.done = bool(self.probe(self.best_z))
-            self.probe_time += self.elapsed() - t
+        if self.probe is not None and t - self.probed_t >= 0.05 * self.budget and self.probe_time <= 0.4 * t:
+            # the grid objective cannot reach the tolerance (sampling); ask the polish about
+            # the best few distinct designs not yet polished, spending at most 40 % of the time
+            self.probed_t = t
+            for u in self.elite_u:
+                key = u.round(6).tobytes()
+                if key in self.probed or self.done or self.probe_time > 0.4 * self.elapsed():
+                    continue
+                self.probed.add(key)
+                t1 = self.elapsed()
+                self.done = bool(self.probe(self.lo + u * self.span))
+                self.probe_time += self.elapsed() - t1
         return self.done or self.best_f <= self.tol or t >= self.budget
 
 
@@ -90,15 +116,17 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget
 
     ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
     the same population.  The start design is always in the first population.
-    ``probe(z) -> bool``, called when the best design improved (at most every 5 %
-    of the budget), stops the search when it returns True (e.g. the polished
-    design meets the tolerance).
+    ``probe(z) -> bool`` is called (at most every 5 % of the budget, spending at most
+    40 % of the time) on each of the :data:`ELITE` best designs seen so far that differ
+    pairwise by more than 0.05 in some unit-box coordinate and were not probed before
+    (an early polish of the best few); it stops the search when it returns True
+    (e.g. the polished design meets the tolerance).
     """
     c = _Counter(problem, budget, tol, progress, probe)
     u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
     c(u0[None, :])
     if probe is not None:                   # the start itself may be one polish away
-        c.probed_f = c.best_f
+        c.probed.add(u0.round(6).tobytes())
         c.done = bool(probe(problem.x0.copy()))
         c.probe_time = c.elapsed()
     stopped = "tolerance"

@@ -11,7 +11,7 @@ import numpy as np
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report"]
+__all__ = ["constraint_report", "turns_fully"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -19,11 +19,26 @@ def _row(name: str, required, value, violation: float) -> dict:
     return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": v}
 
 
+def turns_fully(problem: Problem, z: np.ndarray) -> bool:
+    """Whether the driver of design ``z`` turns fully by ``multiloop check``'s certified
+    range of motion (:func:`multiloop.kin.check.check`), not only on the driver grid
+    (a design on the edge of full rotation may pass every grid sample and still lock
+    between two)."""
+    from multiloop.kin.check import check
+    from multiloop.topo.errors import LinkageError
+    try:
+        return bool(check(problem.ev.with_design(np.asarray(z, float)[:problem.nx])).drivers[0].full_rotation)
+    except LinkageError:
+        return False
+
+
 def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuous: bool) -> list[dict]:
     """One row per constraint of ``problem`` at design ``z`` (driver values ``phi``):
     ``{"name", "required", "value", "met", "violation"}``; ``violation`` is 0 when met,
     else how far the value is from the requirement in its own units (deg, m, a ratio,
-    a fraction of a turn, a count of dyads).
+    a fraction of a turn, a count of dyads).  Full rotation is the certified one of
+    ``multiloop check``; its violation is the fraction of the driver grid not reached
+    (at least one sample when the grid is all reached but ``check`` finds a lock).
 
     Always reported: the targets reached by continuous motion from the reference in
     order (``continuous``, from the caller's assessment) and a non-singular reference
@@ -39,7 +54,9 @@ def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuo
             _row("reference", "relative determinant >= 0.001", margin, max(0.0, 1e-3 - margin))]
     if c.full_rotation:
         frac = 1.0 if full else float(np.mean(ok))
-        rows.append(_row("full_rotation", "the driver turns fully", frac, 1.0 - frac))
+        sure = turns_fully(problem, z)
+        rows.append(_row("full_rotation", "the driver turns fully (multiloop check)",
+                         {"certified": sure, "grid_fraction": frac}, 0.0 if sure else max(1.0 - frac, 1.0 / problem.M)))
     if c.min_transmission:
         mu = np.where(ok, transmission_angles(ev, X, st)[:, :problem.M], np.inf).min()
         rows.append(_row("min_transmission", float(c.min_transmission), float(mu), c.min_transmission - mu))

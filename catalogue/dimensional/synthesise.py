@@ -14,7 +14,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish
-from .report import constraint_report
+from .report import constraint_report, turns_fully
 from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
 __all__ = ["SynthesisResult", "synthesise", "path_target", "function_target", "motion_target"]
@@ -416,8 +416,8 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, d
     notes = []
 
     def key(c):
-        return (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
-                float(np.sqrt(np.mean(c[0][0] ** 2))))
+        bad = _violation(problem, c[1]) > 0.0 or (problem.cons.full_rotation and not turns_fully(problem, c[1]))
+        return (not c[0][2], bad, not _solvable(problem, c[1]), float(np.sqrt(np.mean(c[0][0] ** 2))))
     for half in ((False,) if skip else (True, False)):
         now = time.perf_counter()
         if deadline is not None and now >= deadline:
