@@ -69,6 +69,7 @@ class PathTarget:
         return _size(self.points)
 
     def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the points ``(N, 2)``."""
         return self.points
 
 
@@ -87,6 +88,7 @@ class FunctionTarget:
         return float(np.ptp(self.outputs))
 
     def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the outputs ``(N, 1)``."""
         return self.outputs[:, None]
 
 
@@ -104,6 +106,7 @@ class MotionTarget:
         return _size(self.poses[:, :2])
 
     def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the pose origins ``(N, 2)``."""
         return self.poses[:, :2]
 
 
