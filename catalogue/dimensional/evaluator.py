@@ -27,7 +27,7 @@ from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
-__all__ = ["DesignSpace", "Evaluator", "Poses", "design_space"]
+__all__ = ["DesignSpace", "Evaluator", "Poses", "design_space", "four_bar_roles"]
 
 _CLOSED = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)
 
@@ -264,6 +264,53 @@ class Evaluator:
             W = st.world(ko, r) + sgn * phi[..., None] * uw
             self._place(st, lk, st.th[ko], W, r)
 
+    def branch(self, g: AssurGroup, X) -> np.ndarray:
+        """Assembly branch ``(P, 1)`` (±1) of dyad ``g`` in the reference configuration
+        of designs ``X``: the side of the inner pin (RRR), the sense of the link along
+        the guide (RRP, RPR)."""
+        o1, inner, o2, l1, l2 = g.layout
+        if g.kind is GroupKind.RRR:
+            AC, AB = self.at(X, o2) - self.at(X, o1), self.at(X, inner) - self.at(X, o1)
+            v = AC[:, 0] * AB[:, 1] - AC[:, 1] * AB[:, 0]
+        elif g.kind is GroupKind.RRP:
+            v = np.sum((self.at(X, inner) - self.at(X, o1)) * self.axis(X, o2), axis=-1)
+        else:
+            gx, bx = (o1, o2) if self.mechanism.joint(inner).links[0] == l1 else (o2, o1)
+            v = np.sum((self.at(X, bx) - self.at(X, gx)) * self.axis(X, inner), axis=-1)
+        return np.where(v >= 0, 1.0, -1.0)[:, None]
+
+    def branches(self, X) -> np.ndarray:
+        """Branches ``(P, n_dyads)`` of every RRR, RRP and RPR dyad (see :meth:`branch`)."""
+        X = np.atleast_2d(np.asarray(X, float))
+        cols = [self.branch(g, X) for g in self.plan.groups if g.kind in _CLOSED]
+        return np.concatenate(cols, axis=1) if cols else np.ones((X.shape[0], 0))
+
+    def driver_sense(self) -> tuple[float, str, str]:
+        """``(sense, link, other)``: the driven ``link`` turns (slides) by ``sense`` × the
+        driver value relative to ``other`` (see :meth:`_driver`)."""
+        step = next(s for s in self.plan.steps if isinstance(s, DriverStep))
+        d = next(c for c in step.constraints if c.kind.startswith("drive"))
+        return (1.0 if d.b == step.link else -1.0), step.link, (d.a if d.b == step.link else d.b)
+
+    def driver_zero(self, X) -> np.ndarray:
+        """The driver's absolute value ``(P,)`` in the reference configuration of designs
+        ``X``, for a driver on the frame: an R driver's link angle from the x-axis (the
+        line from the driver's pin to the link's next R joint), a P driver's slider
+        position along the guide from the guide's point (the joint's reference point)
+        to the slider's first R joint."""
+        X = np.atleast_2d(np.asarray(X, float))
+        m = self.mechanism
+        j = m.joint(m.drivers[0].joint)
+        _, link, _ = self.driver_sense()
+        q = next((k.name for k in m.joints_of(link) if k.kind is JointKind.R and k.name != j.name), None)
+        if q is None:
+            raise InputError(explain(f"driven link {link!r}", expected="a second R joint to measure its position by",
+                                     got="none"))
+        d = self.at(X, q) - self.at(X, j.name)
+        if j.kind is JointKind.R:
+            return np.arctan2(d[:, 1], d[:, 0])
+        return np.sum(d * self.axis(X, j.name), axis=-1)
+
     def _rrr(self, g: AssurGroup, X, st: Poses) -> None:
         from multiloop.kin.groups import rrr_position
         o1, inner, o2, l1, l2 = g.layout
@@ -272,8 +319,7 @@ class Evaluator:
         C = st.world(self.links[self._known(g, o2)], Cr)
         la = np.hypot(*(Br - Ar).T)[:, None]
         lc = np.hypot(*(Br - Cr).T)[:, None]
-        AC, AB = Cr - Ar, Br - Ar
-        sgn = np.where(AC[:, 0] * AB[:, 1] - AC[:, 1] * AB[:, 0] >= 0, 1.0, -1.0)[:, None]
+        sgn = self.branch(g, X)
         B = rrr_position(A, C, la, lc, sgn).B
         self._place(st, l1, _ang(B - A) - _ang(Br - Ar)[:, None], A, Ar)
         self._place(st, l2, _ang(B - C) - _ang(Br - Cr)[:, None], C, Cr)
@@ -290,7 +336,7 @@ class Evaluator:
         c, s = np.cos(st.th[kp]), np.sin(st.th[kp])
         u = np.stack([c * ur[:, 0:1] - s * ur[:, 1:2], s * ur[:, 0:1] + c * ur[:, 1:2]], axis=-1)
         la = np.hypot(*(Br - Ar).T)[:, None]
-        sgn = np.where(np.sum((Br - Ar) * ur, axis=-1) >= 0, 1.0, -1.0)[:, None]
+        sgn = self.branch(g, X)
         B = rrp_position(A, Pw, u, la, h, sgn).B
         self._place(st, l1, _ang(B - A) - _ang(Br - Ar)[:, None], A, Ar)
         self._place(st, l2, st.th[kp], B, Br)
@@ -306,7 +352,7 @@ class Evaluator:
         h = np.sum(_nrm(ur) * (Yr - Xr), axis=-1)[:, None]
         Xw = st.world(self.links[self._known(g, gx)], Xr)
         Yw = st.world(self.links[self._known(g, bx)], Yr)
-        sgn = np.where(np.sum((Yr - Xr) * ur, axis=-1) >= 0, 1.0, -1.0)[:, None]
+        sgn = self.branch(g, X)
         u = rpr_position(Yw, Xw, h, sgn).u
         theta = _ang(u) - _ang(ur)[:, None]
         self._place(st, guide, theta, Xw, Xr)
@@ -363,3 +409,26 @@ class Evaluator:
         pts = [replace(p, at=tuple(float(v) for v in self.at(X, p.name)[0]))
                if f"{p.name}.x" in self._cols else p for p in m.points]
         return replace(m, joints=tuple(joints), points=tuple(pts))
+
+
+def four_bar_roles(m) -> dict | None:
+    """Joint and link roles of a driven four-bar, or None: ``O_in, A, B, O_out, crank,
+    coupler, rocker``."""
+    if m.n_links != 4 or m.n_joints != 4 or any(j.kind is not JointKind.R or j.is_multiple for j in m.joints):
+        return None
+    fr = m.frame
+    d = m.joint(m.drivers[0].joint)
+    if fr not in d.links:
+        return None
+    crank = next(x for x in d.links if x != fr)
+    o_out = next((j for j in m.joints if fr in j.links and j.name != d.name), None)
+    if o_out is None:
+        return None
+    rocker = next(x for x in o_out.links if x != fr)
+    coupler = next((x for x in m.link_names if x not in (fr, crank, rocker)), None)
+    A = next((j for j in m.joints if set(j.links) == {crank, coupler}), None)
+    B = next((j for j in m.joints if set(j.links) == {coupler, rocker}), None)
+    if coupler is None or A is None or B is None:
+        return None
+    return dict(O_in=d.name, A=A.name, B=B.name, O_out=o_out.name, crank=crank, coupler=coupler,
+                rocker=rocker)

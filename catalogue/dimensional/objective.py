@@ -25,12 +25,17 @@ from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
-from .evaluator import Evaluator, Poses
+from .evaluator import Evaluator, Poses, four_bar_roles
 from .targets import FunctionTarget, MotionTarget, PathTarget
 
-__all__ = ["Constraints", "Problem", "transmission_angles"]
+__all__ = ["Constraints", "Problem", "transmission_angles", "GRASHOF", "MODES", "DIRECTIONS", "grashof_margins"]
 
 _FAIL = 1e3          # objective of a candidate that cannot reach the targets at all
+_CELLS = 2_000_000   # population chunk of :meth:`Problem.batch`: candidates × targets × samples
+
+GRASHOF = ("any", "crank-rocker", "double-crank")
+MODES = ("any", "reference")
+DIRECTIONS = ("any", "ccw", "cw")
 
 
 @dataclass(frozen=True)
@@ -42,8 +47,19 @@ class Constraints:
     length_bounds: tuple[float, float] | None = None
     max_ratio: float | None = None
     weight: float = 10.0
+    grashof: str = "any"          # "crank-rocker", "double-crank" or "any" (four-bars)
+    mode: str = "any"             # "reference": every dyad keeps the start's assembly branch
+    direction: str = "any"        # "ccw", "cw" or "any": the driven link's sense through the targets
 
     def __post_init__(self):
+        for name, allowed in (("grashof", GRASHOF), ("mode", MODES), ("direction", DIRECTIONS)):
+            if getattr(self, name) not in allowed:
+                raise InputError(explain(f"{name} (--{name})", expected=" or ".join(allowed),
+                                         got=repr(getattr(self, name))))
+        mt = self.min_transmission
+        if mt is not None and not (np.isfinite(mt) and 0 <= mt <= 90):
+            raise InputError(explain("min_transmission (--min-transmission)", expected="an angle in [0, 90] degrees",
+                                     got=str(mt), hint="a folded transmission angle is at most 90°"))
         lb = self.length_bounds
         if lb is not None and not (len(lb) == 2 and np.all(np.isfinite(lb)) and 0 < lb[0] < lb[1]):
             raise InputError(explain("length_bounds (--length-bounds)", expected="two lengths 0 < LOW < HIGH (m)",
@@ -145,10 +161,26 @@ class Problem:
             x0 += [0.0, 0.0, 0.0, 0.0]
             lo += [np.log(0.25), -np.pi, -2 * s, -2 * s]
             hi += [np.log(4.0), np.pi, 2 * s, 2 * s]
+        self.sense = ev.driver_sense()[0]
+        self.timing_mode = target.timing_mode if isinstance(target, PathTarget) and target.timing is not None \
+            else "reference"
+        if self.timing_mode == "step":
+            names += ["timing.offset"] + (["timing.sense"] if constraints.direction == "any" else [])
+            x0 += [0.0, 0.5][:len(names) - len(x0)]
+            reach = np.pi if self.rotary else 2.0 * size
+            lo += [-reach, -1.0][:len(names) - len(lo)]
+            hi += [reach, 1.0][:len(names) - len(hi)]
         self.names = tuple(names)
         self.x0, self.lower, self.upper = (np.array(v, float) for v in (x0, lo, hi))
         self.free_timing = isinstance(target, MotionTarget) or (
             isinstance(target, PathTarget) and target.timing is None)
+        self.start_branches = ev.branches(self.x0[None, :self.nx])
+        self.roles = four_bar_roles(m)
+        if constraints.grashof != "any" and self.roles is None:
+            raise InputError(explain(f"grashof {constraints.grashof!r} (--grashof)",
+                                     expected="a four-bar start (four R joints, driven on the frame)",
+                                     got=f"mechanism '{m.name or ''}' with {m.n_links} links",
+                                     hint="use --grashof any"))
         self.M = int(grid)
         if self.rotary:
             self.delta = 2.0 * np.pi / self.M
@@ -180,6 +212,19 @@ class Problem:
         Z[:, self.nx + 1] = -s * dx + c * dy
         Z[:, self.nx + 2] = _wrap(p0[2] - th[good])
         Z = np.clip(Z, self.lower, self.upper)
+        self.x0 = Z[int(np.argmin(self.batch(Z)))]
+
+    def init_offset(self) -> None:
+        """Step timing: the start's ``timing.offset`` (and ``timing.sense``) at the best of
+        the grid's driver values (both senses, one call)."""
+        if self.timing_mode != "step":
+            return
+        Z = np.repeat(self.x0[None, :], 2 * self.M, axis=0)
+        i = self.names.index("timing.offset")
+        Z[:, i] = np.clip(_wrap(np.tile(self.grid, 2)) if self.rotary else np.tile(self.grid, 2),
+                          self.lower[i], self.upper[i])
+        if "timing.sense" in self.names:
+            Z[self.M:, self.names.index("timing.sense")] = -0.5
         self.x0 = Z[int(np.argmin(self.batch(Z)))]
 
     def init_shape(self, n_angles: int = 24) -> None:
@@ -222,6 +267,42 @@ class Problem:
             return t.timing
         return None
 
+    def timing_for(self, Z: np.ndarray) -> np.ndarray | None:
+        """Driver values from the reference ``(P, N)`` at which designs ``Z`` must meet
+        the targets (prescribed timing), or None (free timing).
+
+        ``reference``: the table's values; ``absolute``: the table's values less the
+        design's own reference value (:meth:`~.evaluator.Evaluator.driver_zero`), the
+        first wrapped to (-π, π] for an R driver and the rest following it by the
+        table's differences; ``step``: the table's differences from the free offset
+        ``timing.offset``, in the sense of ``direction`` (or of ``timing.sense``)."""
+        tim = self.timing()
+        if tim is None:
+            return None
+        P = Z.shape[0]
+        if self.timing_mode == "reference":
+            return np.broadcast_to(tim, (P, len(tim)))
+        d = (tim - tim[0])[None, :]
+        if self.timing_mode == "absolute":
+            first = self.sense * (tim[0] - self.ev.driver_zero(Z[:, :self.nx]))
+            first = _wrap(first) if self.rotary else first
+            return first[:, None] + self.sense * d
+        off = Z[:, self.names.index("timing.offset")][:, None]
+        if "timing.sense" in self.names:
+            sg = np.where(Z[:, self.names.index("timing.sense")] >= 0, 1.0, -1.0)[:, None]
+        else:
+            sg = -1.0 if self.cons.direction == "cw" else 1.0
+        return off + self.sense * sg * d
+
+    def walks(self) -> tuple[int, ...]:
+        """Which walks of :meth:`orders` free timing may use: 0 forward (the driver value
+        increasing), 1 backward; ``direction`` picks the one that turns the driven link
+        counter-clockwise (``ccw``, or the slider forward) or clockwise."""
+        if self.cons.direction == "any":
+            return (0, 1)
+        up = (self.cons.direction == "ccw") == (self.sense > 0)
+        return (0,) if up else (1,)
+
     def targets_for(self, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Targets ``(P, N, c)`` (transformed for shape-only) and their size ``(P,)``."""
         T = self.target_values()
@@ -262,16 +343,16 @@ class Problem:
         return np.sum((st.world(kb, r) - st.world(ka, r)) * ua, axis=-1)[..., None]
 
     def diff(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
-        """Relative differences; ``F`` (P, K, c), ``T`` (P, N, c) → (P, N, K, c)."""
-        D = F[:, None, :, :] - T[:, :, None, :]
+        """Relative differences of features ``F`` and targets ``T``, both ``(P, N, c)``
+        (target by target; angles wrapped)."""
+        D = F - T
+        inv = (1.0 / size)[:, None, None]
         if isinstance(self.target, MotionTarget):
-            D = np.concatenate([D[..., :2] / size[:, None, None, None], _wrap(D[..., 2:])], axis=-1)
-        elif isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(
+            return np.concatenate([D[..., :2] * inv, _wrap(D[..., 2:])], axis=-1)
+        if isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(
                 self.target.joint).kind is JointKind.R:
-            D = _wrap(D) / size[:, None, None, None]
-        else:
-            D = D / size[:, None, None, None]
-        return D
+            return _wrap(D) * inv
+        return D * inv
 
     def sqdist(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
         """Squared relative distances ``(P, N, K)`` of features ``F`` (P, K, c) to
@@ -328,17 +409,24 @@ class Problem:
 
     # -- global objective ------------------------------------------------------
     def batch(self, Z: np.ndarray) -> np.ndarray:
-        """Objective of a population ``Z`` ``(P, n)`` (lower is better)."""
+        """Objective of a population ``Z`` ``(P, n)`` (lower is better), scored in
+        chunks of at most ``_CELLS`` candidate × target × sample cells."""
         Z = np.atleast_2d(Z)
+        step = max(1, _CELLS // ((self.M + self.n_targets) * max(self.n_targets, 1)))
+        if Z.shape[0] > step:
+            return np.concatenate([self._batch(Z[i:i + step]) for i in range(0, Z.shape[0], step)])
+        return self._batch(Z)
+
+    def _batch(self, Z: np.ndarray) -> np.ndarray:
         X = Z[:, :self.nx]
-        tim = self.timing()
-        phi = self.grid if tim is None else np.concatenate([self.grid, tim])
-        st = self.ev.poses(X, phi)
-        idx, valid, cphi, full = self.curve(st.ok[:, :self.M])
+        tim = self.timing_for(Z)
+        M = self.M
+        grid = np.broadcast_to(self.grid, (Z.shape[0], M))
+        st = self.ev.poses(X, grid if tim is None else np.concatenate([grid, tim], axis=1))
+        idx, valid, cphi, full = self.curve(st.ok[:, :M])
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         if tim is None:
-            M = self.M
             ok = st.ok[:, :M]
             d0 = self.sqdist(F[:, :M], T[:, :1], size)[:, 0]
             (oidx, ovalid, _), _ = self.orders(ok, d0)
@@ -348,12 +436,11 @@ class Problem:
             # it starts two samples past the sample nearest to the first target)
             rev = d2f[..., ::-1]
             d2b = np.where(full[:, None, None], np.roll(rev, 5, axis=2), rev)
-            cost = np.minimum(_dp(d2f), _dp(d2b))
+            cost = np.min([_dp(d) for k, d in enumerate((d2f, d2b)) if k in self.walks()], axis=0)
         else:
-            d2 = np.sum(np.square(self.diff(F[:, self.M:], T, size)), axis=-1)
-            cost = np.sum(np.diagonal(d2, axis1=1, axis2=2), axis=1)
+            cost = np.sum(np.square(self.diff(F[:, M:], T, size)), axis=(1, 2))
             lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
-            inside = full[:, None] | ((tim[None, :] >= lo[:, None] - 1e-12) & (tim[None, :] <= hi[:, None] + 1e-12))
+            inside = full[:, None] | ((tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12))
             cost = np.where(inside.all(1), cost, np.inf)
         f = np.sqrt(cost / self.n_targets)
         f = f + self.cons.weight * self.violation(X, st, full)
@@ -363,7 +450,8 @@ class Problem:
     def constrained(self) -> bool:
         """Whether any design constraint is set (the reference margin always counts)."""
         c = self.cons
-        return bool(c.full_rotation or c.min_transmission or c.length_bounds or c.max_ratio)
+        return bool(c.full_rotation or c.min_transmission or c.length_bounds or c.max_ratio
+                    or c.grashof != "any" or c.mode != "any")
 
     def penalty_batch(self, Z: np.ndarray) -> np.ndarray:
         """The constraint penalty of :meth:`batch` alone, ``(P,)``: the weighted
@@ -418,6 +506,10 @@ class Problem:
             if c.max_ratio:
                 r = L.max(1) / np.maximum(L.min(1), 1e-300)
                 v += np.maximum(0.0, r / c.max_ratio - 1.0)
+        if c.grashof != "any":
+            v += np.sum(grashof_margins(self, X), axis=1)
+        if c.mode == "reference":
+            v += np.sum(self.ev.branches(X) != self.start_branches, axis=1)
         return v
 
     def lengths(self, X: np.ndarray) -> np.ndarray:
@@ -434,15 +526,17 @@ class Problem:
     # -- matching and local residuals ------------------------------------------
     def match(self, z: np.ndarray) -> np.ndarray:
         """Driver values ``(N,)`` at which design ``z`` best meets the targets, in order."""
-        tim = self.timing()
-        if tim is not None:
-            return np.asarray(tim, float)
         Z = z[None, :]
+        tim = self.timing_for(Z)
+        if tim is not None:
+            return np.array(tim[0], float)
         st = self.ev.poses(Z[:, :self.nx], self.grid)
         T, size = self.targets_for(Z)
         d2g = self.sqdist(self.features(Z, st), T, size)
         best = None
-        for oidx, ovalid, ophi in self.orders(st.ok, d2g[:, 0, :]):
+        for k, (oidx, ovalid, ophi) in enumerate(self.orders(st.ok, d2g[:, 0, :])):
+            if k not in self.walks():
+                continue
             d2 = np.where(ovalid[0][None, :], d2g[0][:, oidx[0]], np.inf)
             path, cost = _dp_path(d2)
             if best is None or cost < best[0]:
@@ -482,10 +576,24 @@ class Problem:
         """Residuals ``(P, N·c)`` of designs ``Z`` (P, n), each at its own ``PHI`` (P, N)."""
         st = self.ev.poses(Z[:, :self.nx], PHI)
         T, size = self.targets_for(Z)
-        F = self.features(Z, st)
-        D = self.diff(F, T, size)                             # (P, N, N, c)
-        n = np.arange(D.shape[1])
-        return D[:, n, n, :].reshape(Z.shape[0], -1)
+        return self.diff(self.features(Z, st), T, size).reshape(Z.shape[0], -1)
+
+
+def grashof_margins(problem: Problem, X: np.ndarray) -> np.ndarray:
+    """Violations ``(P, 2)`` of a four-bar's Grashof condition, relative to the mean
+    link length: ``s + l − p − q`` (shortest plus longest against the other two;
+    Grashof 1883) and the excess of the link that must be shortest over the
+    shortest of the others (the crank for ``crank-rocker``, the frame for
+    ``double-crank``).  Zero when the condition holds."""
+    r, ev = problem.roles, problem.ev
+    seg = lambda a, b: np.hypot(*(ev.at(X, r[a]) - ev.at(X, r[b])).T)  # noqa: E731
+    L = np.stack([seg("O_in", "A"), seg("A", "B"), seg("B", "O_out"), seg("O_out", "O_in")], axis=1)
+    mean = np.mean(L, axis=1)
+    s, ln = L.min(1), L.max(1)
+    g = np.maximum(0.0, 2.0 * (s + ln) - L.sum(1)) / mean
+    k = 0 if problem.cons.grashof == "crank-rocker" else 3
+    others = np.delete(L, k, axis=1).min(1)
+    return np.stack([g, np.maximum(0.0, L[:, k] - others) / mean], axis=1)
 
 
 def _dp(d2: np.ndarray) -> np.ndarray:

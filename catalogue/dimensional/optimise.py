@@ -30,6 +30,9 @@ __all__ = ["SearchResult", "global_search", "polish", "METHODS"]
 
 METHODS = ("de", "cmaes")
 
+#: how many distinct good designs the probe polishes during the search
+ELITE = 3
+
 
 @dataclass(frozen=True)
 class SearchResult:
@@ -49,10 +52,12 @@ class _Counter:
 
     def __init__(self, problem: Problem, budget: float, tol: float, progress=None, probe=None):
         self.p, self.budget, self.tol, self.progress, self.probe = problem, budget, tol, progress, probe
-        self.probed_f, self.probed_t, self.done, self.probe_time = np.inf, 0.0, False, 0.0
+        self.probed_t, self.done, self.probe_time = 0.0, False, 0.0
         self.lo, self.span = problem.lower, problem.upper - problem.lower
         self.n = 0
         self.best_f, self.best_z = np.inf, problem.x0.copy()
+        self.elite_f, self.elite_u = np.empty(0), np.empty((0, len(problem.x0)))
+        self.probed: set = set()
         self.t0 = time.perf_counter()
         self.history: list[tuple[float, float, int]] = []
 
@@ -63,7 +68,23 @@ class _Counter:
         k = int(np.argmin(f))
         if f[k] < self.best_f:
             self.best_f, self.best_z = float(f[k]), Z[k].copy()
+        self._keep(np.atleast_2d(U), f)
         return f
+
+    def _keep(self, U: np.ndarray, f: np.ndarray, k: int = ELITE, gap: float = 0.05) -> None:
+        """The ``k`` best designs seen that differ pairwise by more than ``gap`` in some
+        unit-box coordinate (the designs the probe polishes)."""
+        F = np.concatenate([self.elite_f, f])
+        A = np.vstack([self.elite_u, U])
+        keep: list[int] = []
+        for i in np.argsort(F, kind="stable"):
+            if not np.isfinite(F[i]):
+                break
+            if all(np.max(np.abs(A[i] - A[j])) > gap for j in keep):
+                keep.append(int(i))
+                if len(keep) == k:
+                    break
+        self.elite_f, self.elite_u = F[keep], A[keep]
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -74,13 +95,18 @@ class _Counter:
         self.history.append((t, self.best_f, self.n))
         if self.progress is not None:
             self.progress(min(t / self.budget, 1.0), self.best_f)
-        if self.probe is not None and self.best_f < self.probed_f and t - self.probed_t >= 0.05 * self.budget \
-                and self.probe_time <= 0.25 * t:
-            # the grid objective cannot reach the tolerance (sampling); ask the polish,
-            # spending at most a quarter of the time on it
-            self.probed_f, self.probed_t = self.best_f, t
-            self.done = bool(self.probe(self.best_z))
-            self.probe_time += self.elapsed() - t
+        if self.probe is not None and t - self.probed_t >= 0.05 * self.budget and self.probe_time <= 0.4 * t:
+            # the grid objective cannot reach the tolerance (sampling); ask the polish about
+            # the best few distinct designs not yet polished, spending at most 40 % of the time
+            self.probed_t = t
+            for u in self.elite_u:
+                key = u.round(6).tobytes()
+                if key in self.probed or self.done or self.probe_time > 0.4 * self.elapsed():
+                    continue
+                self.probed.add(key)
+                t1 = self.elapsed()
+                self.done = bool(self.probe(self.lo + u * self.span))
+                self.probe_time += self.elapsed() - t1
         return self.done or self.best_f <= self.tol or t >= self.budget
 
 
@@ -90,15 +116,17 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget
 
     ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
     the same population.  The start design is always in the first population.
-    ``probe(z) -> bool``, called when the best design improved (at most every 5 %
-    of the budget), stops the search when it returns True (e.g. the polished
-    design meets the tolerance).
+    ``probe(z) -> bool`` is called (at most every 5 % of the budget, spending at most
+    40 % of the time) on each of the :data:`ELITE` best designs seen so far that differ
+    pairwise by more than 0.05 in some unit-box coordinate and were not probed before
+    (an early polish of the best few); it stops the search when it returns True
+    (e.g. the polished design meets the tolerance).
     """
     c = _Counter(problem, budget, tol, progress, probe)
     u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
     c(u0[None, :])
     if probe is not None:                   # the start itself may be one polish away
-        c.probed_f = c.best_f
+        c.probed.add(u0.round(6).tobytes())
         c.done = bool(probe(problem.x0.copy()))
         c.probe_time = c.elapsed()
     stopped = "tolerance"
@@ -151,58 +179,74 @@ def _residuals(problem: Problem, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
 
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
            deadline: float | None = None) -> tuple[np.ndarray, np.ndarray, int]:
-    """Least-squares refinement of design ``z`` and driver values ``phi`` (free timing).
+    """Least-squares refinement of design ``z`` and, with free timing, the driver
+    values ``phi`` (one per target).
 
-    Stops at ``max_nfev`` residual evaluations or at ``deadline`` (a
-    ``time.perf_counter()`` value, checked before every residual and Jacobian
-    evaluation) with the best point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
+    The variables are normalised: the design to its unit box, the driver values to
+    radians (or to the mechanism's size for a slider input), and the trust region
+    works with unit variable scales (``x_scale=1``); the Jacobian is forward
+    differences of step 1e-7 in these units, all perturbed designs in one batched
+    call (Moré 1978 on the scaling of Levenberg–Marquardt steps).  The trust region
+    runs unbounded first and, only when it leaves the box, again within the box from
+    the best point inside it; only points inside the box are kept.  Stops at
+    ``max_nfev`` residual evaluations or at ``deadline`` (a ``time.perf_counter()``
+    value, checked before every residual and Jacobian evaluation) with the best
+    point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
     nz = len(z)
     free = problem.free_timing
+    span = np.where(problem.upper > problem.lower, problem.upper - problem.lower, 1.0)
+    pscale = 1.0 if problem.rotary else problem.mech_size
+    scale = np.concatenate([span, np.full(len(phi), pscale)]) if free else span
+    origin = np.concatenate([problem.lower, np.zeros(len(phi))]) if free else problem.lower
+    lo = np.concatenate([np.zeros(nz), np.full(len(phi), -np.inf)]) if free else np.zeros(nz)
+    hi = np.concatenate([np.ones(nz), np.full(len(phi), np.inf)]) if free else np.ones(nz)
     w0 = np.concatenate([z, phi]) if free else np.asarray(z, float)
-    lo = np.concatenate([problem.lower, np.full(len(phi), -np.inf)]) if free else problem.lower
-    hi = np.concatenate([problem.upper, np.full(len(phi), np.inf)]) if free else problem.upper
-    w0 = np.clip(w0, lo, hi)
+    u0 = np.clip((w0 - origin) / scale, lo, hi)
     count = [0]
+    best = [np.inf, u0]
 
-    def split(W):
-        W = np.atleast_2d(W)
-        PHI = W[:, nz:] if free else np.broadcast_to(phi, (W.shape[0], len(phi)))
-        return W[:, :nz], PHI
-
-    best = [np.inf, w0]
+    def split(U):
+        W = origin + np.atleast_2d(U) * scale
+        Z = W[:, :nz]
+        return Z, (W[:, nz:] if free else problem.timing_for(Z))
 
     def late():
         if deadline is not None and time.perf_counter() > deadline:
             raise _Deadline
 
-    def fun(w):
+    def fun(u):
         late()
-        Z, PHI = split(w)
         count[0] += 1
-        r = _residuals(problem, Z, PHI)[0]
+        r = _residuals(problem, *split(u))[0]
         r = np.where(np.isfinite(r), r, 1.0)
         n = float(r @ r)
-        if n < best[0] and (deadline is None or time.perf_counter() <= deadline):
-            best[0], best[1] = n, w.copy()      # (past the deadline a slow path leaves NaN)
+        inside = bool(np.all((u >= lo) & (u <= hi)))
+        if inside and n < best[0] and (deadline is None or time.perf_counter() <= deadline):
+            best[0], best[1] = n, u.copy()      # (past the deadline a slow path leaves NaN)
         return r
 
-    def jac(w):
+    def jac(u):
         late()
-        h = 1e-7 * np.maximum(1.0, np.abs(w))
-        h = np.where(w + h > hi, -h, h)
-        W = np.vstack([w, w + np.diag(h)])
-        Z, PHI = split(W)
-        count[0] += W.shape[0]
-        R = _residuals(problem, Z, PHI)
+        h = np.where(u + 1e-7 > hi, -1e-7, 1e-7)
+        U = np.vstack([u, u + np.diag(h)])
+        count[0] += U.shape[0]
+        R = _residuals(problem, *split(U))
         R = np.where(np.isfinite(R), R, 1.0)
         return ((R[1:] - R[0]) / h[:, None]).T
 
+    # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
+    # trust-region subproblem is solved iteratively)
+    opts = dict(jac=jac, method="trf", x_scale=1.0, xtol=1e-15, ftol=1e-15, gtol=1e-15,
+                tr_solver="exact" if len(u0) <= 120 else "lsmr")
     try:
-        least_squares(fun, w0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev, x_scale="jac",
-                      xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        # the box's reflective scaling (Coleman & Li 1996) slows convergence from the
+        # interior by orders of magnitude: unbounded first, bounded only when it leaves the box
+        sol = least_squares(fun, u0, max_nfev=max_nfev, **opts)
+        if not np.all((sol.x >= lo) & (sol.x <= hi)):
+            least_squares(fun, best[1], bounds=(lo, hi), max_nfev=max(max_nfev - sol.nfev, 10), **opts)
     except _Deadline:
         pass
     Z, PHI = split(best[1])
-    return Z[0].copy(), PHI[0].copy(), count[0]
+    return Z[0].copy(), np.array(PHI[0], float), count[0]

@@ -9,36 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from multiloop.topo.errors import InputError
-from multiloop.topo.model import JointKind
 
 from .closedform import centre_point, freudenstein, pose_positions
+from .evaluator import four_bar_roles
 from .objective import Problem
 from .targets import FunctionTarget, MotionTarget
 
 __all__ = ["four_bar_roles", "closed_form_start"]
-
-
-def four_bar_roles(m) -> dict | None:
-    """Joint and link roles of a driven four-bar, or None: ``O_in, A, B, O_out, crank,
-    coupler, rocker``."""
-    if m.n_links != 4 or m.n_joints != 4 or any(j.kind is not JointKind.R or j.is_multiple for j in m.joints):
-        return None
-    fr = m.frame
-    d = m.joint(m.drivers[0].joint)
-    if fr not in d.links:
-        return None
-    crank = next(x for x in d.links if x != fr)
-    o_out = next((j for j in m.joints if fr in j.links and j.name != d.name), None)
-    if o_out is None:
-        return None
-    rocker = next(x for x in o_out.links if x != fr)
-    coupler = next((x for x in m.link_names if x not in (fr, crank, rocker)), None)
-    A = next((j for j in m.joints if set(j.links) == {crank, coupler}), None)
-    B = next((j for j in m.joints if set(j.links) == {coupler, rocker}), None)
-    if coupler is None or A is None or B is None:
-        return None
-    return dict(O_in=d.name, A=A.name, B=B.name, O_out=o_out.name, crank=crank, coupler=coupler,
-                rocker=rocker)
 
 
 def _set(problem: Problem, z: np.ndarray, joint: str, xy) -> None:

@@ -14,7 +14,8 @@ from multiloop.topo.model import JointKind, Mechanism
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish
-from .targets import FunctionTarget, MotionTarget, PathTarget, check_rows, read_table
+from .report import constraint_report, turns_fully
+from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
 __all__ = ["SynthesisResult", "synthesise", "path_target", "function_target", "motion_target"]
 
@@ -46,6 +47,7 @@ class SynthesisResult:
     angle_error_max: float | None = None
     history: tuple = field(default_factory=tuple, repr=False)
     notes: tuple[str, ...] = ()
+    constraints: tuple = ()
 
     def inputs_cli(self) -> np.ndarray:
         """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
@@ -62,7 +64,8 @@ class SynthesisResult:
                 "method": self.method, "seed": self.seed, "stopped": self.stopped,
                 "inputs": [float(x) for x in self.inputs_cli()],
                 "achieved": np.asarray(self.achieved).tolist(), "target": np.asarray(self.target).tolist(),
-                "design": dict(self.design),
+                "design": dict(self.design), "constraints": [dict(c) for c in self.constraints],
+                "constraints_met": all(c["met"] for c in self.constraints),
                 "notes": list(self.notes)}
 
 
@@ -80,9 +83,12 @@ def _driver_is_rotary(m: Mechanism) -> bool:
     return m.joint(m.drivers[0].joint).kind is JointKind.R
 
 
-def path_target(m: Mechanism, path, point: str | None, *, shape_only=False) -> PathTarget:
+def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timing: str = "reference") -> PathTarget:
     """A :class:`PathTarget` from an (N, 2|3) array or CSV file (third column: driver
-    value in degrees, or m for a slider input)."""
+    value in degrees, or m for a slider input, measured as ``timing`` says: from the
+    reference, absolute, or only its steps; see :data:`~.targets.TIMINGS`)."""
+    if timing not in TIMINGS:
+        raise InputError(explain("timing (--timing)", expected=" or ".join(TIMINGS), got=repr(timing)))
     a, src = _table(path, (2, 3), "path")
     names = [p.name for p in m.points]
     if point is None and len(names) == 1:
@@ -90,10 +96,17 @@ def path_target(m: Mechanism, path, point: str | None, *, shape_only=False) -> P
     if point not in names:
         raise InputError(explain(f"tracer point {point!r}", expected="a [[point]] of the start mechanism",
                                  got="no such point", hint=f"points: {', '.join(names) or 'none'}"))
-    timing = None
+    values = None
     if a.shape[1] == 3:
-        timing = np.radians(a[:, 2]) if _driver_is_rotary(m) else a[:, 2].copy()
-    return PathTarget(a[:, :2].copy(), point, timing, shape_only, src)
+        values = np.radians(a[:, 2]) if _driver_is_rotary(m) else a[:, 2].copy()
+    elif timing != "reference":
+        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path table with a third column",
+                                 got=f"{src} with two columns", hint="free timing needs no --timing"))
+    if timing == "absolute" and m.frame not in m.joint(m.drivers[0].joint).links:
+        raise InputError(explain("timing 'absolute' (--timing)", expected="a driver on the frame",
+                                 got=f"driver joint {m.drivers[0].joint!r} between moving links",
+                                 hint="use --timing reference or step"))
+    return PathTarget(a[:, :2].copy(), point, values, shape_only, src, timing)
 
 
 def function_target(m: Mechanism, function, output: str) -> FunctionTarget:
@@ -120,8 +133,10 @@ def motion_target(m: Mechanism, motion, link: str) -> MotionTarget:
     return MotionTarget(np.column_stack([a[:, :2], np.radians(a[:, 2])]), link, src)
 
 
-def _check_start(m: Mechanism, budget: float, method: str) -> None:
+def _check_start(m: Mechanism, budget: float, method: str, seed) -> None:
     from multiloop.kin.solve import solve
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2 ** 32:
+        raise InputError(explain("seed (--seed)", expected="an integer in [0, 2**32)", got=repr(seed)))
     if not budget or not np.isfinite(budget) or budget <= 0:
         raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
     if method not in METHODS:
@@ -132,13 +147,42 @@ def _check_start(m: Mechanism, budget: float, method: str) -> None:
     solve(m, 0.0)           # raises AssemblyError / SingularityError when the start does not assemble
 
 
-def _target(m, path, point, shape_only, function, output, motion, link):
+def _checked(task: str, target, direction: str):
+    """Refuse a target of zero size and a direction the timing already fixes; resample
+    more than :data:`~.targets.MAX_ROWS` rows.  Returns the target and a note or None."""
+    if task != "function" and not target.size > 1e-12 * max(1e-300, float(np.max(np.abs(target.target_points())))):
+        raise InputError(explain(f"{task} target ({target.source})", expected="points that are not all the same",
+                                 got=f"a target of size {target.size:.3g}", hint="the error is relative to the size"))
+    if isinstance(target, PathTarget) and target.timing is not None and target.timing_mode != "step" \
+            and direction != "any":
+        raise InputError(explain(f"direction {direction!r} (--direction)", expected="'any' with --timing "
+                                 f"{target.timing_mode}", got=repr(direction),
+                                 hint="the third column fixes the direction; free it with --timing step"))
+    n = len(target.target_points())
+    if n <= MAX_ROWS:
+        return target, None
+    keep = resample(np.arange(n)[:, None])[:, 0]
+    if task == "path":
+        target = replace(target, points=target.points[keep],
+                         timing=None if target.timing is None else target.timing[keep])
+    elif task == "function":
+        target = replace(target, inputs=target.inputs[keep], outputs=target.outputs[keep])
+    else:
+        target = replace(target, poses=target.poses[keep])
+    return target, (f"the target's {n} rows were resampled to {len(keep)} (every {n / len(keep):.3g}th row, "
+                    f"first and last kept): the search's work grows with the number of targets")
+
+
+def _target(m, path, point, shape_only, function, output, motion, link, timing="reference"):
     given = [x is not None for x in (path, function, motion)]
     if sum(given) != 1:
         raise InputError(explain("synthesis task", expected="exactly one of path, function, motion",
                                  got=f"{sum(given)} given"))
     if path is not None:
-        return "path", path_target(m, path, point, shape_only=shape_only)
+        return "path", path_target(m, path, point, shape_only=shape_only, timing=timing)
+    if timing != "reference":
+        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path target with a third column",
+                                 got="function generation" if function is not None else "motion generation"))
     if function is not None:
         if output is None:
             raise InputError(explain("function generation", expected="an output joint", got="none"))
@@ -189,6 +233,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
                seed: int = 0, budget: float = 10.0, method: str = "de", tol: float = 1e-6,
                bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
                length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
+               timing: str = "reference", grashof: str = "any", mode: str = "any", direction: str = "any",
                popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
     """Dimensional synthesis of ``start``: path, function or motion generation.
 
@@ -214,6 +259,20 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
         around the start and the target widened by its size).
     full_rotation, min_transmission, length_bounds, max_ratio
         Constraints (penalties), see :class:`~.objective.Constraints`.
+    timing : {"reference", "absolute", "step"}
+        What a path's third column measures: the driver value from the reference;
+        the driver's absolute value (an R driver on the frame: the driven link's
+        angle from the x-axis, deg; a P driver: the slider's position along its
+        guide from the guide's point, m); or only the steps between consecutive
+        targets, from a free start value.
+    grashof : {"any", "crank-rocker", "double-crank"}
+        A four-bar start only: crank-rocker, the driven link shortest and the loop
+        Grashof (s + l <= p + q); double-crank, the frame shortest and Grashof.
+    mode : {"any", "reference"}
+        ``"reference"``: every dyad keeps the start's assembly branch.
+    direction : {"any", "ccw", "cw"}
+        The driven link's turning sense through the targets (a slider: ``"ccw"`` is
+        forward along its guide), for free and ``step`` timing.
     progress : callable(fraction, best), optional
 
     Returns
@@ -230,37 +289,56 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     _import_optimisers(method)          # one-off module imports (seconds) are not synthesis time
     t0 = time.perf_counter()
     m = start
-    _check_start(m, budget, method)
-    task, target = _target(m, path, point, shape_only, function, output, motion, link)
-    region = target.points if task == "path" else target.poses[:, :2] if task == "motion" else None
-    pts = [target.point] if task == "path" else []
-    space = design_space(m, pts, region=region, bounds=bounds)
-    ev = Evaluator(m, space)
-    ev.deadline = t0 + budget           # a hard bound for the slow path's per-candidate loop
-    cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio)
-    problem = Problem(ev, target, cons, grid)
-    problem.init_motion_frame()
-    problem.init_shape()
-    if not ev.poses(space.x0[None, :], [0.0]).ok.all():
-        raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="a reference configuration that assembles",
-                                 got="a group out of reach at the reference"))
+    _check_start(m, budget, method, seed)
+    cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio, grashof=grashof, mode=mode,
+                       direction=direction)
+    task, target = _target(m, path, point, shape_only, function, output, motion, link, timing)
+    target, sampled = _checked(task, target, direction)
+    problem = _problem(m, task, target, bounds, cons, grid, t0 + budget)
+    ev = problem.ev
     start_note = _closed_form(problem)
     end = ev.deadline = _search_deadline(problem, t0, budget)
     polished: list = []
     probe = _prober(problem, polished, end, tol)
     left = end - time.perf_counter()
-    res = global_search(problem, method=method, seed=seed, budget=0.75 * left, tol=tol, popsize=popsize,
+    res = global_search(problem, method=method, seed=seed, budget=0.6 * left, tol=tol, popsize=popsize,
                         progress=progress, probe=probe)
-    (rel, ang, ok), z, phi, n2, notes = _best(problem, res.z, polished, skip=res.stopped == "tolerance",
-                                              deadline=end)
-    notes = ([start_note] if start_note else []) + notes
-    out = _output(ev, z[:problem.nx], task, target, method, seed)
+    best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", deadline=end)
+    return _result(problem, res, best, [sampled, start_note], task, target, method, seed, t0)
+
+
+def _result(problem: Problem, res, best, notes0: list, task: str, target, method: str, seed: int,
+            t0: float) -> SynthesisResult:
+    """The :class:`SynthesisResult` of the chosen design ``best`` (see :func:`_best`)."""
+    (rel, ang, ok), z, phi, n2, notes = best
+    notes = [n for n in notes0 if n] + notes
+    ev = problem.ev
     with _unbounded(ev):
         achieved, wanted = _achieved(problem, z, phi)
+        report = tuple(constraint_report(problem, z, phi, ok))
+    out = _output(ev, z[:problem.nx], task, target, method, seed, float(np.max(rel)))
     return SynthesisResult(out, task, float(np.max(rel)), float(np.sqrt(np.mean(rel ** 2))), res.evaluations + n2,
                            time.perf_counter() - t0, method, seed, phi, achieved, wanted,
                            dict(zip(problem.names, map(float, z))), res.stopped,
-                           None if ang is None else float(np.max(ang)), res.history, tuple(notes))
+                           None if ang is None else float(np.max(ang)), res.history, tuple(notes), report)
+
+
+def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: int, deadline: float) -> Problem:
+    """The design space, the evaluator (with its hard ``deadline``) and the problem,
+    with its start values for a motion frame, a shape-only similarity and a step
+    timing's offset."""
+    region = target.points if task == "path" else target.poses[:, :2] if task == "motion" else None
+    space = design_space(m, [target.point] if task == "path" else [], region=region, bounds=bounds)
+    ev = Evaluator(m, space)
+    ev.deadline = deadline              # a hard bound for the slow path's per-candidate loop
+    problem = Problem(ev, target, cons, grid)
+    problem.init_motion_frame()
+    problem.init_shape()
+    problem.init_offset()
+    if not ev.poses(space.x0[None, :], [0.0]).ok.all():
+        raise InputError(explain(f"start mechanism '{m.name or ''}'", expected="a reference configuration that assembles",
+                                 got="a group out of reach at the reference"))
+    return problem
 
 
 def _prober(problem: Problem, polished: list, end: float, tol: float):
@@ -271,7 +349,7 @@ def _prober(problem: Problem, polished: list, end: float, tol: float):
             return False
         with _unbounded(problem.ev):
             phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=40, deadline=end)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=100, deadline=end)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0
@@ -297,14 +375,17 @@ def _search_deadline(problem: Problem, t0: float, budget: float) -> float:
     return t0 + budget - min(0.25 * budget, 6.0 * (time.perf_counter() - t))
 
 
-def _output(ev: Evaluator, x: np.ndarray, task: str, target, method: str, seed: int) -> Mechanism:
-    """The start with design ``x``: names kept, ``source`` citing the target."""
+def _output(ev: Evaluator, x: np.ndarray, task: str, target, method: str, seed: int, error: float) -> Mechanism:
+    """The start with design ``x``: names kept, ``source`` citing the target, and a
+    description of the new design (the start's own description, which describes
+    other dimensions, is replaced)."""
     m = ev.mechanism
     src = (f"dimensional synthesis ({task} generation) by multiloop synthesise: {target.source}; "
            f"method {method}, seed {seed}")
-    what = f"Dimensions synthesised for {target.source}."
-    return replace(ev.with_design(x), source=src,
-                   description=f"{m.description} {what}" if m.description else what)
+    what = (f"{m.name or 'Mechanism'} with dimensions synthesised by multiloop synthesise for {task} generation "
+            f"({target.source}, {len(target.target_points())} targets, largest error {error:.3g} of the "
+            f"target size).")
+    return replace(ev.with_design(x), source=src, description=what)
 
 
 def _closed_form(problem: Problem) -> str | None:
@@ -323,24 +404,49 @@ def _closed_form(problem: Problem) -> str | None:
 
 def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, deadline: float | None = None):
     """The best of the global design, its polish and the probes' polished designs:
-    a design meeting the targets on the continuous branch beats one that does not."""
+    a design meeting the targets on the continuous branch beats one that does not.
+
+    The time left is split: the global design is polished for half of it, then the
+    best candidate so far (often a probe's polished design) for the rest.  When the
+    search stopped at the tolerance (``skip``), only the best candidate is polished, a
+    little (100 evaluations: near a solution the steps converge quickly)."""
     with _unbounded(problem.ev):
         phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
-    if not skip and (deadline is None or time.perf_counter() < deadline):
-        z2, phi2, n = polish(problem, z, phi, max_nfev=300, deadline=deadline)
-        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
-        if not cands[-1][0][2]:
-            notes.append("the local polish left the continuous branch")
+
+    keys: dict = {}
 
     def key(c):
-        return (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
-                float(np.sqrt(np.mean(c[0][0] ** 2))))
-    a, zb, phib, _ = min(cands, key=key)
+        if id(c[1]) not in keys:
+            keys[id(c[1])] = (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
+                              float(np.sqrt(np.mean(c[0][0] ** 2))))
+        return keys[id(c[1])]
+    for half in ((False,) if skip else (True, False)):
+        now = time.perf_counter()
+        if deadline is not None and now >= deadline:
+            break
+        stop = None if deadline is None else (now + 0.5 * (deadline - now) if half else deadline)
+        _, zs, phis, _ = cands[0] if half else min(cands, key=key)
+        z2, phi2, n = polish(problem, zs, phis, max_nfev=100 if skip else 1500, deadline=stop)
+        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
+        if half and not cands[-1][0][2]:
+            notes.append("the local polish left the continuous branch")
+    a, zb, phib, _ = _certified(problem, sorted(cands, key=key))
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
     return a, zb, phib, sum(c[3] for c in cands), notes
+
+
+def _certified(problem: Problem, ranked: list):
+    """The first of the best five ``ranked`` candidates whose full rotation ``multiloop
+    check`` certifies (when full rotation is asked; a design on the edge of it may pass
+    every grid sample and lock between two), else the first."""
+    if problem.cons.full_rotation:
+        for c in ranked[:5]:
+            if c[0][2] and turns_fully(problem, c[1]):
+                return c
+    return ranked[0]
 
 
 def _violation(problem: Problem, z: np.ndarray) -> float:

@@ -15,12 +15,29 @@ import numpy as np
 
 from multiloop.topo.errors import InputError, explain
 
-__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "MIN_ROWS"]
+__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "MIN_ROWS", "MAX_ROWS", "MAX_VALUE",
+           "resample", "TIMINGS"]
 
 #: fewest rows each task needs: a path needs 3 points (a circle passes through any
 #: 3 points, so fewer say nothing), function and motion need 3 precision positions
 #: (Freudenstein's and Burmester's exact three-position syntheses)
 MIN_ROWS = {"path": 3, "function": 3, "motion": 3}
+
+#: most targets used: a longer table is resampled to this many rows, evenly by row
+#: number, first and last kept (the work and memory of the search grow with the
+#: number of targets × the driver grid × the population; 10 000 rows took 3.2 GB)
+MAX_ROWS = 200
+
+#: largest magnitude of a table value (as ``forces`` and ``check`` cap their inputs)
+MAX_VALUE = 1e9
+
+#: largest target file read (bytes)
+MAX_BYTES = 16 * 2 ** 20
+
+#: meanings of a path table's third column: the driver value from the reference,
+#: the driver's absolute value (crank angle from the x-axis, slider position along
+#: its guide), or steps between consecutive targets from a free start
+TIMINGS = ("reference", "absolute", "step")
 
 
 def _size(a: np.ndarray) -> float:
@@ -31,9 +48,12 @@ def _size(a: np.ndarray) -> float:
 class PathTarget:
     """Points ``(N, 2)`` the tracer ``point`` meets in this order.
 
-    ``timing`` (N,) gives the driver value (rad, or m for a slider input) from the
-    reference at each point, or ``None`` for free timing; ``shape_only`` lets the
-    target be scaled, rotated and translated (a similarity transform).
+    ``timing`` (N,) gives the driver value (rad, or m for a slider input) at each
+    point, or ``None`` for free timing; ``timing_mode`` (:data:`TIMINGS`) says what
+    it is measured from: the reference configuration, the driver's absolute zero
+    (the x-axis, the guide's pivot), or nothing (``"step"``: only its differences
+    count, the start is free).  ``shape_only`` lets the target be scaled, rotated
+    and translated (a similarity transform).
     """
 
     points: np.ndarray
@@ -41,11 +61,16 @@ class PathTarget:
     timing: np.ndarray | None = None
     shape_only: bool = False
     source: str = "the given points"
+    timing_mode: str = "reference"
 
     @property
     def size(self) -> float:
         """The target's size: the larger side of its bounding box."""
         return _size(self.points)
+
+    def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the points ``(N, 2)``."""
+        return self.points
 
 
 @dataclass(frozen=True)
@@ -62,6 +87,10 @@ class FunctionTarget:
     def size(self) -> float:
         return float(np.ptp(self.outputs))
 
+    def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the outputs ``(N, 1)``."""
+        return self.outputs[:, None]
+
 
 @dataclass(frozen=True)
 class MotionTarget:
@@ -75,6 +104,10 @@ class MotionTarget:
     @property
     def size(self) -> float:
         return _size(self.poses[:, :2])
+
+    def target_points(self) -> np.ndarray:
+        """The rows whose spread is the target's size: the pose origins ``(N, 2)``."""
+        return self.poses[:, :2]
 
 
 def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndarray:
@@ -90,7 +123,19 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
     p = Path(path)
     if not p.is_file():
         raise InputError(explain(f"{what} table {str(p)!r}", expected="an existing CSV file", got="no such file"))
-    rows = [r for r in csv.reader(p.read_text(encoding="utf-8").splitlines()) if r and any(c.strip() for c in r)]
+    if p.stat().st_size > MAX_BYTES:
+        raise InputError(explain(f"{what} table {p.name!r}", expected=f"a CSV file of at most {MAX_BYTES} bytes",
+                                 got=f"{p.stat().st_size} bytes"))
+    raw = p.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise InputError(explain(f"{what} table {p.name!r}", expected="UTF-8 text",
+                                 got=f"byte 0x{raw[e.start]:02x} at offset {e.start}",
+                                 hint="save the file as UTF-8")) from None
+    rows = [r for r in csv.reader(text.splitlines()) if r and any(c.strip() for c in r)]
+    if not rows:
+        raise InputError(explain(f"{what} table {p.name!r}", expected="rows of numbers", got="an empty file"))
     out = []
     for i, r in enumerate(rows):
         try:
@@ -98,14 +143,23 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
         except ValueError:
             if i == 0:
                 continue        # header
-            raise InputError(explain(f"{p.name} row {i + 1}", expected="numbers", got=",".join(r))) from None
+            raise InputError(explain(f"{p.name} row {i + 1}", expected="numbers", got=",".join(r)[:80])) from None
         if len(vals) not in columns:
             raise InputError(explain(f"{p.name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
                                      got=f"{len(vals)}"))
         out.append(vals)
+    if not out:
+        raise InputError(explain(f"{what} table {p.name!r}", expected="rows of numbers", got="a header line only"))
     if len({len(v) for v in out}) > 1:
         raise InputError(explain(p.name, expected="the same number of columns on every row", got="a ragged table"))
     return check_rows(np.array(out, float).reshape(len(out), -1), what, p.name)
+
+
+def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:
+    """At most ``n`` rows of ``a``, evenly by row number (the first and the last kept)."""
+    if len(a) <= n:
+        return a
+    return a[np.unique(np.round(np.linspace(0, len(a) - 1, n)).astype(int))]
 
 
 def check_rows(a: np.ndarray, what: str, where: str) -> np.ndarray:
@@ -118,4 +172,9 @@ def check_rows(a: np.ndarray, what: str, where: str) -> np.ndarray:
     if bad.any():
         raise InputError(explain(f"{where} row {int(np.flatnonzero(bad)[0]) + 1}", expected="finite numbers",
                                  got="NaN or infinity"))
+    big = np.abs(a) > MAX_VALUE
+    if big.any():
+        i, j = np.argwhere(big)[0]
+        raise InputError(explain(f"{where} row {int(i) + 1}", expected=f"numbers of magnitude at most {MAX_VALUE:g}",
+                                 got=f"{a[i, j]:g} in column {int(j) + 1}"))
     return a

@@ -1,6 +1,7 @@
 """``multiloop synthesise START.toml (--path T.csv --point NAME | --function F.csv --output JOINT |
 --motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes]
-[--json] [--plot P]``: dimensional synthesis.
+[--timing reference|absolute|step] [--bounds NAME=LOW:HIGH ...] [--grashof crank-rocker|double-crank|any]
+[--mode reference|any] [--direction ccw|cw|any] [--json] [--plot P]``: dimensional synthesis.
 
 ``START.toml`` gives the topology, names, one driver and a starting geometry.
 Tables are CSV with an optional header line:
@@ -22,6 +23,7 @@ curve and the mechanism.  Nothing is written unless the whole run succeeds.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -29,6 +31,8 @@ from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.io import dumps_toml
+from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
+from multiloop.catalogue.dimensional.targets import TIMINGS
 
 __all__ = ["add_arguments", "run"]
 
@@ -54,8 +58,40 @@ def add_arguments(p) -> None:
     p.add_argument("--max-ratio", type=float, default=None, help="longest / shortest link length at most this")
     p.add_argument("--length-bounds", type=float, nargs=2, default=None, metavar=("LOW", "HIGH"),
                    help="every link length (distance between two joints of a link, the frame's too) in [LOW, HIGH] m")
+    p.add_argument("--timing", choices=TIMINGS, default="reference",
+                   help="--path's third column: from the reference (default), absolute (crank angle from the "
+                        "x-axis, slider position from the guide's point), or steps from a free start")
+    p.add_argument("--bounds", nargs="+", metavar="NAME=LOW:HIGH", default=None,
+                   help="bounds of design variables by name (e.g. O2.x=-1:1; names in the JSON report's design)")
+    p.add_argument("--grashof", choices=GRASHOF, default="any",
+                   help="four-bar: crank-rocker (driven link shortest, Grashof) or double-crank (frame shortest)")
+    p.add_argument("--mode", choices=MODES, default="any",
+                   help="reference: every dyad keeps the start's assembly branch")
+    p.add_argument("--direction", choices=DIRECTIONS, default="any",
+                   help="the driven link's turning sense through the targets (free or step timing)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
+
+
+def parse_bounds(items) -> dict | None:
+    """``["NAME=LOW:HIGH", ...]`` → ``{NAME: (LOW, HIGH)}`` (finite numbers, LOW < HIGH)."""
+    if not items:
+        return None
+    out = {}
+    for it in items:
+        name, eq, rng = it.partition("=")
+        lo, colon, hi = rng.partition(":")
+        try:
+            a, b = float(lo), float(hi)
+        except ValueError:
+            a = b = float("nan")
+        if not (eq and colon and name and math.isfinite(a) and math.isfinite(b) and abs(a) <= 1e9 and abs(b) <= 1e9):
+            raise InputError(explain(f"--bounds {it[:80]!r}", expected="NAME=LOW:HIGH with finite numbers "
+                                     "of magnitude at most 1e9", got=repr(it[:80]), hint="e.g. O2.x=-1:1"))
+        if name in out:
+            raise InputError(explain(f"--bounds {name!r}", expected="each variable once", got="twice"))
+        out[name] = (a, b)
+    return out
 
 
 def _progress(enabled: bool):
@@ -81,7 +117,9 @@ def run(args) -> int:
     bar, cb = _progress(sys.stderr.isatty() and not args.json)
     kw = dict(seed=args.seed, budget=args.budget, method=args.method, tol=args.tol,
               full_rotation=args.full_rotation, min_transmission=args.min_transmission,
-              max_ratio=args.max_ratio, length_bounds=args.length_bounds, progress=cb)
+              max_ratio=args.max_ratio, length_bounds=args.length_bounds, progress=cb,
+              timing=args.timing, grashof=args.grashof, mode=args.mode, direction=args.direction,
+              bounds=parse_bounds(args.bounds))
     if args.path:
         kw.update(path=args.path, point=args.point, shape_only=args.shape_only)
     elif args.function:
@@ -124,5 +162,18 @@ def _text(doc: dict) -> str:
         lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
     lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s "
                  f"({doc['method']}, seed {doc['seed']}, stopped: {doc['stopped']})")
+    for c in doc["constraints"]:
+        state = "met" if c["met"] else f"NOT met, violated by {c['violation']:.3g}"
+        lines.append(f"constraint {c['name']} ({c['required']}): {state}; value {_fmt(c['value'])}")
     lines += [f"note: {n}" for n in doc["notes"]]
     return "\n".join(lines)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
+    return str(v)

@@ -1,0 +1,83 @@
+"""Whether a synthesised design meets each constraint, and by how much it misses.
+
+:func:`constraint_report` measures the returned design directly (its poses on the
+driver grid walked from the reference, its link lengths, its branches), not the
+penalty the search minimised, so a design that trades a constraint against the
+targets says so.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .objective import Problem, grashof_margins, transmission_angles
+
+__all__ = ["constraint_report", "turns_fully"]
+
+
+def _row(name: str, required, value, violation: float) -> dict:
+    v = float(violation) if np.isfinite(violation) else float("inf")
+    return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": v}
+
+
+def turns_fully(problem: Problem, z: np.ndarray) -> bool:
+    """Whether the driver of design ``z`` turns fully by ``multiloop check``'s certified
+    range of motion (:func:`multiloop.kin.check.check`), not only on the driver grid
+    (a design on the edge of full rotation may pass every grid sample and still lock
+    between two)."""
+    from multiloop.kin.check import check
+    from multiloop.topo.errors import LinkageError
+    try:
+        return bool(check(problem.ev.with_design(np.asarray(z, float)[:problem.nx])).drivers[0].full_rotation)
+    except LinkageError:
+        return False
+
+
+def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuous: bool) -> list[dict]:
+    """One row per constraint of ``problem`` at design ``z`` (driver values ``phi``):
+    ``{"name", "required", "value", "met", "violation"}``; ``violation`` is 0 when met,
+    else how far the value is from the requirement in its own units (deg, m, a ratio,
+    a fraction of a turn, a count of dyads).  Full rotation is the certified one of
+    ``multiloop check``; its violation is the fraction of the driver grid not reached
+    (at least one sample when the grid is all reached but ``check`` finds a lock).
+
+    Always reported: the targets reached by continuous motion from the reference in
+    order (``continuous``, from the caller's assessment) and a non-singular reference
+    configuration (relative determinant of every dyad at least 1e-3)."""
+    c, ev = problem.cons, problem.ev
+    X = np.asarray(z, float)[None, :problem.nx]
+    st = ev.poses(X, problem.grid)
+    ok = st.ok[:, :problem.M]
+    full = bool(problem.curve(ok)[3][0])
+    margin = float(problem.reference_margin(X)[0])
+    rows = [_row("continuous", "targets reached in order from the reference", bool(continuous),
+                 0.0 if continuous else 1.0),
+            _row("reference", "relative determinant >= 0.001", margin, max(0.0, 1e-3 - margin))]
+    if c.full_rotation:
+        frac = 1.0 if full else float(np.mean(ok))
+        sure = turns_fully(problem, z)
+        rows.append(_row("full_rotation", "the driver turns fully (multiloop check)",
+                         {"certified": sure, "grid_fraction": frac}, 0.0 if sure else max(1.0 - frac, 1.0 / problem.M)))
+    if c.min_transmission:
+        mu = np.where(ok, transmission_angles(ev, X, st)[:, :problem.M], np.inf).min()
+        rows.append(_row("min_transmission", float(c.min_transmission), float(mu), c.min_transmission - mu))
+    if c.length_bounds or c.max_ratio:
+        L = problem.lengths(X)[0]
+        if c.length_bounds:
+            a, b = c.length_bounds
+            rows.append(_row("length_bounds", [a, b], [float(L.min()), float(L.max())],
+                             max(0.0, a - L.min(), L.max() - b)))
+        if c.max_ratio:
+            r = float(L.max() / max(L.min(), 1e-300))
+            rows.append(_row("max_ratio", c.max_ratio, r, r - c.max_ratio))
+    if c.grashof != "any":
+        g = grashof_margins(problem, X)[0]
+        rows.append(_row("grashof", c.grashof, {"grashof_excess": float(g[0]), "shortest_excess": float(g[1])},
+                         float(g.sum())))
+    if c.mode == "reference":
+        n = int(np.sum(ev.branches(X) != problem.start_branches))
+        rows.append(_row("mode", "every dyad on the start's branch", n, n))
+    if c.direction != "any":
+        d = np.diff(np.asarray(phi, float)) * problem.sense
+        got = "ccw" if np.all(d >= 0) else "cw" if np.all(d <= 0) else "both"
+        rows.append(_row("direction", c.direction, got, 0.0 if got == c.direction else 1.0))
+    return rows
