@@ -15,7 +15,7 @@ import numpy as np
 
 from multiloop.topo.errors import InputError, explain
 
-__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "MIN_ROWS"]
+__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "parse_table", "MIN_ROWS"]
 
 #: fewest rows each task needs: a path needs 3 points (a circle passes through any
 #: 3 points, so fewer say nothing), function and motion need 3 precision positions
@@ -90,7 +90,12 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
     p = Path(path)
     if not p.is_file():
         raise InputError(explain(f"{what} table {str(p)!r}", expected="an existing CSV file", got="no such file"))
-    rows = [r for r in csv.reader(p.read_text(encoding="utf-8").splitlines()) if r and any(c.strip() for c in r)]
+    return parse_table(p.read_text(encoding="utf-8"), columns, what, p.name)
+
+
+def parse_table(text: str, columns: tuple[int, ...], what: str, name: str) -> np.ndarray:
+    """Rows of numbers from the text of a CSV table named ``name`` (see :func:`read_table`)."""
+    rows = [r for r in csv.reader(text.splitlines()) if r and any(c.strip() for c in r)]
     out = []
     for i, r in enumerate(rows):
         try:
@@ -98,14 +103,14 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
         except ValueError:
             if i == 0:
                 continue        # header
-            raise InputError(explain(f"{p.name} row {i + 1}", expected="numbers", got=",".join(r))) from None
+            raise InputError(explain(f"{name} row {i + 1}", expected="numbers", got=",".join(r))) from None
         if len(vals) not in columns:
-            raise InputError(explain(f"{p.name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
+            raise InputError(explain(f"{name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
                                      got=f"{len(vals)}"))
         out.append(vals)
     if len({len(v) for v in out}) > 1:
-        raise InputError(explain(p.name, expected="the same number of columns on every row", got="a ragged table"))
-    return check_rows(np.array(out, float).reshape(len(out), -1), what, p.name)
+        raise InputError(explain(name, expected="the same number of columns on every row", got="a ragged table"))
+    return check_rows(np.array(out, float).reshape(len(out), -1), what, name)
 
 
 def check_rows(a: np.ndarray, what: str, where: str) -> np.ndarray:

@@ -50,7 +50,7 @@ from pathlib import Path
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder
 
-__all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs",
+__all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs", "loads_pyslvs",
            "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs"]
 
 GROUND = "ground"
@@ -177,27 +177,33 @@ def mechanism_from_expression(expr: str, inputs=(), name: str | None = None) -> 
 
 def read_pyslvs(path: str | Path) -> Mechanism:
     """A mechanism from a ``.pyslvs`` project (YAML) or a file holding a bare expression."""
-    import yaml  # noqa: PLC0415 - only needed for Pyslvs files
-
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(explain(f"file '{p}'", expected="a readable UTF-8 file", got=str(exc))) from None
+    return loads_pyslvs(text, str(p), name=p.stem)
+
+
+def loads_pyslvs(text: str, where: str = "<string>", name: str | None = None) -> Mechanism:
+    """A mechanism from the text of a ``.pyslvs`` project or a bare expression;
+    ``where`` names the source in messages, ``name`` names the mechanism."""
+    import yaml  # noqa: PLC0415 - only needed for Pyslvs files
+
     if text.lstrip().startswith("M["):
-        return mechanism_from_expression(text, name=p.stem)
+        return mechanism_from_expression(text, name=name)
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise InputError(explain(f"file '{p}'", expected="a Pyslvs YAML project",
+        raise InputError(explain(f"file '{where}'", expected="a Pyslvs YAML project",
                                  got=f"invalid YAML ({str(exc).splitlines()[0]})")) from None
     if not isinstance(doc, dict) or not isinstance(doc.get("mechanism"), str):
-        raise InputError(explain(f"file '{p}'", expected="a YAML mapping with a 'mechanism' expression",
+        raise InputError(explain(f"file '{where}'", expected="a YAML mapping with a 'mechanism' expression",
                                  got=type(doc).__name__ if not isinstance(doc, dict) else "no 'mechanism' key"))
     try:
-        return mechanism_from_expression(doc["mechanism"], doc.get("input") or (), name=p.stem)
+        return mechanism_from_expression(doc["mechanism"], doc.get("input") or (), name=name)
     except InputError as exc:
-        raise InputError(f"{p}: {exc}") from None
+        raise InputError(f"{where}: {exc}") from None
 
 
 def _fmt(v: float) -> str:
