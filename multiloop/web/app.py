@@ -82,7 +82,7 @@ class Workbench:
         self.check = CheckView(self.move_to)
         self.view = MechanismView(cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
-        self.pick = pn.widgets.Select(name="mechanism", options=choices, width=240)
+        self.pick = pn.widgets.Select(name="mechanism", options=choices, width=240, css_classes=["ml-pick"])
         self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
         self.pick.param.watch(lambda e: self.open_name(e.new), "value")
@@ -162,7 +162,7 @@ class Workbench:
         self.mechanism, self.mechanism_name = m, name or m.name or "design"
         self.scene, self.shown_sweeps = scene, False
         self.structure.object = structure
-        self.view.show(scene, [])
+        self.view.show(scene, [], self.mechanism_name)
         self.check.show(None, None, self.threshold) if not m.drivers else self.check.busy("motion and check: computing…")
         if m.drivers and m.has_geometry:
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold), "check")
@@ -177,7 +177,7 @@ class Workbench:
             return
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
-            self.view.show(self.scene, job.sweeps)
+            self.view.show(self.scene, job.sweeps, self.mechanism_name)
             self.check.busy("check: computing…")
         if job.running:
             return
@@ -215,7 +215,12 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
     pn.config.inline = False
     pn.extension(design="native", notifications=False)
 
+    from panel.io.resources import LOCAL_DIST
+
     def page():
+        # every stylesheet of this document from this server (Panel defaults to its CDN
+        # for models made outside the page's first render, e.g. a tab opened later)
+        pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
         wb = Workbench(files, atlases, threshold)
         cb = pn.state.add_periodic_callback(wb.poll, period=150)
 

@@ -30,6 +30,7 @@ class AtlasView:
         self.cards = pn.pane.HTML("", sizing_mode="stretch_width")
         self.file.param.watch(lambda e: self._pairs(), "value")
         self.button.on_click(lambda e: self.show())
+        self.pair.param.watch(lambda e: self.show(), "value")
         self.query.param.watch(lambda e: self.show(), "value")
         self.panel = pn.Column(pn.Row(self.file, self.pair, self.query, self.limit, self.button), self.cards)
         self._pairs()
@@ -40,6 +41,8 @@ class AtlasView:
             return
         pairs = sorted({(r[0], r[1]) for r in a.con.execute("SELECT DISTINCT n, F FROM chains")})
         self.pair.options = [f"{n}, {F}" for n, F in pairs]
+        if self.pair.options and self.pair.value not in self.pair.options:
+            self.pair.value = self.pair.options[0]
         self.show()
 
     def show(self) -> None:

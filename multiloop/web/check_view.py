@@ -69,6 +69,9 @@ class CheckView:
 
     def busy(self, text: str) -> None:
         self.verdict.object = f'<p id="ml-check-status">{html.escape(text)}</p>'
+        self.json.object = self.table.object = ""
+        self.events.data = dict(x=[], label=[])
+        self.curves.data = dict(xs=[], ys=[], name=[], colour=[])
 
     def show(self, doc: dict | None, sw: Sweep | None, threshold: float) -> list[tuple[float, str]]:
         """Fill the panel from a check JSON document (None: nothing to check); returns the
@@ -81,7 +84,7 @@ class CheckView:
         items = "".join(f"<li>{html.escape(v)}</li>" for v in doc["verdict"]) or "<li>no fault found</li>"
         self.verdict.object = (f'<h3 id="ml-check-status" data-ok="{str(doc["ok"]).lower()}">Verdict: {ok}</h3>'
                                f"<ul>{items}</ul>")
-        self.json.object = f'<pre id="ml-check-json">{html.escape(json.dumps(doc, indent=1, allow_nan=False))}</pre>'
+        self.json.object = f'<pre id="ml-check-json" data-mechanism="{html.escape(doc["mechanism"])}">{html.escape(json.dumps(doc, indent=1, allow_nan=False))}</pre>'
         if sw is None:
             return []
         ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]

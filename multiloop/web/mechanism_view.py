@@ -34,19 +34,19 @@ for (const ix of idx) {
 links.data = Object.assign({}, links.data, {xs: xs, ys: ys});
 joints.data = Object.assign({}, joints.data, {x: nx.slice(0, nj), y: ny.slice(0, nj)});
 for (const c of cursors) { c.location = sweep.data.input[i]; }
-const [label, unit, names] = readout.tags;
+const [label, unit, names, mech] = readout.tags;
 const pos = {};
 names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
-readout.text = '<span id="ml-positions" data-index="' + i + '" data-input="' + sweep.data.input[i]
+readout.text = '<span id="ml-positions" data-mechanism="' + mech + '" data-index="' + i + '" data-input="' + sweep.data.input[i]
   + '" data-positions=\\'' + JSON.stringify(pos) + '\\'>' + label + ' = '
   + sweep.data.input[i].toFixed(3) + ' ' + unit + '</span>';
 """
 
 
-def readout_html(sw: Sweep, i: int, names) -> str:
+def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
-    return (f'<span id="ml-positions" data-index="{i}" data-input="{float(sw.x[i])!r}" '
+    return (f'<span id="ml-positions" data-mechanism="{html.escape(mech)}" data-index="{i}" data-input="{float(sw.x[i])!r}" '
             f"data-positions='{html.escape(json.dumps(pos), quote=False)}'>{sw.joint} = "
             f"{sw.x[i]:.3f} {sw.unit}</span>")
 
@@ -101,9 +101,13 @@ class MechanismView:
         return f
 
     # ------------------------------------------------------------------ content
-    def show(self, scene: Scene, sweeps: list[Sweep]) -> None:
-        """Draw ``scene`` and make its sweeps the player's frames (driver 0 first)."""
-        self.scene, self.sweeps = scene, sweeps
+    def show(self, scene: Scene, sweeps: list[Sweep], name: str = "") -> None:
+        """Draw ``scene`` (named ``name`` on the page) and make its sweeps the player's
+        frames (driver 0 first)."""
+        self.scene, self.sweeps, self.name = scene, sweeps, name
+        if not sweeps:
+            self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
+            self.marks.data = dict(x=[], y=[], label=[])
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
                                colour=[c for _, _, c, _ in scene.links], name=[n for n, _, _, _ in scene.links],
@@ -137,7 +141,7 @@ class MechanismView:
         n_pts = len(names) - self.scene.n_joints
         self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
                                ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
-        self.readout.tags = [sw.joint, sw.unit, names]
+        self.readout.tags = [sw.joint, sw.unit, names, self.name]
         i = sw.reference_index
         self.player.param.update(start=0, end=max(len(sw.x) - 1, 1), value=i)
         self.status.object = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
@@ -150,7 +154,7 @@ class MechanismView:
         self._draw_nodes(sw.nodes[i])
         for c in self.cursors:
             c.location = float(sw.x[i])
-        self.readout.text = readout_html(sw, i, self.scene.node_names)
+        self.readout.text = readout_html(sw, i, self.scene.node_names, self.name)
 
     def _draw_nodes(self, nodes: np.ndarray) -> None:
         xs, ys = _frame_links(self.scene, nodes)

@@ -70,12 +70,12 @@ def _float_or_none(text: str, what: str):
 def _widgets() -> dict:
     w = pn.widgets
     return dict(
-        start=w.Select(name="start mechanism", options=[], width=200),
+        start=w.Select(name="start mechanism", options=[], width=200, css_classes=["ml-start"]),
         point=w.Select(name="tracer point (--point)", options=[], width=160),
         csv=w.FileInput(name="target CSV", accept=".csv,.txt", multiple=False),
         method=w.Select(name="method", options=["de", "cmaes"], value="de", width=90),
         seed=w.IntInput(name="seed", value=0, width=90),
-        budget=w.FloatInput(name="budget (s)", value=4.0, start=0.1, width=100),
+        budget=w.FloatInput(name="budget (s)", value=4.0, start=0.1, width=100, css_classes=["ml-budget"]),
         tol=w.FloatInput(name="tol", value=1e-6, width=100),
         candidates=w.IntInput(name="candidates", value=1, start=1, end=8, width=100),
         shape_only=w.Checkbox(name="shape only", value=False),
