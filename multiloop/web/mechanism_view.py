@@ -14,7 +14,7 @@ import json
 
 import numpy as np
 import panel as pn
-from bokeh.models import ColumnDataSource, Div, HoverTool
+from bokeh.models import ColumnDataSource, Div, HoverTool, Range1d
 from bokeh.plotting import figure
 
 from .scene import Scene, Sweep
@@ -31,15 +31,27 @@ for (const ix of idx) {
   if (ix.length > 2) { cx.push(nx[ix[0]]); cy.push(ny[ix[0]]); }
   xs.push(cx); ys.push(cy);
 }
-links.data = Object.assign({}, links.data, {xs: xs, ys: ys});
-joints.data = Object.assign({}, joints.data, {x: nx.slice(0, nj), y: ny.slice(0, nj)});
+// in place, then one change signal each: a redraw in the browser, no patch to the server
+links.data.xs = xs; links.data.ys = ys; links.change.emit();
+joints.data.x = nx.slice(0, nj); joints.data.y = ny.slice(0, nj); joints.change.emit();
 for (const c of cursors) { c.location = sweep.data.input[i]; }
 const [label, unit, names, mech] = readout.tags;
 const pos = {};
 names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
-readout.text = '<span id="ml-positions" data-mechanism="' + mech + '" data-index="' + i + '" data-input="' + sweep.data.input[i]
-  + '" data-positions=\\'' + JSON.stringify(pos) + '\\'>' + label + ' = '
-  + sweep.data.input[i].toFixed(3) + ' ' + unit + '</span>';
+// the readout's element itself (a new Div text would re-lay out the whole page)
+let el = window.__mlReadout;
+if (!el || !el.isConnected) {
+  el = null;
+  const walk = (root) => { el = el || root.querySelector('#ml-positions');
+    for (const e of root.querySelectorAll('*')) { if (el) return; if (e.shadowRoot) walk(e.shadowRoot); } };
+  walk(document);
+  window.__mlReadout = el;
+}
+if (el) {
+  el.setAttribute('data-mechanism', mech); el.setAttribute('data-index', i);
+  el.setAttribute('data-input', sweep.data.input[i]); el.setAttribute('data-positions', JSON.stringify(pos));
+  el.textContent = label + ' = ' + sweep.data.input[i].toFixed(3) + ' ' + unit;
+}
 """
 
 
@@ -66,12 +78,13 @@ class MechanismView:
     def __init__(self, cursors=()):
         self.scene: Scene | None = None
         self.sweeps: list[Sweep] = []
-        self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]))
-        self.joints = ColumnDataSource(dict(x=[], y=[], name=[], fill=[], size=[], marker=[], links=[]))
+        self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
+        self.joints = ColumnDataSource(dict(x=[], y=[], name=[], fill=[], size=[], marker=[], links=[]), name="ml-joints")
         self.paths = ColumnDataSource(dict(xs=[], ys=[]))
         self.marks = ColumnDataSource(dict(x=[], y=[], label=[]))
         self.sweep = ColumnDataSource(dict(nx=[], ny=[], input=[]))
-        self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout")
+        # fixed size: a new text then repaints the readout alone, not the whole layout
+        self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
         self.driver = pn.widgets.Select(name="driver", options=[], width=160)
@@ -86,7 +99,9 @@ class MechanismView:
                                pn.pane.Bokeh(self.readout), pn.pane.Bokeh(self.fig))
 
     def _figure(self):
-        f = figure(width=620, height=480, match_aspect=True, tools="pan,wheel_zoom,reset,save",
+        # fixed ranges (set from the whole sweep): a frame repaints the glyphs, never the axes
+        f = figure(width=620, height=480, x_range=Range1d(-1, 1), y_range=Range1d(-1, 1),
+                   tools="pan,wheel_zoom,reset,save",
                    toolbar_location="above", name="ml-mechanism")
         f.multi_line("xs", "ys", source=self.paths, line_color="#bbbbbb", line_width=1)
         r = f.patches("xs", "ys", source=self.links, fill_color="colour", fill_alpha=0.25,
@@ -108,6 +123,8 @@ class MechanismView:
         if not sweeps:
             self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
             self.marks.data = dict(x=[], y=[], label=[])
+            self.paths.data = dict(xs=[], ys=[])
+            self._fit(scene.reference)
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
                                colour=[c for _, _, c, _ in scene.links], name=[n for n, _, _, _ in scene.links],
@@ -142,11 +159,25 @@ class MechanismView:
         self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
                                ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
         self.readout.tags = [sw.joint, sw.unit, names, self.name]
+        self._fit(sw.nodes)
         i = sw.reference_index
         self.player.param.update(start=0, end=max(len(sw.x) - 1, 1), value=i)
         self.status.object = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
                               f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
         self.draw_frame(i)
+
+    def _fit(self, nodes: np.ndarray) -> None:
+        """Ranges around every finite position of ``nodes``, equal scales on both axes."""
+        P = nodes.reshape(-1, 2)
+        P = P[np.all(np.isfinite(P), axis=1)]
+        if not len(P):
+            return
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        c, half = (lo + hi) / 2, max(float(np.max(hi - lo)) * 0.55, 1e-9)
+        aspect = (self.fig.width - 60) / (self.fig.height - 70)        # plot area, about
+        hx, hy = (half * aspect, half) if aspect >= 1 else (half, half / aspect)
+        self.fig.x_range.update(start=c[0] - hx, end=c[0] + hx, reset_start=c[0] - hx, reset_end=c[0] + hx)
+        self.fig.y_range.update(start=c[1] - hy, end=c[1] + hy, reset_start=c[1] - hy, reset_end=c[1] + hy)
 
     def draw_frame(self, i: int) -> None:
         """Server-side redraw of frame ``i`` (loading, a click on a plot); the same output as the glue."""
