@@ -13,7 +13,7 @@ import json
 import numpy as np
 import panel as pn
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, Span
+from bokeh.models import ColumnDataSource, Range1d, Span
 from bokeh.plotting import figure
 
 from .scene import PALETTE, Sweep
@@ -55,6 +55,7 @@ class CheckView:
         self.events = ColumnDataSource(dict(x=[], label=[]))
         self.cursor = Span(location=0, dimension="height", line_color="#333", line_dash="dashed")
         self.fig = figure(width=620, height=260, tools="pan,wheel_zoom,reset,tap", toolbar_location="above",
+                          x_range=Range1d(0, 360),
                           x_axis_label="input", y_axis_label="angle (deg)", name="ml-angles")
         self.fig.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2, legend_field="name")
         self.fig.scatter("x", 0, source=self.events, marker="inverted_triangle", size=10, color="#d62728")
@@ -90,6 +91,8 @@ class CheckView:
         ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]
         self.events.data = dict(x=[x for x, _ in ev], label=[lb for _, lb in ev])
         self.fig.xaxis.axis_label = f"{sw.joint} ({sw.unit})"
+        lo, hi = float(sw.x.min()), float(sw.x.max())
+        self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         A = np.where(np.isfinite(sw.angles), sw.angles, np.nan)
         self.curves.data = dict(xs=[sw.x.tolist()] * A.shape[1], ys=[A[:, c].tolist() for c in range(A.shape[1])],
                                 name=list(sw.angle_names),

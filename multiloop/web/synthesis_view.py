@@ -147,6 +147,7 @@ class SynthesisView:
             self.say(str(exc))
             return
         self.w["point"].options = [p.name for p in m.points]
+        self.w["point"].value = m.points[0].name if m.points else None
         from .scene import sweep_driver
         if len(m.drivers) == 1 and m.points:
             sw = sweep_driver(m, 0)
