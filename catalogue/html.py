@@ -44,6 +44,8 @@ function filt(){
 
 
 def chain_card(i: int, rec) -> str:
+    """The gallery card of chain ``rec`` (a :class:`~.synthesis.ChainRecord`) numbered
+    ``i``: its drawing, codes and assortments, with a ``data-search`` text for filtering."""
     masks = [sum(1 << x for x in j) for j in rec.joints]
     choices = mechanism_choices(rec.n, masks)
     la = "-".join(map(str, rec.La)) if rec.La else ("non-planar" if rec.planar is False else "—")

@@ -174,6 +174,16 @@ def test_slider_positions_are_those_of_solve(page, tmp_path_factory):
     _shot(page, "web_mechanism.png", tmp_path_factory)
 
 
+def test_a_limited_motion_gets_its_own_slider_range(page):
+    """dyad_prp's crank does not turn fully: the slider spans both sides of the reference."""
+    _pick(page, "dyad_prp")
+    n = int(page.locator("input[type=range]").first.get_attribute("max"))
+    assert n + 1 == 201
+    page.evaluate(MOVE_JS, [n])
+    r = _readout(page)
+    assert r["index"] == n and 0 < r["input"] < 360
+
+
 def test_check_panel_shows_the_numbers_of_check_json(page):
     _pick(page, "four_bar")
     page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)

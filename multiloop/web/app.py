@@ -76,7 +76,7 @@ class Workbench:
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
-        self.mechanism = None
+        self.mechanism, self.mechanism_name = None, ""
         self.job = None
         self.message = pn.pane.HTML('<div id="ml-message"></div>', sizing_mode="stretch_width")
         self.check = CheckView(self.move_to)

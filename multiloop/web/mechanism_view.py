@@ -55,6 +55,14 @@ if (el) {
 """
 
 
+#: Panel's Player does not pass a new start/end to its range input: this glue does
+RANGE_JS = """
+const walk = (root, out) => { root.querySelectorAll('input[type=range]').forEach(e => out.push(e));
+  root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot, out); }); return out; };
+for (const el of walk(document, [])) { el.min = cb_obj.start; el.max = cb_obj.end; el.value = cb_obj.value; }
+"""
+
+
 def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
@@ -92,6 +100,7 @@ class MechanismView:
                                         loop_policy="loop", width=380, show_loop_controls=False)
         self.player.jscallback(value=REDRAW_JS, args=dict(sweep=self.sweep, links=self.links, joints=self.joints,
                                                           readout=self.readout, cursors=self.cursors))
+        self.player.jscallback(start=RANGE_JS, end=RANGE_JS)
         self.driver.param.watch(lambda e: self.use_driver(self.driver.options.index(e.new)
                                                           if e.new in self.driver.options else 0), "value")
         self.status = pn.pane.HTML("", sizing_mode="stretch_width")
