@@ -136,11 +136,11 @@ def _readout(page) -> dict:
             "positions": json.loads(el.get_attribute("data-positions"))}
 
 
-def _pick(page, name: str) -> None:
+def _pick(page, name: str, timeout: int = 60000) -> None:
     page.locator(".ml-pick select").select_option(name)
     page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
         return r && r.getAttribute('data-positions') && r.getAttribute('data-mechanism') == '{name}'; }}""",
-                           timeout=60000)
+                           timeout=timeout)
 
 
 @pytest.fixture(scope="module")
@@ -304,10 +304,10 @@ def test_redraw_latency_of_every_catalogue_mechanism(page):
     from multiloop.web.app import catalogue_names
     worst = {}
     for name in catalogue_names():
-        _pick(page, name)
+        _pick(page, name, timeout=600000)
         n = int(page.locator("input[type=range]").first.get_attribute("max"))
         times = np.array([page.evaluate(MOVE_JS, [int(i)]) for i in np.linspace(0, n, 12).round()[1:]])
         worst[name] = (float(np.median(times[:, 0])), float(times[:, 0].max()), n + 1)
         print(f"{name:24s} frames {n + 1:4d}  drawn: median {worst[name][0]:6.1f} ms, max {worst[name][1]:6.1f} ms;"
               f"  next frame: median {np.median(times[:, 1]):6.1f} ms")
-    assert max(w[1] for w in worst.values()) < 250
+    assert max(w[0] for w in worst.values()) <= 50      # the goal, on the median of 11 moves

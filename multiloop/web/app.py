@@ -98,6 +98,8 @@ class Workbench:
             tabs.append(("Atlas", self.atlas.panel))
         header = pn.Row(pn.pane.HTML("<b>multiloop workbench</b>"), self.pick,
                         pn.Column(pn.pane.HTML("open a .toml, .json or .pyslvs file:"), self.upload))
+        # not dynamic: a tab rendered later by the server fetches Panel's stylesheets from
+        # its CDN, whatever the resources setting (seen with Panel 1.9.4)
         self.tabs = pn.Tabs(*tabs, dynamic=False)
         self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(choices[0] if "four_bar" not in choices or self.files else "four_bar")

@@ -96,7 +96,7 @@ class MechanismView:
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
         self.driver = pn.widgets.Select(name="driver", options=[], width=160)
-        self.player = pn.widgets.Player(name="input", start=0, end=1, value=0, interval=40,
+        self.player = pn.widgets.Player(name="", show_value=False, start=0, end=1, value=0, interval=40,
                                         loop_policy="loop", width=380, show_loop_controls=False)
         self.player.jscallback(value=REDRAW_JS, args=dict(sweep=self.sweep, links=self.links, joints=self.joints,
                                                           readout=self.readout, cursors=self.cursors))
