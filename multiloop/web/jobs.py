@@ -2,7 +2,7 @@
 
 The page never waits for a job: a periodic callback of the session reads
 :attr:`Job.state` and updates the widgets.  :meth:`Job.cancel` sets an event that the
-job's progress callback checks; the callback then raises :class:`Cancelled` inside the
+job's progress callback checks; the callback then raises ``_Cancelled`` inside the
 worker, which unwinds the optimiser and ends the thread (the work stops, it is not
 merely hidden).
 """
@@ -12,10 +12,10 @@ import threading
 import time
 import warnings
 
-__all__ = ["Job", "Cancelled"]
+__all__ = ["Job"]
 
 
-class Cancelled(Exception):
+class _Cancelled(Exception):
     """Raised inside a job's worker when the job was cancelled."""
 
 
@@ -47,7 +47,7 @@ class Job:
                 warnings.simplefilter("ignore")
                 self.result = self.fn(self)
             self.state = "cancelled" if self._stop.is_set() else "done"
-        except Cancelled:
+        except _Cancelled:
             self.state = "cancelled"
         except LinkageError as exc:
             self.error, self.state = str(exc), "failed"
@@ -55,12 +55,12 @@ class Job:
             self.error, self.state = f"internal error: {type(exc).__name__}: {exc}", "failed"
 
     def report(self, fraction: float, best: float = float("nan"), note: str = "") -> None:
-        """Progress from the worker; raises :class:`Cancelled` once :meth:`cancel` was called."""
+        """Progress from the worker; raises ``_Cancelled`` once :meth:`cancel` was called."""
         self.fraction, self.best = float(fraction), float(best)
         if note:
             self.note = note
         if self._stop.is_set():
-            raise Cancelled(self.name)
+            raise _Cancelled(self.name)
 
     def cancel(self) -> None:
         self._stop.set()

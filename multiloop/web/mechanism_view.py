@@ -23,6 +23,7 @@ __all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
 
 #: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
 REDRAW_JS = """
+if (sweep.data.nx.length == 0) { return; }       // the motion is not solved yet
 const i = Math.max(0, Math.min(cb_obj.value, sweep.data.nx.length - 1));
 const nx = sweep.data.nx[i], ny = sweep.data.ny[i], nj = joints.data.name.length;
 const idx = links.data.idx, xs = [], ys = [];
@@ -133,6 +134,8 @@ class MechanismView:
             self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
             self.marks.data = dict(x=[], y=[], label=[])
             self.paths.data = dict(xs=[], ys=[])
+            self.sweep.data = dict(nx=[], ny=[], input=[])
+            self.player.disabled = True
             self._fit(scene.reference)
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
@@ -168,6 +171,7 @@ class MechanismView:
         self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
                                ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
         self.readout.tags = [sw.joint, sw.unit, names, self.name]
+        self.player.disabled = False
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.param.update(start=0, end=max(len(sw.x) - 1, 1), value=i)
