@@ -21,11 +21,13 @@ from multiloop.topo.io import mechanism_to_dict
 MULTILOOP = [sys.executable, "-m", "multiloop"]
 
 
-def _cli_message(tmp_path, name: str, data: bytes) -> str:
+def _cli_message(tmp_path, name: str, data: bytes, capsys, monkeypatch) -> str:
+    from multiloop.cli import main
     (tmp_path / name).write_bytes(data)
-    r = subprocess.run(MULTILOOP + ["analyse", name], capture_output=True, text=True, cwd=tmp_path)
-    assert r.returncode == 2
-    return r.stderr.strip().removeprefix("multiloop analyse: error: ")
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["analyse", name]) == 2
+    return capsys.readouterr().err.strip().removeprefix("multiloop analyse: error: ")
 
 
 @pytest.mark.parametrize("name, data", [
@@ -35,10 +37,10 @@ def _cli_message(tmp_path, name: str, data: bytes) -> str:
     ("bad.toml", b"\xff\xfe"),
     ("bad.pyslvs", b"mechanism: 3\n"),
 ])
-def test_a_bad_upload_has_the_message_of_the_command_line(tmp_path, name, data):
+def test_a_bad_upload_has_the_message_of_the_command_line(tmp_path, name, data, capsys, monkeypatch):
     with pytest.raises(LinkageError) as exc:
         load_upload(name, data)
-    cli = _cli_message(tmp_path, name, data)
+    cli = _cli_message(tmp_path, name, data, capsys, monkeypatch)
     assert str(exc.value) == cli
 
 
