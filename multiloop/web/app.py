@@ -165,8 +165,12 @@ class Workbench:
         self.scene, self.shown_sweeps = scene, False
         self.structure.object = structure
         self.view.show(scene, [], self.mechanism_name)
-        self.check.show(None, None, self.threshold) if not m.drivers else self.check.busy("motion and check: computing…")
-        if m.drivers and m.has_geometry:
+        if not m.drivers:
+            self.check.show(None, None, self.threshold)
+        elif not m.has_geometry:
+            self.check.busy("no geometry: nothing to move or check")
+        else:
+            self.check.busy("motion and check: computing…")
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold), "check")
         self.tabs.active = 0
 
