@@ -82,13 +82,14 @@ class Workbench:
         self.check = CheckView(self.move_to)
         self.view = MechanismView(cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
-        self.pick = pn.widgets.Select(name="mechanism", options=choices, width=240, css_classes=["ml-pick"])
+        first = choices[0] if self.files or "four_bar" not in choices else "four_bar"
+        self.pick = pn.widgets.Select(name="mechanism", options=choices, value=first, width=240,
+                                      css_classes=["ml-pick"])
         self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
         self.pick.param.watch(lambda e: self.open_name(e.new), "value")
         self.upload.param.watch(lambda e: self.open_upload(), "value")
-        self.synthesis = SynthesisView(["(open mechanism)"] + [n for n in choices if n != "(open mechanism)"],
-                                       self._start, self.open_design, self.say)
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
         tabs = [("Mechanism", pn.Row(self.view.panel, self.check.panel)), ("Structure", self.structure),
                 ("Synthesis", self.synthesis.panel)]
         self.atlas = None
@@ -102,9 +103,7 @@ class Workbench:
         # its CDN, whatever the resources setting (seen with Panel 1.9.4)
         self.tabs = pn.Tabs(*tabs, dynamic=False)
         self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
-        self.open_name(choices[0] if "four_bar" not in choices or self.files else "four_bar")
-        if self.pick.value != self.mechanism_name:
-            self.pick.value = self.mechanism_name
+        self.open_name(first)
 
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
