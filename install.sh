@@ -3,13 +3,15 @@
 # nauty's geng/genbg come from the passagemath-nauty wheel and pynauty from a prebuilt
 # wheel (no C compiler on Linux x86_64, Python 3.11); extras: [test] the suite, [dask]
 # Dask clusters for `atlas --scheduler`, [notebook] the notebook widgets and the
-# executed example notebook, [bench] the libraries the benchmarks compare against.
+# executed example notebook, [web] Panel and Bokeh for `multiloop serve`,
+# [browser-test] Playwright (it drives Debian's chromium; its own browser download is
+# not used), [bench] the libraries the benchmarks compare against.
 # System packages are installed with apt-get when it is available and we are root:
 # Debian's nauty (a fallback for the wheel's generators) and headless Chromium (the
-# HTML-atlas browser test).  Set MULTILOOP_NO_APT=1 to skip them.
+# HTML-atlas and `multiloop serve` browser tests).  Set MULTILOOP_NO_APT=1 to skip them.
 set -euo pipefail
 cd "$(dirname "$0")"
-python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook]"
+python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook,web,browser-test]"
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"

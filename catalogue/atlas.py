@@ -268,10 +268,13 @@ class Atlas:
     16
     """
 
-    def __init__(self, path: str | Path = "atlas.sqlite"):
+    def __init__(self, path: str | Path = "atlas.sqlite", readonly: bool = False):
         self.path = str(path)
         if self.path != ":memory:" and Path(self.path).is_dir():
             raise InputError(explain("--db", expected="an atlas file (SQLite)", got=f"the directory {self.path!r}"))
+        if readonly:
+            self._open_readonly()
+            return
         try:
             self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
             self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
@@ -283,6 +286,20 @@ class Atlas:
             raise InputError(explain("--db", expected="an atlas file (SQLite) or a new file name",
                                      got=f"{self.path!r}: {exc}",
                                      hint="give another --db path")) from None
+
+    def _open_readonly(self) -> None:
+        """Open an existing atlas for reading only: no journal, no lock file, nothing
+        written (SQLite's ``immutable`` URI; the file must not change while open)."""
+        p = Path(self.path)
+        if not p.is_file():
+            raise InputError(explain("atlas", expected="an existing atlas file (SQLite)", got=f"{self.path!r}: no such file"))
+        try:
+            self.con = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro&immutable=1", uri=True,
+                                       check_same_thread=False)
+            self.con.execute("SELECT count(*) FROM chains").fetchone()
+        except sqlite3.DatabaseError as exc:
+            raise InputError(explain("atlas", expected="an atlas file (SQLite) with a chains table",
+                                     got=f"{self.path!r}: {exc}")) from None
 
     def close(self) -> None:
         self.con.close()

@@ -15,9 +15,9 @@ from .atlas import Atlas
 from multiloop.kin.figures.chains import chain_svg
 from .synthesis import mechanism_choices
 
-__all__ = ["write_gallery", "gallery_files", "gallery_page"]
+__all__ = ["write_gallery", "gallery_files", "gallery_page", "chain_card", "CSS"]
 
-_CSS = """
+CSS = """
 body{font-family:system-ui,sans-serif;margin:1.2em;background:#fafafa;color:#222}
 h1{font-size:1.4em} .meta{color:#555}
 #q{font-size:1em;padding:.3em .5em;width:22em}
@@ -43,7 +43,9 @@ function filt(){
 """
 
 
-def _card(i: int, rec) -> str:
+def chain_card(i: int, rec) -> str:
+    """The gallery card of chain ``rec`` (a :class:`~.synthesis.ChainRecord`) numbered
+    ``i``: its drawing, codes and assortments, with a ``data-search`` text for filtering."""
     masks = [sum(1 << x for x in j) for j in rec.joints]
     choices = mechanism_choices(rec.n, masks)
     la = "-".join(map(str, rec.La)) if rec.La else ("non-planar" if rec.planar is False else "—")
@@ -69,11 +71,11 @@ def gallery_page(atlas: Atlas, n: int, F: int, query: str | None = None, limit: 
 
     opts = SynthesisOptions(n, F)
     total = atlas.count(opts, query)
-    cards = [_card(i, r) for i, r in enumerate(atlas.chains(opts, query, limit=limit), 1)]
+    cards = [chain_card(i, r) for i, r in enumerate(atlas.chains(opts, query, limit=limit), 1)]
     note = "" if len(cards) == total else f" (first {len(cards)} shown; raise --html-limit for more)"
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>Atlas n={n} F={F}</title>
-<style>{_CSS}</style><script>{_JS}</script></head>
+<style>{CSS}</style><script>{_JS}</script></head>
 <body><h1>Atlas of planar chains: n = {n} links, F = {F}</h1>
 <p class="meta">{total} non-isomorphic non-degenerate chains{_html.escape(note)}{'' if not query else ' matching ' + _html.escape(query)}.
 Links: bars (2 joints) and shaded polygons (3+ joints); open circles: simple joints;
@@ -102,7 +104,7 @@ def gallery_files(atlas: Atlas, pairs=None, query: str | None = None,
         items.append(f'<li><a href="{name}">n = {n}, F = {F}</a>: '
                      f'{atlas.count(SynthesisOptions(n, F), query)} chains</li>')
     files["index.html"] = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>multiloop atlas</title>"
-                           f"<style>{_CSS}</style></head><body><h1>multiloop atlas</h1><ul>"
+                           f"<style>{CSS}</style></head><body><h1>multiloop atlas</h1><ul>"
                            + "".join(items) + "</ul></body></html>")
     return files
 

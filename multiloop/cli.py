@@ -27,6 +27,7 @@ COMMANDS = {
     "check": "design check over the whole motion: limits, dead centres, transmission, circuits",
     "bench": "run the benchmarks and print ratios",
     "synthesise": "dimensional synthesis: path, function and motion generation",
+    "serve": "web workbench: move a design, see its check, draw a target, browse atlases",
 }
 
 

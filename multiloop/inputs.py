@@ -21,10 +21,13 @@ from pathlib import Path
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import Mechanism
 
-__all__ = ["resolve", "load_mechanism", "load_mechanism_or_engine", "PYSLVS_SUFFIXES"]
+__all__ = ["resolve", "load_mechanism", "load_mechanism_or_engine", "load_upload", "upload_text",
+           "PYSLVS_SUFFIXES", "MAX_UPLOAD"]
 
 #: suffixes read as Pyslvs input (project YAML, or a bare expression)
 PYSLVS_SUFFIXES = (".pyslvs", ".expr")
+#: largest upload accepted (bytes): the largest bundled mechanism is a few kB
+MAX_UPLOAD = 1 << 20
 
 
 def resolve(arg: str | Path, folders: tuple[str, ...] = ("mechanisms", "engines")) -> Path:
@@ -76,3 +79,36 @@ def load_mechanism_or_engine(path: str | Path) -> Mechanism:
             except InputError as exc:
                 raise InputError(f"{p}: {exc}") from None
     return load_mechanism(p)
+
+
+def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> str:
+    """The UTF-8 text of an uploaded file ``name`` (no disk), at most ``max_bytes``.
+
+    Raises
+    ------
+    InputError
+        Too large, or not UTF-8 (the messages of the file readers).
+    """
+    if len(data) > max_bytes:
+        raise InputError(explain(f"file '{name}'", expected=f"at most {max_bytes} bytes",
+                                 got=f"{len(data)} bytes", hint="upload a mechanism file, not a data set"))
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(explain(f"file '{name}'", expected="UTF-8 text",
+                                 got=f"undecodable bytes ({exc.reason})")) from None
+
+
+def load_upload(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> Mechanism:
+    """A :class:`Mechanism` from the bytes of an uploaded ``.toml``/``.json``/``.pyslvs``
+    file, read by the same parsers as :func:`load_mechanism` without touching the disk."""
+    suffix = Path(name).suffix.lower()
+    if suffix not in (".toml", ".json") + PYSLVS_SUFFIXES:
+        raise InputError(explain(f"file '{name}'", expected="a .toml, .json or .pyslvs file",
+                                 got=f"suffix '{suffix or '(none)'}'"))
+    text = upload_text(name, data, max_bytes)
+    if suffix in PYSLVS_SUFFIXES:
+        from multiloop.exchange.pyslvs import loads_pyslvs  # noqa: PLC0415
+        return loads_pyslvs(text, name, name=Path(name).stem)
+    from multiloop.topo.io import loads  # noqa: PLC0415
+    return loads(text, suffix[1:], where=name)

@@ -211,10 +211,16 @@ def load(path: str | Path) -> Mechanism:
         raise InputError(f"{path}: {exc}") from None
 
 
-def loads(text: str, fmt: str = "toml") -> Mechanism:
-    """Parse a mechanism from a TOML (default) or JSON string."""
-    doc = _parse_json(text, "<string>") if fmt == "json" else _parse_toml(text, "<string>")
-    return mechanism_from_dict(doc)
+def loads(text: str, fmt: str = "toml", where: str = "<string>") -> Mechanism:
+    """Parse a mechanism from a TOML (default) or JSON string; ``where`` names it in
+    messages (e.g. the name of an uploaded file)."""
+    doc = _parse_json(text, where) if fmt == "json" else _parse_toml(text, where)
+    try:
+        return mechanism_from_dict(doc)
+    except InputError as exc:
+        if where == "<string>":
+            raise
+        raise InputError(f"{where}: {exc}") from None
 
 
 # ---------------------------------------------------------------------------------

@@ -15,8 +15,8 @@ import numpy as np
 
 from multiloop.topo.errors import InputError, explain
 
-__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "MIN_ROWS", "MAX_ROWS", "MAX_VALUE",
-           "resample", "TIMINGS"]
+__all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "parse_table", "MIN_ROWS", "MAX_ROWS",
+           "MAX_VALUE", "resample", "TIMINGS"]
 
 #: fewest rows each task needs: a path needs 3 points (a circle passes through any
 #: 3 points, so fewer say nothing), function and motion need 3 precision positions
@@ -133,9 +133,14 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
         raise InputError(explain(f"{what} table {p.name!r}", expected="UTF-8 text",
                                  got=f"byte 0x{raw[e.start]:02x} at offset {e.start}",
                                  hint="save the file as UTF-8")) from None
+    return parse_table(text, columns, what, p.name)
+
+
+def parse_table(text: str, columns: tuple[int, ...], what: str, name: str) -> np.ndarray:
+    """Rows of numbers from the text of a CSV table named ``name`` (see :func:`read_table`)."""
     rows = [r for r in csv.reader(text.splitlines()) if r and any(c.strip() for c in r)]
     if not rows:
-        raise InputError(explain(f"{what} table {p.name!r}", expected="rows of numbers", got="an empty file"))
+        raise InputError(explain(f"{what} table {name!r}", expected="rows of numbers", got="an empty file"))
     out = []
     for i, r in enumerate(rows):
         try:
@@ -143,16 +148,16 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
         except ValueError:
             if i == 0:
                 continue        # header
-            raise InputError(explain(f"{p.name} row {i + 1}", expected="numbers", got=",".join(r)[:80])) from None
+            raise InputError(explain(f"{name} row {i + 1}", expected="numbers", got=",".join(r)[:80])) from None
         if len(vals) not in columns:
-            raise InputError(explain(f"{p.name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
+            raise InputError(explain(f"{name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
                                      got=f"{len(vals)}"))
         out.append(vals)
     if not out:
-        raise InputError(explain(f"{what} table {p.name!r}", expected="rows of numbers", got="a header line only"))
+        raise InputError(explain(f"{what} table {name!r}", expected="rows of numbers", got="a header line only"))
     if len({len(v) for v in out}) > 1:
-        raise InputError(explain(p.name, expected="the same number of columns on every row", got="a ragged table"))
-    return check_rows(np.array(out, float).reshape(len(out), -1), what, p.name)
+        raise InputError(explain(name, expected="the same number of columns on every row", got="a ragged table"))
+    return check_rows(np.array(out, float).reshape(len(out), -1), what, name)
 
 
 def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:

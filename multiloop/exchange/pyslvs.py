@@ -55,7 +55,7 @@ from pathlib import Path
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder
 
-__all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs",
+__all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs", "loads_pyslvs",
            "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs", "pyslvs_losses",
            "MAX_YAML_DEPTH"]
 
@@ -241,18 +241,24 @@ def read_pyslvs(path: str | Path) -> Mechanism:
         text = read_input_bytes(p).decode("utf-8")
     except UnicodeDecodeError as exc:
         raise InputError(explain(f"file '{p}'", expected="UTF-8 text", got=f"undecodable bytes ({exc.reason})")) from None
+    return loads_pyslvs(text, str(p), name=p.stem)
+
+
+def loads_pyslvs(text: str, where: str = "<string>", name: str | None = None) -> Mechanism:
+    """A mechanism from the text of a ``.pyslvs`` project or a bare expression;
+    ``where`` names the source in messages, ``name`` names the mechanism."""
     try:
         if text.lstrip().startswith("M["):
-            return mechanism_from_expression(text, name=p.stem)
-        doc = _yaml_document(text, f"file '{p}'")
+            return mechanism_from_expression(text, name=name)
+        doc = _yaml_document(text, f"file '{where}'")
         if not isinstance(doc, dict) or not isinstance(doc.get("mechanism"), str):
-            raise InputError(explain(f"file '{p}'", expected="a YAML mapping with a 'mechanism' expression",
+            raise InputError(explain(f"file '{where}'", expected="a YAML mapping with a 'mechanism' expression",
                                      got=type(doc).__name__ if not isinstance(doc, dict) else "no 'mechanism' key"))
         inputs = doc.get("input")
-        return mechanism_from_expression(doc["mechanism"], () if inputs is None else inputs, name=p.stem)
+        return mechanism_from_expression(doc["mechanism"], () if inputs is None else inputs, name=name)
     except InputError as exc:
         msg = str(exc)
-        raise InputError(msg if msg.startswith(f"file '{p}'") else f"{p}: {msg}") from None
+        raise InputError(msg if msg.startswith(f"file '{where}'") else f"{where}: {msg}") from None
 
 
 def _fmt(v: float) -> str:

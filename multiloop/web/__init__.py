@@ -1,0 +1,16 @@
+"""The web workbench of ``multiloop serve`` (the optional ``[web]`` extra: Panel + Bokeh).
+
+One page per browser session: a mechanism moved by a player, its structural report,
+its design check marked on the input axis and the drawing, dimensional synthesis from a
+drawn or uploaded target, and a browser of stored atlases.  Everything shown comes from
+the library's own functions (:mod:`.scene` solves the motions once; the rest are views).
+"""
+from __future__ import annotations
+
+__all__ = ["serve"]
+
+
+def serve(*args, **kwargs):
+    """:func:`multiloop.web.app.serve` (imports Panel only when called)."""
+    from .app import serve as _serve
+    return _serve(*args, **kwargs)

@@ -1,0 +1,74 @@
+"""Background jobs of one page: a worker thread, its progress, its result, a real cancel.
+
+The page never waits for a job: a periodic callback of the session reads
+:attr:`Job.state` and updates the widgets.  :meth:`Job.cancel` sets an event that the
+job's progress callback checks; the callback then raises ``_Cancelled`` inside the
+worker, which unwinds the optimiser and ends the thread (the work stops, it is not
+merely hidden).
+"""
+from __future__ import annotations
+
+import threading
+import time
+import warnings
+
+__all__ = ["Job"]
+
+
+class _Cancelled(Exception):
+    """Raised inside a job's worker when the job was cancelled."""
+
+
+class Job:
+    """Run ``fn(job)`` in a daemon thread; ``fn`` reports through :meth:`report`.
+
+    Attributes
+    ----------
+    state : str
+        ``"running"``, ``"done"``, ``"failed"`` or ``"cancelled"``.
+    fraction, best : float
+        The last progress report.
+    result, error : the return value, or the error message (one line).
+    """
+
+    def __init__(self, fn, name: str = "job"):
+        self.fn, self.name = fn, name
+        self.state, self.fraction, self.best, self.note = "running", 0.0, float("nan"), ""
+        self.result, self.error = None, ""
+        self._stop = threading.Event()
+        self.started = time.perf_counter()
+        self.thread = threading.Thread(target=self._run, name=f"multiloop-web-{name}", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        from multiloop.topo.errors import LinkageError
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self.result = self.fn(self)
+            self.state = "cancelled" if self._stop.is_set() else "done"
+        except _Cancelled:
+            self.state = "cancelled"
+        except LinkageError as exc:
+            self.error, self.state = str(exc), "failed"
+        except Exception as exc:  # noqa: BLE001 - shown on the page, the server keeps serving
+            self.error, self.state = f"internal error: {type(exc).__name__}: {exc}", "failed"
+
+    def report(self, fraction: float, best: float = float("nan"), note: str = "") -> None:
+        """Progress from the worker; raises ``_Cancelled`` once :meth:`cancel` was called."""
+        self.fraction, self.best = float(fraction), float(best)
+        if note:
+            self.note = note
+        if self._stop.is_set():
+            raise _Cancelled(self.name)
+
+    def cancel(self) -> None:
+        self._stop.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._stop.is_set()
+
+    @property
+    def running(self) -> bool:
+        return self.state == "running"

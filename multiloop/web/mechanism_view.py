@@ -1,0 +1,230 @@
+"""The mechanism view: the drawing, a player per driver, and the motion's frames.
+
+The whole motion of the chosen driver is sent to the page once (:class:`~.scene.Sweep`);
+a move of the slider redraws in the browser by indexing those frames (a few lines of
+BokehJS glue, :data:`REDRAW_JS`), so no round trip to the server and no solving happens
+per frame.  The glue also writes the displayed positions into the element
+``#ml-positions`` (``data-index``, ``data-input``, ``data-positions`` as JSON), which
+the browser tests read.
+"""
+from __future__ import annotations
+
+import html
+import json
+
+import numpy as np
+import panel as pn
+from bokeh.models import ColumnDataSource, Div, HoverTool, Range1d
+from bokeh.plotting import figure
+
+from .scene import Scene, Sweep
+
+__all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
+
+#: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
+REDRAW_JS = """
+if (sweep.data.nx.length == 0) { return; }       // the motion is not solved yet
+const i = Math.max(0, Math.min(cb_obj.value, sweep.data.nx.length - 1));
+const nx = sweep.data.nx[i], ny = sweep.data.ny[i], nj = joints.data.name.length;
+const idx = links.data.idx, xs = [], ys = [];
+for (const ix of idx) {
+  const cx = ix.map(j => nx[j]), cy = ix.map(j => ny[j]);
+  if (ix.length > 2) { cx.push(nx[ix[0]]); cy.push(ny[ix[0]]); }
+  xs.push(cx); ys.push(cy);
+}
+// in place, then one change signal each: a redraw in the browser, no patch to the server
+links.data.xs = xs; links.data.ys = ys; links.change.emit();
+joints.data.x = nx.slice(0, nj); joints.data.y = ny.slice(0, nj); joints.change.emit();
+for (const c of cursors) { c.location = sweep.data.input[i]; }
+const [label, unit, names, mech] = readout.tags;
+const pos = {};
+names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
+// the readout's element itself (a new Div text would re-lay out the whole page)
+let el = window.__mlReadout;
+if (!el || !el.isConnected) {
+  el = null;
+  const walk = (root) => { el = el || root.querySelector('#ml-positions');
+    for (const e of root.querySelectorAll('*')) { if (el) return; if (e.shadowRoot) walk(e.shadowRoot); } };
+  walk(document);
+  window.__mlReadout = el;
+}
+if (el) {
+  el.setAttribute('data-mechanism', mech); el.setAttribute('data-index', i);
+  el.setAttribute('data-input', sweep.data.input[i]); el.setAttribute('data-positions', JSON.stringify(pos));
+  el.textContent = label + ' = ' + sweep.data.input[i].toFixed(3) + ' ' + unit;
+}
+"""
+
+
+#: Panel's Player does not pass a new start/end to its range input: this glue does
+RANGE_JS = """
+const walk = (root, out) => { root.querySelectorAll('input[type=range]').forEach(e => out.push(e));
+  root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot, out); }); return out; };
+for (const el of walk(document, [])) { el.min = cb_obj.start; el.max = cb_obj.end; el.value = cb_obj.value; }
+"""
+
+
+def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
+    """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
+    pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
+    return (f'<span id="ml-positions" data-mechanism="{html.escape(mech)}" data-index="{i}" data-input="{float(sw.x[i])!r}" '
+            f"data-positions='{html.escape(json.dumps(pos), quote=False)}'>{sw.joint} = "
+            f"{sw.x[i]:.3f} {sw.unit}</span>")
+
+
+def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
+    xs, ys = [], []
+    for _, idx, _, _ in scene.links:
+        P = nodes[list(idx) + ([idx[0]] if len(idx) > 2 else [])]
+        xs.append(P[:, 0].tolist())
+        ys.append(P[:, 1].tolist())
+    return xs, ys
+
+
+class MechanismView:
+    """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it."""
+
+    def __init__(self, cursors=()):
+        self.scene: Scene | None = None
+        self.sweeps: list[Sweep] = []
+        self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
+        self.joints = ColumnDataSource(dict(x=[], y=[], name=[], fill=[], size=[], marker=[], links=[]), name="ml-joints")
+        self.paths = ColumnDataSource(dict(xs=[], ys=[]))
+        self.marks = ColumnDataSource(dict(x=[], y=[], label=[]))
+        self.sweep = ColumnDataSource(dict(nx=[], ny=[], input=[]))
+        # fixed size: a new text then repaints the readout alone, not the whole layout
+        self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout", width=560, height=22)
+        self.cursors = list(cursors)     # the input cursors of the plots against the input
+        self.fig = self._figure()
+        self.driver = pn.widgets.Select(name="driver", options=[], width=160)
+        self.player = pn.widgets.Player(name="", show_value=False, start=0, end=1, value=0, interval=40,
+                                        loop_policy="loop", width=380, show_loop_controls=False)
+        self.player.jscallback(value=REDRAW_JS, args=dict(sweep=self.sweep, links=self.links, joints=self.joints,
+                                                          readout=self.readout, cursors=self.cursors))
+        self.player.jscallback(start=RANGE_JS, end=RANGE_JS)
+        self.driver.param.watch(lambda e: self.use_driver(self.driver.options.index(e.new)
+                                                          if e.new in self.driver.options else 0), "value")
+        self.status = pn.pane.HTML("", sizing_mode="stretch_width")
+        self.panel = pn.Column(pn.Row(self.driver, self.player), self.status,
+                               pn.pane.Bokeh(self.readout), pn.pane.Bokeh(self.fig))
+
+    def _figure(self):
+        # fixed ranges (set from the whole sweep): a frame repaints the glyphs, never the axes
+        f = figure(width=620, height=480, x_range=Range1d(-1, 1), y_range=Range1d(-1, 1),
+                   tools="pan,wheel_zoom,reset,save",
+                   toolbar_location="above", name="ml-mechanism")
+        f.multi_line("xs", "ys", source=self.paths, line_color="#bbbbbb", line_width=1)
+        r = f.patches("xs", "ys", source=self.links, fill_color="colour", fill_alpha=0.25,
+                      line_color="colour", line_width=3)
+        f.add_tools(HoverTool(renderers=[r], tooltips=[("link", "@name"), ("group", "@group")]))
+        j = f.scatter("x", "y", source=self.joints, marker="marker", size="size", fill_color="fill",
+                      line_color="black", line_width=1.5)
+        f.add_tools(HoverTool(renderers=[j], tooltips=[("joint", "@name"), ("links", "@links")]))
+        f.scatter("x", "y", source=self.marks, marker="diamond", size=11, color="#d62728", alpha=0.8)
+        f.text("x", "y", text="label", source=self.marks, text_font_size="9px", text_color="#d62728",
+               x_offset=6, y_offset=-4)
+        return f
+
+    # ------------------------------------------------------------------ content
+    def show(self, scene: Scene, sweeps: list[Sweep], name: str = "") -> None:
+        """Draw ``scene`` (named ``name`` on the page) and make its sweeps the player's
+        frames (driver 0 first)."""
+        self.scene, self.sweeps, self.name = scene, sweeps, name
+        if not sweeps:
+            self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
+            self.marks.data = dict(x=[], y=[], label=[])
+            self.paths.data = dict(xs=[], ys=[])
+            self.sweep.data = dict(nx=[], ny=[], input=[])
+            self.player.disabled = True
+            self._fit(scene.reference)
+        m = scene.mechanism
+        self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
+                               colour=[c for _, _, c, _ in scene.links], name=[n for n, _, _, _ in scene.links],
+                               group=[g for _, _, _, g in scene.links],
+                               idx=[list(ix) for _, ix, _, _ in scene.links])
+        n_pts = len(scene.node_names) - scene.n_joints
+        fill = ["gold" if k > 2 else "white" for k in scene.multiplicity] + ["crimson"] * n_pts
+        marker = ["square" if k == "P" else "triangle" if k == "frame" else "circle" for k in scene.joint_kind]
+        self.joints.data = dict(
+            x=[0.0] * len(scene.node_names), y=[0.0] * len(scene.node_names), name=list(scene.node_names),
+            fill=fill, size=[11 + 3 * (k - 2) if k > 2 else 9 for k in scene.multiplicity] + [10] * n_pts,
+            marker=marker + ["x"] * n_pts,
+            links=[", ".join(j.links) for j in m.joints] + [f"tracer point on {p.link}" for p in m.points])
+        labels = [f"{sw.joint} ({sw.unit})" for sw in sweeps]
+        self.driver.options = labels
+        self.driver.visible = len(labels) > 1
+        if labels:
+            self.driver.value = labels[0]
+            self.use_driver(0)
+        else:
+            self._draw_nodes(scene.reference)
+
+    def use_driver(self, k: int) -> None:
+        """Make driver ``k``'s sweep the player's frames and draw its reference frame."""
+        if not self.sweeps:
+            return
+        sw = self.sweeps[k]
+        self.current = sw
+        names = list(self.scene.node_names)
+        self.sweep.data = dict(nx=sw.nodes[:, :, 0].tolist(), ny=sw.nodes[:, :, 1].tolist(), input=sw.x.tolist())
+        n_pts = len(names) - self.scene.n_joints
+        self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
+                               ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
+        self.readout.tags = [sw.joint, sw.unit, names, self.name]
+        self.player.disabled = False
+        self._fit(sw.nodes)
+        i = sw.reference_index
+        self.player.param.update(start=0, end=max(len(sw.x) - 1, 1), value=i)
+        self.status.object = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
+                              f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
+        self.draw_frame(i)
+
+    def _fit(self, nodes: np.ndarray) -> None:
+        """Ranges around every finite position of ``nodes``, equal scales on both axes."""
+        P = nodes.reshape(-1, 2)
+        P = P[np.all(np.isfinite(P), axis=1)]
+        if not len(P):
+            return
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        c, half = (lo + hi) / 2, max(float(np.max(hi - lo)) * 0.55, 1e-9)
+        aspect = (self.fig.width - 60) / (self.fig.height - 70)        # plot area, about
+        hx, hy = (half * aspect, half) if aspect >= 1 else (half, half / aspect)
+        self.fig.x_range.update(start=c[0] - hx, end=c[0] + hx, reset_start=c[0] - hx, reset_end=c[0] + hx)
+        self.fig.y_range.update(start=c[1] - hy, end=c[1] + hy, reset_start=c[1] - hy, reset_end=c[1] + hy)
+
+    def draw_frame(self, i: int) -> None:
+        """Server-side redraw of frame ``i`` (loading, a click on a plot); the same output as the glue."""
+        sw = self.current
+        self._draw_nodes(sw.nodes[i])
+        for c in self.cursors:
+            c.location = float(sw.x[i])
+        self.readout.text = readout_html(sw, i, self.scene.node_names, self.name)
+
+    def _draw_nodes(self, nodes: np.ndarray) -> None:
+        xs, ys = _frame_links(self.scene, nodes)
+        self.links.patch({"xs": [(slice(0, len(xs)), xs)], "ys": [(slice(0, len(ys)), ys)]}) if xs else None
+        nj = len(self.scene.node_names)
+        self.joints.patch({"x": [(slice(0, nj), nodes[:nj, 0].tolist())],
+                           "y": [(slice(0, nj), nodes[:nj, 1].tolist())]})
+
+    def move_to(self, x: float) -> None:
+        """Move the player to the frame nearest driver value ``x`` (deg or m)."""
+        i = int(np.argmin(np.abs(self.current.x - x)))
+        self.player.value = i
+        self.draw_frame(i)
+
+    def mark(self, events: list[tuple[float, str]]) -> None:
+        """Mark events (driver value, label) on the drawing at the driver link's moving
+        joints in the frame of each event (where the input is when it happens)."""
+        sw, sc = self.current, self.scene
+        m = sc.mechanism
+        dj = m.joint(sw.joint)
+        link = dj.links[1] if dj.links[0] == m.frame else dj.links[0]
+        idx = [i for i, j in enumerate(m.joints) if link in j.links and m.frame not in j.links] or [0]
+        xs, ys, labels = [], [], []
+        for x, label in events:
+            f = int(np.argmin(np.abs(sw.x - x)))
+            xs.append(float(sw.nodes[f, idx[0], 0]))
+            ys.append(float(sw.nodes[f, idx[0], 1]))
+            labels.append(label)
+        self.marks.data = dict(x=xs, y=ys, label=labels)

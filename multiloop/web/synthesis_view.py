@@ -1,0 +1,302 @@
+"""The synthesis panel: a target path drawn freehand or uploaded, a start, the options of
+``multiloop synthesise``, a background run with progress and cancel, the candidates.
+
+Each candidate is one :func:`multiloop.catalogue.dimensional.synthesise` run (seeds
+``seed``, ``seed + 1``, …, each with its share of the budget).  A candidate is drawn over
+the target, opens in the mechanism view, and downloads as ``.toml`` or ``.pyslvs``
+(:mod:`multiloop.exchange.pyslvs`).
+"""
+from __future__ import annotations
+
+import html
+import io
+
+import numpy as np
+import panel as pn
+from bokeh.models import ColumnDataSource, FreehandDrawTool
+from bokeh.plotting import figure
+
+from multiloop.topo.errors import InputError, LinkageError, explain
+
+from .jobs import Job
+
+__all__ = ["SynthesisView", "resample", "run_candidates"]
+
+TARGET_POINTS = 24      # points of a freehand target after resampling
+
+
+def resample(xs, ys, n: int = TARGET_POINTS) -> np.ndarray:
+    """``n`` points equally spaced along a drawn stroke (arc length), (n, 2)."""
+    P = np.column_stack([np.asarray(xs, float), np.asarray(ys, float)])
+    P = P[np.all(np.isfinite(P), axis=1)]
+    if len(P) < 2:
+        raise InputError(explain("drawn target", expected="a stroke of at least 2 points", got=f"{len(P)}",
+                                 hint="drag the mouse over the plot with the freehand tool"))
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(P, axis=0).T))])
+    if s[-1] <= 0:
+        raise InputError(explain("drawn target", expected="a stroke of some length", got="a dot"))
+    t = np.linspace(0.0, s[-1], n)
+    return np.column_stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])])
+
+
+def run_candidates(job: Job, start, target: np.ndarray, n: int, options: dict) -> list:
+    """``n`` synthesis runs (seeds ``seed``…) in the worker of ``job``; the finished ones
+    are in ``job.partial`` as they come.  Cancelling stops the current run."""
+    from multiloop.catalogue.dimensional import synthesise
+
+    out = job.partial = []
+    seed, budget = int(options.pop("seed")), float(options.pop("budget"))
+    for c in range(n):
+        res = synthesise(start, path=target, seed=seed + c, budget=budget / n,
+                         progress=lambda f, b, c=c: job.report((c + f) / n, b), **options)
+        out.append(res)
+        job.report((c + 1) / n, min(r.error_rms for r in out))
+    return out
+
+
+def _float_or_none(text: str, what: str):
+    text = (text or "").strip()
+    if not text:
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        raise InputError(explain(what, expected="a number or nothing", got=repr(text))) from None
+    if not np.isfinite(v):
+        raise InputError(explain(what, expected="a finite number", got=repr(text)))
+    return v
+
+
+def _widgets() -> dict:
+    w = pn.widgets
+    return dict(
+        start=w.Select(name="start mechanism", options=[], width=200, css_classes=["ml-start"]),
+        point=w.Select(name="tracer point (--point)", options=[], width=160),
+        csv=w.FileInput(name="target CSV", accept=".csv,.txt", multiple=False),
+        method=w.Select(name="method", options=["de", "cmaes"], value="de", width=90),
+        seed=w.IntInput(name="seed", value=0, width=90),
+        budget=w.FloatInput(name="budget (s)", value=4.0, start=0.1, width=100, css_classes=["ml-budget"]),
+        tol=w.FloatInput(name="tol", value=1e-6, width=100),
+        candidates=w.IntInput(name="candidates", value=1, start=1, end=8, width=100),
+        shape_only=w.Checkbox(name="shape only", value=False),
+        full_rotation=w.Checkbox(name="full rotation", value=False),
+        min_transmission=w.TextInput(name="min transmission (deg)", value="", width=150),
+        max_ratio=w.TextInput(name="max ratio", value="", width=100),
+        length_low=w.TextInput(name="length ≥ (m)", value="", width=100),
+        length_high=w.TextInput(name="length ≤ (m)", value="", width=100),
+        run=w.Button(name="Run", button_type="primary", width=90),
+        cancel=w.Button(name="Cancel", button_type="warning", width=90, disabled=True),
+        clear=w.Button(name="Clear target", width=110),
+        progress=pn.indicators.Progress(value=0, max=1000, width=300, name="progress"),
+        pick=w.Select(name="candidate", options=[], width=120),
+        open=w.Button(name="Open in mechanism view", width=190),
+    )
+
+
+class SynthesisView:
+    """The synthesis panel of one session.  ``load_start(name)`` gives a start mechanism
+    (a catalogue name, or the open one), ``open_design(m)`` shows a candidate, ``say``
+    shows a one-line message."""
+
+    def __init__(self, starts: list[str], load_start, open_design, say):
+        self.load_start, self.open_design, self.say = load_start, open_design, say
+        self.w = w = _widgets()
+        w["start"].options = starts
+        self.target = None
+        self.job: Job | None = None
+        self.results: list = []
+        self.strokes = ColumnDataSource(dict(xs=[], ys=[]), name="ml-strokes")
+        self.uploaded = ColumnDataSource(dict(x=[], y=[]))
+        self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
+        self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
+        self.fig = self._figure()
+        w["start"].param.watch(lambda e: self._start_changed(), "value")
+        w["csv"].param.watch(lambda e: self._upload(), "value")
+        w["run"].on_click(lambda e: self.run())
+        w["cancel"].on_click(lambda e: self.cancel())
+        w["clear"].on_click(lambda e: self._clear())
+        w["open"].on_click(lambda e: self._open())
+        w["pick"].param.watch(lambda e: self._draw_candidates(), "value")
+        self.status = pn.pane.HTML('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
+        self.table = pn.pane.HTML("")
+        self.downloads = [pn.widgets.FileDownload(callback=lambda f=f: self._download(f), filename=f"candidate.{f}",
+                                                  label=f"Download .{f}", width=150) for f in ("toml", "pyslvs")]
+        self.panel = pn.Row(
+            pn.Column(w["start"], w["point"], w["csv"], pn.Row(w["method"], w["seed"], w["budget"]),
+                      pn.Row(w["tol"], w["candidates"]), pn.Row(w["shape_only"], w["full_rotation"]),
+                      pn.Row(w["min_transmission"], w["max_ratio"]), pn.Row(w["length_low"], w["length_high"]),
+                      pn.Row(w["run"], w["cancel"], w["clear"]), w["progress"], self.status, width=380),
+            pn.Column(pn.pane.Bokeh(self.fig), self.table, pn.Row(w["pick"], w["open"]), pn.Row(*self.downloads)))
+
+    def _figure(self):
+        f = figure(width=560, height=440, match_aspect=True, tools="pan,wheel_zoom,reset", name="ml-target",
+                   toolbar_location="above", title="draw the target path (freehand tool)")
+        f.multi_line("xs", "ys", source=self.start_src, line_color="#bbbbbb", line_dash="dotted")
+        r = f.multi_line("xs", "ys", source=self.strokes, line_color="black", line_width=3)
+        tool = FreehandDrawTool(renderers=[r], num_objects=1)
+        f.add_tools(tool)
+        f.toolbar.active_drag = tool
+        f.scatter("x", "y", source=self.uploaded, size=7, color="black")
+        f.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2)
+        return f
+
+    def _start_changed(self) -> None:
+        try:
+            m = self.load_start(self.w["start"].value)
+        except LinkageError as exc:
+            self.say(str(exc))
+            return
+        self.w["point"].options = [p.name for p in m.points]
+        self.w["point"].value = m.points[0].name if m.points else None
+        from .scene import sweep_driver
+        if len(m.drivers) == 1 and m.points:
+            sw = sweep_driver(m, 0)
+            n0 = len(m.joints)
+            self.start_src.data = dict(xs=[sw.nodes[:, n0 + p, 0].tolist() for p in range(len(m.points))],
+                                       ys=[sw.nodes[:, n0 + p, 1].tolist() for p in range(len(m.points))])
+
+
+    def _upload(self) -> None:
+        from multiloop.catalogue.dimensional.targets import parse_table
+        from multiloop.inputs import upload_text
+        name = self.w["csv"].filename or "target.csv"
+        try:
+            a = parse_table(upload_text(name, self.w["csv"].value or b""), (2, 3), "path", name)
+        except LinkageError as exc:
+            self.say(str(exc))
+            return
+        self.target = a
+        self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
+        self.strokes.data = dict(xs=[], ys=[])
+        self.status.object = f'<p id="ml-synthesis-status">target: {html.escape(name)}, {len(a)} rows</p>'
+
+    def _clear(self) -> None:
+        self.target = None
+        self.uploaded.data = dict(x=[], y=[])
+        self.strokes.data = dict(xs=[], ys=[])
+
+    def _target(self) -> np.ndarray:
+        xs, ys = self.strokes.data.get("xs", []), self.strokes.data.get("ys", [])
+        if len(xs):
+            return resample(xs[-1], ys[-1])
+        if self.target is not None:
+            return self.target
+        raise InputError(explain("target path", expected="a drawn stroke or an uploaded CSV", got="none"))
+
+    def _options(self) -> dict:
+        w = self.w
+        lo, hi = (_float_or_none(w["length_low"].value, "length ≥"), _float_or_none(w["length_high"].value, "length ≤"))
+        if (lo is None) != (hi is None):
+            raise InputError(explain("length bounds", expected="both LOW and HIGH, or neither", got="one of them"))
+        return dict(point=w["point"].value or None, shape_only=w["shape_only"].value, method=w["method"].value,
+                    seed=w["seed"].value, budget=w["budget"].value, tol=w["tol"].value,
+                    full_rotation=w["full_rotation"].value,
+                    min_transmission=_float_or_none(w["min_transmission"].value, "min transmission"),
+                    max_ratio=_float_or_none(w["max_ratio"].value, "max ratio"),
+                    length_bounds=None if lo is None else (lo, hi))
+
+    def run(self) -> None:
+        """Start a background run (one job at a time per page)."""
+        if self.job is not None and self.job.running:
+            return
+        try:
+            target, options = self._target(), self._options()
+            if not options["budget"] or options["budget"] <= 0:
+                raise InputError(explain("budget", expected="a positive number of seconds", got=str(options["budget"])))
+            start = self.load_start(self.w["start"].value)
+        except LinkageError as exc:
+            self.say(str(exc))
+            return
+        n = int(self.w["candidates"].value or 1)
+        self.results = []
+        self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
+        self.w["run"].disabled, self.w["cancel"].disabled = True, False
+        self.status.object = '<p id="ml-synthesis-status" data-state="running">running…</p>'
+
+    def cancel(self) -> None:
+        if self.job is not None:
+            self.job.cancel()
+
+    def poll(self) -> None:
+        """Called by the session's periodic callback: progress, then the candidates."""
+        job = self.job
+        if job is None:
+            return
+        self.w["progress"].value = int(1000 * min(job.fraction, 1.0))
+        done = list(getattr(job, "partial", []))
+        if len(done) != len(self.results):
+            self.results = done
+            self._list()
+        if job.running:
+            best = "" if not np.isfinite(job.best) else f", best objective {job.best:.3g}"
+            self.status.object = (f'<p id="ml-synthesis-status" data-state="running">running '
+                                  f'{100 * job.fraction:.0f} %{best}</p>')
+            return
+        self.job = None
+        self.w["run"].disabled, self.w["cancel"].disabled = False, True
+        if job.state == "failed":
+            self.say(job.error)
+        self.status.object = (f'<p id="ml-synthesis-status" data-state="{job.state}">{job.state}: '
+                              f'{len(self.results)} candidate(s)</p>')
+
+
+    def _list(self) -> None:
+        from multiloop.topo.assur import decompose
+        rows = []
+        for i, r in enumerate(self.results, 1):
+            m = r.mechanism
+            try:
+                formula = decompose(m).formula
+            except LinkageError as exc:
+                formula = str(exc)
+            rows.append(f'<tr data-candidate="{i}"><td>{i}</td><td>{r.error_max:.3g}</td><td>{r.error_rms:.3g}</td>'
+                        f"<td>{len(m.links)}</td><td>{html.escape(formula)}</td><td>{r.seed}</td>"
+                        f"<td>{html.escape(r.stopped)}</td></tr>")
+        self.table.object = ('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
+                             "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>"
+                             + "".join(rows) + "</table>")
+        self.w["pick"].options = [str(i) for i in range(1, len(self.results) + 1)]
+        if self.results:
+            best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms)
+            self.w["pick"].value = str(best + 1)
+        self._draw_candidates()
+
+    def _chosen(self):
+        v = self.w["pick"].value
+        if not v or int(v) > len(self.results):
+            raise InputError(explain("candidate", expected="a finished synthesis run", got="none"))
+        return self.results[int(v) - 1]
+
+    def _draw_candidates(self) -> None:
+        xs, ys, colours = [], [], []
+        pick = self.w["pick"].value
+        for i, r in enumerate(self.results, 1):
+            a = np.asarray(r.achieved, float)
+            xs.append(a[:, 0].tolist())
+            ys.append(a[:, 1].tolist())
+            colours.append("#e15759" if str(i) == pick else "#f1a7a8")
+        self.curves.data = dict(xs=xs, ys=ys, colour=colours)
+
+    def _open(self) -> None:
+        try:
+            self.open_design(self._chosen().mechanism)
+        except LinkageError as exc:
+            self.say(str(exc))
+
+    def _download(self, fmt: str):
+        """The chosen candidate as ``.toml`` or ``.pyslvs`` text (nothing kept on the server)."""
+        try:
+            m = self._chosen().mechanism
+            if fmt == "toml":
+                from multiloop.topo.io import dumps_toml
+                text = dumps_toml(m)
+            else:
+                from multiloop.exchange.pyslvs import dumps_pyslvs
+                text = dumps_pyslvs(m)
+        except LinkageError as exc:
+            self.say(str(exc))
+            return None
+        for d in self.downloads:
+            if d.filename.endswith(fmt):
+                d.filename = f"{m.name or 'candidate'}.{fmt}"
+        return io.BytesIO(text.encode("utf-8"))

@@ -1,0 +1,121 @@
+"""``multiloop serve`` without a browser: uploads read by the command line's parsers,
+the read-only atlas, the sweeps the slider indexes, the command's start-up checks."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from multiloop.catalogue.atlas import Atlas
+from multiloop.catalogue.dimensional.targets import parse_table, read_table
+from multiloop.catalogue.synthesis import SynthesisOptions
+from multiloop.exchange.pyslvs import dumps_pyslvs, loads_pyslvs, read_pyslvs
+from multiloop.inputs import load_mechanism, load_upload, resolve
+from multiloop.kin.solve import solve
+from multiloop.topo.errors import InputError, LinkageError
+from multiloop.topo.io import mechanism_to_dict
+
+MULTILOOP = [sys.executable, "-m", "multiloop"]
+
+
+def _cli_message(tmp_path, name: str, data: bytes, capsys, monkeypatch) -> str:
+    from multiloop.cli import main
+    (tmp_path / name).write_bytes(data)
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["analyse", name]) == 2
+    return capsys.readouterr().err.strip().removeprefix("multiloop analyse: error: ")
+
+
+@pytest.mark.parametrize("name, data", [
+    ("bad.toml", b"x = ["),
+    ("bad.toml", b"[[link]]\nname = 1\n"),
+    ("bad.json", b'{"link": [], "link": []}'),
+    ("bad.toml", b"\xff\xfe"),
+    ("bad.pyslvs", b"mechanism: 3\n"),
+])
+def test_a_bad_upload_has_the_message_of_the_command_line(tmp_path, name, data, capsys, monkeypatch):
+    with pytest.raises(LinkageError) as exc:
+        load_upload(name, data)
+    cli = _cli_message(tmp_path, name, data, capsys, monkeypatch)
+    assert str(exc.value) == cli
+
+
+def test_uploads_are_capped_and_need_a_known_suffix():
+    with pytest.raises(InputError, match="at most 10 bytes"):
+        load_upload("a.toml", b"x" * 11, max_bytes=10)
+    with pytest.raises(InputError, match="suffix '.exe'"):
+        load_upload("a.exe", b"")
+
+
+@pytest.mark.parametrize("name", ["four_bar", "stephenson_3", "crank_slider"])
+def test_an_upload_reads_as_the_file_does(name, tmp_path):
+    p = resolve(name)
+    m = load_upload(p.name, p.read_bytes())
+    assert mechanism_to_dict(m) == mechanism_to_dict(load_mechanism(name))
+    text = dumps_pyslvs(load_mechanism(name))
+    (tmp_path / "m.pyslvs").write_text(text)
+    assert mechanism_to_dict(loads_pyslvs(text, "m.pyslvs", "m")) == mechanism_to_dict(read_pyslvs(tmp_path / "m.pyslvs"))
+
+
+def test_csv_text_and_csv_file_give_the_same_table(tmp_path):
+    text = "x,y\n0,0\n1,0.5\n2,1\n3,1.5\n4,2\n5,2.5\n"
+    (tmp_path / "t.csv").write_text(text)
+    np.testing.assert_array_equal(parse_table(text, (2, 3), "path", "t.csv"), read_table(tmp_path / "t.csv", (2, 3), "path"))
+    with pytest.raises(InputError, match="t.csv row 3"):
+        parse_table("x,y\n0,0\n1,a\n", (2, 3), "path", "t.csv")
+
+
+def test_read_only_atlas_writes_nothing(tmp_path):
+    db = tmp_path / "a.sqlite"
+    with Atlas(db) as a:
+        n = a.build(SynthesisOptions(6, 1), progress=False).count
+    before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+    with Atlas(db, readonly=True) as a:
+        assert a.count(SynthesisOptions(6, 1)) == n == len(list(a.chains(SynthesisOptions(6, 1))))
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before
+    with pytest.raises(InputError, match="no such file"):
+        Atlas(tmp_path / "none.sqlite", readonly=True)
+    (tmp_path / "junk.sqlite").write_text("not a database")
+    with pytest.raises(InputError, match="atlas"):
+        Atlas(tmp_path / "junk.sqlite", readonly=True)
+
+
+@pytest.mark.parametrize("name", ["four_bar", "dyad_prp", "stephenson_3_triad"])
+def test_the_slider_frames_are_the_solver_positions(name):
+    from multiloop.web.scene import scene_of, sweep_driver
+    m = load_mechanism(name)
+    sc, sw = scene_of(m), sweep_driver(m, 0)
+    assert sw.ok.all() and sw.x[sw.reference_index] == 0.0
+    np.testing.assert_allclose(sw.nodes[sw.reference_index], sc.reference, atol=1e-9)
+    # the frames after the reference are one continuous path from it
+    fwd = sw.x[sw.reference_index:]
+    st = solve(m, np.radians(fwd) if sw.rotary else fwd)
+    np.testing.assert_allclose(sw.nodes[sw.reference_index:, : len(m.joints)], st.positions, atol=1e-12)
+    assert sw.full_rotation == (name != "dyad_prp")
+    # every moving link is drawn, over joints of that link
+    drawn = {lk for lk, _, _, _ in sc.links}
+    assert drawn == {lk for lk in m.link_names if lk != m.frame}
+
+
+def test_serve_rejects_a_bad_file_before_serving(tmp_path):
+    (tmp_path / "bad.toml").write_text("x = [")
+    r = subprocess.run(MULTILOOP + ["serve", "bad.toml", "--port", "0"], capture_output=True, text=True,
+                       cwd=tmp_path, timeout=120)
+    assert r.returncode == 2 and "bad.toml: TOML syntax error" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_serve_warns_when_bound_beyond_localhost(tmp_path):
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    p = subprocess.Popen(MULTILOOP + ["serve", "--host", "0.0.0.0", "--port", "0"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        assert "warning: binding 0.0.0.0" in p.stderr.readline()
+        assert "http://0.0.0.0:" in p.stdout.readline()
+    finally:
+        p.terminate()
+        p.wait(timeout=20)
+    assert list(tmp_path.iterdir()) == []            # nothing written

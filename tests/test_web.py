@@ -1,0 +1,313 @@
+"""``multiloop serve``: the web workbench in a real headless browser (Debian's chromium
+driven by Playwright), plus the background job's cancel without a browser.
+
+The server runs as ``multiloop serve`` in a subprocess on a free port; every request the
+page makes is recorded and must stay on 127.0.0.1 (the page works offline).  Set
+``MULTILOOP_SCREENSHOTS=DIR`` to keep the screenshots (docs/figures/ holds two).
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+# in CI (install.sh installs the [web] and [browser-test] extras and chromium) these
+# tests must run: a missing piece is a failure there, a skip elsewhere
+if os.environ.get("CI"):
+    import panel  # noqa: F401
+    import playwright.sync_api as sync_api
+else:
+    pytest.importorskip("panel")
+    sync_api = pytest.importorskip("playwright.sync_api")
+
+from multiloop.inputs import load_mechanism  # noqa: E402
+from multiloop.kin.solve import solve  # noqa: E402
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or ("/usr/bin/chromium" if os.environ.get("CI") else None)
+MULTILOOP = [sys.executable, "-m", "multiloop"]
+
+#: every element of the page, also inside Bokeh's shadow roots
+DEEP_JS = """(sel) => { const out = []; const walk = (root) => {
+  root.querySelectorAll(sel).forEach(e => out.push(e));
+  root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
+  walk(document); return out; }"""
+
+#: move the player to frame i (the events of a keyboard step on the slider) and time it
+#: until the drawing shows frame i (the animation frame in which Bokeh paints it), and
+#: until the frame after that one (the page's own work after the move, e.g. the player's
+#: title and its message to the server)
+MOVE_JS = """async ([i]) => {
+  const deep = %s;
+  const slider = deep('input[type=range]')[0];
+  const frame = () => new Promise(res => requestAnimationFrame(() => res()));
+  const t0 = performance.now();
+  slider.value = i; slider.dispatchEvent(new Event('input', {bubbles: true}));
+  slider.dispatchEvent(new Event('change', {bubbles: true}));
+  for (;;) {      // the glue runs in the input event; Bokeh paints in the next animation frame
+    const r = deep('#ml-positions')[0];
+    await frame();
+    if (r && r.getAttribute('data-index') == String(i)) break;
+  }
+  const t1 = performance.now();
+  await frame();
+  return [t1 - t0, performance.now() - t0]; }""" % DEEP_JS
+
+pytestmark = [pytest.mark.browser,
+              pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
+                                 reason="chromium not installed (install.sh installs it)")]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _shot(page, name: str, tmp_path_factory) -> Path:
+    folder = Path(os.environ.get("MULTILOOP_SCREENSHOTS") or tmp_path_factory.mktemp("shots"))
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / name
+    page.screenshot(path=str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def atlas_db(tmp_path_factory):
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+    db = tmp_path_factory.mktemp("atlas") / "a.sqlite"
+    with Atlas(db) as a:
+        a.build(SynthesisOptions(6, 1), progress=False)
+    return db
+
+
+@pytest.fixture(scope="module")
+def server(atlas_db):
+    """``multiloop serve`` on a free port; yields (url, seconds until the page was usable)."""
+    port = _free_port()
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(atlas_db)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
+    yield f"http://127.0.0.1:{port}/", t0, proc
+    proc.terminate()
+    proc.wait(timeout=20)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def requests_seen():
+    return []
+
+
+def _page(browser, url, requests_seen):
+    page = browser.new_page(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
+    page.on("request", lambda r: requests_seen.append(r.url))
+    page.goto(url)
+    _wait_frames(page)
+    return page
+
+
+def _wait_frames(page, timeout=60000):
+    page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=timeout)
+
+
+def _readout(page) -> dict:
+    el = page.locator("#ml-positions")
+    return {"index": int(el.get_attribute("data-index")), "input": float(el.get_attribute("data-input")),
+            "positions": json.loads(el.get_attribute("data-positions"))}
+
+
+def _pick(page, name: str, timeout: int = 60000) -> None:
+    page.locator(".ml-pick select").select_option(name)
+    page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+        return r && r.getAttribute('data-positions') && r.getAttribute('data-mechanism') == '{name}'; }}""",
+                           timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def page(browser, server, requests_seen, tmp_path_factory):
+    url, t0, _ = server
+    p = _page(browser, url, requests_seen)
+    p.usable_after = time.perf_counter() - t0           # seconds from `serve` to a movable drawing
+    print(f"\npage usable {p.usable_after:.2f} s after multiloop serve started")
+    return p
+
+
+def test_slider_positions_are_those_of_solve(page, tmp_path_factory):
+    """Pick a catalogue mechanism, move the slider, read the displayed positions: they are
+    the solver's along the same path from the reference."""
+    _pick(page, "stephenson_3")
+    m = load_mechanism("stephenson_3")
+    ref = solve(m, np.radians(np.linspace(0.0, 360.0, 361)))
+    names = list(m.joint_names) + [p.name for p in m.points]
+    latencies = []
+    for i in (37, 180, 299, 0):
+        latencies.append(page.evaluate(MOVE_JS, [i])[0])
+        r = _readout(page)
+        assert r["index"] == i and r["input"] == pytest.approx(float(i))
+        want = np.concatenate([ref.positions[i], ref.point_positions[i]])
+        got = np.array([r["positions"][n] for n in names])
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    print(f"redraw after a slider move: max {max(latencies):.1f} ms")
+    assert max(latencies) < 250, latencies          # the goal is 50 ms (measured in the note)
+    page.wait_for_selector("#ml-check-json[data-mechanism=stephenson_3]", state="attached", timeout=60000)
+    page.evaluate(MOVE_JS, [37])
+    _shot(page, "web_mechanism.png", tmp_path_factory)
+
+
+def test_a_limited_motion_gets_its_own_slider_range(page):
+    """dyad_prp's crank does not turn fully: the slider spans both sides of the reference."""
+    _pick(page, "dyad_prp")
+    n = int(page.locator("input[type=range]").first.get_attribute("max"))
+    assert n + 1 == 201
+    page.evaluate(MOVE_JS, [n])
+    r = _readout(page)
+    assert r["index"] == n and 0 < r["input"] < 360
+
+
+def test_check_panel_shows_the_numbers_of_check_json(page):
+    _pick(page, "four_bar")
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    shown = json.loads(page.locator("#ml-check-json").text_content())
+    cli = subprocess.run(MULTILOOP + ["check", "four_bar", "--json"], capture_output=True, text=True, check=True)
+    assert shown == json.loads(cli.stdout)
+    assert page.locator("#ml-check-events tr").count() > 1     # the events listed, each on the axis
+
+
+def test_click_on_the_angle_plot_moves_the_mechanism(page):
+    _pick(page, "four_bar")
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    before = _readout(page)["index"]
+    canvas = page.locator(".bk-Canvas").nth(1) if page.locator(".bk-Canvas").count() > 1 else None
+    box = page.locator("canvas").nth(1).bounding_box() if canvas is None else canvas.bounding_box()
+    page.mouse.click(box["x"] + 0.6 * box["width"], box["y"] + 0.5 * box["height"])
+    page.wait_for_function(f"() => ({DEEP_JS})('#ml-positions')[0].getAttribute('data-index') != '{before}'",
+                           timeout=10000)
+    assert _readout(page)["index"] != before
+
+
+def test_malformed_upload_shows_the_cli_message_and_the_page_goes_on(page, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[[link]]\nname = 1\n")
+    cli = subprocess.run(MULTILOOP + ["analyse", "bad.toml"], capture_output=True, text=True, cwd=tmp_path)
+    assert cli.returncode == 2
+    message = cli.stderr.strip().removeprefix("multiloop analyse: error: ")
+    page.locator("input[type=file]").first.set_input_files(str(bad))
+    page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=20000)
+    assert page.locator("#ml-message").text_content().strip() == message
+    _pick(page, "watt_1")                       # the server still serves this page
+    assert "P" in _readout(page)["positions"] or _readout(page)["positions"]
+
+
+def test_two_tabs_do_not_share_state(browser, server, requests_seen, page):
+    other = _page(browser, server[0], requests_seen)
+    try:
+        _pick(other, "crank_slider")
+        _pick(page, "stephenson_2")
+        assert set(_readout(other)["positions"]) == set(load_mechanism("crank_slider").joint_names) | {
+            p.name for p in load_mechanism("crank_slider").points}
+        assert page.locator("#ml-positions").get_attribute("data-mechanism") == "stephenson_2"
+        assert other.locator("#ml-positions").get_attribute("data-mechanism") == "crank_slider"
+    finally:
+        other.close()
+
+
+def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory):
+    page.get_by_text("Synthesis", exact=True).click()
+    page.locator(".ml-start select").select_option("four_bar")
+    page.wait_for_timeout(500)
+    page.locator(".ml-budget input").fill("3")            # budget (s)
+    page.locator(".ml-budget input").press("Enter")
+    box = page.locator(".bk-Canvas").last.bounding_box() if page.locator(".bk-Canvas").count() else None
+    box = box or page.locator("canvas").last.bounding_box()
+    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
+    page.mouse.move(cx + r, cy)
+    page.mouse.down()
+    for t in np.linspace(0, 1.6 * math.pi, 40):
+        page.mouse.move(cx + r * math.cos(t) * 1.4, cy + r * math.sin(t))
+    page.mouse.up()
+    page.get_by_role("button", name="Run").click()
+    page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=60000)
+    assert page.locator("#ml-candidates tr[data-candidate]").count() == 1
+    _shot(page, "web_synthesis.png", tmp_path_factory)
+    with page.expect_download() as dl:
+        page.get_by_text("Download .toml").click()
+    path = tmp_path / "design.toml"
+    dl.value.save_as(path)
+    m = load_mechanism(path)
+    st = solve(m, np.radians(np.linspace(0.0, 360.0, 73)))
+    assert st.ok[0] and np.isfinite(st.point_positions[0]).all()
+    page.get_by_role("button", name="Open in mechanism view").click()
+    _wait_frames(page)
+    page.get_by_text("Mechanism", exact=True).first.click()
+
+
+def test_atlas_tab_lists_the_stored_chains(page, atlas_db):
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+    page.get_by_text("Atlas", exact=True).click()
+    page.wait_for_selector("#ml-atlas-count", state="attached", timeout=20000)
+    with Atlas(atlas_db, readonly=True) as a:
+        n = a.count(SynthesisOptions(6, 1))
+    assert page.locator("#ml-atlas-count").text_content().startswith(f"{n} chains")
+    assert page.locator(".card[data-search]").count() == n
+
+
+def test_page_is_usable_soon_and_asks_nothing_from_the_internet(page, requests_seen):
+    print(f"usable after {page.usable_after:.2f} s; {len(requests_seen)} requests")
+    assert requests_seen and all(u.startswith(("http://127.0.0.1:", "ws://127.0.0.1:", "data:", "blob:"))
+                                 for u in requests_seen), [u for u in requests_seen if "127.0.0.1" not in u]
+    assert page.usable_after < 60
+
+
+def test_cancel_stops_the_synthesis_worker():
+    """Not a browser test: the cancel of a job ends its thread within a generation."""
+    from multiloop.web.jobs import Job
+    from multiloop.web.synthesis_view import run_candidates
+    m = load_mechanism("four_bar")
+    target = np.column_stack([0.05 + 0.03 * np.cos(np.linspace(0, 5, 20)), 0.07 + 0.02 * np.sin(np.linspace(0, 5, 20))])
+    job = Job(lambda j: run_candidates(j, m, target, 1, dict(seed=0, budget=60.0, tol=1e-12)), "test")
+    t = time.perf_counter()
+    while job.fraction == 0 and time.perf_counter() - t < 30:
+        time.sleep(0.05)
+    job.cancel()
+    job.thread.join(timeout=10)
+    assert not job.thread.is_alive() and job.state == "cancelled"
+    assert time.perf_counter() - t < 30
+    assert threading.active_count() >= 1
+
+
+@pytest.mark.benchmark
+def test_redraw_latency_of_every_catalogue_mechanism(page):
+    """Redraw latency in the browser after a slider move, for every catalogue mechanism
+    (the goal is 50 ms; the heavy excavators take minutes to sweep, hence a benchmark).
+    Run: ``python -m pytest tests/test_web.py -m benchmark -s -k latency``."""
+    from multiloop.web.app import catalogue_names
+    worst = {}
+    for name in catalogue_names():
+        _pick(page, name, timeout=600000)
+        n = int(page.locator("input[type=range]").first.get_attribute("max"))
+        times = np.array([page.evaluate(MOVE_JS, [int(i)]) for i in np.linspace(0, n, 12).round()[1:]])
+        worst[name] = (float(np.median(times[:, 0])), float(times[:, 0].max()), n + 1)
+        print(f"{name:24s} frames {n + 1:4d}  drawn: median {worst[name][0]:6.1f} ms, max {worst[name][1]:6.1f} ms;"
+              f"  next frame: median {np.median(times[:, 1]):6.1f} ms")
+    assert max(w[0] for w in worst.values()) <= 50      # the goal, on the median of 11 moves
