@@ -176,6 +176,22 @@ def _zero_run(pr: Probe, s: np.ndarray, i: int) -> tuple[float, float]:
     return s[lo], s[hi]
 
 
+def _vertex(evaluate, P, s_nodes, flips, g, s_star: float, h: float) -> float:
+    """A crossing is a touch of the reach margin, ``margin ≈ c (s − s*)²``: ``s*`` from
+    the margin at ``s_star ± h, ± 2h`` (h well outside the run where the margin is
+    rounding), the centre of that run when the margin does not fit."""
+    q = s_star + h * np.array([-2.0, -1.0, 1.0, 2.0])
+    pr = evaluate(_at(P, s_nodes, q), {k: sign_factor(f, q) for k, f in flips.items()})[g]
+    if pr.margin is None or not np.all(np.isfinite(pr.margin)):
+        return s_star
+    f2m, f1m, f1, f2 = pr.margin
+    c = (f2 + f2m - f1 - f1m) / (6.0 * h * h)
+    if not c > 0:
+        return s_star
+    e = -(f1 - f1m) / (4.0 * c * h)
+    return s_star + e if abs(e) < h else s_star
+
+
 def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, rounds: int = 16):
     """The limit of group ``g`` in ``[a, b]`` (assembled at ``a``, not at ``b``) to the
     precision of its reach margin: a zoom search on the sign of the margin, ``n`` points
@@ -267,6 +283,8 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         s_star = 0.5 * (lo + hi)
         d = max(delta, hi - lo)
         d = min(d, 0.25 * (s_star - s[0])) if s_star > s[0] else d
+        if probes[g].margin is not None and s_star - 2 * d > s[0]:
+            s_star = _vertex(evaluate, P, s_nodes, flips, g, s_star, d)
         rule = _resolve(evaluate, P, s_nodes, flips, g, s_star, d)
         if rule == "limit":                  # a turning point within delta: the motion stops
             a, b = _limit_root(evaluate, P, s_nodes, flips, g, lo, s_star + d)

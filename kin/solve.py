@@ -52,7 +52,8 @@ from .result import MESSAGES, Status
 from .rigid import transport
 from .state import KinematicState
 
-__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH"]
+__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
+           "motion_events"]
 
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = SINGULAR       # relative determinant below which a position is singular
@@ -383,6 +384,34 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     ch = _build_chart(sp, kernels, lo_req, hi_req)
     sp.extra["chart"] = ch
     return ch
+
+
+@dataclass(frozen=True)
+class MotionEvents:
+    """The certified motion of a one-driver mechanism from its reference (rad or m):
+    ``lo`` ≤ input ≤ ``hi`` (±inf when the driver turns without limit, ``period`` 2π or
+    4π then), ``crossings`` (input, group label) where two assembly branches of a group
+    meet, ``limits`` {"lo"/"hi": group label} of the groups that stop the motion."""
+
+    lo: float
+    hi: float
+    period: float | None
+    crossings: tuple[tuple[float, str], ...]
+    limits: dict
+
+
+def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> MotionEvents | None:
+    """The events of a one-driver mechanism's motion found by the certified walk
+    (:mod:`kin.continuation`): every crossing and both limits, none read off a grid.
+    ``extent`` (m) bounds the search of a P driver (default: the mechanism's size).
+    None for a mechanism with several drivers."""
+    sp = plan_of(mechanism, plan)
+    if len(sp.mechanism.drivers) != 1:
+        return None
+    span = sp.size if extent is None else float(extent)
+    ch = _chart(sp, True, np.array([-span, span]))
+    return MotionEvents(ch.lo, ch.hi, ch.period, tuple((c, sp.steps[k].label) for c, k in ch.crossings),
+                        {side: sp.steps[k].label for side, k in ch.limits.items()})
 
 
 def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:

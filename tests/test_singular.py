@@ -253,3 +253,66 @@ def test_triad_limits_are_turning_points():
         assert st.ok.all(), st.status
         ang = angle_values(st, specs)
         assert np.all(ang < 0.01), ang
+
+
+# --------------------------------------------------------------------------- check
+def _check(m):
+    from multiloop.kin.check import check
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return check(m)
+
+
+def test_check_reads_extremes_through_change_points():
+    """Parallelogram (tests/data/branches): flat positions at 120° and 300° from the
+    reference, where the transmission angle is exactly 0° and 180°; crank = rod
+    crank-slider: the bifurcation at 225° has the rod normal to the guide (90°)."""
+    from pathlib import Path
+    from multiloop.topo.io import load
+    data = Path(__file__).parent / "data" / "branches"
+    rep = _check(load(data / "parallelogram.toml"))
+    dc = rep.drivers[0]
+    e = dc.angles[0].extreme
+    assert e.min == pytest.approx(0.0, abs=1e-5) and e.max == pytest.approx(180.0, abs=1e-5)
+    assert math.degrees(e.at_min) == pytest.approx(300.0, abs=1e-6)
+    assert math.degrees(e.at_max) == pytest.approx(120.0, abs=1e-6)
+    assert sorted(round(math.degrees(x), 6) for x, _ in dc.branch_points) == [120.0, 300.0]
+    assert any("transmission angle at B falls to 0.000°" in v for v in rep.verdict)
+    rep = _check(load(data / "crank_equals_rod.toml"))
+    e = rep.drivers[0].angles[0].extreme
+    assert e.max == pytest.approx(90.0, abs=1e-5)
+    assert any("pressure angle at B reaches 90.000°" in v for v in rep.verdict)
+
+
+def test_check_finds_a_dead_zone_narrower_than_its_grid():
+    """A 0.37° dead zone (the check's grid step is 0.5°): limited motion, limits by the
+    law of cosines, the transmission angle reaches 180° there, the ratio is unbounded."""
+    a, d, b = 0.3, 1.0, 0.8
+    half = math.radians(0.37) / 2
+    L = math.sqrt(a * a + d * d + 2 * a * d * math.cos(half))       # at θ = π − half
+    c = L - b
+    th0 = math.radians(40.0)
+    A = np.array([a * math.cos(th0), a * math.sin(th0)])
+    O4 = np.array([d, 0.0])
+    dd = np.hypot(*(O4 - A))
+    x = (b * b + dd * dd - c * c) / (2 * dd)
+    u = (O4 - A) / dd
+    m = four_bar((0, 0), A, A + x * u + math.sqrt(b * b - x * x) * np.array([-u[1], u[0]]), O4)
+    dc = _check(m).drivers[0]
+    assert not dc.full_rotation
+    got = sorted(dc.limits)
+    assert got[1] == pytest.approx(math.pi - half - th0, abs=math.radians(1e-9))
+    assert got[0] == pytest.approx(math.pi + half - th0 - 2 * math.pi, abs=math.radians(1e-9))
+    assert dc.angles[0].extreme.max == pytest.approx(180.0, abs=1e-4)
+    assert len(dc.ratio_unbounded_at) == 2
+
+
+def test_check_of_a_limited_triad_is_exact_at_its_turning_points():
+    m = limited_triad()
+    from multiloop.kin.solve import motion_events
+    ev = motion_events(m)
+    dc = _check(m).drivers[0]
+    assert sorted(dc.limits) == pytest.approx(sorted([ev.lo, ev.hi]), abs=1e-10)
+    for a in dc.angles:
+        assert a.extreme.min < 0.01                 # singular (concurrent legs) at a limit
+    assert len(dc.ratio_unbounded_at) == 2

@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from multiloop.kin.solve import compile_plan, solve
+from multiloop.kin.solve import compile_plan, motion_events, solve
 from multiloop.topo.assur import GroupKind, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
@@ -126,18 +126,30 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     groups, D = signed_dets(ap)
     mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
+    ev = motion_events(m, plan) if len(m.drivers) == 1 else None
     limit_groups = []
     for seg in mo.segments:
-        if seg.limit_bracket is not None:
-            st, r = seg.side.at([seg.side.grid[seg.n]])      # the first failed grid value
-            limit_groups.append(str(st.status[r[0]]))
+        if seg.limit_bracket is None:
+            continue
+        label = ev.limits.get("hi" if seg.side.sign > 0 else "lo") if ev is not None else None
+        if label is not None:                # the group the certified walk stopped at
+            unit = f"{np.degrees(seg.limit):.6g}°" if rotary else f"{seg.limit:.6g} m"
+            limit_groups.append(f"{label}: unreachable: limit at {unit} (out of reach beyond it)")
+            continue
+        st, r = seg.side.at([seg.side.grid[seg.n]])      # the first failed grid value
+        limit_groups.append(str(st.status[r[0]]))
     ww = [x for x in w if x[0] != driver_link and not (x[1] == "P" and x[2] == d.joint)]
     # one refinement for both: signed determinants (branch points), velocities (dead centres)
     found = roots(mo, lambda s: np.hstack([D(s), _velocity(s, ww)]), derivatives=True)
+    crossings = [x for x, _ in ev.crossings] if ev is not None else []
     bps = [(x, groups[c].describe()) for c, xs in enumerate(found[: len(groups)]) for x in xs]
-    bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
+    if ev is not None:                   # the certified walk's crossings, none read off the grid
+        bps = [(_on_turn(x, mo), g) for x, g in ev.crossings] + [
+            b for b in bps if not any(abs(b[0] - _on_turn(c, mo)) < 1e-6 for c in crossings)]
+    else:
+        bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
     dead = found[len(groups):] or [[] for _ in ww]
-    ext = extremes(mo, lambda s: angle_values(s, specs))
+    ext = extremes(mo, lambda s: angle_values(s, specs), events=crossings)
     angles = tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
     out = _output(m, w, output, driver_link)
     if output is None and out is not None:
@@ -159,11 +171,30 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
         rs.append(rr)
     unit = ("m" if out and out[1] in ("P", "point") else "rad") + ("/rad" if rotary else "/m")
     bad = tuple(x for x in (positions or ()) if not _reachable(mo, x))
+    unbounded = tuple(seg.limit for seg in mo.segments if seg.limit is not None and out
+                      and _grows_at_limit(seg, lambda st: _ratio(st, out)))
     return DriverCheck(d.joint, rotary, mo.full_rotation, mo.periodic, mo.limits,
                        tuple(limit_groups), tuple(sorted(bps)),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
                        angles, out[0] if out else None, unit,
-                       np.concatenate(xs), np.concatenate(rs), bad)
+                       np.concatenate(xs), np.concatenate(rs), bad, unbounded)
+
+
+def _on_turn(x: float, mo) -> float:
+    """A crossing of a full turn reduced to [0, 2π) (as the grid's inputs are)."""
+    return float(np.mod(x, 2 * np.pi)) if mo.rotary and mo.full_rotation else float(x)
+
+
+def _grows_at_limit(seg, ratio) -> bool:
+    """Does the velocity ratio grow without bound as the limit is approached?  At a
+    turning point it grows like δ^(−1/2) with the distance δ to the limit (the input
+    stops while the output moves): read at δ = 1e-4 and 1e-8 of the step to it."""
+    d = seg.limit - seg.x[-1] if seg.n else 0.0
+    if d == 0.0:
+        return False
+    st, r = seg.side.at(seg.limit - d * np.array([1e-2, 1e-6]), derivatives=True)
+    v = np.abs(ratio(st)[r])
+    return bool(np.all(np.isfinite(v)) and v[1] > 30.0 * max(v[0], 1e-300))
 
 
 def _reachable(mo, x) -> bool:

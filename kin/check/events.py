@@ -89,8 +89,42 @@ def _candidates(seg, V, sign):
     return seg.x[i], seg.x[i + 2], col
 
 
-def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | None]:
-    """Exact min and max of every column of ``Q`` over the reachable motion."""
+#: offsets at which a quantity is read beside a crossing (the crossing itself is singular)
+_BESIDE = np.array([3e-9, 1e-7])
+
+
+def _event_points(seg, events, ncol):
+    """Inputs just beside each crossing of ``events`` on this segment's side, one row per
+    column: a quantity's value at the crossing is its limit from either side."""
+    empty = np.zeros(0), np.zeros(0, int), np.zeros(0)
+    if not events:
+        return empty
+    xs, at = [], []
+    for c in events:
+        for x in (c, c - 2 * np.pi, c + 2 * np.pi) if seg.side.is_rotary else (c,):
+            if seg.x.size and min(seg.x[0], seg.x[-1]) <= x <= max(seg.x[0], seg.x[-1]):
+                xs += [x - _BESIDE, x + _BESIDE]
+                at += [np.full(2 * _BESIDE.size, x)]
+    if not xs:
+        return empty
+    xs, at = np.concatenate(xs), np.concatenate(at)
+    return np.repeat(xs, ncol), np.tile(np.arange(ncol), xs.size), np.repeat(at, ncol)
+
+
+def _grid_extremes(seg, V):
+    """The grid's own smallest and largest value of every column (a column may have its
+    extreme next to a singular sample, where no three finite samples bracket it)."""
+    ok = np.isfinite(V)
+    cols = np.flatnonzero(ok.any(axis=0))
+    lo = np.nanargmin(np.where(ok[:, cols], V[:, cols], np.inf), axis=0)
+    hi = np.nanargmax(np.where(ok[:, cols], V[:, cols], -np.inf), axis=0)
+    return np.concatenate([seg.x[lo], seg.x[hi]]), np.concatenate([cols, cols])
+
+
+def extremes(motion: Motion, Q, derivatives: bool = False, events=()) -> list[Extreme | None]:
+    """Exact min and max of every column of ``Q`` over the reachable motion; ``events``
+    are the crossings (inputs from the reference) found by the certified walk, where a
+    quantity is read on both sides."""
     best: dict[int, list] = {}
     ncol = 0
     for seg in motion.segments:
@@ -119,11 +153,14 @@ def extremes(motion: Motion, Q, derivatives: bool = False) -> list[Extreme | Non
         # grid values too (guards a flat or monotone column without interior extremum)
         gx = np.repeat(seg.x[[0, -1]], ncol)
         gc = np.tile(np.arange(ncol), 2)
-        xs, cols = np.concatenate([xs, gx]), np.concatenate([cols, gc])
+        ex, ec, eat = _event_points(seg, events, ncol)
+        mx, mc = _grid_extremes(seg, V)
+        report = np.concatenate([xs, gx, eat, mx])      # a value beside a crossing is reported at it
+        xs, cols = np.concatenate([xs, gx, ex, mx]), np.concatenate([cols, gc, ec, mc])
         ux, inv = np.unique(xs, return_inverse=True)
         st, r = seg.side.at(ux, derivatives)
         vals = _pick(Q(st), r[inv], cols)
-        for x, c, v in zip(xs, cols, vals):
+        for x, c, v in zip(report, cols, vals):
             if np.isfinite(v):
                 best.setdefault(int(c), []).append((float(v), float(x)))
     out: list[Extreme | None] = []

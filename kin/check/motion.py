@@ -18,6 +18,8 @@ from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import AssemblyError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
+from multiloop.kin.solve import motion_events
+
 from .sweep import Side, mechanism_size
 
 __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
@@ -98,7 +100,16 @@ def _scan(side: Side, chunk: int | None):
         end += chunk
 
 
-def _segment(side: Side, chunk: int | None = None) -> Segment:
+def _segment(side: Side, chunk: int | None = None, stop: float | None = None) -> Segment:
+    """The assembled part of ``side``; ``stop`` is the certified limit on this side
+    (:func:`multiloop.kin.solve.motion_events`), where the motion ends whatever the grid
+    shows (the solver reaches inputs beyond a limit of a crank by whole turns)."""
+    if stop is not None and np.isfinite(stop):
+        cut = np.flatnonzero(np.abs(side.grid) > abs(stop))
+        if cut.size:
+            f = int(cut[0])
+            st_ok = side.solve(side.grid[:f], derivatives=True)
+            return Segment(_guarded(side, st_ok), f, st_ok, float(stop), (float(stop), float(stop)), ())
     st = _scan(side, chunk)
     grid = side.grid[: st.n_positions]
     f, singular = _first_stop(st, grid)
@@ -139,12 +150,14 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
         fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples, stride)
     fwd = replace(fwd, branch=branch)
     chunk = 8 if heavy else None
-    seg_f = _segment(fwd, chunk)
+    ev = motion_events(m, plan) if len(m.drivers) == 1 else None
+    hi, lo = (ev.hi, ev.lo) if ev is not None and ev.period is None else (None, None)
+    seg_f = _segment(fwd, chunk, hi)
     if rotary and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic)
     bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride, branch)
-    seg_b = _segment(bwd, chunk)
+    seg_b = _segment(bwd, chunk, lo)
     return Motion(m, k, rotary, False, (seg_f, seg_b), False)

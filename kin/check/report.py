@@ -72,6 +72,7 @@ class DriverCheck:
     ratio_x: np.ndarray = field(repr=False)
     ratio: np.ndarray = field(repr=False)
     unreachable: tuple[float, ...] = ()
+    ratio_unbounded_at: tuple[float, ...] = ()     # limits where the velocity ratio has no bound
 
     @property
     def unit(self) -> str:
@@ -101,7 +102,9 @@ class DriverCheck:
                 "output": self.output, "velocity_ratio_unit": self.output_unit,
                 "input": [v(x) for x in self.ratio_x],
                 "velocity_ratio": [None if not np.isfinite(y) else float(y) for y in self.ratio],
-                "max_abs_velocity_ratio": float(np.max(np.abs(r))) if r.size else None}
+                "max_abs_velocity_ratio": (float(np.max(np.abs(r))) if r.size and not self.ratio_unbounded_at
+                                           else None),
+                "unbounded_at": [v(x) for x in self.ratio_unbounded_at]}
         return d
 
 

@@ -33,7 +33,9 @@ def _driver(dc, thr: float) -> list[str]:
         import numpy as np
         r = np.abs(dc.ratio[np.isfinite(dc.ratio)])
         if r.size:
-            L.append(f"  velocity ratio {dc.output}/{dc.joint} ({dc.output_unit}): |max| {r.max():.4g}, "
+            top = (f"unbounded (at the limit {', '.join(fmt_input(dc, x) for x in dc.ratio_unbounded_at)})"
+                   if dc.ratio_unbounded_at else f"{r.max():.4g}")
+            L.append(f"  velocity ratio {dc.output}/{dc.joint} ({dc.output_unit}): |max| {top}, "
                      f"|min| {r.min():.4g}; mechanical advantage = 1/ratio")
     return L
 
