@@ -44,7 +44,7 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
 from multiloop.topo.model import JointKind, Mechanism
 
 from .continuation import Probe, Walk, walk
-from .groups.newton import ConstraintSystem
+from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
 from .groups.step import SINGULAR
 from .poses import PoseRates, Poses
@@ -129,9 +129,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
             label = s.describe()
         # regularity at the reference configuration
         cols = (3 * np.asarray(unknown)[:, None] + np.arange(3)).ravel()
-        J = sysm.jacobian(Z0)[0][:, cols]
-        norms = np.prod(np.linalg.norm(J, axis=0))
-        rel = abs(np.linalg.det(J)) / norms if norms > 0 else 0.0
+        rel = float(relative_det(sysm.jacobian(Z0)[0][:, cols]))      # the same at any scale and place
         if rel < _SINGULAR:
             hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular" \
                 if isinstance(s, AssurGroup) and s.kind in (GroupKind.PRP, GroupKind.RPP) else \

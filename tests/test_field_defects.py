@@ -302,7 +302,7 @@ def test_relative_det_is_invariant_under_scale_and_translation(name, k, off):
 def test_newton_tracks_dyad_rpr_at_any_scale(k, monkeypatch):
     """The Newton route's singularity measure does not depend on the unit: the dyad
     scaled by k and moved by (3k, 5k) tracks all 36 positions (the reference check of
-    compile_plan is bypassed here: it is kin/solve.py's, see the xfail below)."""
+    compile_plan is bypassed here)."""
     import multiloop.kin.solve as ks
     monkeypatch.setattr(ks, "_SINGULAR", 0.0)
     m1 = load_mechanism("dyad_rpr")
@@ -312,8 +312,6 @@ def test_newton_tracks_dyad_rpr_at_any_scale(k, monkeypatch):
     np.testing.assert_allclose(st.positions / k - np.array([3.0, 5.0]), ref.positions, atol=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="kin/solve.py compile_plan's reference check still divides |det J| "
-                   "by the column norms only; it should call kin.groups.newton.relative_det")
 def test_dyad_rpr_solves_at_scale_1e_minus_8():
     m = _moved(load_mechanism("dyad_rpr"), 1e-8, (0.0, 0.0))
     assert solve(m, np.radians(np.arange(0.0, 360.0, 10.0))).ok.all()

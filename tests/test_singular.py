@@ -316,3 +316,21 @@ def test_check_of_a_limited_triad_is_exact_at_its_turning_points():
     for a in dc.angles:
         assert a.extreme.min < 0.01                 # singular (concurrent legs) at a limit
     assert len(dc.ratio_unbounded_at) == 2
+
+
+@pytest.mark.parametrize("offset", [(1e6, 1e6), (-3e5, 7e5)])
+def test_triad_mechanism_far_from_the_origin_moves_as_at_it(offset):
+    """Issue of the field: the triad mechanism moved 1e6 m away failed 35 of 36 positions;
+    the triad (and class IV) kernels now solve about their reference anchor."""
+    from multiloop.catalogue.named import load_named
+    m1 = load_named("stephenson_3_triad")
+    b = MechanismBuilder("far")
+    for lk in m1.links:
+        b.add_link(lk.name, frame=lk.is_frame)
+    for j in m1.joints:
+        b.add_joint(j.name, "R", j.links, at=(j.at[0] + offset[0], j.at[1] + offset[1]))
+    b.add_driver("O1")
+    q = np.radians(np.arange(0.0, 360.0, 10.0))
+    ref, st = _solve(m1, q), _solve(b.build(), q)
+    assert st.ok.all() and ref.ok.all()
+    np.testing.assert_allclose(st.positions - np.array(offset), ref.positions, atol=1e-9)

@@ -271,8 +271,9 @@ class Class4Step(GroupStep):
         why: dict[int, tuple] = {}
         if good.any():
             idx = np.flatnonzero(good)
-            res = class4_track(O[idx], self.r, self.lengths, np.zeros(2))
-            J[idx], th[idx], ok[idx] = res.J, res.theta, res.ok
+            o = Oref[0]                      # solved about the reference pivot: translation-invariant
+            res = class4_track(O[idx] - o, self.r, self.lengths, np.zeros(2))
+            J[idx], th[idx], ok[idx] = res.J + o, res.theta, res.ok
             for k in np.flatnonzero(~res.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))
         for i, t in enumerate((lay.ternary1, lay.ternary2)):

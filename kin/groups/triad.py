@@ -687,8 +687,9 @@ class TriadStep(GroupStep):
         why: dict[int, tuple] = {}
         if good.any():
             idx = np.flatnonzero(good)
-            r = triad_track(A[idx], self.b, self.lengths, self.b)
-            P[idx], th[idx], ok[idx] = r.P, r.theta, r.ok
+            o = self.A[0]                    # solved about the reference anchor: translation-invariant
+            r = triad_track(A[idx] - o, self.b - o, self.lengths, self.b - o)
+            P[idx], th[idx], ok[idx] = r.P + o, r.theta, r.ok
             for k in np.flatnonzero(~r.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
         G.place_cs(lay.ternary, P[:, 0], self.b[0], np.cos(th), np.sin(th), th)
