@@ -334,3 +334,18 @@ def test_triad_mechanism_far_from_the_origin_moves_as_at_it(offset):
     ref, st = _solve(m1, q), _solve(b.build(), q)
     assert st.ok.all() and ref.ok.all()
     np.testing.assert_allclose(st.positions - np.array(offset), ref.positions, atol=1e-9)
+
+
+def test_check_velocity_ratio_is_exact_not_the_grids():
+    """Crank = rod crank-slider: the slider's rate is |dx/dθ| = 2 r |sin θ| (x = 2 r cos θ
+    on the reference mode, r = 50 and θ = 45° + input), largest exactly at the two
+    bifurcations, 45° and 225° from the reference, where the crank is vertical."""
+    from pathlib import Path
+    from multiloop.topo.io import load
+    m = load(Path(__file__).parent / "data" / "branches" / "crank_equals_rod.toml")
+    r = math.hypot(*m.joint("A").at)
+    dc = _check(m).drivers[0]
+    e = dc.ratio_extreme
+    assert e.max == pytest.approx(2 * r, rel=1e-6)
+    assert min(abs(math.degrees(e.at_max) - v) for v in (45.0, 225.0)) < 1e-6
+    assert e.min == pytest.approx(0.0, abs=1e-9 * r)

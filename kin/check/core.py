@@ -173,11 +173,13 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     bad = tuple(x for x in (positions or ()) if not _reachable(mo, x))
     unbounded = tuple(seg.limit for seg in mo.segments if seg.limit is not None and out
                       and _grows_at_limit(seg, lambda st: _ratio(st, out)))
+    ratio_ext = (extremes(mo, lambda s: np.abs(_ratio(s, out))[:, None], derivatives=True, events=crossings,
+                          beside=(1e-5, 1e-4))[0] if out else None)
     return DriverCheck(d.joint, rotary, mo.full_rotation, mo.periodic, mo.limits,
                        tuple(limit_groups), tuple(sorted(bps)),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
                        angles, out[0] if out else None, unit,
-                       np.concatenate(xs), np.concatenate(rs), bad, unbounded)
+                       np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext)
 
 
 def _on_turn(x: float, mo) -> float:

@@ -93,7 +93,7 @@ def _candidates(seg, V, sign):
 _BESIDE = np.array([3e-9, 1e-7])
 
 
-def _event_points(seg, events, ncol):
+def _event_points(seg, events, ncol, beside=_BESIDE):
     """Inputs just beside each crossing of ``events`` on this segment's side, one row per
     column: a quantity's value at the crossing is its limit from either side."""
     empty = np.zeros(0), np.zeros(0, int), np.zeros(0)
@@ -103,8 +103,8 @@ def _event_points(seg, events, ncol):
     for c in events:
         for x in (c, c - 2 * np.pi, c + 2 * np.pi) if seg.side.is_rotary else (c,):
             if seg.x.size and min(seg.x[0], seg.x[-1]) <= x <= max(seg.x[0], seg.x[-1]):
-                xs += [x - _BESIDE, x + _BESIDE]
-                at += [np.full(2 * _BESIDE.size, x)]
+                xs += [x - beside, x + beside]
+                at += [np.full(2 * beside.size, x)]
     if not xs:
         return empty
     xs, at = np.concatenate(xs), np.concatenate(at)
@@ -121,10 +121,11 @@ def _grid_extremes(seg, V):
     return np.concatenate([seg.x[lo], seg.x[hi]]), np.concatenate([cols, cols])
 
 
-def extremes(motion: Motion, Q, derivatives: bool = False, events=()) -> list[Extreme | None]:
+def extremes(motion: Motion, Q, derivatives: bool = False, events=(), beside=_BESIDE) -> list[Extreme | None]:
     """Exact min and max of every column of ``Q`` over the reachable motion; ``events``
     are the crossings (inputs from the reference) found by the certified walk, where a
-    quantity is read on both sides."""
+    quantity is read on both sides, ``beside`` from them (a rate loses about
+    ε/δ² of its accuracy at δ from a crossing, so rates are read farther away)."""
     best: dict[int, list] = {}
     ncol = 0
     for seg in motion.segments:
@@ -153,7 +154,7 @@ def extremes(motion: Motion, Q, derivatives: bool = False, events=()) -> list[Ex
         # grid values too (guards a flat or monotone column without interior extremum)
         gx = np.repeat(seg.x[[0, -1]], ncol)
         gc = np.tile(np.arange(ncol), 2)
-        ex, ec, eat = _event_points(seg, events, ncol)
+        ex, ec, eat = _event_points(seg, events, ncol, np.asarray(beside, float))
         mx, mc = _grid_extremes(seg, V)
         report = np.concatenate([xs, gx, eat, mx])      # a value beside a crossing is reported at it
         xs, cols = np.concatenate([xs, gx, ex, mx]), np.concatenate([cols, gc, ec, mc])

@@ -73,6 +73,7 @@ class DriverCheck:
     ratio: np.ndarray = field(repr=False)
     unreachable: tuple[float, ...] = ()
     ratio_unbounded_at: tuple[float, ...] = ()     # limits where the velocity ratio has no bound
+    ratio_extreme: object = None                   # Extreme of |velocity ratio| (exact, not the grid's)
 
     @property
     def unit(self) -> str:
@@ -102,8 +103,9 @@ class DriverCheck:
                 "output": self.output, "velocity_ratio_unit": self.output_unit,
                 "input": [v(x) for x in self.ratio_x],
                 "velocity_ratio": [None if not np.isfinite(y) else float(y) for y in self.ratio],
-                "max_abs_velocity_ratio": (float(np.max(np.abs(r))) if r.size and not self.ratio_unbounded_at
-                                           else None),
+                "max_abs_velocity_ratio": (None if self.ratio_unbounded_at or self.ratio_extreme is None
+                                           else float(self.ratio_extreme.max)),
+                "min_abs_velocity_ratio": None if self.ratio_extreme is None else float(self.ratio_extreme.min),
                 "unbounded_at": [v(x) for x in self.ratio_unbounded_at]}
         return d
 

@@ -32,11 +32,12 @@ def _driver(dc, thr: float) -> list[str]:
     if dc.output is not None:
         import numpy as np
         r = np.abs(dc.ratio[np.isfinite(dc.ratio)])
-        if r.size:
+        e = dc.ratio_extreme
+        if r.size and e is not None:
             top = (f"unbounded (at the limit {', '.join(fmt_input(dc, x) for x in dc.ratio_unbounded_at)})"
-                   if dc.ratio_unbounded_at else f"{r.max():.4g}")
+                   if dc.ratio_unbounded_at else f"{e.max:.4g} at {fmt_input(dc, e.at_max)}")
             L.append(f"  velocity ratio {dc.output}/{dc.joint} ({dc.output_unit}): |max| {top}, "
-                     f"|min| {r.min():.4g}; mechanical advantage = 1/ratio")
+                     f"|min| {e.min:.4g} at {fmt_input(dc, e.at_min)}; mechanical advantage = 1/ratio")
     return L
 
 
