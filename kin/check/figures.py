@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from multiloop.kin.figures.labels import place_labels  # noqa: E402
 from multiloop.kin.figures.mechanism import plot_mechanism  # noqa: E402
 from multiloop.kin.figures.style import no_mathtext  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
@@ -102,20 +103,27 @@ def instant_centre_axes(ax, m, rep):
         P = np.concatenate([P, st.point_positions[0]])
     size = float(np.ptp(P, axis=0).max())
     c0 = P.mean(axis=0)
+    labelled = []
     for c in rep.instant_centres:
         if c.point is None or np.max(np.abs(np.array(c.point) - c0)) > 2.5 * size:
             continue
         primary = frozenset((c.a, c.b)) in pins
         ax.plot(*c.point, "o" if primary else "D", ms=4, color="k" if primary else "tab:blue")
         if not primary:
-            ax.annotate(f"{c.a}|{c.b}", c.point, fontsize=6, color="tab:blue",
-                        textcoords="offset points", xytext=(3, -8))
+            labelled.append(c)
     pts = np.array([c.point for c in rep.instant_centres if c.point is not None
                     and np.max(np.abs(np.array(c.point) - c0)) <= 2.5 * size] + list(P))
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     pad = 0.08 * float(max(hi - lo)) + 1e-9
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    if labelled:                          # placed apart (centres at one pivot overlap otherwise)
+        texts = [f"{c.a}|{c.b}" for c in labelled]
+        offsets = place_labels(ax, np.array([c.point for c in labelled], float), texts,
+                               [3.0] * len(texts), fontsize=6)
+        for c, t, off in zip(labelled, texts, offsets):
+            ax.annotate(t, c.point, fontsize=6, color="tab:blue", textcoords="offset points",
+                        xytext=off, ha="center", va="center")
 
 
 def report_figures(m, rep) -> dict:
