@@ -102,7 +102,7 @@ def square_curvature(rel, vrel, arel):
 
 
 #: rounding of a reach margin, in units of eps × the magnitudes it is computed from
-MARGIN_ROUNDING = 16.0
+MARGIN_ROUNDING = 4.0
 
 
 def margin_tol(P, Q, lengths: float, squared: bool = False) -> np.ndarray:
