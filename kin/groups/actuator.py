@@ -62,43 +62,52 @@ class ActuatorStep(GroupStep):
         self.k1, self.k3 = (mechanism.link_names.index(x) for x in (self.known1, self.known2))
 
     def _side(self, X):
-        """The actuator side ``d(s)`` in near's reference frame (N, 2) and its length."""
+        """The actuator side ``d(s)`` in near's reference frame (components) and its length."""
         s = self.sigma * X[:, self.layout.driver]
-        d = self.d0[None, :] + s[:, None] * self.u0[None, :]
-        return d, np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+        dx = self.d0[0] + s * self.u0[0]
+        dy = self.d0[1] + s * self.u0[1]
+        return dx, dy, np.sqrt(dx * dx + dy * dy)
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
-        lay, lc = self.layout, self.lc
-        d, L = self._side(X)
+        lc = self.lc
+        dx, dy, L = self._side(X)
         ax, ay = G.point_xy(self.k1, self.A)
         cx, cy = G.point_xy(self.k3, self.C)
         bx, by, ok, det, _ = rrr_xy(ax, ay, cx, cy, L, lc, self.sign * factor)
         why, pr = {}, None
-        A, C, B = (columns(p, q, G.M) for p, q in ((ax, ay), (cx, cy), (bx, by)))
-        AC = C - A
-        dd = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
-        if probe:             # margin in m: 1-Lipschitz in |C − A| and in L (the lip's two rows)
-            gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / dd
-            margin = np.minimum(L + lc - dd, dd - np.abs(L - lc))
-            lip = np.stack([AC, np.stack([L, np.zeros_like(L)], axis=1)], axis=1)
-            pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=lip,
-                       tol=margin_tol(A, C, L + lc))
-        for n in np.flatnonzero(~ok):
-            if np.isfinite(dd[n]):
-                rel = f"> {L[n]:.6g} + {lc:.6g}" if dd[n] > L[n] + lc else f"< |{L[n]:.6g} − {lc:.6g}|"
-                why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: |{lay.outer1}{lay.outer2}| = {dd[n]:.6g} "
-                                                    f"{rel} (actuator {lay.slide}: out of reach)")
+        if probe or not ok.all():
+            pr = self._probe(G, (ax, ay), (cx, cy), (bx, by), L, ok, why, probe)
         # the actuator's halves turn by the rotation taking d(s) to B − A (|d| = |B − A| = L)
         rx, ry = bx - ax, by - ay
         inv = 1.0 / (L * L)
-        c = (d[:, 0] * rx + d[:, 1] * ry) * inv
-        s = (d[:, 0] * ry - d[:, 1] * rx) * inv
+        c = (dx * rx + dy * ry) * inv
+        s = (dx * ry - dy * rx) * inv
         G.place_k(self.kn, ax, ay, self.A, c, s)
         G.place_k(self.kf, bx, by, self.B, c, s)
         G.place_dir_xy(self.k2, cx, cy, self.C, bx - cx, by - cy, self.dir2)
         G.keep_point(self.kf, self.B, bx, by)
         G.keep_point(self.k2, self.B, bx, by)
         return dyad_outcome(ok, why, det, L * lc, False, pr, probe)
+
+    def _probe(self, G, a, c, b, L, ok, why: dict, probe: bool):
+        """Reasons of the failed positions (into ``why``) and, when asked, the Probe: the
+        margin in m, 1-Lipschitz in |C − A| and in L (the lip's two rows)."""
+        lay, lc = self.layout, self.lc
+        A, C, B = (columns(p, q, G.M) for p, q in (a, c, b))
+        AC = C - A
+        dd = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
+        for n in np.flatnonzero(~ok):
+            if np.isfinite(dd[n]):
+                rel = f"> {L[n]:.6g} + {lc:.6g}" if dd[n] > L[n] + lc else f"< |{L[n]:.6g} − {lc:.6g}|"
+                why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: |{lay.outer1}{lay.outer2}| = {dd[n]:.6g} "
+                                                    f"{rel} (actuator {lay.slide}: out of reach)")
+        if not probe:
+            return None
+        gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / dd
+        margin = np.minimum(L + lc - dd, dd - np.abs(L - lc))
+        lip = np.stack([AC, np.stack([L, np.zeros_like(L)], axis=1)], axis=1)
+        return Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=lip,
+                     tol=margin_tol(A, C, L + lc))
 
     def _guide(self, R, input_rates):
         """σ ṡ u in the world (N, 2), from the near half's turn."""
