@@ -186,3 +186,26 @@ def test_velocities_against_finite_differences(name):
     assert np.max(np.abs(st.velocities[0] - fd)) < 1e-6
     fd_w = np.angle(np.exp(1j * (pm.angles[1] - pm.angles[0]))) / (2 * h)
     assert np.max(np.abs(st.omegas[0] - fd_w)) < 1e-6
+
+
+def test_oblique_guide_against_newton():
+    """A guide not along the pins (a jack with an offset rod eye): the side is
+    |d₀ + s u₀|, exact; positions and rates agree with Newton."""
+    b = MechanismBuilder()
+    b.add_link("frame", frame=True)
+    for x in ("boom", "barrel", "rod"):
+        b.add_link(x)
+    b.add_joint("foot", "R", ("frame", "boom"), at=C0)
+    b.add_joint("base", "R", ("frame", "rod"), at=A0)
+    b.add_joint("slide", "P", ("barrel", "rod"), at=(1.9, 0.3), axis=(0.2, 1.0))
+    b.add_joint("end", "R", ("barrel", "boom"), at=B0)
+    b.add_driver("slide")
+    m = b.build()
+    x = np.linspace(-0.3, 0.3, 13)
+    a, n = solve(m, x, derivatives=True), solve(m, x, derivatives=True, method="newton")
+    assert a.ok.all() and n.ok.all()
+    for f in ("positions", "angles", "velocities", "omegas", "accelerations", "epsilons"):
+        assert np.max(np.abs(getattr(a, f) - getattr(n, f))) < 1e-10, f
+    d = B0 - A0 - x[:, None] * np.array([0.2, 1.0]) / np.hypot(0.2, 1.0)    # rod on the base: σ = −1
+    Aj, Bj = a.positions[:, a.joint_index("base")], a.positions[:, a.joint_index("end")]
+    assert np.max(np.abs(np.hypot(*(Bj - Aj).T) - np.hypot(*d.T))) < 1e-12
