@@ -74,7 +74,8 @@ class GroupKind(str, Enum):
     """The kind of an Assur group: the five dyads by their joint sequence (outer–inner–
     outer, Vasechkin et al. 2017), the class III triad, the class IV order-2 group, any
     other group (``GENERAL``, solved by Newton), a triangle with a linear actuator as one
-    side (``ACTUATED``) and any other block with a driver inside (``DRIVEN``).  A member is its string (``GroupKind.RRR == "RRR"``)."""
+    side (``ACTUATED``) and any other block with a driver inside (``DRIVEN``).  A member
+    is its string (``GroupKind.RRR == "RRR"``)."""
 
     RRR = "RRR"
     RRP = "RRP"
@@ -137,6 +138,7 @@ class Class4Layout(NamedTuple):
     j12: str
     j21: str
     j22: str
+
 
 class ActuatorLayout(NamedTuple):
     """A triangle with a linear actuator as one side (an RRR dyad whose first side is a
@@ -711,7 +713,6 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
         kind = GroupKind.GENERAL
     return AssurGroup(index, cls, order, kind, tuple(links), full, inner_joints, outer_joints,
                       known_links, tuple(cons), numbers, layout, tuple(drv))
-
 
 
 def _actuator_layout(m: Mechanism, links: list[str], cons: list[Constraint]) -> ActuatorLayout | None:
