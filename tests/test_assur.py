@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from multiloop.topo.assur import AssurGroup, AssurPlan, decompose
+from multiloop.topo.assur import AssurGroup, AssurPlan, GroupKind, decompose
 from multiloop.topo.errors import DecompositionError, MobilityError
 from multiloop.topo.model import MechanismBuilder
 
@@ -290,8 +290,9 @@ def test_decomposition_is_relabelling_invariant():
     assert [tuple(link_map[x] for x in g.links) for g in p1.groups] == [g.links for g in p2.groups]
 
 
-def test_driver_between_moving_links_gives_a_driven_block():
-    """A hydraulic cylinder (P driver between two moving links) lifting a boom."""
+def test_driver_between_moving_links_gives_an_actuated_triangle():
+    """A hydraulic cylinder (P driver between two moving links) lifting a boom: a block
+    with the driver inside, recognised as a triangle of driven side length."""
     b = MechanismBuilder(name="boom")
     b.add_link("frame", frame=True)
     b.add_joint("O", "R", ("frame", "boom"), at=(0, 0))
@@ -301,7 +302,8 @@ def test_driver_between_moving_links_gives_a_driven_block():
     b.add_driver("S")
     p = decompose(b.build())
     (g,) = p.groups
-    assert g.kind.startswith("driven") and set(g.links) == {"boom", "barrel", "rod"}
+    assert g.kind is GroupKind.ACTUATED and set(g.links) == {"boom", "barrel", "rod"}
+    assert g.kind_name == "RRR (actuated: S)" and g.drivers == (0,) and g.label.startswith("G3(")
     assert isinstance(g, AssurGroup)
 
 

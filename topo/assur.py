@@ -64,7 +64,7 @@ from .mobility import actual_mobility
 from .model import JointKind, Mechanism
 
 __all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS", "GroupKind",
-           "DyadLayout", "TriadLayout", "Class4Layout"]
+           "DyadLayout", "TriadLayout", "Class4Layout", "ActuatorLayout"]
 
 # Constraint, link_origins and reference_jacobian live in topo.constraints; the names
 # stay importable from here for existing callers.
@@ -73,8 +73,9 @@ _ = link_origins
 class GroupKind(str, Enum):
     """The kind of an Assur group: the five dyads by their joint sequence (outer–inner–
     outer, Vasechkin et al. 2017), the class III triad, the class IV order-2 group, any
-    other group (``GENERAL``, solved by Newton) and a block with a driver inside
-    (``DRIVEN``).  A member is its string (``GroupKind.RRR == "RRR"``)."""
+    other group (``GENERAL``, solved by Newton), a triangle with a linear actuator as one
+    side (``ACTUATED``) and any other block with a driver inside (``DRIVEN``).  A member
+    is its string (``GroupKind.RRR == "RRR"``)."""
 
     RRR = "RRR"
     RRP = "RRP"
@@ -83,6 +84,7 @@ class GroupKind(str, Enum):
     RPP = "RPP"
     TRIAD = "triad"
     CLASS_IV = "class IV"
+    ACTUATED = "actuated RRR"
     GENERAL = "group"
     DRIVEN = "driven group"
 
@@ -137,6 +139,23 @@ class Class4Layout(NamedTuple):
     j21: str
     j22: str
 
+
+class ActuatorLayout(NamedTuple):
+    """A triangle with a linear actuator as one side (an RRR dyad whose first side is a
+    bar of driven length): the actuator's two halves ``near`` (on the known pin
+    ``outer1``) and ``far`` (on the ``inner`` pin), joined by the driven P joint
+    ``slide`` of driver ``driver``; ``link2`` carries ``inner`` and ``outer2``."""
+
+    outer1: str
+    inner: str
+    outer2: str
+    near: str
+    far: str
+    link2: str
+    slide: str
+    driver: int
+
+
 _ROMAN = {1: "I", 2: "II", 3: "III", 4: "IV", 5: "V", 6: "VI", 7: "VII", 8: "VIII"}
 
 
@@ -179,7 +198,7 @@ class AssurGroup:
         The group's equations in pair form (3 per link in total, counted by rows).
     numbers : tuple of int
         Link numbers in the structure formula.
-    layout : DyadLayout, TriadLayout, Class4Layout or None
+    layout : DyadLayout, TriadLayout, Class4Layout, ActuatorLayout or None
         Kind-specific roles used by the closed-form solvers (``kin.solve``,
         ``kin.check``, ``catalogue.dimensional``); None for other groups.
     drivers : tuple of int
@@ -197,7 +216,7 @@ class AssurGroup:
     known_links: tuple[str, ...]
     constraints: tuple[Constraint, ...]
     numbers: tuple[int, ...] = ()
-    layout: DyadLayout | TriadLayout | Class4Layout | None = None
+    layout: DyadLayout | TriadLayout | Class4Layout | ActuatorLayout | None = None
     drivers: tuple[int, ...] = ()
 
     @property
@@ -211,6 +230,8 @@ class AssurGroup:
             return f"{len(self.links)}-link group"
         if self.kind is GroupKind.DRIVEN:
             return f"driven {len(self.links)}-link group"
+        if self.kind is GroupKind.ACTUATED:
+            return f"RRR (actuated: {self.layout.slide})"
         return self.kind.value
 
     @property
@@ -652,7 +673,8 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
     order = len(outer)
     layout = None
     if drv:
-        kind = GroupKind.DRIVEN
+        layout = _actuator_layout(m, links, cons)
+        kind = GroupKind.DRIVEN if layout is None else GroupKind.ACTUATED
     elif len(links) == 2 and len(inner) == 1 and len(outer) == 2 and \
             {outer[0].a, outer[0].b} & B != {outer[1].a, outer[1].b} & B:
         o1, o2 = outer
@@ -692,3 +714,29 @@ def _make_group(m: Mechanism, index: int, links: list[str], cons: list[Constrain
     return AssurGroup(index, cls, order, kind, tuple(links), full, inner_joints, outer_joints,
                       known_links, tuple(cons), numbers, layout, tuple(drv))
 
+
+def _actuator_layout(m: Mechanism, links: list[str], cons: list[Constraint]) -> ActuatorLayout | None:
+    """The roles of a three-link block made of a linear actuator (two links, each with one
+    R pin besides the driven P joint between them) and one more link pinned to it: a
+    triangle whose actuator side has a known length at each input; None otherwise."""
+    drive = [c for c in cons if c.kind.startswith("drive")]
+    slides = [c for c in cons if c.kind == "P"]
+    pins = [c for c in cons if c.kind == "R"]
+    if len(links) != 3 or len(drive) != 1 or drive[0].kind != "drive_P" or len(slides) != 1 \
+            or len(pins) != 3 or {slides[0].a, slides[0].b} != {drive[0].a, drive[0].b}:
+        return None
+    cyl = {drive[0].a, drive[0].b}
+    if not cyl <= set(links) or any(len(m.joints_of(x)) != 2 for x in cyl):
+        return None
+    third = next(x for x in links if x not in cyl)
+    inner = [c for c in pins if {c.a, c.b} <= set(links)]
+    outer = [c for c in pins if not {c.a, c.b} <= set(links)]
+    if len(inner) != 1 or third not in (inner[0].a, inner[0].b) or len(outer) != 2:
+        return None
+    far = inner[0].a if inner[0].b == third else inner[0].b
+    near = next(x for x in cyl if x != far)
+    o1 = next((c.joint for c in outer if near in (c.a, c.b)), None)
+    o2 = next((c.joint for c in outer if third in (c.a, c.b)), None)
+    if o1 is None or o2 is None:
+        return None
+    return ActuatorLayout(o1, inner[0].joint, o2, near, far, third, drive[0].joint, drive[0].driver)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from multiloop.topo.assur import DriverStep, GroupKind
 
+from .actuator import ActuatorStep
 from .class4 import Class4Step
 from .driver import DriverStepSolver, is_closed_form
 from .newton import NewtonStep
@@ -21,7 +22,7 @@ __all__ = ["CLOSED_FORM", "closed_form_step", "newton_step"]
 CLOSED_FORM: dict[GroupKind, type[GroupStep]] = {
     GroupKind.RRR: RRRStep, GroupKind.RRP: RRPStep, GroupKind.RPR: RPRStep,
     GroupKind.PRP: PRPStep, GroupKind.RPP: RPPStep, GroupKind.TRIAD: TriadStep,
-    GroupKind.CLASS_IV: Class4Step,
+    GroupKind.CLASS_IV: Class4Step, GroupKind.ACTUATED: ActuatorStep,
 }
 
 

@@ -1,0 +1,142 @@
+"""A linear actuator as a bar of driven length: the RRR closed form with one driven side.
+
+A hydraulic cylinder or screw jack is two links (barrel and rod) on a driven prismatic
+pair, each pinned once more.  The drive ``u_a · (p_b − p_a) = s`` translates the rod by
+``s u`` along the barrel's guide ``u``, so in the frame of the actuator's half ``near``
+(on the known pin A) the vector to its other pin B is ``d(s) = d₀ + σ s u₀`` (``σ = +1``
+when ``near`` is the barrel, −1 when it is the rod): a bar of length ``L(s) = |d(s)|``,
+``L₀ + s`` for a guide along the pins.  The group (the actuator and the link C–B) is
+then the triangle A–B–C of Vasechkin et al. 2017 [1]_, eqs. (1)-(3), with ``l₂ = L(s)``:
+two assembly modes, O(1) per position by :func:`~kin.groups.rrr.rrr_xy`.
+
+Rates: ``B − A = R(θ) d(s)`` gives ``v_B = v_A + σ ṡ u + ω perp(B − A)`` and
+``a_B = a_A + 2 ω σ ṡ perp(u) + ε perp(B − A) − ω² (B − A)`` (zero input acceleration,
+``u`` the guide in the world): the RRR rates of eqs. (4)-(8) of [1]_ with the pin A's
+velocity and acceleration shifted by the slide's relative and Coriolis terms.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..continuation import Probe
+from ..poses import columns, known_on, unit
+from ..result import Status
+from ..rigid import perp
+from .base import margin_tol
+from .rrr import rrr_branch, rrr_rates, rrr_xy
+from .step import GroupStep, Outcome, dyad_outcome
+
+__all__ = ["ActuatorStep"]
+
+
+def _length_curvature(r, v):
+    """|d²|r|/dt²| for ``r`` moving with velocity ``v`` and no acceleration (N, 2)."""
+    n = np.sqrt(np.sum(r * r, axis=-1))
+    rv = np.sum(r * v, axis=-1)
+    return np.abs(np.sum(v * v, axis=-1) - rv * rv / (n * n)) / n
+
+
+class ActuatorStep(GroupStep):
+    """A triangle with a linear actuator as one side (:class:`~topo.assur.ActuatorLayout`),
+    compiled once: the actuator's guide, the branch sign, the third side's length."""
+
+    def __init__(self, mechanism, st, size: float):
+        super().__init__(mechanism, st, size)
+        lay = self.layout = self.group.layout
+        self.known1, self.known2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
+        self.A, self.B, self.C = (self.at(j) for j in (lay.outer1, lay.inner, lay.outer2))
+        jt = mechanism.joint(lay.slide)
+        self.sigma = 1.0 if jt.links[0] == lay.near else -1.0     # near = barrel (guide host)
+        self.u0 = unit(jt.axis)                                  # the guide, in near's frame at the reference
+        self.d0 = self.B - self.A
+        self.lc = float(np.hypot(*(self.B - self.C)))
+        self.sign = float(rrr_branch(self.A, self.C, self.B))
+        self.dir2 = unit(self.B - self.C)
+        self.kn, self.kf, self.k2 = (mechanism.link_names.index(x) for x in (lay.near, lay.far, lay.link2))
+        self.k1, self.k3 = (mechanism.link_names.index(x) for x in (self.known1, self.known2))
+
+    def _side(self, X):
+        """The actuator side ``d(s)`` in near's reference frame (components) and its length."""
+        s = self.sigma * X[:, self.layout.driver]
+        dx = self.d0[0] + s * self.u0[0]
+        dy = self.d0[1] + s * self.u0[1]
+        return dx, dy, np.sqrt(dx * dx + dy * dy)
+
+    def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        lc = self.lc
+        dx, dy, L = self._side(X)
+        ax, ay = G.point_xy(self.k1, self.A)
+        cx, cy = G.point_xy(self.k3, self.C)
+        bx, by, ok, det, _ = rrr_xy(ax, ay, cx, cy, L, lc, self.sign * factor)
+        why, pr = {}, None
+        if probe or not ok.all():
+            pr = self._probe(G, (ax, ay), (cx, cy), (bx, by), L, ok, why, probe)
+        # the actuator's halves turn by the rotation taking d(s) to B − A (|d| = |B − A| = L)
+        rx, ry = bx - ax, by - ay
+        inv = 1.0 / (L * L)
+        c = (dx * rx + dy * ry) * inv
+        s = (dx * ry - dy * rx) * inv
+        G.place_k(self.kn, ax, ay, self.A, c, s)
+        G.place_k(self.kf, bx, by, self.B, c, s)
+        G.place_dir_xy(self.k2, cx, cy, self.C, bx - cx, by - cy, self.dir2)
+        G.keep_point(self.kf, self.B, bx, by)
+        G.keep_point(self.k2, self.B, bx, by)
+        return dyad_outcome(ok, why, det, L * lc, False, pr, probe)
+
+    def _probe(self, G, a, c, b, L, ok, why: dict, probe: bool):
+        """Reasons of the failed positions (into ``why``) and, when asked, the Probe: the
+        margin in m, 1-Lipschitz in |C − A| and in L (the lip's two rows)."""
+        lay, lc = self.layout, self.lc
+        A, C, B = (columns(p, q, G.M) for p, q in (a, c, b))
+        AC = C - A
+        dd = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
+        for n in np.flatnonzero(~ok):
+            if np.isfinite(dd[n]):
+                rel = f"> {L[n]:.6g} + {lc:.6g}" if dd[n] > L[n] + lc else f"< |{L[n]:.6g} − {lc:.6g}|"
+                why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: |{lay.outer1}{lay.outer2}| = {dd[n]:.6g} "
+                                                    f"{rel} (actuator {lay.slide}: out of reach)")
+        if not probe:
+            return None
+        gap = 2.0 * np.abs(AC[:, 0] * (B[:, 1] - A[:, 1]) - AC[:, 1] * (B[:, 0] - A[:, 0])) / dd
+        margin = np.minimum(L + lc - dd, dd - np.abs(L - lc))
+        lip = np.stack([AC, np.stack([L, np.zeros_like(L)], axis=1)], axis=1)
+        return Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=lip,
+                     tol=margin_tol(A, C, L + lc))
+
+    def _guide(self, R, input_rates):
+        """σ ṡ u in the world (N, 2), from the near half's turn."""
+        u = R.direction(self.layout.near, self.u0)[0]
+        return self.sigma * float(input_rates[self.layout.driver]) * u
+
+    def margin_curvature(self, R) -> np.ndarray:
+        """A bound on |d²margin/dx²| along the motion of ``R``: |d''| + |L''| (the probe's
+        margin is ``min(L + l₃ − d, d − |L − l₃|)`` with ``d = |C − A|``)."""
+        A, vA, aA = R.point(self.known1, self.A)
+        C, vC, aC = R.point(self.known2, self.C)
+        r, v, a = C - A, vC - vA, aC - aA
+        n = np.sqrt(np.sum(r * r, axis=-1))
+        rv = np.sum(r * v, axis=-1)
+        d2 = (np.sum(v * v, axis=-1) + np.sum(r * a, axis=-1)) / n - rv * rv / n ** 3
+        B = R.point(self.layout.far, self.B)[0]
+        g = self._guide(R, np.ones(len(self.mechanism.drivers)))
+        return np.abs(d2) + _length_curvature(B - A, g)
+
+    def rates(self, R, input_rates) -> None:
+        lay = self.layout
+        A, vA, aA = R.point(self.known1, self.A)
+        C, vC, aC = R.point(self.known2, self.C)
+        B = R.point(lay.far, self.B)[0]
+        g = self._guide(R, input_rates)
+        vA1 = vA + g                                  # B − A = R(θ) d(s): the slide moves B
+        w = rrr_rates(A, C, B, vA1, vC).w2
+        aA1 = aA + 2.0 * w[:, None] * perp(g)         # Coriolis term of the slide
+        r = rrr_rates(A, C, B, vA1, vC, aA1, aC)
+        R.set(lay.near, A, vA, aA, r.w2, r.e2)
+        R.set(lay.far, B, r.vB, r.aB, r.w2, r.e2)
+        R.set(lay.link2, C, vC, aC, r.w3, r.e3)
