@@ -66,7 +66,7 @@ class StepPlan:
     step: object                      # DriverStep or AssurGroup
     system: ConstraintSystem
     unknown: tuple[int, ...]          # link indices
-    solver: str                       # "driver", "dyad", "triad", "class4", "newton"
+    solver: str                       # "driver", "dyad" (an actuated triangle too), "triad", "class4", "newton"
     label: str
     closed: object = None             # its closed-form step (kin.groups.step protocol), if any
     newton: object = None             # Newton with continuation: any step
@@ -123,7 +123,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         if isinstance(s, DriverStep):
             solver, label = "driver", f"driver {s.joint} (I{s.number})"
         else:
-            solver = "dyad" if s.is_dyad else (
+            solver = "dyad" if s.is_dyad or s.kind is GroupKind.ACTUATED else (
                 "triad" if s.kind is GroupKind.TRIAD else
                 ("class4" if s.kind is GroupKind.CLASS_IV and s.layout else "newton"))
             label = s.describe()

@@ -41,7 +41,7 @@ def _modes(ap, g) -> int | None:
             return int(K.class4_modes(O, r, ll).n_modes)
     except Exception:  # noqa: BLE001 - a count we cannot make is reported as unknown
         return None
-    return {"RRR": 2, "RRP": 2, "RPR": 2, "PRP": 1, "RPP": 1}.get(g.kind)
+    return {"RRR": 2, "actuated RRR": 2, "RRP": 2, "RPR": 2, "PRP": 1, "RPP": 1}.get(g.kind)
 
 
 def group_circuits(ap, drivers) -> tuple[GroupCircuit, ...]:
