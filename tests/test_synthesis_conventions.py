@@ -269,3 +269,19 @@ def test_search_is_at_least_as_good_as_plain_de():
             ours.append(e)
             de.append(B.plain_de(cs[name], wall, seed)[0])
         assert np.median(ours) <= np.median(de), (name, ours, de)
+
+
+def test_csv_messages_name_file_lines_and_semicolon_tables_are_read():
+    """Field defects (issue 22, smaller): every fault names the file's line (blank lines
+    and the header counted); a ';'-separated table is read, not taken as a header."""
+    import pytest as _pt
+    from multiloop.catalogue.dimensional.targets import parse_table
+    from multiloop.topo.errors import InputError
+    a = parse_table("x;y\n0;0\n1;0\n0;1\n", (2,), "path", "t.csv")
+    assert a.shape == (3, 2)
+    b = parse_table("0;0\n1;0\n0;1\n", (2,), "path", "t.csv")
+    assert b.shape == (3, 2)
+    with _pt.raises(InputError, match="t.csv line 5"):
+        parse_table("x,y\n0,0\n\n1,0\n0,nan\n", (2,), "path", "t.csv")
+    with _pt.raises(InputError, match="t.csv line 4"):
+        parse_table("x,y\n0,0\n\n1,0,3\n", (2,), "path", "t.csv")

@@ -137,27 +137,35 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
 
 
 def parse_table(text: str, columns: tuple[int, ...], what: str, name: str) -> np.ndarray:
-    """Rows of numbers from the text of a CSV table named ``name`` (see :func:`read_table`)."""
-    rows = [r for r in csv.reader(text.splitlines()) if r and any(c.strip() for c in r)]
+    """Rows of numbers from the text of a CSV table named ``name`` (see :func:`read_table`).
+
+    Messages name the *line* of the file (blank lines and the header counted), the same
+    numbering for every fault; a table whose first line is separated by ``;`` and has
+    no comma is read with ``;`` (a spreadsheet's export), never taken as a header."""
+    lines = text.splitlines()
+    first = next((ln for ln in lines if ln.strip()), "")
+    sep = ";" if ";" in first and "," not in first else ","
+    rows = [(n + 1, r) for n, r in enumerate(csv.reader(lines, delimiter=sep)) if r and any(c.strip() for c in r)]
     if not rows:
         raise InputError(explain(f"{what} table {name!r}", expected="rows of numbers", got="an empty file"))
-    out = []
-    for i, r in enumerate(rows):
+    out, where = [], []
+    for i, (line, r) in enumerate(rows):
         try:
             vals = [float(c) for c in r]
         except ValueError:
             if i == 0:
                 continue        # header
-            raise InputError(explain(f"{name} row {i + 1}", expected="numbers", got=",".join(r)[:80])) from None
+            raise InputError(explain(f"{name} line {line}", expected="numbers", got=sep.join(r)[:80])) from None
         if len(vals) not in columns:
-            raise InputError(explain(f"{name} row {i + 1}", expected=" or ".join(map(str, columns)) + " columns",
+            raise InputError(explain(f"{name} line {line}", expected=" or ".join(map(str, columns)) + " columns",
                                      got=f"{len(vals)}"))
         out.append(vals)
+        where.append(line)
     if not out:
         raise InputError(explain(f"{what} table {name!r}", expected="rows of numbers", got="a header line only"))
     if len({len(v) for v in out}) > 1:
         raise InputError(explain(name, expected="the same number of columns on every row", got="a ragged table"))
-    return check_rows(np.array(out, float).reshape(len(out), -1), what, name)
+    return check_rows(np.array(out, float).reshape(len(out), -1), what, name, where)
 
 
 def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:
@@ -167,19 +175,23 @@ def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:
     return a[np.unique(np.round(np.linspace(0, len(a) - 1, n)).astype(int))]
 
 
-def check_rows(a: np.ndarray, what: str, where: str) -> np.ndarray:
-    """Validate a target array: enough rows, finite values."""
+def check_rows(a: np.ndarray, what: str, where: str, lines=None) -> np.ndarray:
+    """Validate a target array: enough rows, finite values; ``lines`` are the rows' line
+    numbers in their file (messages then say ``line``, else ``row``)."""
+    def at(i):
+        return f"{where} line {lines[i]}" if lines is not None else f"{where} row {i + 1}"
+
     need = MIN_ROWS[what]
     if a.shape[0] < need:
         raise InputError(explain(where, expected=f"at least {need} {what} targets", got=f"{a.shape[0]}",
                                  hint="fewer targets do not determine the dimensions"))
     bad = ~np.all(np.isfinite(a), axis=1)
     if bad.any():
-        raise InputError(explain(f"{where} row {int(np.flatnonzero(bad)[0]) + 1}", expected="finite numbers",
+        raise InputError(explain(at(int(np.flatnonzero(bad)[0])), expected="finite numbers",
                                  got="NaN or infinity"))
     big = np.abs(a) > MAX_VALUE
     if big.any():
         i, j = np.argwhere(big)[0]
-        raise InputError(explain(f"{where} row {int(i) + 1}", expected=f"numbers of magnitude at most {MAX_VALUE:g}",
+        raise InputError(explain(at(int(i)), expected=f"numbers of magnitude at most {MAX_VALUE:g}",
                                  got=f"{a[i, j]:g} in column {int(j) + 1}"))
     return a
