@@ -349,3 +349,24 @@ def test_check_velocity_ratio_is_exact_not_the_grids():
     assert e.max == pytest.approx(2 * r, rel=1e-6)
     assert min(abs(math.degrees(e.at_max) - v) for v in (45.0, 225.0)) < 1e-6
     assert e.min == pytest.approx(0.0, abs=1e-9 * r)
+
+
+def test_a_dead_zone_below_the_floor_is_a_change_point():
+    """The stated floor (docs/kinematics.md): a 5e-6° dead zone violates the reach by
+    ~1e-18 relative, below binary64's rounding; it is reported as a change point, and
+    the motion stays continuous through it."""
+    a, d, b = 0.3, 1.0, 0.8
+    half = math.radians(5e-6) / 2
+    L = math.sqrt(a * a + d * d + 2 * a * d * math.cos(half))
+    c = L - b
+    th0 = math.radians(40.0)
+    A = np.array([a * math.cos(th0), a * math.sin(th0)])
+    O4 = np.array([d, 0.0])
+    dd = np.hypot(*(O4 - A))
+    x = (b * b + dd * dd - c * c) / (2 * dd)
+    u = (O4 - A) / dd
+    m = four_bar((0, 0), A, A + x * u + math.sqrt(b * b - x * x) * np.array([-u[1], u[0]]), O4)
+    from multiloop.kin.solve import motion_events
+    ev = motion_events(m)
+    assert ev.period is not None
+    assert any(abs(math.remainder(x - (math.pi - th0), 2 * math.pi)) < 1e-6 for x, _ in ev.crossings)
