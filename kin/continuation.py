@@ -176,12 +176,16 @@ def _zero_run(pr: Probe, s: np.ndarray, i: int) -> tuple[float, float]:
     return s[lo], s[hi]
 
 
+def _probe_at(evaluate, P, s_nodes, flips, g, q: np.ndarray) -> Probe:
+    """Group ``g``'s probe at path parameters ``q``, on the signs the flips so far give."""
+    return evaluate(_at(P, s_nodes, q), {k: sign_factor(f, q) for k, f in flips.items()})[g]
+
+
 def _vertex(evaluate, P, s_nodes, flips, g, s_star: float, h: float) -> float:
     """A crossing is a touch of the reach margin, ``margin ≈ c (s − s*)²``: ``s*`` from
     the margin at ``s_star ± h, ± 2h`` (h well outside the run where the margin is
     rounding), the centre of that run when the margin does not fit."""
-    q = s_star + h * np.array([-2.0, -1.0, 1.0, 2.0])
-    pr = evaluate(_at(P, s_nodes, q), {k: sign_factor(f, q) for k, f in flips.items()})[g]
+    pr = _probe_at(evaluate, P, s_nodes, flips, g, s_star + h * np.array([-2.0, -1.0, 1.0, 2.0]))
     if pr.margin is None or not np.all(np.isfinite(pr.margin)):
         return s_star
     f2m, f1m, f1, f2 = pr.margin
@@ -200,7 +204,7 @@ def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, 
         if b - a <= 4.0 * np.finfo(float).eps * max(abs(a), abs(b), 1.0):
             break
         q = a + (b - a) * np.arange(1, n + 1) / (n + 1)
-        pr = evaluate(_at(P, s_nodes, q), {k: sign_factor(f, q) for k, f in flips.items()})[g]
+        pr = _probe_at(evaluate, P, s_nodes, flips, g, q)
         if pr.margin is None:
             return a, b
         pos = np.flatnonzero(~(pr.margin > 0))
