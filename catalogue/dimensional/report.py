@@ -7,11 +7,15 @@ targets says so.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from multiloop.topo.errors import InputError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully"]
+__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -81,3 +85,50 @@ def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuo
         got = "ccw" if np.all(d >= 0) else "cw" if np.all(d <= 0) else "both"
         rows.append(_row("direction", c.direction, got, 0.0 if got == c.direction else 1.0))
     return rows
+
+
+def parse_bounds(items) -> dict | None:
+    """``["NAME=LOW:HIGH", ...]`` → ``{NAME: (LOW, HIGH)}`` (finite numbers, LOW < HIGH)."""
+    if not items:
+        return None
+    out = {}
+    for it in items:
+        name, eq, rng = it.partition("=")
+        lo, colon, hi = rng.partition(":")
+        try:
+            a, b = float(lo), float(hi)
+        except ValueError:
+            a = b = float("nan")
+        if not (eq and colon and name and math.isfinite(a) and math.isfinite(b) and abs(a) <= 1e9 and abs(b) <= 1e9):
+            raise InputError(explain(f"--bounds {it[:80]!r}", expected="NAME=LOW:HIGH with finite numbers "
+                                     "of magnitude at most 1e9", got=repr(it[:80]), hint="e.g. O2.x=-1:1"))
+        if name in out:
+            raise InputError(explain(f"--bounds {name!r}", expected="each variable once", got="twice"))
+        out[name] = (a, b)
+    return out
+
+
+def synthesis_text(doc: dict) -> str:
+    """The readable report of a synthesis run from its JSON document (``as_dict`` plus
+    ``out``, the file written)."""
+    lines = [f"{doc['task']} generation: wrote {doc['out']}",
+             f"error (relative to the target size): max {doc['error_max']:.3g}, RMS {doc['error_rms']:.3g}"]
+    if doc.get("angle_error_max_deg") is not None:
+        lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
+    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s "
+                 f"({doc['method']}, seed {doc['seed']}, stopped: {doc['stopped']})")
+    for c in doc["constraints"]:
+        state = "met" if c["met"] else f"NOT met, violated by {c['violation']:.3g}"
+        lines.append(f"constraint {c['name']} ({c['required']}): {state}; value {_fmt(c['value'])}")
+    lines += [f"note: {n}" for n in doc["notes"]]
+    return "\n".join(lines)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
+    return str(v)

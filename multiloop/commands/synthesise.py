@@ -23,7 +23,6 @@ curve and the mechanism.  Nothing is written unless the whole run succeeds.
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -32,6 +31,7 @@ from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.io import dumps_toml
 from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
+from multiloop.catalogue.dimensional.report import parse_bounds, synthesis_text
 from multiloop.catalogue.dimensional.targets import TIMINGS
 
 __all__ = ["add_arguments", "run"]
@@ -71,27 +71,6 @@ def add_arguments(p) -> None:
                    help="the driven link's turning sense through the targets (free or step timing)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
-
-
-def parse_bounds(items) -> dict | None:
-    """``["NAME=LOW:HIGH", ...]`` → ``{NAME: (LOW, HIGH)}`` (finite numbers, LOW < HIGH)."""
-    if not items:
-        return None
-    out = {}
-    for it in items:
-        name, eq, rng = it.partition("=")
-        lo, colon, hi = rng.partition(":")
-        try:
-            a, b = float(lo), float(hi)
-        except ValueError:
-            a = b = float("nan")
-        if not (eq and colon and name and math.isfinite(a) and math.isfinite(b) and abs(a) <= 1e9 and abs(b) <= 1e9):
-            raise InputError(explain(f"--bounds {it[:80]!r}", expected="NAME=LOW:HIGH with finite numbers "
-                                     "of magnitude at most 1e9", got=repr(it[:80]), hint="e.g. O2.x=-1:1"))
-        if name in out:
-            raise InputError(explain(f"--bounds {name!r}", expected="each variable once", got="twice"))
-        out[name] = (a, b)
-    return out
 
 
 def _progress(enabled: bool):
@@ -151,29 +130,5 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(doc, indent=1, ensure_ascii=False))
     else:
-        print(_text(doc))
+        print(synthesis_text(doc))
     return 0
-
-
-def _text(doc: dict) -> str:
-    lines = [f"{doc['task']} generation: wrote {doc['out']}",
-             f"error (relative to the target size): max {doc['error_max']:.3g}, RMS {doc['error_rms']:.3g}"]
-    if doc.get("angle_error_max_deg") is not None:
-        lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
-    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s "
-                 f"({doc['method']}, seed {doc['seed']}, stopped: {doc['stopped']})")
-    for c in doc["constraints"]:
-        state = "met" if c["met"] else f"NOT met, violated by {c['violation']:.3g}"
-        lines.append(f"constraint {c['name']} ({c['required']}): {state}; value {_fmt(c['value'])}")
-    lines += [f"note: {n}" for n in doc["notes"]]
-    return "\n".join(lines)
-
-
-def _fmt(v) -> str:
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    if isinstance(v, list):
-        return "[" + ", ".join(_fmt(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
-    return str(v)
