@@ -65,7 +65,7 @@ def test_csv_text_and_csv_file_give_the_same_table(tmp_path):
     text = "x,y\n0,0\n1,0.5\n2,1\n3,1.5\n4,2\n5,2.5\n"
     (tmp_path / "t.csv").write_text(text)
     np.testing.assert_array_equal(parse_table(text, (2, 3), "path", "t.csv"), read_table(tmp_path / "t.csv", (2, 3), "path"))
-    with pytest.raises(InputError, match="t.csv row 3"):
+    with pytest.raises(InputError, match="t.csv line 3"):
         parse_table("x,y\n0,0\n1,a\n", (2, 3), "path", "t.csv")
 
 
