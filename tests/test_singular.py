@@ -284,20 +284,26 @@ def test_check_reads_extremes_through_change_points():
     assert any("pressure angle at B reaches 90.000°" in v for v in rep.verdict)
 
 
-def test_check_finds_a_dead_zone_narrower_than_its_grid():
-    """A 0.37° dead zone (the check's grid step is 0.5°): limited motion, limits by the
-    law of cosines, the transmission angle reaches 180° there, the ratio is unbounded."""
-    a, d, b = 0.3, 1.0, 0.8
-    half = math.radians(0.37) / 2
-    L = math.sqrt(a * a + d * d + 2 * a * d * math.cos(half))       # at θ = π − half
-    c = L - b
-    th0 = math.radians(40.0)
+def dead_zone_at_pi(zone_deg, th0, a=0.3, d=1.0, b=0.8):
+    """A non-Grashof four-bar (frame d along x, crank a at ``th0``, coupler b) whose
+    rocker c makes b + c equal the diagonal at θ = π ∓ half the zone: the crank stops in
+    a dead zone ``zone_deg`` wide around θ = π (law of cosines)."""
+    half = math.radians(zone_deg) / 2
+    c = math.sqrt(a * a + d * d + 2 * a * d * math.cos(half)) - b
     A = np.array([a * math.cos(th0), a * math.sin(th0)])
     O4 = np.array([d, 0.0])
     dd = np.hypot(*(O4 - A))
     x = (b * b + dd * dd - c * c) / (2 * dd)
     u = (O4 - A) / dd
-    m = four_bar((0, 0), A, A + x * u + math.sqrt(b * b - x * x) * np.array([-u[1], u[0]]), O4)
+    return four_bar((0, 0), A, A + x * u + math.sqrt(b * b - x * x) * np.array([-u[1], u[0]]), O4)
+
+
+def test_check_finds_a_dead_zone_narrower_than_its_grid():
+    """A 0.37° dead zone (the check's grid step is 0.5°): limited motion, limits by the
+    law of cosines, the transmission angle reaches 180° there, the ratio is unbounded."""
+    th0 = math.radians(40.0)
+    half = math.radians(0.37) / 2
+    m = dead_zone_at_pi(0.37, th0)
     dc = _check(m).drivers[0]
     assert not dc.full_rotation
     got = sorted(dc.limits)
@@ -355,17 +361,8 @@ def test_a_dead_zone_below_the_floor_is_a_change_point():
     """The stated floor (docs/kinematics.md): a 5e-6° dead zone violates the reach by
     ~1e-18 relative, below binary64's rounding; it is reported as a change point, and
     the motion stays continuous through it."""
-    a, d, b = 0.3, 1.0, 0.8
-    half = math.radians(5e-6) / 2
-    L = math.sqrt(a * a + d * d + 2 * a * d * math.cos(half))
-    c = L - b
     th0 = math.radians(40.0)
-    A = np.array([a * math.cos(th0), a * math.sin(th0)])
-    O4 = np.array([d, 0.0])
-    dd = np.hypot(*(O4 - A))
-    x = (b * b + dd * dd - c * c) / (2 * dd)
-    u = (O4 - A) / dd
-    m = four_bar((0, 0), A, A + x * u + math.sqrt(b * b - x * x) * np.array([-u[1], u[0]]), O4)
+    m = dead_zone_at_pi(5e-6, th0)
     from multiloop.kin.solve import motion_events
     ev = motion_events(m)
     assert ev.period is not None
