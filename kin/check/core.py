@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-from multiloop.kin.solve import compile_plan, motion_events, solve
+from multiloop.kin.solve import compile_plan, solve
 from multiloop.topo.assur import GroupKind, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
@@ -126,7 +126,7 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
     groups, D = signed_dets(ap)
     mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
-    ev = motion_events(m, plan) if len(m.drivers) == 1 else None
+    ev = mo.events
     limit_groups = []
     for seg in mo.segments:
         if seg.limit_bracket is None:

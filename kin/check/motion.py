@@ -61,6 +61,7 @@ class Motion:
     full_rotation: bool
     segments: tuple[Segment, ...]
     periodic: bool
+    events: object = None            # MotionEvents of the certified walk (one driver), else None
 
     @property
     def limits(self) -> tuple[float, ...]:
@@ -157,7 +158,7 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
-        return Motion(m, k, True, True, (seg_f,), periodic)
+        return Motion(m, k, True, True, (seg_f,), periodic, ev)
     bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride, branch)
     seg_b = _segment(bwd, chunk, lo)
-    return Motion(m, k, rotary, False, (seg_f, seg_b), False)
+    return Motion(m, k, rotary, False, (seg_f, seg_b), False, ev)
