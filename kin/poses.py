@@ -22,16 +22,22 @@ def angle_of(v):
 
 
 def unit(v):
-    """A 2-vector scaled to length 1."""
+    """2-vectors ``(..., 2)`` scaled to length 1."""
     v = np.asarray(v, float)
-    return v / np.hypot(*v)
+    return v / np.hypot(v[..., 0], v[..., 1])[..., None]
 
 
-def columns(x, y, M: int) -> np.ndarray:
-    """An ``(M, 2)`` array of the components ``x, y`` (arrays (M,) or floats)."""
-    out = np.empty((M, 2))
-    out[:, 0], out[:, 1] = x, y
+def columns(x, y, M) -> np.ndarray:
+    """An ``(*shape, 2)`` array of the components ``x, y`` (arrays of the batch shape,
+    or broadcastable); ``M`` is the batch size or shape."""
+    out = np.empty((*np.atleast_1d(M), 2))
+    out[..., 0], out[..., 1] = x, y
     return out
+
+
+def _zero(a) -> bool:
+    """Whether an offset (a float, or an array over designs) is zero everywhere."""
+    return a == 0.0 if isinstance(a, float) else not np.any(a)
 
 
 def normal(u):
@@ -52,7 +58,8 @@ def known_on(group, joint: str) -> str:
 
 
 def _origins_xy(sp) -> tuple:
-    """The links' reference points as Python floats, kept on the plan (``sp.extra``)."""
+    """The links' reference points as Python floats, kept on the plan (``sp.extra``);
+    a plan bound to a batch of designs (:mod:`kin.design`) keeps arrays ``(D, 1)``."""
     hit = sp.extra.get("origins_xy")
     if hit is None:
         hit = sp.extra["origins_xy"] = tuple(map(tuple, np.asarray(sp.origins, float).tolist()))
@@ -60,7 +67,11 @@ def _origins_xy(sp) -> tuple:
 
 
 class Poses:
-    """Working store of link poses: one preallocated ``(n_links, 3, M)`` array.
+    """Working store of link poses: one preallocated ``(n_links, 3, *shape)`` array.
+
+    ``shape`` is ``(M,)`` for one design at M inputs, or ``(D, N)`` for D designs at N
+    inputs each (a plan bound to designs by :mod:`kin.design`: the reference points of
+    the links and of the steps are then arrays ``(D, 1)`` that broadcast over inputs).
 
     ``T[k] = (x, y, th)`` over the batch: the position of link k's reference point
     and its rotation; ``x[k], y[k], th[k]`` are views of those rows once link k is
@@ -69,11 +80,13 @@ class Poses:
     kept per link (``points[k]``) so the joints' positions reuse them.
     """
 
-    def __init__(self, sp, M: int):
-        self.sp, self.m, self.M = sp, sp.mechanism, M
+    def __init__(self, sp, M):
+        self.shape = tuple(np.atleast_1d(M).tolist())
+        self.sp, self.m, self.M = sp, sp.mechanism, int(np.prod(self.shape))
+        self.reasons = len(self.shape) == 1          # per-position failure texts (one design)
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
-        self.T = np.empty((nl, 3, M))
+        self.T = np.empty((nl, 3, *self.shape))
         self.x = [None] * nl
         self.y = [None] * nl
         self.th = [None] * nl
@@ -84,10 +97,10 @@ class Poses:
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
         self.x[f], self.y[f], self.th[f] = self.T[f]
-        self.c[f], self.s[f] = np.ones(M), np.zeros(M)
+        self.c[f], self.s[f] = np.ones(self.shape), np.zeros(self.shape)
 
     def finite(self, links) -> np.ndarray:
-        out = np.ones(self.M, bool)
+        out = np.ones(self.shape, bool)
         for k in links:
             out &= np.isfinite(self.th[k]) if self.th[k] is not None else False
         return out
@@ -97,7 +110,7 @@ class Poses:
         nan = None
         for k in range(self.m.n_links):
             if self.th[k] is None:
-                nan = np.full(self.M, np.nan) if nan is None else nan
+                nan = np.full(self.shape, np.nan) if nan is None else nan
                 self.T[k] = np.nan
                 self.x[k], self.y[k], self.th[k] = self.T[k]
                 self.c[k] = self.s[k] = nan
@@ -106,6 +119,7 @@ class Poses:
         """The poses at the given rows only."""
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
+        out.shape, out.reasons = (len(rows),), self.reasons
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
@@ -122,13 +136,15 @@ class Poses:
 
     def point_k(self, k: int, r) -> np.ndarray:
         if k == self.frame_k:
-            return np.broadcast_to(np.asarray(r, float), (self.M, 2))
-        return columns(*self.point_xy(k, r), self.M)
+            return np.broadcast_to(np.asarray(r, float), (*self.shape, 2))
+        return columns(*self.point_xy(k, r), self.shape)
 
     def _local(self, k: int, r) -> tuple:
         """Reference position ``r`` relative to link k's reference point (the key of
-        ``points[k]``)."""
-        return float(r[0]) - self.org[k][0], float(r[1]) - self.org[k][1]
+        ``points[k]``); for designs, arrays ``(D, 1)`` (the key is then their bytes)."""
+        if len(self.shape) == 1:
+            return float(r[0]) - self.org[k][0], float(r[1]) - self.org[k][1]
+        return r[..., 0] - self.org[k][0], r[..., 1] - self.org[k][1]
 
     def point_xy(self, k: int, r):
         """Components ``(x, y)`` of link k's material point at the reference position
@@ -142,29 +158,30 @@ class Poses:
         kept in ``points[k]``)."""
         if k == self.frame_k:
             return rx, ry
-        if rx == 0.0 and ry == 0.0:
+        if _zero(rx) and _zero(ry):
             return self.x[k], self.y[k]
-        hit = self.points[k].get((rx, ry))
+        key = _key(rx, ry)
+        hit = self.points[k].get(key)
         if hit is None:
             c, s = self.c[k], self.s[k]
-            hit = self.points[k][rx, ry] = (self.x[k] + (c * rx - s * ry), self.y[k] + (s * rx + c * ry))
+            hit = self.points[k][key] = (self.x[k] + (c * rx - s * ry), self.y[k] + (s * rx + c * ry))
         return hit
 
     def keep_point(self, k: int, r, px, py) -> None:
         """Record that link k's material point at the reference position ``r`` is at
         ``(px, py)`` (solved there directly): :meth:`carry` then reuses it until the link
         is placed again or invalidated."""
-        self.points[k][self._local(k, r)] = (px, py)
+        self.points[k][_key(*self._local(k, r))] = (px, py)
 
     def point(self, link: str, r) -> np.ndarray:
         return self.point_k(self.idx[link], r)
 
     def direction(self, link: str, v) -> np.ndarray:
         k = self.idx[link]
-        vx, vy = v
-        out = np.empty((self.M, 2))
-        out[:, 0] = self.c[k] * vx - self.s[k] * vy
-        out[:, 1] = self.s[k] * vx + self.c[k] * vy
+        vx, vy = v[..., 0], v[..., 1]
+        out = np.empty((*self.shape, 2))
+        out[..., 0] = self.c[k] * vx - self.s[k] * vy
+        out[..., 1] = self.s[k] * vx + self.c[k] * vy
         return out
 
     def theta(self, link: str) -> np.ndarray:
@@ -176,8 +193,9 @@ class Poses:
         (M,) or floats), rotated by (c, s); the angle ``th`` is ``arctan2(s, c)`` unless
         given."""
         T = self.T[k]
-        dx, dy = self.org[k][0] - float(r_ref[0]), self.org[k][1] - float(r_ref[1])
-        if dx == 0.0 and dy == 0.0:
+        dx, dy = self._local(k, r_ref)
+        dx, dy = -dx, -dy
+        if _zero(dx) and _zero(dy):
             T[0], T[1] = px, py
         else:
             np.add(px, c * dx - s * dy, out=T[0])
@@ -192,7 +210,7 @@ class Poses:
 
     def place_cs(self, link: str, P, r_ref, c, s, th) -> None:
         """Pose of ``link`` whose material point at ``r_ref`` is at ``P`` (M, 2), rotated (c, s)."""
-        self.place_k(self.idx[link], P[:, 0], P[:, 1], r_ref, c, s, th)
+        self.place_k(self.idx[link], P[..., 0], P[..., 1], r_ref, c, s, th)
 
     def place_rot(self, k: int, px, py, r_ref, dx, dy, cr: float, sr: float) -> None:
         """As :meth:`place_k`, rotated by ``(dx cr + dy sr, dy cr − dx sr)``: the rotation
@@ -203,11 +221,15 @@ class Poses:
     def place_dir_xy(self, k: int, px, py, r_ref, dx, dy, d_ref) -> None:
         """As :meth:`place_k`, the rotation taking direction ``d_ref`` to ``(dx, dy)``."""
         inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-        self.place_rot(k, px, py, r_ref, dx * inv, dy * inv, *unit(d_ref).tolist())
+        u = unit(d_ref)
+        if u.ndim == 1:
+            self.place_rot(k, px, py, r_ref, dx * inv, dy * inv, *u.tolist())
+        else:
+            self.place_rot(k, px, py, r_ref, dx * inv, dy * inv, u[..., 0], u[..., 1])
 
     def place_dir(self, link: str, P, r_ref, d, d_ref) -> None:
         """As :meth:`place_cs`, the rotation taking direction ``d_ref`` to ``d`` (N, 2)."""
-        self.place_dir_xy(self.idx[link], P[:, 0], P[:, 1], r_ref, d[:, 0], d[:, 1], d_ref)
+        self.place_dir_xy(self.idx[link], P[..., 0], P[..., 1], r_ref, d[..., 0], d[..., 1], d_ref)
 
     def place_like(self, link: str, P, r_ref, other: str) -> None:
         k = self.idx[other]
@@ -219,7 +241,8 @@ class Poses:
                 if self.th[k] is not None:
                     self.T[k][:, bad] = np.nan
                     self.c[k], self.s[k] = np.where(bad, np.nan, self.c[k]), np.where(bad, np.nan, self.s[k])
-                    self.points[k] = {}
+                    self.points[k] = {key: (np.where(bad, np.nan, px), np.where(bad, np.nan, py))
+                                      for key, (px, py) in self.points[k].items()}
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
@@ -227,11 +250,19 @@ class Poses:
         the store itself as a transposed view of ``(n_links, 3, M)``; else a copy with
         only ``links`` and the frame (the others NaN)."""
         if links is None:
-            return self.T.transpose(2, 0, 1)
+            return np.moveaxis(self.T, (0, 1), (-2, -1))
         T = np.full(self.T.shape, np.nan)
         for k in list(links) + [self.frame_k]:
             T[k] = self.T[k]
-        return T.transpose(2, 0, 1)
+        return np.moveaxis(T, (0, 1), (-2, -1))
+
+    def from_T(self, T) -> None:
+        """Every link's pose from a ``(n_links, 3, *shape)`` array (NaN where unsolved)."""
+        self.T[...] = T
+        for k in range(self.m.n_links):
+            self.x[k], self.y[k], self.th[k] = self.T[k]
+            self.c[k], self.s[k] = np.cos(self.th[k]), np.sin(self.th[k])
+            self.points[k] = {}
 
     def from_Z(self, Z, links) -> None:
         for k in links:
@@ -241,6 +272,11 @@ class Poses:
             self.x[k], self.y[k], self.th[k] = self.T[k]
             self.c[k], self.s[k] = c, s
             self.points[k] = {}
+
+
+def _key(rx, ry):
+    """A hashable key of an offset: the floats, or the bytes of per-design arrays."""
+    return (rx, ry) if isinstance(rx, float) else (rx.tobytes(), ry.tobytes())
 
 
 class PoseRates:

@@ -678,7 +678,7 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     sp = plan_of(m, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
-    needed = list(range(len(sp.steps))) if only is None else _needed_steps(sp, only)
+    needed = list(range(len(sp.steps))) if only is None else needed_steps(sp, only)
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
@@ -786,7 +786,9 @@ def _fmt_input(m: Mechanism, x) -> str:
     return ", ".join(parts)
 
 
-def _needed_steps(sp: SolvePlan, only) -> list[int]:
+def needed_steps(sp: SolvePlan, only) -> list[int]:
+    """The steps (in plan order) that the joints, tracer points or links named in
+    ``only`` need: their own and every step upstream of them."""
     m = sp.mechanism
     if isinstance(only, str):
         only = [only]

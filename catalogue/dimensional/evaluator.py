@@ -1,21 +1,14 @@
-"""A mechanism's Assur plan compiled once into a batched, parameterised evaluator.
+"""The design space of synthesis and its evaluator over the kinematic solver.
 
 The design variables are the reference coordinates of every R joint (frame
 pivots included), the guide angle of every prismatic joint, and the tracer
-points asked for; every link length, offset and pivot of the mechanism follows
-from them.  :meth:`Evaluator.poses` solves a whole population ×
-positions in one vectorised pass over the plan: each dyad is one call of its
-closed-form kernel of :mod:`multiloop.kin.groups` (Vasechkin et al. 2017,
-eqs. 1-18) with the dimensions as arrays of shape ``(population, 1)``; a triad
-is one call of the triad tracker per candidate (vectorised over positions).
-Plans with other groups (PRP, RPP, class IV, larger groups) take a slow path:
-:func:`multiloop.kin.solve.solve` once per candidate.
-
-Link poses are kept as maps from reference coordinates to the plane,
-``world = R(θ) r + t``, so a candidate's reference configuration is its own
-identity pose.  Every dyad keeps the assembly branch of its reference
-configuration (sign read per candidate), so a motion that stays assembled never
-changes branch.
+points asked for (:func:`kin.geometry.design_names`); every link length, offset
+and pivot of the mechanism follows from them.  :meth:`Evaluator.poses` solves a
+whole population × positions in one pass over the mechanism's compiled plan
+(:func:`kin.design.solve_designs`: the same steps, kernels and branch signs as
+:func:`kin.solve.solve`, every number an array over the designs), so a design
+scores on exactly the positions that ``solve`` gives it.  Every group keeps the
+assembly branch (mode) of the design's own reference configuration.
 """
 from __future__ import annotations
 
@@ -23,13 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, decompose
+from multiloop.kin.design import (DesignPoses, branch_signs, design_mechanism, design_names, solve_designs,
+                                  unbatched_steps)
+from multiloop.kin.geometry import Geometry
+from multiloop.topo.assur import DriverStep, decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
-__all__ = ["DesignSpace", "Evaluator", "Poses", "design_space", "four_bar_roles"]
-
-_CLOSED = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)
+__all__ = ["DesignSpace", "Evaluator", "design_space", "four_bar_roles"]
 
 
 @dataclass(frozen=True)
@@ -64,17 +58,12 @@ def design_space(m: Mechanism, points=(), *, margin: float = 1.0, region=None,
     as the target) widened by ``margin`` × its size, angles ±π around the start;
     ``bounds`` overrides any variable by name with ``(low, high)``.
     """
-    names, x0 = [], []
+    names = list(design_names(m, points))
     pts = [p for p in m.points if p.name in set(points)]
+    x0 = []
     for j in m.joints:
-        if j.kind is JointKind.P:
-            names += [f"{j.name}.angle"]
-            x0 += [float(np.arctan2(j.axis[1], j.axis[0]))]
-        else:
-            names += [f"{j.name}.x", f"{j.name}.y"]
-            x0 += list(j.at)
+        x0 += [float(np.arctan2(j.axis[1], j.axis[0]))] if j.kind is JointKind.P else list(j.at)
     for p in pts:
-        names += [f"{p.name}.x", f"{p.name}.y"]
         x0 += list(p.at)
     xy = np.array([j.at for j in m.joints] + [p.at for p in pts], float)
     if region is not None:
@@ -103,33 +92,9 @@ def design_space(m: Mechanism, points=(), *, margin: float = 1.0, region=None,
     return DesignSpace(tuple(names), x0, lo, hi)
 
 
-@dataclass(frozen=True)
-class Poses:
-    """Link poses of a population over positions: ``th``, ``tx``, ``ty`` are
-    ``(n_links, P, N)``; ``ok`` is ``(P, N)`` (every group assembled)."""
-
-    th: np.ndarray
-    tx: np.ndarray
-    ty: np.ndarray
-    ok: np.ndarray
-
-    def world(self, k: int, r: np.ndarray) -> np.ndarray:
-        """The material point of link ``k`` at reference ``r`` ``(P, 2)``: ``(P, N, 2)``."""
-        c, s = np.cos(self.th[k]), np.sin(self.th[k])
-        rx, ry = r[:, 0:1], r[:, 1:2]
-        return np.stack([c * rx - s * ry + self.tx[k], s * rx + c * ry + self.ty[k]], axis=-1)
-
-
-def _ang(v):
-    return np.arctan2(v[..., 1], v[..., 0])
-
-
-def _nrm(u):
-    return np.stack([-u[..., 1], u[..., 0]], axis=-1)
-
-
 class Evaluator:
-    """The parameterised solver of one mechanism (compile once, call many times).
+    """The parameterised solver of one mechanism (compile once, call many times): the
+    design decoding of synthesis over :func:`kin.design.solve_designs`.
 
     Parameters
     ----------
@@ -145,149 +110,40 @@ class Evaluator:
         self.plan = decompose(m)
         self.links = {x: i for i, x in enumerate(m.link_names)}
         self.frame = self.links[m.frame]
-        self.slow = [s.kind_name for s in self.plan.steps
-                     if isinstance(s, AssurGroup) and s.kind not in _CLOSED + (GroupKind.TRIAD,)]
         self._cols = {n: i for i, n in enumerate(space.names)}
-        self.deadline: float | None = None      # time.perf_counter() value; see _per_candidate
+        self.deadline: float | None = None      # time.perf_counter() value, for per-design fallbacks
+        self.slow = unbatched_steps(m)          # steps solved design by design
 
     # -- decoding --------------------------------------------------------------
     def at(self, X: np.ndarray, name: str) -> np.ndarray:
         """Reference position ``(P, 2)`` of joint or point ``name`` for designs ``X``."""
-        c = self._cols
-        if f"{name}.x" in c:
-            return X[:, [c[f"{name}.x"], c[f"{name}.y"]]]
-        j = self.mechanism.joint(name)
-        if j.kind is JointKind.P:
-            return np.broadcast_to(np.asarray(j.at, float), (X.shape[0], 2))
-        raise KeyError(name)
+        return Geometry(self.mechanism, self.space.names, np.atleast_2d(X)).at(name)[:, 0]
 
     def axis(self, X: np.ndarray, name: str) -> np.ndarray:
-        a = X[:, self._cols[f"{name}.angle"]]
-        return np.stack([np.cos(a), np.sin(a)], axis=-1)
+        return Geometry(self.mechanism, self.space.names, np.atleast_2d(X)).axis(name)[:, 0]
 
     # -- solving ---------------------------------------------------------------
-    def poses(self, X, phi) -> Poses:
-        """Solve designs ``X`` ``(P, n_var)`` at driver values ``phi`` ``(P, N)`` or ``(N,)``.
+    def poses(self, X, phi, outputs=None) -> DesignPoses:
+        """Solve designs ``X`` ``(P, n_var)`` at driver values ``phi`` ``(P, N)`` or ``(N,)``
+        (:func:`kin.design.solve_designs`: each design on its reference branches).
 
         One driver only (the synthesis problems are single-input); ``phi`` is the
         driver value from the reference configuration (rad, or m for a P driver).
         """
         X = np.atleast_2d(np.asarray(X, float))
-        P = X.shape[0]
-        phi = np.broadcast_to(np.asarray(phi, float), (P, np.shape(phi)[-1]))
-        if self.slow:
-            return self._per_candidate(X, phi)
-        N = phi.shape[1]
-        nl = len(self.links)
-        th = np.full((nl, P, N), np.nan)
-        tx, ty = th.copy(), th.copy()
-        th[self.frame] = tx[self.frame] = ty[self.frame] = 0.0
-        st = Poses(th, tx, ty, np.ones((P, N), bool))
-        for step in self.plan.steps:
-            if isinstance(step, DriverStep):
-                self._driver(step, X, phi, st)
-            elif step.kind is GroupKind.TRIAD:
-                self._triad(step, X, st)
-            else:
-                getattr(self, "_" + step.kind.lower())(step, X, st)
-        ok = np.all(np.isfinite(th), axis=0)
-        return Poses(th, tx, ty, ok)
-
-    def _per_candidate(self, X, phi) -> Poses:
-        """Slow path for groups without a batched kernel (PRP, RPP, class IV, larger
-        groups): :func:`kin.solve.solve` once per candidate, poses converted.
-
-        Past ``self.deadline`` (a ``time.perf_counter()`` value, when set) the
-        remaining candidates are not solved and count as failures (``ok`` False),
-        so that one population cannot overrun the time budget."""
-        import time
-        import warnings
-
-        from multiloop.kin.solve import compile_plan, solve
-        from multiloop.topo.errors import LinkageError
-        P, N = phi.shape
-        th = np.full((len(self.links), P, N), np.nan)
-        tx, ty = th.copy(), th.copy()
-        ok = np.zeros((P, N), bool)
-        for p in range(P):
-            if self.deadline is not None and time.perf_counter() > self.deadline:
-                break
-            try:
-                mp = self.with_design(X[p])
-                sp = compile_plan(mp)
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    st = solve(mp, phi[p], plan=sp)
-            except LinkageError:
-                continue
-            Z = st.poses                                      # (N, n_links, 3): origin + angle
-            good = np.asarray(st.status == "ok")
-            c, s = np.cos(Z[:, :, 2]), np.sin(Z[:, :, 2])
-            o = sp.origins
-            th[:, p] = np.where(good, Z[:, :, 2].T, np.nan)
-            tx[:, p] = np.where(good, (Z[:, :, 0] - (c * o[:, 0] - s * o[:, 1])).T, np.nan)
-            ty[:, p] = np.where(good, (Z[:, :, 1] - (s * o[:, 0] + c * o[:, 1])).T, np.nan)
-            ok[p] = good
-        return Poses(th, tx, ty, ok)
-
-    def _place(self, st: Poses, link: str, theta, anchor_world, anchor_ref) -> None:
-        k = self.links[link]
-        c, s = np.cos(theta), np.sin(theta)
-        rx, ry = anchor_ref[:, 0:1], anchor_ref[:, 1:2]
-        st.th[k] = theta
-        st.tx[k] = anchor_world[..., 0] - (c * rx - s * ry)
-        st.ty[k] = anchor_world[..., 1] - (s * rx + c * ry)
-
-    def _known(self, step, joint: str) -> str:
-        unknown = set(step.links) if isinstance(step, AssurGroup) else {step.link}
-        for c in step.constraints:
-            if c.joint == joint and (c.a in unknown) != (c.b in unknown):
-                return c.a if c.b in unknown else c.b
-        raise KeyError(joint)   # pragma: no cover - the decomposition guarantees one
-
-    def _driver(self, step: DriverStep, X, phi, st: Poses) -> None:
-        d = next(c for c in step.constraints if c.kind.startswith("drive"))
-        lk = step.link
-        other = d.a if d.b == lk else d.b
-        sgn = 1.0 if d.b == lk else -1.0
-        ko = self.links[other]
-        if d.kind == "drive_R":
-            p = next(c for c in step.constraints if c.kind == "R")
-            host = p.a if p.b == lk else p.b
-            r = self.at(X, p.joint)
-            self._place(st, lk, st.th[ko] + sgn * phi, st.world(self.links[host], r), r)
-        else:
-            r = self.at(X, d.joint)
-            u = self.axis(X, d.joint)
-            c, s = np.cos(st.th[ko]), np.sin(st.th[ko])
-            uw = np.stack([c * u[:, 0:1] - s * u[:, 1:2], s * u[:, 0:1] + c * u[:, 1:2]], axis=-1)
-            W = st.world(ko, r) + sgn * phi[..., None] * uw
-            self._place(st, lk, st.th[ko], W, r)
-
-    def branch(self, g: AssurGroup, X) -> np.ndarray:
-        """Assembly branch ``(P, 1)`` (±1) of dyad ``g`` in the reference configuration
-        of designs ``X``: the side of the inner pin (RRR), the sense of the link along
-        the guide (RRP, RPR)."""
-        o1, inner, o2, l1, l2 = g.layout
-        if g.kind is GroupKind.RRR:
-            AC, AB = self.at(X, o2) - self.at(X, o1), self.at(X, inner) - self.at(X, o1)
-            v = AC[:, 0] * AB[:, 1] - AC[:, 1] * AB[:, 0]
-        elif g.kind is GroupKind.RRP:
-            v = np.sum((self.at(X, inner) - self.at(X, o1)) * self.axis(X, o2), axis=-1)
-        else:
-            gx, bx = (o1, o2) if self.mechanism.joint(inner).links[0] == l1 else (o2, o1)
-            v = np.sum((self.at(X, bx) - self.at(X, gx)) * self.axis(X, inner), axis=-1)
-        return np.where(v >= 0, 1.0, -1.0)[:, None]
+        return solve_designs(self.mechanism, self.space.names, X, np.asarray(phi, float), outputs=outputs,
+                             deadline=self.deadline)
 
     def branches(self, X) -> np.ndarray:
-        """Branches ``(P, n_dyads)`` of every RRR, RRP and RPR dyad (see :meth:`branch`)."""
+        """Assembly branches ``(P, n_dyads)`` (±1, NaN on a boundary) of every RRR, RRP and
+        RPR dyad in the reference configuration of designs ``X``: the signs the solver
+        uses (:func:`kin.design.branch_signs`)."""
         X = np.atleast_2d(np.asarray(X, float))
-        cols = [self.branch(g, X) for g in self.plan.groups if g.kind in _CLOSED]
-        return np.concatenate(cols, axis=1) if cols else np.ones((X.shape[0], 0))
+        return branch_signs(self.mechanism, self.space.names, X)
 
     def driver_sense(self) -> tuple[float, str, str]:
         """``(sense, link, other)``: the driven ``link`` turns (slides) by ``sense`` × the
-        driver value relative to ``other`` (see :meth:`_driver`)."""
+        driver value relative to ``other``."""
         step = next(s for s in self.plan.steps if isinstance(s, DriverStep))
         d = next(c for c in step.constraints if c.kind.startswith("drive"))
         return (1.0 if d.b == step.link else -1.0), step.link, (d.a if d.b == step.link else d.b)
@@ -311,104 +167,16 @@ class Evaluator:
             return np.arctan2(d[:, 1], d[:, 0])
         return np.sum(d * self.axis(X, j.name), axis=-1)
 
-    def _rrr(self, g: AssurGroup, X, st: Poses) -> None:
-        from multiloop.kin.groups import rrr_position
-        o1, inner, o2, l1, l2 = g.layout
-        Ar, Br, Cr = self.at(X, o1), self.at(X, inner), self.at(X, o2)
-        A = st.world(self.links[self._known(g, o1)], Ar)
-        C = st.world(self.links[self._known(g, o2)], Cr)
-        la = np.hypot(*(Br - Ar).T)[:, None]
-        lc = np.hypot(*(Br - Cr).T)[:, None]
-        sgn = self.branch(g, X)
-        B = rrr_position(A, C, la, lc, sgn).B
-        self._place(st, l1, _ang(B - A) - _ang(Br - Ar)[:, None], A, Ar)
-        self._place(st, l2, _ang(B - C) - _ang(Br - Cr)[:, None], C, Cr)
-
-    def _rrp(self, g: AssurGroup, X, st: Poses) -> None:
-        from multiloop.kin.groups import rrp_position
-        o1, inner, o2, l1, l2 = g.layout
-        Ar, Br, Pr = self.at(X, o1), self.at(X, inner), self.at(X, o2)
-        ur = self.axis(X, o2)
-        kp = self.links[self._known(g, o2)]
-        h = np.sum(_nrm(ur) * (Br - Pr), axis=-1)[:, None]
-        A = st.world(self.links[self._known(g, o1)], Ar)
-        Pw = st.world(kp, Pr)
-        c, s = np.cos(st.th[kp]), np.sin(st.th[kp])
-        u = np.stack([c * ur[:, 0:1] - s * ur[:, 1:2], s * ur[:, 0:1] + c * ur[:, 1:2]], axis=-1)
-        la = np.hypot(*(Br - Ar).T)[:, None]
-        sgn = self.branch(g, X)
-        B = rrp_position(A, Pw, u, la, h, sgn).B
-        self._place(st, l1, _ang(B - A) - _ang(Br - Ar)[:, None], A, Ar)
-        self._place(st, l2, st.th[kp], B, Br)
-
-    def _rpr(self, g: AssurGroup, X, st: Poses) -> None:
-        from multiloop.kin.groups import rpr_position
-        o1, inner, o2, l1, l2 = g.layout
-        guide = self.mechanism.joint(inner).links[0]
-        gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-        block = l2 if guide == l1 else l1
-        Xr, Yr = self.at(X, gx), self.at(X, bx)
-        ur = self.axis(X, inner)
-        h = np.sum(_nrm(ur) * (Yr - Xr), axis=-1)[:, None]
-        Xw = st.world(self.links[self._known(g, gx)], Xr)
-        Yw = st.world(self.links[self._known(g, bx)], Yr)
-        sgn = self.branch(g, X)
-        u = rpr_position(Yw, Xw, h, sgn).u
-        theta = _ang(u) - _ang(ur)[:, None]
-        self._place(st, guide, theta, Xw, Xr)
-        self._place(st, block, theta, Yw, Yr)
-
-    def _triad(self, g: AssurGroup, X, st: Poses) -> None:
-        """Triad: the all-modes tracker, one call per candidate over its positions."""
-        from multiloop.kin.groups import triad_track
-        tern, bins, outs, inns = g.layout
-        Ar = np.stack([self.at(X, o) for o in outs], axis=1)           # (P, 3, 2)
-        b = np.stack([self.at(X, i) for i in inns], axis=1)
-        A = np.stack([st.world(self.links[self._known(g, o)], Ar[:, i]) for i, o in enumerate(outs)],
-                     axis=2)                                            # (P, N, 3, 2)
-        P, N = A.shape[:2]
-        Pw = np.full((P, N, 3, 2), np.nan)
-        th = np.full((P, N), np.nan)
-        for p in range(P):
-            good = np.all(np.isfinite(A[p].reshape(N, -1)), axis=1)
-            n = int(np.argmin(good)) if not good.all() else N   # track the leading good run
-            if n == 0:
-                continue
-            r = triad_track(A[p, :n], b[p], np.hypot(*(b[p] - Ar[p]).T), b[p])
-            okp = r.ok
-            Pw[p, :n][okp], th[p, :n][okp] = r.P[okp], r.theta[okp]
-        self._place(st, tern, th, Pw[:, :, 0], b[:, 0])
-        for i, lk in enumerate(bins):
-            self._place(st, lk, _ang(Pw[:, :, i] - A[:, :, i]) - _ang(b[:, i] - Ar[:, i])[:, None],
-                        A[:, :, i], Ar[:, i])
-
     # -- outputs ---------------------------------------------------------------
     def point(self, X, phi, name: str) -> tuple[np.ndarray, np.ndarray]:
         """World positions ``(P, N, 2)`` of tracer point or joint ``name`` and ``ok``."""
-        st = self.poses(X, phi)
-        X = np.atleast_2d(np.asarray(X, float))
-        m = self.mechanism
-        pts = {p.name: p for p in m.points}
-        if name in pts:
-            k = self.links[pts[name].link]
-        else:
-            j = m.joint(name)
-            k = self.links[j.links[1] if j.kind is JointKind.P else j.links[0]]
-        return st.world(k, self.at(X, name)), st.ok
+        st = self.poses(X, phi, outputs=[name])
+        return st.point(name), st.ok
 
     def with_design(self, x) -> Mechanism:
         """The start mechanism with the dimensions of design ``x`` (names kept)."""
-        from dataclasses import replace
-        X = np.asarray(x, float)[None, :]
-        m = self.mechanism
-        joints = []
-        for j in m.joints:
-            at = tuple(float(v) for v in self.at(X, j.name)[0])
-            axis = tuple(float(v) for v in self.axis(X, j.name)[0]) if j.kind is JointKind.P else j.axis
-            joints.append(replace(j, at=at, axis=axis))
-        pts = [replace(p, at=tuple(float(v) for v in self.at(X, p.name)[0]))
-               if f"{p.name}.x" in self._cols else p for p in m.points]
-        return replace(m, joints=tuple(joints), points=tuple(pts))
+        geo = Geometry(self.mechanism, self.space.names, np.asarray(x, float)[None, :])
+        return design_mechanism(geo, 0)
 
 
 def four_bar_roles(m) -> dict | None:

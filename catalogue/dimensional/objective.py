@@ -21,11 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from multiloop.kin.design import DesignPoses
 from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
-from .evaluator import Evaluator, Poses, four_bar_roles
+from .evaluator import Evaluator, four_bar_roles
 from .targets import FunctionTarget, MotionTarget, PathTarget
 
 __all__ = ["Constraints", "Problem", "transmission_angles", "GRASHOF", "MODES", "DIRECTIONS", "grashof_margins"]
@@ -68,7 +69,7 @@ class Constraints:
             raise InputError(explain("max_ratio (--max-ratio)", expected="a number >= 1", got=str(self.max_ratio)))
 
 
-def transmission_angles(ev: Evaluator, X: np.ndarray, st: Poses) -> np.ndarray:
+def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.ndarray:
     """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the dyads,
     ``(P, N)``; ``inf`` when there is none.
 
@@ -320,7 +321,7 @@ class Problem:
         size = t.size if t.size > 0 else 1.0
         return np.broadcast_to(T, (P,) + T.shape), np.full(P, size)
 
-    def features(self, Z: np.ndarray, st: Poses) -> np.ndarray:
+    def features(self, Z: np.ndarray, st: DesignPoses) -> np.ndarray:
         """What is compared with the targets, ``(P, N, c)``, from poses ``st``."""
         ev, t = self.ev, self.target
         X = Z[:, :self.nx]
@@ -487,7 +488,7 @@ class Problem:
             out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
         return out
 
-    def violation(self, X: np.ndarray, st: Poses, full: np.ndarray) -> np.ndarray:
+    def violation(self, X: np.ndarray, st: DesignPoses, full: np.ndarray) -> np.ndarray:
         """Sum of the relative constraint violations ``(P,)``; a reference configuration
         within 1e-3 of a singular one always counts."""
         c = self.cons

@@ -28,7 +28,7 @@ from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
 from ..rigid import perp
-from .base import margin_tol
+from .base import length, margin_tol, num
 from .rrr import rrr_branch, rrr_rates, rrr_xy
 from .step import GroupStep, Outcome, dyad_outcome
 
@@ -46,26 +46,26 @@ class ActuatorStep(GroupStep):
     """A triangle with a linear actuator as one side (:class:`~topo.assur.ActuatorLayout`),
     compiled once: the actuator's guide, the branch sign, the third side's length."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         self.known1, self.known2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
         self.A, self.B, self.C = (self.at(j) for j in (lay.outer1, lay.inner, lay.outer2))
         jt = mechanism.joint(lay.slide)
         self.sigma = 1.0 if jt.links[0] == lay.near else -1.0     # near = barrel (guide host)
-        self.u0 = unit(jt.axis)                                  # the guide, in near's frame at the reference
+        self.u0 = self.axis(lay.slide)                           # the guide, in near's frame at the reference
         self.d0 = self.B - self.A
-        self.lc = float(np.hypot(*(self.B - self.C)))
-        self.sign = float(rrr_branch(self.A, self.C, self.B))
+        self.lc = length(self.B - self.C)
+        self.sign = num(rrr_branch(self.A, self.C, self.B, self.strict))
         self.dir2 = unit(self.B - self.C)
         self.kn, self.kf, self.k2 = (mechanism.link_names.index(x) for x in (lay.near, lay.far, lay.link2))
         self.k1, self.k3 = (mechanism.link_names.index(x) for x in (self.known1, self.known2))
 
     def _side(self, X):
         """The actuator side ``d(s)`` in near's reference frame (components) and its length."""
-        s = self.sigma * X[:, self.layout.driver]
-        dx = self.d0[0] + s * self.u0[0]
-        dy = self.d0[1] + s * self.u0[1]
+        s = self.sigma * X[..., self.layout.driver]
+        dx = self.d0[..., 0] + s * self.u0[..., 0]
+        dy = self.d0[..., 1] + s * self.u0[..., 1]
         return dx, dy, np.sqrt(dx * dx + dy * dy)
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
@@ -75,7 +75,7 @@ class ActuatorStep(GroupStep):
         cx, cy = G.point_xy(self.k3, self.C)
         bx, by, ok, det, _ = rrr_xy(ax, ay, cx, cy, L, lc, self.sign * factor)
         why, pr = {}, None
-        if probe or not ok.all():
+        if probe or (G.reasons and not ok.all()):
             pr = self._probe(G, (ax, ay), (cx, cy), (bx, by), L, ok, why, probe)
         # the actuator's halves turn by the rotation taking d(s) to B − A (|d| = |B − A| = L)
         rx, ry = bx - ax, by - ay
@@ -87,7 +87,7 @@ class ActuatorStep(GroupStep):
         G.place_dir_xy(self.k2, cx, cy, self.C, bx - cx, by - cy, self.dir2)
         G.keep_point(self.kf, self.B, bx, by)
         G.keep_point(self.k2, self.B, bx, by)
-        return dyad_outcome(ok, why, det, L * lc, False, pr, probe)
+        return dyad_outcome(ok, why, det, L * lc, False, pr, probe, G.reasons)
 
     def _probe(self, G, a, c, b, L, ok, why: dict, probe: bool):
         """Reasons of the failed positions (into ``why``) and, when asked, the Probe: the

@@ -21,7 +21,7 @@ import numpy as np
 from multiloop.topo.errors import SingularityError, explain
 
 __all__ = ["SINGULAR_RTOL", "REACH_RTOL", "xy", "stack", "cramer", "is_singular",
-           "sign_of", "quiet"]
+           "sign_of", "quiet", "num", "pair", "length", "dot"]
 
 #: ``|det| <= SINGULAR_RTOL · |c1| |c2|`` marks a singular system.  For a dyad
 #: near a turning point the relative det behaves like sqrt(2δ) (δ the relative
@@ -77,8 +77,9 @@ def is_singular(det, c1x, c1y, c2x, c2y):
     return ~(np.abs(det) > SINGULAR_RTOL * scale)
 
 
-def sign_of(value, scale, what):
-    """``±1`` array of ``sign(value)``; raise if ``|value| <= SINGULAR_RTOL·scale``.
+def sign_of(value, scale, what, strict: bool = True):
+    """``±1`` array of ``sign(value)``; raise if ``|value| <= SINGULAR_RTOL·scale``, or
+    with ``strict=False`` (designs in a batch) give NaN there: that design fails.
 
     Raises
     ------
@@ -87,12 +88,36 @@ def sign_of(value, scale, what):
     """
     value = np.asarray(value, dtype=float)
     bad = ~(np.abs(value) > SINGULAR_RTOL * np.asarray(scale, dtype=float))
+    if not strict:
+        return np.where(bad, np.nan, np.where(value > 0, 1.0, -1.0))
     if np.any(bad):
         raise SingularityError(explain(
             what, expected="a reference configuration off the branch boundary",
             got=f"a singular reference at {int(np.count_nonzero(bad))} position(s)",
             hint="move the reference so that the group's links are not collinear"))
     return np.where(value > 0, 1.0, -1.0)
+
+
+def num(a):
+    """A step's number: a Python float for one design, the array ``(D, 1)`` for designs."""
+    return float(a) if np.ndim(a) == 0 else a
+
+
+def pair(v):
+    """A 2-vector's components: two floats ``(2,)``, or two arrays ``(D, 1)`` from
+    ``(D, 1, 2)``."""
+    return tuple(v.tolist()) if np.ndim(v) == 1 else (v[..., 0], v[..., 1])
+
+
+def length(v):
+    """|v| of 2-vectors ``(..., 2)``: a float for one vector."""
+    return num(np.hypot(v[..., 0], v[..., 1]))
+
+
+def dot(a, b):
+    """a·b of 2-vectors ``(..., 2)`` (written out: the same rounding for one design and a
+    batch): a float for one pair."""
+    return num(a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1])
 
 
 def square_curvature(rel, vrel, arel):

@@ -253,8 +253,10 @@ class Class4Step(GroupStep):
     """A class IV order-2 group of a plan, tracked in the mode of the reference
     (:func:`class4_track`); rates from the group's Jacobian."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    batched = False          # solved design by design (kin.design falls back)
+
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
         self.O = np.array([at(lay.outer1), at(lay.outer2)])

@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..continuation import Probe
-from ..poses import unit
 from ..rigid import perp
 from .step import GroupStep, Outcome
 
@@ -35,8 +34,8 @@ def is_closed_form(group) -> bool:
 class DriverStepSolver(GroupStep):
     """A one-link driver step (see :func:`is_closed_form`), compiled once."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         cons = self.group.constraints
         self.link = lk = mechanism.link_names[st.unknown[0]]
         d = self.drive = next(c for c in cons if c.kind.startswith("drive"))
@@ -45,21 +44,20 @@ class DriverStepSolver(GroupStep):
         if d.kind == "drive_R":
             p = next(c for c in cons if c.kind == "R")
             self.host = p.a if p.b == lk else p.b      # the known link carrying the pin
-            self.r = np.asarray(mechanism.joint(p.joint).at, float)
+            self.r = self.at(p.joint)
             self.u = None
         else:
-            jt = mechanism.joint(d.joint)
-            self.r, self.u = np.asarray(jt.at, float), unit(jt.axis)
+            self.r, self.u = self.at(d.joint), self.axis(d.joint)
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
-        x = X[:, self.drive.driver]
+        x = X[..., self.drive.driver]
         if self.u is None:
             ko = G.idx[self.other]
             th = (x if self.sign > 0 else -x) if ko == G.frame_k else G.th[ko] + self.sign * x
             G.place_k(G.idx[self.link], *G.point_xy(G.idx[self.host], self.r), self.r, np.cos(th), np.sin(th), th)
         else:          # the unknown slider sits at +s on the known guide (or the guide at −s)
             k = G.idx[self.other]
-            P = G.point(self.other, self.r) + (self.sign * x)[:, None] * G.direction(self.other, self.u)
+            P = G.point(self.other, self.r) + (self.sign * x)[..., None] * G.direction(self.other, self.u)
             G.place_cs(self.link, P, self.r, G.c[k], G.s[k], G.th[k])
         ok = np.isfinite(G.theta(self.link))
         return Outcome(ok, {}, Probe(ok) if probe else None)

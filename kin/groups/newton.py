@@ -400,6 +400,8 @@ class NewtonStep(GroupStep):
     """Any step solved by Newton with continuation (:func:`track`) from the reference
     configuration; rates from the group's Jacobian."""
 
+    batched = False          # solved design by design (kin.design falls back)
+
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         st = self.st
         u = list(st.unknown)

@@ -21,8 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import cramer, is_singular, stack, xy, quiet
-from ..poses import known_on, normal, unit
+from .base import cramer, dot, is_singular, stack, xy, quiet
+from ..poses import known_on, normal
 from .step import GroupStep, Outcome, dyad_outcome
 
 __all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates", "PRPStep"]
@@ -147,15 +147,15 @@ class PRPStep(GroupStep):
     """A PRP dyad of a plan: two sliders pinned together at B, each on the guide of a
     known link; compiled once."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
         self.B, self.P1, self.P2 = at(lay.inner), at(lay.outer1), at(lay.outer2)
         self.k1, self.k2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
-        self.u1, self.u2 = unit(mechanism.joint(lay.outer1).axis), unit(mechanism.joint(lay.outer2).axis)
-        self.h1 = float(normal(self.u1) @ (self.B - self.P1))
-        self.h2 = float(normal(self.u2) @ (self.B - self.P2))
+        self.u1, self.u2 = self.axis(lay.outer1), self.axis(lay.outer2)
+        self.h1 = dot(normal(self.u1), self.B - self.P1)
+        self.h2 = dot(normal(self.u2), self.B - self.P2)
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay = self.layout
@@ -163,7 +163,7 @@ class PRPStep(GroupStep):
                          G.point(self.k2, self.P2), G.direction(self.k2, self.u2), self.h2)
         G.place_like(lay.link1, r.B, self.B, self.k1)
         G.place_like(lay.link2, r.B, self.B, self.k2)
-        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

@@ -21,8 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import cramer, is_singular, stack, xy, quiet
-from ..poses import angle_of, known_on, normal, unit
+from .base import cramer, dot, is_singular, num, stack, xy, quiet
+from ..poses import angle_of, known_on, normal
 from .step import GroupStep, Outcome, dyad_outcome
 
 __all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates", "RPPStep"]
@@ -153,15 +153,15 @@ class RPPStep(GroupStep):
     """An RPP dyad of a plan: link1 pinned at outer1 and sliding in the block link2,
     which slides on the guide of the known link at outer2; compiled once."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         self.A, self.Q = (self.at(j) for j in (lay.outer1, lay.outer2))
         self.k1, self.kq = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
-        self.u = unit(mechanism.joint(lay.outer2).axis)
-        w = unit(mechanism.joint(lay.inner).axis)
-        self.alpha = float(angle_of(w) - angle_of(self.u))
-        self.h = float(normal(w) @ (self.A - self.Q))
+        self.u = self.axis(lay.outer2)
+        w = self.axis(lay.inner)
+        self.alpha = num(angle_of(w) - angle_of(self.u))
+        self.h = dot(normal(w), self.A - self.Q)
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay = self.layout
@@ -169,7 +169,7 @@ class RPPStep(GroupStep):
         r = rpp_position(A, G.point(self.kq, self.Q), G.direction(self.kq, self.u), self.alpha, self.h)
         G.place_like(lay.link2, r.Q, self.Q, self.kq)
         G.place_like(lay.link1, A, self.A, self.kq)
-        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

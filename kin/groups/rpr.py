@@ -22,9 +22,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, dot, is_singular, num, sign_of, stack, xy,
+                   quiet)
 from ..continuation import Probe
-from ..poses import known_on, normal, unit
+from ..poses import known_on, normal
 from ..result import Status
 from .step import GroupStep, Outcome, dyad_outcome
 
@@ -91,7 +92,7 @@ def rpr_position(A, C, h=0.0, sign=1.0) -> RPRPosition:
     return RPRPosition(stack(ux, uy), s, ok, s)
 
 
-def rpr_branch(A, C, u):
+def rpr_branch(A, C, u, strict=True):
     """Assembly sign ``sign((A-C)·u)`` of an RPR dyad in a reference configuration.
 
     Raises
@@ -103,7 +104,7 @@ def rpr_branch(A, C, u):
     cx, cy = xy(C)
     ux, uy = xy(u)
     v = (ax - cx) * ux + (ay - cy) * uy
-    return sign_of(v, np.hypot(ax - cx, ay - cy), "RPR dyad reference")
+    return sign_of(v, np.hypot(ax - cx, ay - cy), "RPR dyad reference", strict)
 
 
 @quiet
@@ -153,17 +154,17 @@ class RPRStep(GroupStep):
     """An RPR dyad of a plan: the guide (the P joint's first link) pivoted at X, the
     block at Y; compiled once."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         self.guide = mechanism.joint(lay.inner).links[0]
         self.gx, self.bx = (lay.outer1, lay.outer2) if self.guide == lay.link1 else (lay.outer2, lay.outer1)
         self.block = lay.link2 if self.guide == lay.link1 else lay.link1
         self.X, self.Y = (self.at(j) for j in (self.gx, self.bx))
         self.kx, self.ky = known_on(self.group, self.gx), known_on(self.group, self.bx)
-        self.u = unit(mechanism.joint(lay.inner).axis)
-        self.h = float(normal(self.u) @ (self.Y - self.X))
-        self.sign = float(rpr_branch(self.Y, self.X, self.u))
+        self.u = self.axis(lay.inner)
+        self.h = dot(normal(self.u), self.Y - self.X)
+        self.sign = num(rpr_branch(self.Y, self.X, self.u, self.strict))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         Xp, Yp = G.point(self.kx, self.X), G.point(self.ky, self.Y)
@@ -176,7 +177,7 @@ class RPRStep(GroupStep):
             d = np.hypot(rel[:, 0], rel[:, 1])
             pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1), margin=d * d - self.h ** 2,
                        lip=rel[:, None], tol=margin_tol(Xp, Yp, abs(self.h), squared=True), lip_scale=d)
-        if not ok.all():
+        if G.reasons and not ok.all():
             dist = np.hypot(*(Yp - Xp).T)
             for n in np.flatnonzero(~ok):
                 if np.isfinite(dist[n]):
@@ -184,7 +185,7 @@ class RPRStep(GroupStep):
                                    f"offset {abs(self.h):.6g} (out of reach)")
         G.place_dir(self.guide, Xp, self.X, u, self.u)
         G.place_like(self.block, Yp, self.Y, self.guide)
-        return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe)
+        return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe, G.reasons)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (margin ``|XY|² − h²``)."""

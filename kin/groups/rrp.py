@@ -23,9 +23,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import margin_tol, REACH_RTOL, cramer, dot, is_singular, length, num, sign_of, stack, xy, quiet
 from ..continuation import Probe
-from ..poses import known_on, normal, unit
+from ..poses import known_on, normal
 from ..result import Status
 from .step import GroupStep, Outcome, dyad_outcome
 
@@ -103,7 +103,7 @@ def rrp_position(A, P, u, l2, h=0.0, sign=1.0) -> RRPPosition:
     return RRPPosition(stack(bx, by), s, ok, x2)
 
 
-def rrp_branch(A, B, u):
+def rrp_branch(A, B, u, strict=True):
     """Assembly sign ``sign((B-A)·u)`` of an RRP dyad in a reference configuration.
 
     Raises
@@ -115,7 +115,7 @@ def rrp_branch(A, B, u):
     bx, by = xy(B)
     ux, uy = xy(u)
     v = (bx - ax) * ux + (by - ay) * uy
-    return sign_of(v, np.hypot(bx - ax, by - ay), "RRP dyad reference")
+    return sign_of(v, np.hypot(bx - ax, by - ay), "RRP dyad reference", strict)
 
 
 @quiet
@@ -178,16 +178,16 @@ class RRPStep(GroupStep):
     """An RRP dyad of a plan (link1 pinned at outer1 and at the slider's pin, the slider
     link2 on the guide of the known link at outer2): compiled once."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
         self.A, self.B, self.P = at(lay.outer1), at(lay.inner), at(lay.outer2)
         self.known1, self.kp = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
-        self.u = unit(mechanism.joint(lay.outer2).axis)
-        self.h = float(normal(self.u) @ (self.B - self.P))
-        self.la = float(np.hypot(*(self.B - self.A)))
-        self.sign = float(rrp_branch(self.A, self.B, self.u))
+        self.u = self.axis(lay.outer2)
+        self.h = dot(normal(self.u), self.B - self.P)
+        self.la = length(self.B - self.A)
+        self.sign = num(rrp_branch(self.A, self.B, self.u, self.strict))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay = self.layout
@@ -203,7 +203,7 @@ class RRPStep(GroupStep):
             margin = self.la - np.abs(loc[:, 1] - self.h)
             pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1), margin=margin, lip=loc[:, None],
                        tol=margin_tol(A, P, self.la + abs(self.h)))
-        if not ok.all():
+        if G.reasons and not ok.all():
             dist = np.abs(np.sum((A - P) * normal(u), axis=-1) - self.h)
             for n in np.flatnonzero(~ok):
                 if np.isfinite(dist[n]):
@@ -211,7 +211,7 @@ class RRPStep(GroupStep):
                                    f"{lay.inner}, longer than {lay.link1} ({self.la:.6g}) (out of reach)")
         G.place_dir(lay.link1, A, self.A, B - A, self.B - self.A)
         G.place_like(lay.link2, B, self.B, self.kp)
-        return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe)
+        return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe, G.reasons)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R``: the margin is ``l − |y − h|`` with

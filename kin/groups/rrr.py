@@ -25,9 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from multiloop.topo.constraints import link_origins
-
-from .base import square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, sign_of, stack, xy, quiet
+from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, length, num, pair, sign_of,
+                   stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
@@ -101,7 +100,7 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
 
     ``exact`` is True when no position was clamped to the tangent, so that
     ``|B - A| = l2`` and ``|B - C| = l3`` hold to rounding (a caller may then divide
-    by the lengths instead of normalising).  ``det = cross(B-C, B-A)`` is ``-k d²``
+    by the lengths instead of normalising); else the mask of the unclamped positions.  ``det = cross(B-C, B-A)`` is ``-k d²``
     (with ``B - A = t d + k perp(d)``, ``B - C = (t-1) d + k perp(d)``); a NaN pin or
     ``A = C`` gives ``ok = False``.
     """
@@ -115,7 +114,8 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
         t = 0.5 + (0.5 * (l2s - np.square(l3))) * inv
         q = r - t * t
         ok = q >= -REACH_RTOL * r            # False where q is NaN (A = C, NaN pins)
-        exact = not (q < 0.0).any()
+        exact = ~(q < 0.0)
+        exact = True if exact.all() else exact
         k = np.sqrt(np.maximum(q, 0.0)) * sign
         if not ok.all():
             k = np.where(ok, k, np.nan)
@@ -124,7 +124,7 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
     return bx, by, ok, -(k * d2), exact
 
 
-def rrr_branch(A, C, B):
+def rrr_branch(A, C, B, strict=True):
     """Assembly sign of an RRR dyad in a (reference) configuration.
 
     Returns ``sign(cross(C-A, B-A))`` as ±1 (float array of the batch shape).
@@ -139,7 +139,7 @@ def rrr_branch(A, C, B):
     bx, by = xy(B)
     v = (cx - ax) * (by - ay) - (cy - ay) * (bx - ax)
     scale = np.hypot(cx - ax, cy - ay) * np.hypot(bx - ax, by - ay)
-    return sign_of(v, scale, "RRR dyad reference")
+    return sign_of(v, scale, "RRR dyad reference", strict)
 
 
 @quiet
@@ -193,23 +193,36 @@ def rrr_rates(A, C, B, vA, vC, aA=None, aC=None) -> RRRRates:
     return RRRRates(w2, w3, vB, e2, e3, aB, det, sing)
 
 
+def _rotation(dx, dy, rot, d_ref, exact):
+    """(c, s) of the rotation taking the reference direction to ``(dx, dy)``: by the
+    compiled ``rot`` (direction / length) where ``exact``, else normalised, position by
+    position (as :meth:`~kin.poses.Poses.place_rot` and ``place_dir_xy``)."""
+    cr, sr = rot
+    inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+    ux, uy = pair(unit(d_ref))
+    nx, ny = dx * inv, dy * inv
+    return (np.where(exact, dx * cr + dy * sr, nx * ux + ny * uy),
+            np.where(exact, dy * cr - dx * sr, ny * ux - nx * uy))
+
+
 class RRRStep(GroupStep):
     """An RRR dyad of a plan: lengths, branch sign and reference directions compiled
     once; positions by :func:`rrr_position`, rates by :func:`rrr_rates`."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         self.known1, self.known2 = known_on(self.group, lay.outer1), known_on(self.group, lay.outer2)
         self.A, self.B, self.C = (self.at(j) for j in (lay.outer1, lay.inner, lay.outer2))
-        self.la, self.lc = float(np.hypot(*(self.B - self.A))), float(np.hypot(*(self.B - self.C)))
-        self.sign = float(rrr_branch(self.A, self.C, self.B))
+        self.la, self.lc = length(self.B - self.A), length(self.B - self.C)
+        self.sign = num(rrr_branch(self.A, self.C, self.B, self.strict))
         self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
-        self.rot1, self.rot2 = tuple((self.dir1 / self.la).tolist()), tuple((self.dir2 / self.lc).tolist())
+        self.rot1 = pair(self.dir1 / np.asarray(self.la)[..., None])
+        self.rot2 = pair(self.dir2 / np.asarray(self.lc)[..., None])
         self.k1, self.k2, self.l1, self.l2 = (mechanism.link_names.index(x) for x in
                                               (self.known1, self.known2, lay.link1, lay.link2))
-        org = link_origins(mechanism)        # a link whose reference point is B is placed from B
-        self.from_B1, self.from_B2 = (bool(np.all(org[x] == self.B)) for x in (lay.link1, lay.link2))
+        # a link whose reference point is B is placed from B
+        self.from_B1, self.from_B2 = (bool(np.all(self.geo.origin(x) == self.B)) for x in (lay.link1, lay.link2))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay, la, lc = self.layout, self.la, self.lc
@@ -217,7 +230,7 @@ class RRRStep(GroupStep):
         cx, cy = G.point_xy(self.k2, self.C)
         bx, by, ok, det, exact = rrr_xy(ax, ay, cx, cy, la, lc, self.sign * factor)
         why, pr = {}, None
-        if probe or not ok.all():
+        if probe or (G.reasons and not ok.all()):
             A, C, B = (columns(u, v, G.M) for u, v in ((ax, ay), (cx, cy), (bx, by)))
             AC = C - A
             d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
@@ -228,22 +241,22 @@ class RRRStep(GroupStep):
             margin = np.minimum((la + lc) ** 2 - d2, d2 - (la - lc) ** 2)
             pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=AC[:, None],
                        tol=margin_tol(A, C, la + lc, squared=True), lip_scale=d)
-        for n in np.flatnonzero(~ok):
+        for n in (np.flatnonzero(~ok) if G.reasons else ()):
             if np.isfinite(d[n]):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH,
                                f"no assembly: |{lay.outer1}{lay.outer2}| = {d[n]:.6g} {rel} (out of reach)")
         at1 = (bx, by, self.B) if self.from_B1 else (ax, ay, self.A)
         at2 = (bx, by, self.B) if self.from_B2 else (cx, cy, self.C)
-        if exact:                          # |B - A| = la, |B - C| = lc: no normalising
+        if exact is True:                  # |B - A| = la, |B - C| = lc: no normalising
             G.place_rot(self.l1, *at1, bx - ax, by - ay, *self.rot1)
             G.place_rot(self.l2, *at2, bx - cx, by - cy, *self.rot2)
-        else:
-            G.place_dir_xy(self.l1, *at1, bx - ax, by - ay, self.dir1)
-            G.place_dir_xy(self.l2, *at2, bx - cx, by - cy, self.dir2)
+        else:                              # per position: clamped ones normalised
+            G.place_k(self.l1, *at1, *_rotation(bx - ax, by - ay, self.rot1, self.dir1, exact))
+            G.place_k(self.l2, *at2, *_rotation(bx - cx, by - cy, self.rot2, self.dir2, exact))
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
-        return dyad_outcome(ok, why, det, la * lc, False, pr, probe)
+        return dyad_outcome(ok, why, det, la * lc, False, pr, probe, G.reasons)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (the reach margin of the probe is

@@ -23,6 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..continuation import Probe
+from ..geometry import Geometry
 from ..result import Status
 
 __all__ = ["Outcome", "GroupStep", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES"]
@@ -46,16 +47,27 @@ class Outcome(NamedTuple):
 class GroupStep:
     """Base of the compiled steps, built once per plan from the ``mechanism``, the step's
     :class:`~kin.solve.StepPlan` ``st`` (its Assur step, constraint system and unknown
-    links) and the mechanism's ``size`` (m, for tolerances)."""
+    links) and the mechanism's ``size`` (m, for tolerances); its numbers come from
+    ``geo`` (:class:`~kin.geometry.Geometry`: the mechanism's reference by default, or a
+    batch of designs, when every number is an array over the designs)."""
 
-    def __init__(self, mechanism, st, size: float):
+    #: whether the step solves a batch of designs (:mod:`kin.design`) in one pass
+    batched = True
+
+    def __init__(self, mechanism, st, size: float, geo=None):
         self.mechanism, self.st, self.size = mechanism, st, size
+        self.geo = geo if geo is not None else Geometry(mechanism)
+        self.strict = not self.geo.batch          # a singular reference raises (one design)
         self.group = st.step
         self.label = st.label
 
     def at(self, joint: str) -> np.ndarray:
-        """A joint's reference position."""
-        return np.asarray(self.mechanism.joint(joint).at, float)
+        """A joint's reference position ((2,), or (D, 1, 2) for designs)."""
+        return self.geo.at(joint)
+
+    def axis(self, joint: str) -> np.ndarray:
+        """A P joint's unit guide direction in the reference."""
+        return self.geo.axis(joint)
 
     def positions(self, G, X: np.ndarray, factor: float = 1.0, probe: bool = False) -> Outcome:
         raise NotImplementedError
@@ -64,10 +76,12 @@ class GroupStep:
         raise NotImplementedError
 
 
-def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, probe: bool) -> Outcome:
+def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, probe: bool,
+                 reasons: bool = True) -> Outcome:
     """The common end of a dyad's ``positions``: a generic reason for every failure not
-    explained yet, and singular positions (``|det| <= tol · rdet``) marked and removed."""
-    if not ok.all():
+    explained yet (unless ``reasons`` is False: designs in a batch), and singular
+    positions (``|det| <= tol · rdet``) marked and removed."""
+    if reasons and not ok.all():
         for n in np.flatnonzero(~ok):
             why.setdefault(int(n), (Status.OUT_OF_REACH, "no assembly (out of reach)"))
     tol = PARALLEL_GUIDES if parallel else SINGULAR
@@ -76,6 +90,6 @@ def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, pro
         probe_obj = Probe(ok.copy())
     if not sing.any():
         return Outcome(ok, why, probe_obj)
-    for n in np.flatnonzero(sing):
+    for n in (np.flatnonzero(sing) if reasons else ()):
         why[int(n)] = (Status.SINGULAR, f"singular position (dyad determinant {det[n]:.2e}: links or guides aligned)")
     return Outcome(ok & ~sing, why, probe_obj)

@@ -670,8 +670,10 @@ class TriadStep(GroupStep):
     """A class III triad of a plan, tracked in the mode of the reference
     (:func:`triad_track`); rates from the group's Jacobian."""
 
-    def __init__(self, mechanism, st, size: float):
-        super().__init__(mechanism, st, size)
+    batched = False          # solved design by design (kin.design falls back)
+
+    def __init__(self, mechanism, st, size: float, geo=None):
+        super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
         self.A = np.array([at(o) for o in lay.outers])

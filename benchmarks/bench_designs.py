@@ -1,0 +1,118 @@
+"""Many designs through one solver: coupler curves of D designs × N positions (plain script).
+
+Run:  python benchmarks/bench_designs.py [--quick]
+
+Measured in one run, each the best of a few repeats (CPU, one thread):
+
+* four-bar coupler curves, D = 10⁴ designs × N = 96 positions:
+  ``kin.design.solve_designs(..., outputs=["P"])`` against a bare NumPy closed form of
+  the same curves (crank cos/sin, one RRR, the coupler point; no status, no pose store);
+* Stephenson III (class III triad) curves, D = 10³ × N = 96: the batch against the
+  per-candidate route (each design's steps run alone along the inputs: the triad
+  tracker once per candidate, as synthesis did before the batch existed).
+
+Each line that states a goal is collected by ``multiloop bench --goals``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from multiloop.catalogue.dimensional import design_space  # noqa: E402
+from multiloop.catalogue.named import load_named  # noqa: E402
+from multiloop.kin.design import design_mechanism, solve_designs  # noqa: E402
+from multiloop.kin.design import _one_design  # noqa: E402  (the per-candidate route, for the ratio)
+from multiloop.kin.solve import plan_of  # noqa: E402
+
+
+def _best(f, repeat=3):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = f()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def _population(m, D, rel, seed=0):
+    space = design_space(m, [p.name for p in m.points])
+    size = float(np.ptp(np.array([j.at for j in m.joints]), axis=0).max())
+    X = space.x0 + rel * size * np.random.default_rng(seed).standard_normal((D, space.size))
+    X[0] = space.x0
+    return space.names, X
+
+
+def bare_curves(m, names, X, phi):
+    """The floor: the four-bar's coupler point for every design and input in one NumPy pass
+    (the crank's cos/sin, the RRR closed form, the coupler point), no status or store."""
+    col = {n: i for i, n in enumerate(names)}
+    get = lambda j: (X[:, col[j + ".x"]][:, None], X[:, col[j + ".y"]][:, None])  # noqa: E731
+    (ox, oy), (a0x, a0y), (b0x, b0y), (cx, cy), (px, py) = (get(j) for j in ("O2", "A", "B", "O4", "P"))
+    la2 = (b0x - a0x) ** 2 + (b0y - a0y) ** 2
+    lc2 = (b0x - cx) ** 2 + (b0y - cy) ** 2
+    sign = np.sign((cx - a0x) * (b0y - a0y) - (cy - a0y) * (b0x - a0x))
+    c, s = np.cos(phi), np.sin(phi)
+    rx, ry = a0x - ox, a0y - oy
+    ax, ay = ox + c * rx - s * ry, oy + s * rx + c * ry
+    dx, dy = cx - ax, cy - ay
+    d2 = dx * dx + dy * dy
+    t = 0.5 * (la2 / d2 + 1.0 - lc2 / d2)
+    k = sign * np.sqrt(la2 / d2 - t * t)
+    bx, by = ax + t * dx - k * dy, ay + t * dy + k * dx
+    # the coupler's rotation takes B0 − A0 to B − A (|B − A| = |B0 − A0|)
+    ux, uy = b0x - a0x, b0y - a0y
+    cr, sr = (ux * (bx - ax) + uy * (by - ay)) / la2, (ux * (by - ay) - uy * (bx - ax)) / la2
+    qx, qy = px - a0x, py - a0y
+    return np.stack([ax + cr * qx - sr * qy, ay + sr * qx + cr * qy], axis=-1)
+
+
+def four_bar_goal(D: int, N: int) -> None:
+    m = load_named("four_bar")
+    names, X = _population(m, D, 0.02)
+    phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)
+    plan_of(m)
+    ours, r = _best(lambda: solve_designs(m, names, X, phi, outputs=["P"]).point("P"))
+    floor, P = _best(lambda: bare_curves(m, names, X, phi))
+    both = np.isfinite(r[..., 0]) & np.isfinite(P[..., 0])
+    dev = float(np.max(np.abs(r[both] - P[both])))
+    ratio = ours / floor
+    print(f"four-bar coupler curves, D = {D} x N = {N}: batch {ours * 1e3:.1f} ms "
+          f"({ours / (D * N) * 1e9:.0f} ns per design-position), bare NumPy closed form {floor * 1e3:.1f} ms, "
+          f"largest difference {dev:.1e} m; goal ratio <= 1.5: {ratio:.2f} -> {'MET' if ratio <= 1.5 else 'NOT MET'}")
+
+
+def triad_goal(D: int, N: int) -> None:
+    m = load_named("stephenson_3_triad")
+    names, X = _population(m, D, 0.003)
+    phi = np.linspace(0.0, np.radians(60.0), N)
+    sp = plan_of(m)
+    ours, r = _best(lambda: solve_designs(m, names, X, phi, outputs=["P"]))
+    geo = r.geometry
+    designs = [design_mechanism(geo, d) for d in range(D)]
+    steps = list(range(len(sp.steps)))
+    per, _ = _best(lambda: [_one_design(sp, md, steps, phi[:, None]) for md in designs], repeat=1)
+    per_dp = ours / (D * N) * 1e6
+    ratio = per / ours
+    met = ratio >= 20 and per_dp <= 1.0
+    print(f"Stephenson III (triad) curves, D = {D} x N = {N}: batch {ours * 1e3:.1f} ms ({per_dp:.2f} us per "
+          f"design-position), per-candidate route {per * 1e3:.0f} ms; goal >= 20x faster and <= 1 us: "
+          f"{ratio:.1f}x, {per_dp:.2f} us -> {'MET' if met else 'NOT MET'}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer designs")
+    a = ap.parse_args(argv)
+    print(f"numpy {np.__version__}")
+    four_bar_goal(1000 if a.quick else 10_000, 96)
+    triad_goal(100 if a.quick else 1000, 96)
+
+
+if __name__ == "__main__":
+    main()

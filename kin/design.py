@@ -1,0 +1,260 @@
+"""Many designs of one mechanism solved in one pass over its compiled plan.
+
+The plan's topology is compiled once (:func:`kin.solve.plan_of`); :func:`solve_designs`
+binds its steps to a design matrix ``(D, p)`` (:class:`~kin.geometry.Geometry`, columns
+named by :func:`~kin.geometry.design_names`) and runs each step once for every design and
+input: the dyads' closed forms (Vasechkin et al. 2017, eqs. 1-18) broadcast the designs'
+numbers ``(D, 1)`` over the inputs, and the triad and class IV steps compute every
+assembly mode of every design at every input with one polynomial kernel and follow the
+reference's mode along the inputs (:func:`kin.groups.triad.follow_modes_batch`).  A step
+with no batched form (Newton's) makes the plan fall back to :func:`kin.solve.solve` per
+design.
+
+Semantics: every design is solved at the given inputs, in order, on the assembly branch
+of its own reference configuration (the branch sign of each dyad, the mode of each
+triad); a design whose reference sits on a branch boundary fails (NaN).  There is no
+lead-in and no change of branch at a crossing: the inputs should start at the reference
+(input 0) and be dense enough to follow a triad's mode, as a synthesis grid is.  A dyad
+mechanism gives the same bits as :func:`kin.solve.solve` of each design alone.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical
+   model of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2)
+   (2017) 73-79. doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from multiloop.topo.errors import InputError, LinkageError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .geometry import Geometry, design_names
+from .poses import Poses
+from .solve import SolvePlan, needed_steps, plan_of, solve
+
+__all__ = ["DesignPoses", "solve_designs", "design_names", "design_mechanism", "branch_signs",
+           "unbatched_steps"]
+
+
+@dataclass(frozen=True, eq=False)
+class _BoundPlan:
+    """What the pose store reads from a plan, for a batch of designs."""
+
+    mechanism: Mechanism
+    origins: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class DesignPoses:
+    """Link poses of D designs at N inputs.
+
+    ``ok`` ``(D, N)``: every asked-for step assembled; ``th`` ``(n_links, D, N)`` the links'
+    rotations from the reference; :meth:`point` and :meth:`world` give material points.
+    """
+
+    plan: SolvePlan
+    geometry: Geometry
+    store: Poses
+    ok: np.ndarray
+
+    @property
+    def th(self) -> np.ndarray:
+        return self.store.T[:, 2]
+
+    def _translation(self, i: int) -> np.ndarray:
+        """``t`` of the map ``world = R(θ) r + t`` of every link (rows x or y)."""
+        T = self.store.T
+        o = np.stack([self.geometry.origin(x)[..., 0, :] for x in self.plan.mechanism.link_names])  # (nl, D, 2)
+        c, s = np.cos(T[:, 2]), np.sin(T[:, 2])
+        ox, oy = o[..., 0:1], o[..., 1:2]
+        return T[:, i] - ((c * ox - s * oy) if i == 0 else (s * ox + c * oy))
+
+    @property
+    def tx(self) -> np.ndarray:
+        return self._translation(0)
+
+    @property
+    def ty(self) -> np.ndarray:
+        return self._translation(1)
+
+    def world(self, k: int, r) -> np.ndarray:
+        """Link k's material point at reference position ``r`` ``(D, 2)`` (or ``(2,)``):
+        ``(D, N, 2)``, carried as :func:`kin.solve.solve` carries joints."""
+        G = self.store
+        r = np.broadcast_to(np.asarray(r, float), (G.shape[0], 2))[:, None, :]
+        x, y = G.point_xy(k, r)
+        out = np.empty((*G.shape, 2))
+        out[..., 0], out[..., 1] = x, y
+        return out
+
+    def point(self, name: str) -> np.ndarray:
+        """Joint or tracer point ``name`` ``(D, N, 2)``, on the link that carries it in
+        :func:`kin.solve.solve`."""
+        m, sp = self.plan.mechanism, self.plan
+        names = [p.name for p in m.points]
+        k = sp.point_host[names.index(name)] if name in names else sp.joint_host[m.joint_names.index(name)]
+        return self.world(k, self.geometry.at(name)[:, 0])
+
+
+def design_mechanism(geometry: Geometry, d: int) -> Mechanism:
+    """Design ``d`` of a batch as a mechanism (names, topology and drivers kept)."""
+    m = geometry.mechanism
+    joints = []
+    for j in m.joints:
+        at = tuple(float(v) for v in geometry.at(j.name)[d, 0])
+        if j.kind is JointKind.P:
+            a = tuple(float(v) for v in _raw_axis(geometry, j.name, d))
+            joints.append(replace(j, at=at, axis=a))
+        else:
+            joints.append(replace(j, at=at))
+    pts = [replace(p, at=tuple(float(v) for v in geometry.at(p.name)[d, 0])) for p in m.points]
+    return replace(m, joints=tuple(joints), points=tuple(pts))
+
+
+def _raw_axis(geometry: Geometry, joint: str, d: int):
+    """A P joint's axis as written to a file: (cos, sin) of its design angle, or the
+    mechanism's own."""
+    col = geometry.cols.get(f"{joint}.angle")
+    if col is None:
+        return geometry.mechanism.joint(joint).axis
+    a = geometry.X[d, col]
+    return np.cos(a), np.sin(a)
+
+
+def _as_design_inputs(m: Mechanism, inputs, D: int) -> np.ndarray:
+    """Inputs ``(N,)``/``(N, nd)`` shared by the designs, or ``(D, N)``/``(D, N, nd)``
+    per design, as an array ending in the driver axis."""
+    x = np.asarray(inputs, float)
+    nd = len(m.drivers)
+    if nd == 1 and (x.ndim == 1 or (x.ndim == 2 and x.shape[0] == D and x.shape[1] != 1)):
+        x = x[..., None]
+    ok = x.ndim in (2, 3) and x.shape[-1] == nd and (x.ndim == 2 or x.shape[0] == D)
+    if not ok or not np.all(np.isfinite(x)):
+        raise InputError(explain("inputs", expected=f"finite values of shape (N,{' ' + str(nd) if nd > 1 else ''}) "
+                                 f"or (D, N{', ' + str(nd) if nd > 1 else ''}) with D = {D}",
+                                 got=f"shape {np.shape(inputs)}" if not ok else "NaN or infinity"))
+    return x
+
+
+def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None, plan=None,
+                  deadline: float | None = None) -> DesignPoses:
+    """Solve D designs of ``mechanism`` at N inputs in one pass over its plan.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The topology, drivers and decomposition (and the values the designs do not name).
+    names : sequence of str
+        Columns of ``designs`` (:func:`design_names`).
+    designs : ndarray, shape (D, p)
+    inputs : ndarray, shape (N,) or (N, n_drivers), or (D, N[, n_drivers]) per design
+        Driver values from each design's reference (rad for R, m for P drivers).
+    outputs : sequence of str, optional
+        Joints, tracer points or links wanted: only the steps they need are solved (the
+        other links stay NaN).  Default: every step.
+    plan : SolvePlan, optional
+        The compiled plan of ``mechanism`` (default: the cached one).
+    deadline : float, optional
+        A ``time.perf_counter()`` value: past it the design-by-design fallback leaves
+        the remaining designs unsolved (failed), so that a population cannot overrun a
+        time budget.
+
+    Returns
+    -------
+    DesignPoses
+    """
+    sp = plan_of(mechanism, plan)
+    geo = Geometry(mechanism, tuple(names), designs)
+    X = _as_design_inputs(mechanism, inputs, geo.D)
+    shape = (geo.D, X.shape[-2])
+    steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
+    bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
+    if any(b is None for b in bound):
+        return _per_design(sp, geo, X, shape, outputs, deadline)
+    bp = _BoundPlan(mechanism, sp.origins, {"origins_xy": geo.origins_xy()})
+    G = Poses(bp, shape)
+    for k, step in zip(steps, bound):
+        okk = step.positions(G, X).ok
+        G.invalidate(sp.steps[k].unknown, ~okk)
+    G.unset_to_nan()
+    ok = G.finite([i for k in steps for i in sp.steps[k].unknown])
+    return DesignPoses(sp, geo, G, ok)
+
+
+def _bind(st, mechanism, size, geo):
+    """Plan step ``st`` compiled for the designs of ``geo``, or None (no batched form)."""
+    closed = st.closed
+    if closed is None or not type(closed).batched:
+        return None
+    return type(closed)(mechanism, st, size, geo)
+
+
+def unbatched_steps(mechanism: Mechanism, plan=None) -> list[str]:
+    """Labels of the plan's steps with no batched form (their plan is solved design by
+    design): Newton's groups, a triad or class IV group."""
+    sp = plan_of(mechanism, plan)
+    return [st.label for st in sp.steps if st.closed is None or not type(st.closed).batched]
+
+
+def branch_signs(mechanism: Mechanism, names, designs, plan=None) -> np.ndarray:
+    """The assembly sign ``(D, n)`` (±1, NaN on a branch boundary) of every dyad step with
+    one (RRR, RRP, RPR, actuated), in plan order, that :func:`solve_designs` gives each
+    design: read from its reference configuration by the step itself."""
+    sp = plan_of(mechanism, plan)
+    geo = Geometry(mechanism, tuple(names), designs)
+    cols = []
+    for st in sp.steps:
+        step = _bind(st, mechanism, sp.size, geo)
+        if step is not None and hasattr(step, "sign") and st.solver == "dyad":
+            cols.append(np.broadcast_to(step.sign, (geo.D, 1)))
+    return np.concatenate(cols, axis=1) if cols else np.ones((geo.D, 0))
+
+
+def _one_design(sp: SolvePlan, md: Mechanism, steps, X) -> np.ndarray:
+    """Poses ``(n_links, 3, N)`` of one design ``md`` by the plan's closed-form steps."""
+    geo = Geometry(md)
+    origins = np.stack([geo.origin(x) for x in md.link_names])
+    G = Poses(_BoundPlan(md, origins), X.shape[0])
+    for k in steps:
+        st = sp.steps[k]
+        okk = type(st.closed)(md, st, sp.size, geo).positions(G, X).ok
+        G.invalidate(st.unknown, ~okk)
+    G.unset_to_nan()
+    return G.T
+
+
+def _per_design(sp: SolvePlan, geo: Geometry, X, shape, outputs, deadline) -> DesignPoses:
+    """The fallback for plans with a step that has no batched form: each design alone
+    (no design after ``deadline``)."""
+    m = sp.mechanism
+    bp = _BoundPlan(m, sp.origins, {"origins_xy": geo.origins_xy()})
+    G = Poses(bp, shape)
+    T = np.full(G.T.shape, np.nan)
+    steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
+    closed = all(sp.steps[k].closed is not None for k in steps)
+    for d in range(shape[0]):
+        if deadline is not None and time.perf_counter() > deadline:
+            break
+        Xd = X if X.ndim == 2 else X[d]
+        try:
+            md = design_mechanism(geo, d)
+            if closed:                 # the closed-form steps along the inputs, as in the batch
+                T[:, :, d] = _one_design(sp, md, steps, Xd)
+                continue
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                st = solve(md, Xd, only=outputs)
+        except LinkageError:
+            continue
+        good = np.asarray(st.status == "ok")
+        T[:, :, d] = np.where(good, np.moveaxis(st.poses, 0, -1), np.nan)
+    G.from_T(T)
+    return DesignPoses(sp, geo, G, np.all(np.isfinite(T[:, 2]), axis=0))
+

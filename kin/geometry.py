@@ -1,0 +1,111 @@
+"""The reference dimensions that the compiled steps of a plan are built from.
+
+A plan's topology (its Assur steps and constraint systems) is compiled once; the
+numbers of each step — pin positions, guide directions, lengths, branch signs — are
+read from a :class:`Geometry`: the mechanism's own reference configuration, or a batch
+of D designs of the same topology given as a design matrix ``(D, p)`` whose columns are
+named by :func:`design_names`.  A single design gives ``(2,)`` points (Python-float
+fast paths); a batch gives ``(D, 1, 2)`` points and ``(D, 1)`` numbers that broadcast
+over the inputs, so that every kernel runs once for all designs and positions.  The
+same code computes a step's numbers in both cases, so a design solves to the same bits
+alone and in a batch.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from multiloop.topo.errors import InputError, explain
+from multiloop.topo.model import JointKind, Mechanism
+
+from .poses import unit
+
+__all__ = ["Geometry", "design_names"]
+
+
+def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
+    """The design variables of ``m``: ``"J.x"``, ``"J.y"`` of every R joint (frame pivots
+    included), ``"J.angle"`` (rad) of every P joint's guide, and ``"T.x"``, ``"T.y"`` of
+    the tracer points named in ``points``.  A P joint's point is not a variable: the
+    slider's track runs through the slider's own joints parallel to the guide, so moving
+    the joint's reference point along the guide's normal changes no motion."""
+    names = []
+    for j in m.joints:
+        names += [f"{j.name}.angle"] if j.kind is JointKind.P else [f"{j.name}.x", f"{j.name}.y"]
+    chosen = set(points)
+    for p in m.points:
+        if p.name in chosen:
+            names += [f"{p.name}.x", f"{p.name}.y"]
+    return tuple(names)
+
+
+class Geometry:
+    """Reference points, guide directions and link origins of one design or of D designs.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        The topology, and the values of whatever the design matrix does not name.
+    names : sequence of str, optional
+        Column names of ``designs`` (see :func:`design_names`).
+    designs : ndarray, shape (D, p), optional
+        The design matrix; without it the geometry is the mechanism's own.
+    """
+
+    def __init__(self, mechanism: Mechanism, names=None, designs=None):
+        self.mechanism = mechanism
+        self.batch = designs is not None
+        self._pts = {p.name: p for p in mechanism.points}
+        self._cache: dict = {}
+        if self.batch:
+            X = np.asarray(designs, float)
+            if X.ndim != 2 or X.shape[1] != len(names):
+                raise InputError(explain("designs", expected=f"shape (D, {len(names)}) for the variables "
+                                         + ", ".join(names), got=f"shape {X.shape}"))
+            self.X, self.D = X, X.shape[0]
+            self.cols = {n: i for i, n in enumerate(names)}
+
+    def _fixed(self, name: str):
+        if name in self._pts:
+            return self._pts[name].at
+        return self.mechanism.joint(name).at
+
+    def at(self, name: str) -> np.ndarray:
+        """Reference position of joint or tracer point ``name``: ``(2,)`` or ``(D, 1, 2)``."""
+        hit = self._cache.get(("at", name))
+        if hit is None:
+            if not self.batch:
+                hit = np.asarray(self._fixed(name), float)
+            elif f"{name}.x" in self.cols:
+                hit = self.X[:, [self.cols[f"{name}.x"], self.cols[f"{name}.y"]]][:, None, :]
+            else:
+                hit = np.broadcast_to(np.asarray(self._fixed(name), float), (self.D, 1, 2))
+            self._cache["at", name] = hit
+        return hit
+
+    def axis(self, joint: str) -> np.ndarray:
+        """Unit guide direction of P joint ``joint`` in the reference: ``(2,)`` or ``(D, 1, 2)``."""
+        hit = self._cache.get(("axis", joint))
+        if hit is None:
+            if self.batch and f"{joint}.angle" in self.cols:
+                a = self.X[:, self.cols[f"{joint}.angle"]]
+                hit = unit(np.stack([np.cos(a), np.sin(a)], axis=-1))[:, None, :]
+            else:
+                hit = unit(self.mechanism.joint(joint).axis)
+                if self.batch:
+                    hit = np.broadcast_to(hit, (self.D, 1, 2))
+            self._cache["axis", joint] = hit
+        return hit
+
+    def origin(self, link: str) -> np.ndarray:
+        """A link's reference point: its first joint's position (the origin for the frame
+        or a link without joints), as :func:`topo.constraints.link_origins`."""
+        m = self.mechanism
+        lk = next(x for x in m.links if x.name == link)
+        js = m.joints_of(link)
+        if lk.is_frame or not js or js[0].at is None:
+            return np.zeros((self.D, 1, 2)) if self.batch else np.zeros(2)
+        return self.at(js[0].name)
+
+    def origins_xy(self) -> tuple:
+        """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only)."""
+        return tuple((o[..., 0], o[..., 1]) for o in (self.origin(x) for x in self.mechanism.link_names))

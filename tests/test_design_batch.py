@@ -1,0 +1,142 @@
+"""One solver for many designs (kin.design): the batch over designs against solve, design
+by design, to the bit; outputs; bad input; and synthesis on the same solver."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from multiloop.catalogue.dimensional import Evaluator, design_space
+from multiloop.catalogue.named import load_named
+from multiloop.kin.design import branch_signs, design_mechanism, solve_designs, unbatched_steps
+from multiloop.kin.geometry import design_names
+from multiloop.kin.solve import solve
+from multiloop.topo.errors import InputError
+from multiloop.topo.model import JointKind
+
+#: one-driver mechanisms whose plans are all dyads (every dyad kind, the actuator)
+DYAD_MECHANISMS = ["four_bar", "crank_slider", "stephenson_2", "watt_1", "dyad_rpr", "dyad_rrp", "dyad_prp",
+                   "dyad_rpp", "linkage_24", "knitting_needle_drive"]
+
+
+def _designs(m, D=40, rel=0.01, seed=1):
+    """The start's design vector and D − 1 random neighbours (row 0 = the start)."""
+    names = design_names(m, [p.name for p in m.points])
+    space = design_space(m, [p.name for p in m.points])
+    assert space.names == names
+    size = float(np.ptp(np.array([j.at for j in m.joints]), axis=0).max())
+    rng = np.random.default_rng(seed)
+    X = space.x0 + rel * size * rng.standard_normal((D, len(names)))
+    X[0] = space.x0
+    return names, X
+
+
+def _inputs(m, n=16):
+    j = m.joint(m.drivers[0].joint)
+    return np.radians(np.linspace(0.0, 40.0, n)) if j.kind is JointKind.R else np.linspace(0.0, 0.05, n)
+
+
+@pytest.mark.parametrize("name", DYAD_MECHANISMS)
+def test_batch_equals_solve_to_the_bit(name):
+    """Each design of a batch gives the same bits as solve of that design alone, at every
+    position where both assemble, and fails exactly where solve fails."""
+    m = load_named(name)
+    names, X = _designs(m)
+    x = _inputs(m)
+    r = solve_designs(m, names, X, x)
+    assert not unbatched_steps(m)
+    compared = 0
+    for d in range(X.shape[0]):
+        md = design_mechanism(r.geometry, d)
+        try:
+            st = solve(md, x)
+        except Exception:                       # noqa: BLE001 - a design that does not compile
+            assert not r.ok[d].any()
+            continue
+        ok = np.asarray(st.status == "ok")
+        if ok.all():                            # solve stayed on the reference branch everywhere
+            np.testing.assert_array_equal(r.ok[d], ok)
+        both = ok & r.ok[d]
+        for i, j in enumerate(m.joint_names):
+            np.testing.assert_array_equal(r.point(j)[d][both], st.positions[both, i])
+        for i, p in enumerate(m.points):
+            np.testing.assert_array_equal(r.point(p.name)[d][both], st.point_positions[both, i])
+        compared += int(both.sum())
+    assert compared > 0.25 * X.shape[0] * len(x)
+
+
+@pytest.mark.parametrize("name", ["stephenson_3_triad", "stephenson_3"])
+def test_triad_and_class_iv_designs_follow_solve(name):
+    """Plans with a triad or class IV group (solved design by design on the same steps)
+    agree with solve to rounding."""
+    m = load_named(name)
+    names, X = _designs(m, D=6, rel=0.005)
+    x = np.radians(np.linspace(0.0, 30.0, 31))
+    r = solve_designs(m, names, X, x)
+    assert unbatched_steps(m)
+    for d in range(X.shape[0]):
+        st = solve(design_mechanism(r.geometry, d), x)
+        ok = np.asarray(st.status == "ok") & r.ok[d]
+        assert ok.sum() > 20
+        for i, j in enumerate(m.joint_names):
+            np.testing.assert_allclose(r.point(j)[d][ok], st.positions[ok, i], atol=1e-10)
+
+
+def test_outputs_solve_only_the_steps_they_need():
+    """outputs=: the links upstream of the named point are solved, the others stay NaN;
+    the point is the same as in the full solve."""
+    m = load_named("four_bar")
+    names, X = _designs(m, D=8)
+    x = _inputs(m)
+    full = solve_designs(m, names, X, x)
+    p = "A"                                     # on the crank: the driver step only
+    part = solve_designs(m, names, X, x, outputs=[p])
+    np.testing.assert_array_equal(part.point(p), full.point(p))
+    assert np.isnan(part.th).any() and not np.isnan(full.th[:, full.ok]).any()
+
+
+def test_per_design_inputs_and_shapes():
+    """Inputs (D, N) per design give (D, N) results; each row equals that design's call."""
+    m = load_named("four_bar")
+    names, X = _designs(m, D=5)
+    x = np.stack([_inputs(m) + 0.01 * d for d in range(5)])
+    r = solve_designs(m, names, X, x)
+    assert r.ok.shape == (5, 16) and r.point("B").shape == (5, 16, 2)
+    for d in range(5):
+        np.testing.assert_array_equal(solve_designs(m, names, X[d:d + 1], x[d]).point("B")[0], r.point("B")[d])
+
+
+def test_bad_shapes_are_named():
+    m = load_named("four_bar")
+    names, X = _designs(m, D=3)
+    with pytest.raises(InputError, match="designs"):
+        solve_designs(m, names, X[:, :-1], _inputs(m))
+    with pytest.raises(InputError, match="inputs"):
+        solve_designs(m, names, X, np.full(4, np.nan))
+
+
+def test_branch_signs_are_the_solvers():
+    """The evaluator's branches are the signs the steps use; a mirrored design flips them."""
+    m = load_named("four_bar")
+    space = design_space(m, ["P"])
+    ev = Evaluator(m, space)
+    s0 = ev.branches(space.x0[None])
+    X = space.x0.copy()[None]
+    for i, n in enumerate(space.names):
+        if n.endswith(".y"):
+            X[0, i] = -X[0, i]                  # mirror in the x-axis: every RRR flips
+    np.testing.assert_array_equal(branch_signs(m, space.names, X), -s0)
+
+
+def test_synthesis_scores_what_solve_gives():
+    """The synthesiser's tracer positions of a design are solve's, bit for bit."""
+    m = load_named("four_bar")
+    space = design_space(m, ["P"])
+    ev = Evaluator(m, space)
+    rng = np.random.default_rng(3)
+    X = space.x0 + 0.002 * rng.standard_normal((6, space.size))
+    phi = np.linspace(0.0, 2 * np.pi, 96, endpoint=False)
+    w, ok = ev.point(X, phi, "P")
+    for d in range(6):
+        st = solve(ev.with_design(X[d]), phi)
+        good = np.asarray(st.status == "ok") & ok[d]
+        np.testing.assert_array_equal(w[d][good], st.point_positions[good, 0])
