@@ -42,7 +42,7 @@ from .newton import jacobian_rates
 from .step import GroupStep, Outcome
 
 __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
-           "triad_rates", "follow_modes", "MAX_MODES", "TriadStep"]
+           "triad_rates", "follow_modes", "follow_modes_batch", "MAX_MODES", "TriadStep"]
 
 #: maximum number of real assembly modes of a triad / class IV group.
 MAX_MODES = 6
@@ -134,10 +134,11 @@ def _det(A, P):
 def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
     """Newton on the three closure equations, vectorised over any batch shape.
 
-    ``A`` (..., 3, 2), ``bb`` (3, 2) = b - b_1, ``l`` (..., 3); ``p`` (..., 2),
-    ``th`` (...).  Component arithmetic; stops early when every correction is
-    below ``tol`` (relative to max l).  Returns ``P`` (..., 3, 2), ``th`` and the
-    relative ``residual`` max_i |‖P_i - A_i‖ - l_i| / max_i l_i.
+    ``A`` (..., 3, 2), ``bb`` (3, 2) or broadcastable (..., 3, 2) = b - b_1, ``l``
+    (..., 3); ``p`` (..., 2), ``th`` (...).  Component arithmetic; a position stops
+    once its correction is below ``tol`` (relative to max l), so that each position's
+    result does not depend on the others in the batch.  Returns ``P`` (..., 3, 2),
+    ``th`` and the relative ``residual`` max_i |‖P_i - A_i‖ - l_i| / max_i l_i.
     """
     shape = np.broadcast_shapes(A.shape[:-2], l.shape[:-1], p.shape[:-1], th.shape)
     Ax = [np.broadcast_to(A[..., i, 0], shape) for i in range(3)]
@@ -150,25 +151,24 @@ def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
 
     def geom(px, py, th):
         c, s = np.cos(th), np.sin(th)
-        rbx = [c * bb[i, 0] - s * bb[i, 1] for i in range(3)]
-        rby = [s * bb[i, 0] + c * bb[i, 1] for i in range(3)]
+        rbx = [c * bb[..., i, 0] - s * bb[..., i, 1] for i in range(3)]
+        rby = [s * bb[..., i, 0] + c * bb[..., i, 1] for i in range(3)]
         dx = [px + rbx[i] - Ax[i] for i in range(3)]
         dy = [py + rby[i] - Ay[i] for i in range(3)]
         return rbx, rby, dx, dy
 
+    active = np.ones(shape, bool)
     for _ in range(iters):
         rbx, rby, dx, dy = geom(px, py, th)
         m = [[dx[i], dy[i], dy[i] * rbx[i] - dx[i] * rby[i]] for i in range(3)]
         f = [-0.5 * (dx[i] * dx[i] + dy[i] * dy[i] - L[i] * L[i]) for i in range(3)]
         (ux, uy, ut), _, _ = _solve3c(m, f)
-        ok = np.isfinite(ux) & np.isfinite(uy) & np.isfinite(ut)
-        ux = np.where(ok, ux, 0.0)
-        uy = np.where(ok, uy, 0.0)
-        ut = np.where(ok, ut, 0.0)
-        px += ux
-        py += uy
-        th += ut
-        if np.all(np.abs(ux) + np.abs(uy) + np.abs(ut) * lmax <= tol * lmax):
+        ok = active & np.isfinite(ux) & np.isfinite(uy) & np.isfinite(ut)
+        px += np.where(ok, ux, 0.0)
+        py += np.where(ok, uy, 0.0)
+        th += np.where(ok, ut, 0.0)
+        active &= ~(np.abs(ux) + np.abs(uy) + np.abs(ut) * lmax <= tol * lmax)
+        if not active.any():
             break
     rbx, rby, dx, dy = geom(px, py, th)
     res = np.maximum.reduce([np.abs(np.sqrt(dx[i] * dx[i] + dy[i] * dy[i]) - L[i])
@@ -193,10 +193,11 @@ def _poly_coefficients(A, bb, l):
     """Coefficients (N, 7), highest first, of ``z³F(z)`` (degree 6), with
     ``F = N_x² + N_y² - l_1² D²`` (docs/groups.md), read exactly
     by a 16-point DFT on the unit circle; also ``b_i``, ``a_i`` as complex."""
-    bc = bb[1:, 0] + 1j * bb[1:, 1]                                     # (2,)
+    bc = bb[..., 1:, 0] + 1j * bb[..., 1:, 1]                           # (2,) or (N, 2)
     a = (A[:, 1:, 0] - A[:, :1, 0]) + 1j * (A[:, 1:, 1] - A[:, :1, 1])   # (N, 2)
     z = np.exp(2j * np.pi * np.arange(16) / 16)                          # (16,)
-    w, k = _linear_terms(z[None, :], bc, a[:, None, :], l[:, None, :])   # (N, 16, 2)
+    w, k = _linear_terms(z[None, :], bc[..., None, :] if bc.ndim == 2 else bc,
+                         a[:, None, :], l[:, None, :])                    # (N, 16, 2)
     wr, wi = w.real, w.imag
     D = wr[..., 0] * wi[..., 1] - wi[..., 0] * wr[..., 1]
     Nx = 0.5 * (k[..., 0] * wi[..., 1] - k[..., 1] * wi[..., 0])
@@ -273,8 +274,9 @@ def triad_modes(A, b, l) -> TriadModes:
     ----------
     A : array_like, shape (N, 3, 2) or (3, 2)
         Outer pins A1, A2, A3 (on known links).
-    b : array_like, shape (3, 2)
-        P1, P2, P3 in the reference configuration (or any rigid copy).
+    b : array_like, shape (3, 2) or (N, 3, 2)
+        P1, P2, P3 in the reference configuration (or any rigid copy), per position
+        when given with the batch axis.
     l : array_like, shape (3,) or (N, 3)
         Lengths |A_i P_i|.
 
@@ -307,12 +309,13 @@ def triad_modes(A, b, l) -> TriadModes:
     b = np.asarray(b, dtype=float)
     l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
     N = A.shape[0]
-    bb = b - b[0]
+    bb = b - b[..., :1, :]
     coef, bc, a = _poly_coefficients(A, bb, l)
     th0, cand, good = _unit_circle_roots(coef)
     ri, ki = np.nonzero(cand)                            # polish the candidates only
-    p0 = _position_from_angle(A[ri], bc, a[ri], l[ri], th0[ri, ki])
-    Pk, thk, resk = _polish(A[ri], bb, l[ri], p0, th0[ri, ki])
+    per = bb.ndim == 3                                   # a reference per position
+    p0 = _position_from_angle(A[ri], bc[ri] if per else bc, a[ri], l[ri], th0[ri, ki])
+    Pk, thk, resk = _polish(A[ri], bb[ri] if per else bb, l[ri], p0, th0[ri, ki])
     P = np.full((N, MAX_MODES, 3, 2), np.nan)
     th = np.full((N, MAX_MODES), np.nan)
     res = np.full((N, MAX_MODES), np.inf)
@@ -440,44 +443,53 @@ def follow_modes(P, valid, pred, start, sep_ratio=0.5):
     idx : ndarray of int (N,)  (-1 after a loss)
     status : ndarray of int (N,)  (0 ok, 2 lost/ambiguous here, 3 after)
     """
-    N, Mm = valid.shape
-    idx = np.full(N, -1)
-    status = np.full(N, 3)
-    status[0] = 0
-    idx[0] = start
+    idx, status = follow_modes_batch(P[None], valid[None], pred[None], np.array([start]), sep_ratio)
+    return idx[0], status[0]
+
+
+def follow_modes_batch(P, valid, pred, start, sep_ratio=0.5):
+    """:func:`follow_modes` along D paths at once (the same arithmetic for each path):
+    ``P`` (D, N, M, k, 2), ``valid`` (D, N, M), ``pred`` (D, N-1, M, k, 2), ``start``
+    (D,) int; returns ``idx`` and ``status`` (D, N)."""
+    Dn, N, Mm = valid.shape
+    idx = np.full((Dn, N), -1)
+    status = np.full((Dn, N), 3)
+    status[:, 0] = 0
+    idx[:, 0] = start
     if N == 1:
         return idx, status
-    D = np.zeros((N - 1, Mm, Mm))
-    S = np.zeros((N - 1, Mm, Mm))
-    Q = np.zeros((N, Mm, Mm))
-    for c in range(P.shape[2]):
+    D = np.zeros((Dn, N - 1, Mm, Mm))
+    S = np.zeros((Dn, N - 1, Mm, Mm))
+    Q = np.zeros((Dn, N, Mm, Mm))
+    for c in range(P.shape[3]):
         for x in range(2):
-            D += np.square(pred[:, :, None, c, x] - P[1:, None, :, c, x])
-            S += np.square(P[:-1, :, None, c, x] - P[1:, None, :, c, x])
-            Q += np.square(P[:, :, None, c, x] - P[:, None, :, c, x])
+            D += np.square(pred[:, :, :, None, c, x] - P[:, 1:, None, :, c, x])
+            S += np.square(P[:, :-1, :, None, c, x] - P[:, 1:, None, :, c, x])
+            Q += np.square(P[:, :, :, None, c, x] - P[:, :, None, :, c, x])
     with np.errstate(invalid="ignore"):
-        D = np.sqrt(np.where(valid[1:, None, :], D, np.inf))
+        D = np.sqrt(np.where(valid[:, 1:, None, :], D, np.inf))
         D = np.where(np.isnan(D), np.inf, D)
         S = np.sqrt(S)
-        Q = np.sqrt(np.where(valid[:, None, :] & valid[:, :, None], Q, np.inf))
-    Q[:, np.arange(Mm), np.arange(Mm)] = np.inf
+        Q = np.sqrt(np.where(valid[:, :, None, :] & valid[:, :, :, None], Q, np.inf))
+    Q[:, :, np.arange(Mm), np.arange(Mm)] = np.inf
     Q = np.where(np.isnan(Q), np.inf, Q)
-    sep = Q.min(axis=-1)                                        # (N, M)
+    sep = Q.min(axis=-1)                                        # (D, N, M)
     srt = np.sort(D, axis=-1)
     k1 = np.argmin(D, axis=-1)
     d1, d2 = srt[..., 0], srt[..., 1]
     step = np.take_along_axis(S, k1[..., None], axis=-1)[..., 0]
     ok = (np.isfinite(d1) & (d1 <= sep_ratio * d2)
-          & (step <= sep_ratio * sep[:-1]) & (d1 <= sep_ratio * sep[:-1]))
-    nxt = np.where(ok & valid[:-1], k1, -1).tolist()
-    j = start
+          & (step <= sep_ratio * sep[:, :-1]) & (d1 <= sep_ratio * sep[:, :-1]))
+    nxt = np.where(ok & valid[:, :-1], k1, -1)
+    rows = np.arange(Dn)
+    j = np.asarray(start).copy()
+    alive = j >= 0
     for i in range(N - 1):
-        j = nxt[i][j]
-        if j < 0:
-            status[i + 1] = 2
-            break
-        idx[i + 1] = j
-        status[i + 1] = 0
+        j = np.where(alive, nxt[rows, i, np.maximum(j, 0)], -1)
+        status[alive & (j < 0), i + 1] = 2
+        alive &= j >= 0
+        idx[alive, i + 1] = j[alive]
+        status[alive, i + 1] = 0
     return idx, status
 
 
@@ -670,18 +682,19 @@ class TriadStep(GroupStep):
     """A class III triad of a plan, tracked in the mode of the reference
     (:func:`triad_track`); rates from the group's Jacobian."""
 
-    batched = False          # solved design by design (kin.design falls back)
-
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
-        self.A = np.array([at(o) for o in lay.outers])
-        self.b = np.array([at(i) for i in lay.inners])
-        self.lengths = np.hypot(*(self.b - self.A).T)
+        self.A = np.stack([at(o) for o in lay.outers], axis=-2)     # (3, 2), or (D, 1, 3, 2) for designs
+        self.b = np.stack([at(i) for i in lay.inners], axis=-2)
+        v = self.b - self.A
+        self.lengths = np.hypot(v[..., 0], v[..., 1])
         self.known = [known_on(self.group, o) for o in lay.outers]
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        if not G.reasons:
+            return self._designs(G)
         lay, N = self.layout, G.M
         A = np.stack([G.point(k, a) for k, a in zip(self.known, self.A)], axis=1)
         good = np.all(np.isfinite(A.reshape(N, -1)), axis=1)
@@ -694,9 +707,25 @@ class TriadStep(GroupStep):
             P[idx], th[idx], ok[idx] = r.P + o, r.theta, r.ok
             for k in np.flatnonzero(~r.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
-        G.place_cs(lay.ternary, P[:, 0], self.b[0], np.cos(th), np.sin(th), th)
-        for i, lk in enumerate(lay.binaries):
-            G.place_dir(lk, A[:, i], self.A[i], P[:, i] - A[:, i], self.b[i] - self.A[i])
+        self._place(G, A, P, th)
         return Outcome(ok, why, Probe(ok.copy()) if probe else None)
+
+    def _place(self, G, A, P, th) -> None:
+        lay = self.layout
+        G.place_cs(lay.ternary, P[..., 0, :], self.b[..., 0, :], np.cos(th), np.sin(th), th)
+        for i, lk in enumerate(lay.binaries):
+            G.place_dir(lk, A[..., i, :], self.A[..., i, :], P[..., i, :] - A[..., i, :],
+                        self.b[..., i, :] - self.A[..., i, :])
+
+    def _designs(self, G) -> Outcome:
+        """D designs at N inputs (``G.shape``), each tracked as alone
+        (:func:`~kin.groups.triad_batch.track_designs`)."""
+        from .triad_batch import track_designs
+        A = np.stack([G.point(k, self.A[..., i, :]) for i, k in enumerate(self.known)], axis=-2)  # (D, N, 3, 2)
+        o = self.A[:, :, :1]                 # (D, 1, 1, 2): about the reference anchor, as alone
+        b = (self.b - o)[:, 0]
+        P, th, status = track_designs(A - o, b, self.lengths[:, 0], b)
+        self._place(G, A, P + o, th)
+        return Outcome(status == 0, {}, None)
 
     rates = jacobian_rates
