@@ -9,7 +9,13 @@ Measured in one run, each the best of a few repeats (CPU, one thread):
   the same curves (crank cos/sin, one RRR, the coupler point; no status, no pose store);
 * Stephenson III (class III triad) curves, D = 10³ × N = 96: the batch against the
   per-candidate route (each design's steps run alone along the inputs: the triad
-  tracker once per candidate, as synthesis did before the batch existed).
+  tracker once per candidate, as synthesis did before the batch existed);
+* synthesis evaluations per second, four-bar path with free timing (10 points, DE, 2 s):
+  ``synthesise`` (its objective scores each candidate on a 96-position grid for order
+  and continuity) against Pyslvs 22.07's ``FPlanar`` with its DE
+  (``benchmarks/peers/pyslvs_synthesis.py``, run in an interpreter that has Pyslvs:
+  ``--pyslvs-python`` or ``$MULTILOOP_PYSLVS_PYTHON``), evaluations over its
+  ``max_time``.
 
 Each line that states a goal is collected by ``multiloop bench --goals``.
 """
@@ -105,13 +111,33 @@ def triad_goal(D: int, N: int) -> None:
           f"{ratio:.1f}x, {per_dp:.2f} us -> {'MET' if met else 'NOT MET'}")
 
 
+def synthesis_goal(py: str | None, budget: int = 2) -> None:
+    import bench_synthesis as bs
+    T = bs.targets()["four-bar 10 points"]
+    res = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=float(budget), seed=0)
+    ours = res.evaluations / res.seconds
+    if py is None:
+        print(f"synthesis, four-bar 10 points, free timing: ours {ours:,.0f} evaluations/s; Pyslvs not run")
+        return
+    _, _, n = bs.pyslvs_run(T, budget, py)
+    theirs = n / budget
+    print(f"synthesis evaluations per second, four-bar 10 points, free timing, DE {budget} s: ours {ours:,.0f} "
+          f"(each on a 96-position grid, continuity checked), Pyslvs FPlanar {theirs:,.0f}; goal ratio >= 1: "
+          f"{ours / theirs:.2f} -> {'MET' if ours >= theirs else 'NOT MET'}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer designs")
+    ap.add_argument("--pyslvs-python", default=None, metavar="PY",
+                    help="an interpreter with pyslvs (default $MULTILOOP_PYSLVS_PYTHON or this one)")
     a = ap.parse_args(argv)
     print(f"numpy {np.__version__}")
     four_bar_goal(1000 if a.quick else 10_000, 96)
     triad_goal(100 if a.quick else 1000, 96)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import bench_synthesis as bs
+    synthesis_goal(bs.pyslvs_python(a.pyslvs_python))
 
 
 if __name__ == "__main__":

@@ -66,10 +66,12 @@ class DesignPoses:
 
     @property
     def th(self) -> np.ndarray:
+        self.store.angles()
         return self.store.T[:, 2]
 
     def _translation(self, i: int) -> np.ndarray:
         """``t`` of the map ``world = R(θ) r + t`` of every link (rows x or y)."""
+        self.store.angles()
         T = self.store.T
         o = np.stack([self.geometry.origin(x)[..., 0, :] for x in self.plan.mechanism.link_names])  # (nl, D, 2)
         c, s = np.cos(T[:, 2]), np.sin(T[:, 2])
@@ -227,6 +229,7 @@ def _one_design(sp: SolvePlan, md: Mechanism, steps, X) -> np.ndarray:
         okk = type(st.closed)(md, st, sp.size, geo).positions(G, X).ok
         G.invalidate(st.unknown, ~okk)
     G.unset_to_nan()
+    G.angles()
     return G.T
 
 

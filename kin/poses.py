@@ -76,13 +76,15 @@ class Poses:
     ``T[k] = (x, y, th)`` over the batch: the position of link k's reference point
     and its rotation; ``x[k], y[k], th[k]`` are views of those rows once link k is
     placed (``None`` before), ``c[k], s[k]`` its cos and sin (kept to avoid recomputing
-    trigonometry; stored by reference).  Material points computed while solving are
-    kept per link (``points[k]``) so the joints' positions reuse them.
+    trigonometry; stored by reference).  A rotation given by (c, s) only gets its angle
+    row on first use (:meth:`angle`; ``arctan2`` is the most expensive operation of a
+    dyad).  Material points computed while solving are kept per link (``points[k]``)
+    so the joints' positions reuse them.
     """
 
     def __init__(self, sp, M):
-        self.shape = tuple(np.atleast_1d(M).tolist())
-        self.sp, self.m, self.M = sp, sp.mechanism, int(np.prod(self.shape))
+        self.shape = (M,) if isinstance(M, int) else tuple(int(v) for v in M)
+        self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else int(np.prod(self.shape))
         self.reasons = len(self.shape) == 1          # per-position failure texts (one design)
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
@@ -93,6 +95,7 @@ class Poses:
         self.c = [None] * nl
         self.s = [None] * nl
         self.points = [{} for _ in range(nl)]
+        self.pending = set()                          # links whose angle row is not computed yet
         self.org = _origins_xy(sp)
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
@@ -102,7 +105,7 @@ class Poses:
     def finite(self, links) -> np.ndarray:
         out = np.ones(self.shape, bool)
         for k in links:
-            out &= np.isfinite(self.th[k]) if self.th[k] is not None else False
+            out &= np.isfinite(self.c[k]) if self.th[k] is not None else False
         return out
 
     def unset_to_nan(self) -> None:
@@ -117,9 +120,10 @@ class Poses:
 
     def take(self, rows: np.ndarray) -> "Poses":
         """The poses at the given rows only."""
+        self.angles()
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
-        out.shape, out.reasons = (len(rows),), self.reasons
+        out.shape, out.reasons, out.pending = (len(rows),), self.reasons, set()
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
@@ -142,7 +146,7 @@ class Poses:
     def _local(self, k: int, r) -> tuple:
         """Reference position ``r`` relative to link k's reference point (the key of
         ``points[k]``); for designs, arrays ``(D, 1)`` (the key is then their bytes)."""
-        if len(self.shape) == 1:
+        if self.reasons:
             return float(r[0]) - self.org[k][0], float(r[1]) - self.org[k][1]
         return r[..., 0] - self.org[k][0], r[..., 1] - self.org[k][1]
 
@@ -158,9 +162,14 @@ class Poses:
         kept in ``points[k]``)."""
         if k == self.frame_k:
             return rx, ry
-        if _zero(rx) and _zero(ry):
+        if self.reasons:                   # one design: float offsets
+            if rx == 0.0 and ry == 0.0:
+                return self.x[k], self.y[k]
+            key = (rx, ry)
+        elif _zero(rx) and _zero(ry):
             return self.x[k], self.y[k]
-        key = _key(rx, ry)
+        else:
+            key = _key(rx, ry)
         hit = self.points[k].get(key)
         if hit is None:
             c, s = self.c[k], self.s[k]
@@ -185,7 +194,19 @@ class Poses:
         return out
 
     def theta(self, link: str) -> np.ndarray:
-        return self.th[self.idx[link]]
+        return self.angle(self.idx[link])
+
+    def angle(self, k: int) -> np.ndarray:
+        """Link k's rotation row (computed from its cos and sin on first use)."""
+        if k in self.pending:
+            self.pending.discard(k)
+            np.arctan2(self.s[k], self.c[k], out=self.T[k, 2])
+        return self.th[k]
+
+    def angles(self) -> None:
+        """Compute every pending angle row."""
+        for k in list(self.pending):
+            self.angle(k)
 
     # -- writing -------------------------------------------------------------------
     def place_k(self, k: int, px, py, r_ref, c, s, th=None) -> None:
@@ -195,14 +216,15 @@ class Poses:
         T = self.T[k]
         dx, dy = self._local(k, r_ref)
         dx, dy = -dx, -dy
-        if _zero(dx) and _zero(dy):
+        if (dx == 0.0 and dy == 0.0) if self.reasons else (_zero(dx) and _zero(dy)):
             T[0], T[1] = px, py
         else:
             np.add(px, c * dx - s * dy, out=T[0])
             np.add(py, s * dx + c * dy, out=T[1])
         if th is None:
-            np.arctan2(s, c, out=T[2])
+            self.pending.add(k)
         else:
+            self.pending.discard(k)
             T[2] = th
         self.x[k], self.y[k], self.th[k] = T
         self.c[k], self.s[k] = c, s
@@ -233,10 +255,10 @@ class Poses:
 
     def place_like(self, link: str, P, r_ref, other: str) -> None:
         k = self.idx[other]
-        self.place_cs(link, P, r_ref, self.c[k], self.s[k], self.th[k])
+        self.place_cs(link, P, r_ref, self.c[k], self.s[k], self.angle(k))
 
     def invalidate(self, links, bad) -> None:
-        if np.any(bad):
+        if np.any(bad):                 # (a pending angle row follows its NaN cos and sin)
             for k in links:
                 if self.th[k] is not None:
                     self.T[k][:, bad] = np.nan
@@ -249,6 +271,7 @@ class Poses:
         """The ``(M, n_links, 3)`` pose array: with ``links`` None (every link placed),
         the store itself as a transposed view of ``(n_links, 3, M)``; else a copy with
         only ``links`` and the frame (the others NaN)."""
+        self.angles()
         if links is None:
             return np.moveaxis(self.T, (0, 1), (-2, -1))
         T = np.full(self.T.shape, np.nan)
@@ -259,6 +282,7 @@ class Poses:
     def from_T(self, T) -> None:
         """Every link's pose from a ``(n_links, 3, *shape)`` array (NaN where unsolved)."""
         self.T[...] = T
+        self.pending.clear()
         for k in range(self.m.n_links):
             self.x[k], self.y[k], self.th[k] = self.T[k]
             self.c[k], self.s[k] = np.cos(self.th[k]), np.sin(self.th[k])
@@ -266,6 +290,7 @@ class Poses:
 
     def from_Z(self, Z, links) -> None:
         for k in links:
+            self.pending.discard(k)
             th = Z[:, k, 2]
             c, s = np.cos(th), np.sin(th)
             self.T[k, 0], self.T[k, 1], self.T[k, 2] = Z[:, k, 0], Z[:, k, 1], th

@@ -554,6 +554,7 @@ def _turn_drivers(sp: SolvePlan, run: _Run, turns: np.ndarray) -> None:
                 grow = True
     for k in (names.index(x) for x in turned):
         if run.G.th[k] is not None:
+            run.G.angle(k)
             run.G.T[k, 2] += turns
 
 
@@ -621,7 +622,7 @@ def _take(run: _Run, rows: np.ndarray) -> _Run:
 
 
 def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rates=None,
-          only=None, plan=None, method: str = "auto", assemble: bool = False) -> KinematicState:
+          only=None, outputs=None, plan=None, method: str = "auto", assemble: bool = False) -> KinematicState:
     """Positions (and velocities, accelerations) of a mechanism over a batch of inputs.
 
     Parameters
@@ -638,6 +639,11 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     only : iterable of str, optional
         Names of joints, tracer points or links wanted: only the groups upstream
         of them are solved (the other entries stay NaN).
+    outputs : iterable of str, optional
+        The only results wanted: positions of these joints and tracer points, angles of
+        these links.  Only the groups they need are solved (as ``only``), and nothing
+        else is computed: the other positions, the other links' angles and pose angles
+        stay NaN (statuses are always given; derivatives only when asked).
     plan : AssurPlan or SolvePlan, optional
         A precompiled plan (default: the one cached on the mechanism).
     method : {"auto", "closed_form", "newton"}
@@ -678,7 +684,9 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     sp = plan_of(m, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
-    needed = list(range(len(sp.steps))) if only is None else needed_steps(sp, only)
+    wanted = (*([only] if isinstance(only, str) else (only or ())),
+              *([outputs] if isinstance(outputs, str) else (outputs or ())))
+    needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
@@ -688,7 +696,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         run, notes = _solve_ranged(sp, X, needed, kernels)
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
-    return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels)
+    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
+    return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
 
 
 def _check_range(sp: SolvePlan, X: np.ndarray) -> None:
@@ -724,7 +733,28 @@ _PLANS: dict = {}
 _PLANS_KEPT = 64
 
 
-def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, kernels) -> KinematicState:
+def _cached(sp: SolvePlan, key, f, arg):
+    """``f(sp, arg)`` kept on the plan under ``key`` (the last 32 keys)."""
+    hit = sp.extra.get(key)
+    if hit is None:
+        if len(sp.extra) > 64:
+            for k in [k for k in sp.extra if isinstance(k, tuple) and k[0] in ("needed", "select")][:32]:
+                del sp.extra[k]
+        hit = sp.extra[key] = f(sp, arg)
+    return hit
+
+
+def _selection(sp: SolvePlan, outputs) -> tuple:
+    """Indices of the joints, tracer points and links named in ``outputs``."""
+    m = sp.mechanism
+    names = {outputs} if isinstance(outputs, str) else set(outputs)
+    return (tuple(i for i, n in enumerate(m.joint_names) if n in names),
+            tuple(i for i, p in enumerate(m.points) if p.name in names),
+            tuple(i for i, n in enumerate(m.link_names) if n in names))
+
+
+def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, kernels,
+            select=None) -> KinematicState:
     """Statuses, NaN for unsolved links, derivatives and the frozen state."""
     m = sp.mechanism
     G = run.G
@@ -742,11 +772,18 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     if not all_ok:
         for n in np.flatnonzero(~okm):
             status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
+    if select is not None and not derivatives:       # only the links' angles asked for
+        for k in list(G.pending):
+            if k in select[2]:
+                G.angle(k)
+            else:
+                G.pending.discard(k)
+                G.T[k, 2] = np.nan
     Z = G.to_Z()
     Zd = Zdd = rates_in = None
     if derivatives:
         rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links)
-    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code)
+    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select)
     if single and code[0] != 0:
         msg = f"input {_fmt_input(m, X[0])}: {status[0]}"
         if code[0] == Status.SINGULAR:
@@ -808,9 +845,10 @@ def needed_steps(sp: SolvePlan, only) -> list[int]:
     return list(sp.assur.upstream([w for w in want if w >= 0]))
 
 
-def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, code) -> KinematicState:
+def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, code,
+           select=None) -> KinematicState:
     m = sp.mechanism
-    pos = _points(sp, G, sp.joint_host, "joints")
+    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0])
     vel = acc = om = ep = None
     if Zd is not None:
         host = np.asarray(sp.joint_host)
@@ -819,7 +857,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = _points(sp, G, sp.point_host, "points")
+        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1])
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
     return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,
@@ -828,7 +866,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
 
 
-def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
+def _points(sp: SolvePlan, G: "Poses", hosts, which: str, chosen=None) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
     carried by its host link's pose (:meth:`Poses.carry`), written point-major into one
     array and returned transposed."""
@@ -840,9 +878,13 @@ def _points(sp: SolvePlan, G: "Poses", hosts, which: str) -> np.ndarray:
         r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
         hit = sp.extra[key] = (h, tuple(map(tuple, r.tolist())))
     h, r = hit
-    out = np.empty((len(h), 2, G.M))
-    for i, k in enumerate(h):
-        out[i, 0], out[i, 1] = G.carry(k, *r[i])
+    if chosen is None:
+        out = np.empty((len(h), 2, G.M))
+        chosen = range(len(h))
+    else:                                  # only the chosen points: the others NaN
+        out = np.full((len(h), 2, G.M), np.nan)
+    for i in chosen:
+        out[i, 0], out[i, 1] = G.carry(h[i], *r[i])
     return out.transpose(2, 0, 1)
 
 

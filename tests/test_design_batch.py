@@ -66,14 +66,14 @@ def test_batch_equals_solve_to_the_bit(name):
 
 @pytest.mark.parametrize("name", ["stephenson_3_triad", "stephenson_3"])
 def test_triad_and_class_iv_designs_follow_solve(name):
-    """Plans with a triad (batched) or a class IV group (design by design) agree with solve
-    to rounding (solve reaches the inputs along its own sampled path), and a design's
-    result does not depend on the batch it is in, to the bit."""
+    """Plans with a triad or a class IV group agree with solve to rounding (solve reaches
+    the inputs along its own sampled path), and a design's result does not depend on the
+    batch it is in, to the bit."""
     m = load_named(name)
     names, X = _designs(m, D=6, rel=0.005)
     x = np.radians(np.linspace(0.0, 30.0, 80))
     r = solve_designs(m, names, X, x)
-    assert bool(unbatched_steps(m)) == (name == "stephenson_3")
+    assert not unbatched_steps(m)
     for d in range(X.shape[0]):
         st = solve(design_mechanism(r.geometry, d), x)
         ok = np.asarray(st.status == "ok") & r.ok[d]
@@ -144,3 +144,25 @@ def test_synthesis_scores_what_solve_gives():
         st = solve(ev.with_design(X[d]), phi)
         good = np.asarray(st.status == "ok") & ok[d]
         np.testing.assert_array_equal(w[d][good], st.point_positions[good, 0])
+
+
+def test_solve_outputs_compute_only_what_is_asked():
+    """solve(outputs=): the named joint and tracer point equal the full solve's bits;
+    nothing else is computed (other positions and angles NaN), statuses are all given."""
+    m = load_named("stephenson_2")
+    x = np.radians(np.linspace(0.0, 360.0, 73))
+    full = solve(m, x)
+    j = m.joint_names[2]
+    part = solve(m, x, outputs=[j])
+    i = m.joint_names.index(j)
+    np.testing.assert_array_equal(part.positions[:, i], full.positions[:, i])
+    np.testing.assert_array_equal(part.status, full.status)
+    others = [k for k in range(m.n_joints) if k != i]
+    assert np.isnan(part.positions[:, others]).all()
+    skipped = np.flatnonzero(np.isnan(part.angles).all(axis=0))   # angles a dyad would compute
+    assert len(skipped) >= m.n_links - 2                           # all but the frame's and the crank's
+    link = m.link_names[skipped[0]]
+    with_angle = solve(m, x, outputs=[j, link])
+    np.testing.assert_array_equal(with_angle.angles[:, skipped[0]], full.angles[:, skipped[0]])
+    moved = solve(m, x, outputs=[j], derivatives=True)   # derivatives still work when asked
+    np.testing.assert_allclose(moved.velocities[:, i], solve(m, x, derivatives=True).velocities[:, i])

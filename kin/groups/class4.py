@@ -78,8 +78,8 @@ def class4_points(O, r, theta):
     r = np.asarray(r, dtype=float)
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
-    J12 = O[..., :1, :] + _rot(c[..., 0, None], s[..., 0, None], r[:2])
-    J34 = O[..., 1:, :] + _rot(c[..., 1, None], s[..., 1, None], r[2:])
+    J12 = O[..., :1, :] + _rot(c[..., 0, None], s[..., 0, None], r[..., :2, :])
+    J34 = O[..., 1:, :] + _rot(c[..., 1, None], s[..., 1, None], r[..., 2:, :])
     return np.concatenate([J12, J34], axis=-2)
 
 
@@ -253,19 +253,20 @@ class Class4Step(GroupStep):
     """A class IV order-2 group of a plan, tracked in the mode of the reference
     (:func:`class4_track`); rates from the group's Jacobian."""
 
-    batched = False          # solved design by design (kin.design falls back)
-
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
         at = self.at
-        self.O = np.array([at(lay.outer1), at(lay.outer2)])
-        self.J = np.array([at(j) for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
-        self.r = self.J - self.O[[0, 0, 1, 1]]
-        self.lengths = np.array([np.hypot(*(self.J[2] - self.J[0])), np.hypot(*(self.J[3] - self.J[1]))])
+        self.O = np.stack([at(lay.outer1), at(lay.outer2)], axis=-2)     # (2, 2), or (D, 1, 2, 2)
+        self.J = np.stack([at(j) for j in (lay.j11, lay.j12, lay.j21, lay.j22)], axis=-2)
+        self.r = self.J - self.O[..., [0, 0, 1, 1], :]
+        v = self.J[..., 2:, :] - self.J[..., :2, :]
+        self.lengths = np.hypot(v[..., 0], v[..., 1])
         self.known = (known_on(self.group, lay.outer1), known_on(self.group, lay.outer2))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
+        if not G.reasons:
+            return self._designs(G)
         lay, N, Oref, Jref = self.layout, G.M, self.O, self.J
         O = np.stack([G.point(self.known[0], Oref[0]), G.point(self.known[1], Oref[1])], axis=1)
         good = np.all(np.isfinite(O.reshape(N, -1)), axis=1)
@@ -278,10 +279,41 @@ class Class4Step(GroupStep):
             J[idx], th[idx], ok[idx] = res.J + o, res.theta, res.ok
             for k in np.flatnonzero(~res.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))
-        for i, t in enumerate((lay.ternary1, lay.ternary2)):
-            G.place_cs(t, O[:, i], Oref[i], np.cos(th[:, i]), np.sin(th[:, i]), th[:, i])
-        G.place_dir(lay.binary1, J[:, 0], Jref[0], J[:, 2] - J[:, 0], Jref[2] - Jref[0])
-        G.place_dir(lay.binary2, J[:, 1], Jref[1], J[:, 3] - J[:, 1], Jref[3] - Jref[1])
+        self._place(G, O, J, th)
         return Outcome(ok, why, Probe(ok.copy()) if probe else None)
+
+    def _place(self, G, O, J, th) -> None:
+        lay, Oref, Jref = self.layout, self.O, self.J
+        for i, t in enumerate((lay.ternary1, lay.ternary2)):
+            G.place_cs(t, O[..., i, :], Oref[..., i, :], np.cos(th[..., i]), np.sin(th[..., i]), th[..., i])
+        for b, i, j in ((lay.binary1, 0, 2), (lay.binary2, 1, 3)):
+            G.place_dir(b, J[..., i, :], Jref[..., i, :], J[..., j, :] - J[..., i, :], Jref[..., j, :] - Jref[..., i, :])
+
+    def _designs(self, G) -> Outcome:
+        """D designs at N inputs: the triad reduction of :func:`class4_track` tracked for all
+        designs at once (:func:`~kin.groups.triad_batch.track_designs`), as alone."""
+        from .triad_batch import track_designs
+        Oref, r = self.O, self.r
+        O = np.stack([G.point(k, Oref[..., i, :]) for i, k in enumerate(self.known)], axis=-2)   # (D, N, 2, 2)
+        o = Oref[:, :, :1]                   # (D, 1, 1, 2): about the reference pivot, as alone
+        Od = O - o
+        e = Od[..., 1, :] - Od[..., 0, :]
+        L = np.hypot(e[..., 0], e[..., 1])
+        Dn, N = L.shape
+        zero = np.zeros((Dn, 1, 2))
+        anchors = np.broadcast_to(np.stack([r[:, 0, 0], r[:, 0, 1], zero[:, 0]], axis=1)[:, None], (Dn, N, 3, 2))
+        b = np.stack([r[:, 0, 2], r[:, 0, 3], zero[:, 0]], axis=1)
+        m = self.lengths[:, 0]
+        ll = np.stack([np.broadcast_to(m[:, :1], (Dn, N)), np.broadcast_to(m[:, 1:], (Dn, N)), L], axis=-1)
+        J0 = class4_points(Od[:, 0], r[:, 0], np.zeros((Dn, 2)))
+        loc = np.stack([J0[:, 2], J0[:, 3], Od[:, 0, 1]], axis=1) - Od[:, 0, :1]
+        P, phi, status = track_designs(np.ascontiguousarray(anchors), b, ll, _rot(1.0, 0.0, loc))
+        ok = status == 0
+        th1 = _wrap(np.arctan2(e[..., 1], e[..., 0]) - np.arctan2(P[..., 2, 1], P[..., 2, 0]))
+        theta = np.stack([th1, _wrap(th1 + phi)], axis=-1)
+        theta[~ok] = np.nan
+        J = class4_points(Od, r, theta) + o
+        self._place(G, O, J, theta)
+        return Outcome(ok, {}, None)
 
     rates = jacobian_rates

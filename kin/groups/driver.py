@@ -53,13 +53,13 @@ class DriverStepSolver(GroupStep):
         x = X[..., self.drive.driver]
         if self.u is None:
             ko = G.idx[self.other]
-            th = (x if self.sign > 0 else -x) if ko == G.frame_k else G.th[ko] + self.sign * x
+            th = (x if self.sign > 0 else -x) if ko == G.frame_k else G.angle(ko) + self.sign * x
             G.place_k(G.idx[self.link], *G.point_xy(G.idx[self.host], self.r), self.r, np.cos(th), np.sin(th), th)
         else:          # the unknown slider sits at +s on the known guide (or the guide at −s)
             k = G.idx[self.other]
             P = G.point(self.other, self.r) + (self.sign * x)[..., None] * G.direction(self.other, self.u)
-            G.place_cs(self.link, P, self.r, G.c[k], G.s[k], G.th[k])
-        ok = np.isfinite(G.theta(self.link))
+            G.place_cs(self.link, P, self.r, G.c[k], G.s[k], G.angle(k))
+        ok = G.finite([G.idx[self.link]])
         return Outcome(ok, {}, Probe(ok) if probe else None)
 
     def rates(self, R, input_rates) -> None:

@@ -60,8 +60,8 @@ def track_designs(A, b, l, start, *, stride=32):
         The outer pins of each design along the inputs.
     b : ndarray, shape (D, 3, 2)
         Each design's P1..P3 in its reference configuration.
-    l : ndarray, shape (D, 3)
-        Each design's binary lengths.
+    l : ndarray, shape (D, 3) or (D, N, 3)
+        Each design's binary lengths (per input for a reduction, e.g. class IV's).
     start : ndarray, shape (D, 3, 2)
         Points near the wanted mode at ``A[:, 0]``.
 
@@ -71,7 +71,7 @@ def track_designs(A, b, l, start, *, stride=32):
         As :class:`~kin.groups.triad.TriadTrack` (0 ok, 1 no assembly, 2 lost, 3 after).
     """
     Dn, N = A.shape[:2]
-    L = np.broadcast_to(l[:, None], (Dn, N, 3))
+    L = np.broadcast_to(l[:, None] if l.ndim == 2 else l, (Dn, N, 3))
     P = np.full((Dn, N, 3, 2), np.nan)
     th = np.full((Dn, N), np.nan)
     status = np.full((Dn, N), 3)
