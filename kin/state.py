@@ -67,11 +67,13 @@ class KinematicState(BatchStatus):
                 v.flags.writeable = False
                 object.__setattr__(self, f, v)
 
-    def as_dict(self, formula: str | None = None, inputs_cli=None) -> dict:
+    def as_dict(self, formula: str | None = None, inputs_cli=None, derivatives: bool | None = None) -> dict:
         """The stable JSON document (layout: docs/kinematics.md, section 3); NaN is
         ``None``.  ``inputs_cli`` (N,): the inputs as the user gave them (deg / m),
-        printed as given; default: this state's inputs in deg (R) or m (P)."""
-        return _state_dict(self, formula, inputs_cli)
+        printed as given; default: this state's inputs in deg (R) or m (P).
+        ``derivatives``: False leaves the rates out even when they were computed (for a
+        figure); default: included when computed."""
+        return _state_dict(self, formula, inputs_cli, derivatives)
 
     def point_index(self, name: str) -> int:
         return self.point_names.index(name)
@@ -126,7 +128,7 @@ def _list(a) -> list:
     return json_ready(np.asarray(a, float).ravel())
 
 
-def _state_dict(state, formula=None, inputs_cli=None) -> dict:
+def _state_dict(state, formula=None, inputs_cli=None, derivatives=None) -> dict:
     """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc).
     ``inputs_cli`` (N,): the inputs as given on the command line (deg / m), printed
     as given (no round trip through radians)."""
@@ -144,7 +146,7 @@ def _state_dict(state, formula=None, inputs_cli=None) -> dict:
            "drivers": drivers,
            "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
            "status": [str(s) for s in state.status]}
-    der = state.velocities is not None
+    der = state.velocities is not None and derivatives is not False
     joints = {}
     for i, j in enumerate(m.joints):
         e = {"x": _list(state.positions[:, i, 0]), "y": _list(state.positions[:, i, 1])}

@@ -20,7 +20,7 @@ import numpy as np
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
-__all__ = ["add_arguments", "run", "state_to_dict"]
+__all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p) -> None:
@@ -50,11 +50,6 @@ def add_arguments(p) -> None:
     p.add_argument("--dxf", metavar="OUT.dxf", default=None, help="the same drawing as DXF (ezdxf, mm)")
 
 
-def state_to_dict(state, plan=None, inputs_cli=None) -> dict:
-    """The JSON document of a state: :meth:`KinematicState.as_dict` (kept for callers)."""
-    return state.as_dict(plan.formula if plan is not None else None, inputs_cli)
-
-
 def run(args) -> int:
     import warnings
 
@@ -78,12 +73,7 @@ def run(args) -> int:
         warnings.simplefilter("ignore")
         state = solve(m, si_inputs(m, x_cli), derivatives=want_der, plan=plan, method=args.method,
                       assemble=args.assemble)
-    doc_state = state
-    if want_der and not args.derivatives:
-        doc_state = type(state)(state.mechanism, state.inputs, state.positions, state.angles, state.status,
-                                point_names=state.point_names, point_positions=state.point_positions,
-                                notes=state.notes, poses=state.poses)
-    doc = state_to_dict(doc_state, plan.assur, x_cli)
+    doc = state.as_dict(plan.assur.formula, x_cli, derivatives=args.derivatives)   # the rates only when asked
     # render every file in memory first: nothing is written half-way
     if args.plot is not None:
         from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
