@@ -13,7 +13,14 @@ from enum import IntEnum
 
 import numpy as np
 
-__all__ = ["Status", "MESSAGES", "BatchStatus", "status_text", "json_ready"]
+__all__ = ["Status", "MESSAGES", "BatchStatus", "status_text", "json_ready", "inputs_json"]
+
+
+def inputs_json(q) -> list:
+    """Driver inputs ``(N, n_drivers)`` as every JSON document prints them: a flat list
+    for one driver, a list of rows for several (NaN as null)."""
+    q = np.asarray(q, float)
+    return json_ready(q[:, 0] if q.ndim == 2 and q.shape[1] == 1 else q)
 
 
 def json_ready(o):

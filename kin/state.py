@@ -30,7 +30,7 @@ import numpy as np
 
 from multiloop.topo.model import JointKind, Mechanism
 
-from .result import BatchStatus, json_ready
+from .result import BatchStatus, inputs_json, json_ready
 from .rigid import move_point
 
 __all__ = ["KinematicState", "doc_csv", "doc_text"]
@@ -144,7 +144,7 @@ def _state_dict(state, formula=None, inputs_cli=None, derivatives=None) -> dict:
             inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
     doc = {"mechanism": m.name, "formula": formula,
            "drivers": drivers,
-           "input": _list(inp[0]) if len(inp) == 1 else [_list(r) for r in np.stack(inp, 1)],
+           "input": inputs_json(np.stack(inp, 1)),
            "status": [str(s) for s in state.status]}
     der = state.velocities is not None and derivatives is not False
     joints = {}

@@ -7,7 +7,7 @@ import numpy as np
 
 from multiloop.topo.model import JointKind, Mechanism
 
-from ..result import BatchStatus, json_ready
+from ..result import BatchStatus, inputs_json, json_ready
 from ..state import KinematicState
 from .plan import Pair
 
@@ -198,7 +198,7 @@ class ForceResult(BatchStatus):
             key = d.joint if sum(x.joint == d.joint for x in m.drivers) == 1 else f"{d.joint}:{d.links[0]}->{d.links[1]}"
             bal[key] = json_list(self.balancing[:, i])
         return {"mechanism": m.name, "method": self.method, "blocks": [list(b) for b in self.blocks],
-                "notes": list(self.notes), "drivers": self._drivers_dict(), "input": json_list(self.inputs_user),
+                "notes": list(self.notes), "drivers": self._drivers_dict(), "input": inputs_json(self.inputs_user),
                 "status": [str(s) for s in self.status], "balancing": bal, "reactions": self._reactions_dict(),
                 "virtual_power_residual": json_list(self.virtual_power_residual),
                 "relative_residual": json_list(self.relative_residual),
