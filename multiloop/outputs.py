@@ -44,6 +44,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import io
+import json
 import os
 import signal
 import stat
@@ -56,10 +57,26 @@ from pathlib import Path
 from multiloop.topo.errors import OutputError, explain
 
 __all__ = ["OutputError", "Outputs", "check_target", "check_directory", "figure_formats",
-           "quiet_warnings"]
+           "quiet_warnings", "JSON_SETTINGS", "dumps_json", "emit"]
 
 #: matplotlib's warnings that say nothing the user can act on
 _BENIGN = ("Glyph", "missing from font", "tight_layout", "Tight layout", "constrained_layout")
+
+
+#: the JSON of every command, one setting: UTF-8 kept, one-space indent, NaN refused (the
+#: results write null for it)
+JSON_SETTINGS = {"indent": 1, "ensure_ascii": False, "allow_nan": False}
+
+
+def dumps_json(doc) -> str:
+    """A command's JSON document as text (:data:`JSON_SETTINGS`)."""
+    return json.dumps(doc, **JSON_SETTINGS)
+
+
+def emit(result, as_json: bool, text: str | None = None) -> None:
+    """Print a result the one way every command does: its ``as_dict()`` as JSON, or its
+    ``to_text()`` (``text`` when the command prints it with options)."""
+    print(dumps_json(result.as_dict()) if as_json else (result.to_text() if text is None else text))
 
 
 def _err(what: str, path, expected: str, got: str, hint: str | None = None) -> OutputError:

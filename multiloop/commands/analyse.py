@@ -1,12 +1,12 @@
 """``multiloop analyse FILE [--json]``: the structural report of Pozhbelko & Kuts 2020."""
 from __future__ import annotations
 
-import json
 import sys
 import time
 
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.numbers import structural_report
+from multiloop.outputs import emit
 
 
 def add_arguments(p) -> None:
@@ -41,8 +41,5 @@ def run(args) -> int:
                           loops=loops)
     if progress:
         print(f"analyse: done in {time.perf_counter() - t0:.2f} s", file=sys.stderr, flush=True)
-    if args.json:
-        print(json.dumps(r.as_dict(), indent=2))
-    else:
-        print(r.to_text())
+    emit(r, args.json)
     return 0

@@ -7,9 +7,9 @@ path; print(path('excavator'))")``, or in Python ``structural_report(load_named(
 """
 from __future__ import annotations
 
-import json
 
 from multiloop.catalogue.named import entry, names
+from multiloop.outputs import dumps_json
 
 
 def add_arguments(p) -> None:
@@ -20,7 +20,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     rows = [entry(name).as_dict() for name in names()]
     if args.json:
-        print(json.dumps(rows, indent=2, ensure_ascii=False))
+        print(dumps_json(rows))
         return 0
     head = ("name", "n", "F", "K", "code", "source")
     table = [(r["name"], str(r["n"]), str(r["F"]), str(r["K"]), r["code"],

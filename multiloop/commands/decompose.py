@@ -10,10 +10,10 @@ link's full joint set), ``inner_joints``, ``outer_joints``, ``known_links``,
 """
 from __future__ import annotations
 
-import json
 
 from multiloop.topo.assur import decompose
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
+from multiloop.outputs import emit
 
 __all__ = ["add_arguments", "run"]
 
@@ -25,8 +25,5 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     plan = decompose(load(args.file))
-    if args.json:
-        print(json.dumps(plan.as_dict(), indent=2, ensure_ascii=False))
-    else:
-        print(plan.to_text())
+    emit(plan, args.json)
     return 0

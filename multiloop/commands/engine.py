@@ -9,13 +9,12 @@ kinematics, pressure, balancing, cyclogram, rod_com and reactions PNGs.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 
 from multiloop.kin.engine import MAX_STEPS, analyse_engine, load_engine
 from multiloop.inputs import resolve
-from multiloop.outputs import Outputs, quiet_warnings
+from multiloop.outputs import emit, Outputs, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -44,8 +43,5 @@ def run(args) -> int:
         paths = outs.commit()
         if not args.json:
             print("wrote " + ", ".join(str(p) for p in paths))
-    if args.json:
-        print(json.dumps(res.as_dict(), allow_nan=False))
-        return 0
-    print(res.to_text())
+    emit(res, args.json)
     return 0

@@ -10,13 +10,12 @@ JSON keys are documented in docs/platform.md.
 from __future__ import annotations
 
 import argparse
-import json
 
 
 from multiloop.kin.spatial.platform import load_platform
 from multiloop.kin.spatial.report import platform_report, report_text
 from multiloop.inputs import resolve
-from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.outputs import dumps_json, figure_formats, Outputs, quiet_warnings
 
 __all__ = ["add_arguments", "run"]
 
@@ -44,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
             outs.add_figure(args.plot, plot_platform(platform), dpi=120)
         outs.commit()
     if args.json:
-        print(json.dumps(rep, indent=2, ensure_ascii=False, allow_nan=False))
+        print(dumps_json(rep))
     else:
         print(report_text(rep))
         if args.plot:

@@ -11,13 +11,12 @@ Files are written only after the whole solve and all figures succeeded.
 """
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.outputs import dumps_json, figure_formats, Outputs, quiet_warnings
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
 __all__ = ["add_arguments", "run"]
@@ -92,7 +91,7 @@ def run(args) -> int:
         if args.dxf is not None:
             outs.add(args.dxf, mechanism_dxf(state), "--dxf")
     if args.json:
-        text = json.dumps(doc, indent=1, ensure_ascii=False, allow_nan=False)
+        text = dumps_json(doc)
     elif args.csv:
         text = doc_csv(doc)
     else:
