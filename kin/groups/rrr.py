@@ -198,11 +198,14 @@ def _rotation(dx, dy, rot, d_ref, exact):
     compiled ``rot`` (direction / length) where ``exact``, else normalised, position by
     position (as :meth:`~kin.poses.Poses.place_rot` and ``place_dir_xy``)."""
     cr, sr = rot
-    inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-    ux, uy = pair(unit(d_ref))
-    nx, ny = dx * inv, dy * inv
-    return (np.where(exact, dx * cr + dy * sr, nx * ux + ny * uy),
-            np.where(exact, dy * cr - dx * sr, ny * ux - nx * uy))
+    c, s = dx * cr + dy * sr, dy * cr - dx * sr
+    at = np.nonzero(~exact)                      # the clamped positions only: normalised
+    ex, ey = dx[at], dy[at]
+    inv = 1.0 / np.sqrt(ex * ex + ey * ey)
+    ux, uy = (np.broadcast_to(v, dx.shape)[at] for v in pair(unit(d_ref)))
+    nx, ny = ex * inv, ey * inv
+    c[at], s[at] = nx * ux + ny * uy, ny * ux - nx * uy
+    return c, s
 
 
 class RRRStep(GroupStep):
