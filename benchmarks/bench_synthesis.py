@@ -150,7 +150,7 @@ def pyslvs_run(T: np.ndarray, budget: int, py: str) -> tuple[float, float, int]:
     """Pyslvs's FPlanar + DE on the target (in mm); our importer reads the result back."""
     import json
     import subprocess
-    from multiloop.exchange.pyslvs import expression_of, mechanism_from_expression
+    from multiloop.topo.pyslvs import expression_of, mechanism_from_expression
     from dataclasses import replace
     m = start_mechanism()
     mm = replace(m, joints=tuple(replace(j, at=tuple(1000.0 * np.asarray(j.at))) for j in m.joints),

@@ -2,7 +2,7 @@
 
 Every ``multiloop`` command and :func:`multiloop.load` accept, wherever they take a
 file, (i) a ``.toml``/``.json`` mechanism file, (ii) a Pyslvs project ``.pyslvs`` (or a
-bare Pyslvs expression in a ``.txt``/``.expr`` file, read by :mod:`multiloop.exchange.pyslvs`),
+bare Pyslvs expression in an ``.expr`` file: the readers of :data:`topo.formats.FORMATS`),
 and (iii) the name of a bundled mechanism (``multiloop catalogue`` lists them), looked up
 in the catalogue folders when no file of that name exists.
 
@@ -19,13 +19,12 @@ from importlib import resources
 from pathlib import Path
 
 from multiloop.topo.errors import InputError, explain
+from multiloop.topo.formats import FORMATS, loads_mechanism, read_mechanism
 from multiloop.topo.model import Mechanism
 
 __all__ = ["resolve", "load_mechanism", "load_mechanism_or_engine", "load_upload", "upload_text",
-           "PYSLVS_SUFFIXES", "MAX_UPLOAD"]
+           "MAX_UPLOAD"]
 
-#: suffixes read as Pyslvs input (project YAML, or a bare expression)
-PYSLVS_SUFFIXES = (".pyslvs", ".expr")
 #: largest upload accepted (bytes): the largest bundled mechanism is a few kB
 MAX_UPLOAD = 1 << 20
 
@@ -58,11 +57,10 @@ def resolve(arg: str | Path, folders: tuple[str, ...] = ("mechanisms", "engines"
 def load_mechanism(arg: str | Path) -> Mechanism:
     """A :class:`Mechanism` from a ``.toml``/``.json``/``.pyslvs`` file or a catalogue name."""
     p = resolve(arg)
-    if p.suffix.lower() in PYSLVS_SUFFIXES:
-        from multiloop.exchange.pyslvs import read_pyslvs  # noqa: PLC0415 - YAML only when used
-        return read_pyslvs(p)
-    from multiloop.topo.io import load  # noqa: PLC0415
-    return load(p)
+    if p.suffix.lower() not in FORMATS:       # (the TOML/JSON reader names an unknown suffix)
+        from multiloop.topo.io import load  # noqa: PLC0415
+        return load(p)
+    return read_mechanism(p)
 
 
 def load_mechanism_or_engine(path: str | Path) -> Mechanism:
@@ -103,12 +101,7 @@ def load_upload(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> Mechanis
     """A :class:`Mechanism` from the bytes of an uploaded ``.toml``/``.json``/``.pyslvs``
     file, read by the same parsers as :func:`load_mechanism` without touching the disk."""
     suffix = Path(name).suffix.lower()
-    if suffix not in (".toml", ".json") + PYSLVS_SUFFIXES:
+    if suffix not in FORMATS:
         raise InputError(explain(f"file '{name}'", expected="a .toml, .json or .pyslvs file",
                                  got=f"suffix '{suffix or '(none)'}'"))
-    text = upload_text(name, data, max_bytes)
-    if suffix in PYSLVS_SUFFIXES:
-        from multiloop.exchange.pyslvs import loads_pyslvs  # noqa: PLC0415
-        return loads_pyslvs(text, name, name=Path(name).stem)
-    from multiloop.topo.io import loads  # noqa: PLC0415
-    return loads(text, suffix[1:], where=name)
+    return loads_mechanism(upload_text(name, data, max_bytes), name)

@@ -151,7 +151,7 @@ def mutate_json(rng: random.Random, doc) -> bytes:
 
 
 def _seed_texts() -> dict[str, str]:
-    from multiloop.exchange.pyslvs import dumps_pyslvs
+    from multiloop.topo.pyslvs import dumps_pyslvs
     from multiloop.inputs import load_mechanism
 
     texts = {s: (CAT / s).read_text() for s in TOML_SEEDS + [ENGINE_SEED, PLATFORM_SEED]}

@@ -1,4 +1,4 @@
-"""Pyslvs projects in and out (multiloop.exchange.pyslvs, ``multiloop convert``).
+"""Pyslvs projects in and out (multiloop.topo.pyslvs, ``multiloop convert``).
 
 Oracle: tests/data/pyslvs_solutions.json, Pyslvs 22.7.0's own position solutions of
 its bundled examples (``pyslvs.example_list``), recorded by
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from multiloop.cli import main
-from multiloop.exchange.pyslvs import (dumps_pyslvs, expression_of, mechanism_from_expression,
+from multiloop.topo.pyslvs import (dumps_pyslvs, expression_of, mechanism_from_expression,
                                        parse_expression, read_pyslvs)
 from multiloop.kin.solve import solve
 from multiloop.topo.errors import InputError

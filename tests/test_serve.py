@@ -12,7 +12,7 @@ import pytest
 from multiloop.catalogue.atlas import Atlas
 from multiloop.catalogue.dimensional.targets import parse_table, read_table
 from multiloop.catalogue.synthesis import SynthesisOptions
-from multiloop.exchange.pyslvs import dumps_pyslvs, loads_pyslvs, read_pyslvs
+from multiloop.topo.pyslvs import dumps_pyslvs, loads_pyslvs, read_pyslvs
 from multiloop.inputs import load_mechanism, load_upload, resolve
 from multiloop.kin.solve import solve
 from multiloop.topo.errors import InputError, LinkageError

@@ -3,22 +3,20 @@
 IN may be any input the other commands take (a ``.toml``/``.json``/``.pyslvs``/``.expr``
 file or a catalogue name); the format of OUT follows its suffix: ``.toml``, ``.json``,
 ``.pyslvs`` (Pyslvs project YAML: ``mechanism`` expression and ``input`` pairs) or
-``.expr`` (a bare Pyslvs expression).  The mapping to and from Pyslvs is documented in
-:mod:`multiloop.exchange.pyslvs`; what a Pyslvs file cannot keep (masses, loads, gravity,
+``.expr`` (a bare Pyslvs expression): the writers of :data:`topo.formats.FORMATS`.  The
+mapping to and from Pyslvs is documented in :mod:`multiloop.topo.pyslvs`; what a Pyslvs file cannot keep (masses, loads, gravity,
 joint names, ...) is named on stderr.  Nothing is written when the conversion fails.
 """
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from multiloop.inputs import load_mechanism
 from multiloop.outputs import Outputs
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError
+from multiloop.topo.formats import dumps_mechanism, format_of
 
-__all__ = ["add_arguments", "run", "render"]
-
-FORMATS = (".toml", ".json", ".pyslvs", ".expr")
+__all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p) -> None:
@@ -26,30 +24,18 @@ def add_arguments(p) -> None:
     p.add_argument("output", help="output file; its suffix picks the format (.toml/.json/.pyslvs/.expr)")
 
 
-def render(m, suffix: str) -> str:
-    """The text of ``m`` in the format of ``suffix``."""
-    from multiloop.exchange.pyslvs import dumps_expression, dumps_pyslvs  # noqa: PLC0415
-    from multiloop.topo.io import dumps_json, dumps_toml  # noqa: PLC0415
-
-    writers = {".toml": dumps_toml, ".json": dumps_json, ".pyslvs": dumps_pyslvs, ".expr": dumps_expression}
-    return writers[suffix](m)
-
-
 def run(args) -> int:
-    suffix = Path(args.output).suffix.lower()
-    if suffix not in FORMATS:
-        raise InputError(explain(f"output '{args.output}'", expected="a suffix among " + ", ".join(FORMATS),
-                                 got=repr(suffix or "none")))
+    suffix = format_of(args.output, f"output '{args.output}'").suffix
     m = load_mechanism(args.input)
     try:
-        text = render(m, suffix)
+        text = dumps_mechanism(m, args.output)
     except InputError as exc:
         raise InputError(f"{args.input}: {exc}") from None
     outs = Outputs("multiloop convert")
     outs.add(args.output, text, "OUT")
     outs.commit()
     if suffix in (".pyslvs", ".expr"):
-        from multiloop.exchange.pyslvs import pyslvs_losses  # noqa: PLC0415
+        from multiloop.topo.pyslvs import pyslvs_losses  # noqa: PLC0415
         lost = pyslvs_losses(m) + (["the inputs (a bare expression has none)"] if suffix == ".expr" and m.drivers
                                    else [])
         if lost:

@@ -4,7 +4,7 @@
 Each candidate is one :func:`multiloop.catalogue.dimensional.synthesise` run (seeds
 ``seed``, ``seed + 1``, …, each with its share of the budget).  A candidate is drawn over
 the target, opens in the mechanism view, and downloads as ``.toml`` or ``.pyslvs``
-(:mod:`multiloop.exchange.pyslvs`).
+(:mod:`multiloop.topo.pyslvs`).
 """
 from __future__ import annotations
 
@@ -291,7 +291,7 @@ class SynthesisView:
                 from multiloop.topo.io import dumps_toml
                 text = dumps_toml(m)
             else:
-                from multiloop.exchange.pyslvs import dumps_pyslvs
+                from multiloop.topo.pyslvs import dumps_pyslvs
                 text = dumps_pyslvs(m)
         except LinkageError as exc:
             self.say(str(exc))
