@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .base import cramer, is_singular, quiet
-from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, triad_modes
+from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, track_designs, triad_modes
 from ..continuation import Probe
 from ..poses import known_on
 from ..result import Status
@@ -291,8 +291,7 @@ class Class4Step(GroupStep):
 
     def _designs(self, G) -> Outcome:
         """D designs at N inputs: the triad reduction of :func:`class4_track` tracked for all
-        designs at once (:func:`~kin.groups.triad_batch.track_designs`), as alone."""
-        from .triad_batch import track_designs
+        designs at once (:func:`~kin.groups.triad.track_designs`), as alone."""
         Oref, r = self.O, self.r
         O = np.stack([G.point(k, Oref[..., i, :]) for i, k in enumerate(self.known)], axis=-2)   # (D, N, 2, 2)
         o = Oref[:, :, :1]                   # (D, 1, 1, 2): about the reference pivot, as alone
