@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from multiloop.kin.solve import compile_plan, solve
-from multiloop.topo.assur import GroupKind, decompose
+from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -24,7 +24,7 @@ from .grashof import four_bar_loops
 from .instant_centres import instant_centres
 from .motion import driver_motion
 from .report import AngleResult, CheckReport, DriverCheck
-from .transmission import angle_specs, angle_values
+from .transmission import angle_specs, angle_values, guide_direction
 from .verdict import verdict
 
 __all__ = ["check", "watched", "signed_dets"]
@@ -62,35 +62,27 @@ def _velocity(state, w) -> np.ndarray:
 
 
 def signed_dets(plan):
-    """Dyads with a reach limit and their normalised signed determinant ``D(state)``:
-    sin of the angle at B (RRR), cos of rod–guide angle (RRP), s/|CA| (RPR)."""
-    m = plan.mechanism
-    groups = [g for g in plan.groups if g.kind in (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)]
+    """Groups with a reach limit and their normalised signed determinant ``D(state)``,
+    from each group's monitored angle (:func:`~kin.check.transmission.angle_specs`):
+    sin of the angle at B of a triangle (an RRR dyad or an actuated triangle), cos of
+    the rod–guide angle (RRP), s/|CA| (RPR)."""
+    specs = [sp for sp in angle_specs(plan) if sp.quantity in ("transmission", "pressure")]
+    by_label = {g.describe(): g for g in plan.groups}
+    groups = [by_label[sp.group] for sp in specs]
 
     def D(state):
         P = state.positions
-        out = np.full((P.shape[0], len(groups)), np.nan)
-        for c, g in enumerate(groups):
-            o1, inner, o2, l1, _ = g.layout
-            if g.kind is GroupKind.RRR:
-                A, B, C = (P[:, state.joint_index(n)] for n in (o1, inner, o2))
+        out = np.full((P.shape[0], len(specs)), np.nan)
+        for c, sp in enumerate(specs):
+            if sp.quantity == "transmission":
+                A, B, C = (P[:, state.joint_index(n)] for n in sp.points)
                 u, v = A - B, C - B
                 out[:, c] = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (
                     np.hypot(*u.T) * np.hypot(*v.T))
                 continue
-            pj = o2 if g.kind is GroupKind.RRP else inner
-            guide = m.joint(pj).links[0]
-            if g.kind is GroupKind.RRP:
-                X, Y = P[:, state.joint_index(o1)], P[:, state.joint_index(inner)]
-            else:
-                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-                X, Y = P[:, state.joint_index(gx)], P[:, state.joint_index(bx)]
-            ax = np.asarray(m.joint(pj).axis, float)
-            th = state.angles[:, state.link_index(guide)]
-            u = np.stack([np.cos(th) * ax[0] - np.sin(th) * ax[1],
-                          np.sin(th) * ax[0] + np.cos(th) * ax[1]], -1) / np.hypot(*ax)
+            X, Y = (P[:, state.joint_index(n)] for n in sp.points)
             d = Y - X
-            out[:, c] = np.sum(d * u, axis=-1) / np.hypot(*d.T)
+            out[:, c] = np.sum(d * guide_direction(state, sp), axis=-1) / np.hypot(*d.T)
         return out
     return groups, D
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from multiloop.topo.assur import GroupKind
+from multiloop.kin.groups.registry import has_closed_form
 from multiloop.topo.errors import AssemblyError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -26,12 +26,6 @@ __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
 R_STEPS = 720            # grid steps per turn (0.5°)
 P_STEPS = 400            # grid steps over ± the mechanism's size
-#: groups with a closed-form or all-modes kernel; any other group is tracked by Newton
-#: at about a millisecond per position, so its mechanism gets a coarser P grid and
-#: fewer samples per zoom iteration (same 1e-10 tolerance, more iterations)
-#: the group kinds with a closed-form kernel
-_KERNELS = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR, GroupKind.PRP, GroupKind.RPP, GroupKind.TRIAD,
-            GroupKind.CLASS_IV)
 
 
 @dataclass(frozen=True)
@@ -141,7 +135,10 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
     ``branch(state)`` gives the signed dyad determinants that guard refinements against
     branch jumps (:meth:`Side._guard`)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
-    heavy = any(kd not in _KERNELS for kd in kinds)
+    # a group without a closed-form or all-modes kernel is tracked by Newton at about a
+    # millisecond per position: its mechanism gets a coarser P grid and fewer samples per
+    # zoom iteration (same 1e-10 tolerance, more iterations)
+    heavy = any(not has_closed_form(kd) for kd in kinds)
     samples, stride = (8, 1) if heavy else (32, 1)
     if rotary:
         h = 2.0 * np.pi / R_STEPS
