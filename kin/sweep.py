@@ -30,7 +30,10 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
     reference itself (0, 360/N, …); for P drivers a stroke from 0 to +10 % of the
     mechanism's size (the largest extent of its reference joints), N points.
     ``start``/``stop``: N points from ``start`` to ``stop`` inclusive, exactly
-    ``start + k·step``.  Every driver takes the same values.
+    ``start + k·step``.  Every driver takes the same values.  Without ``start``/``stop``,
+    a driver with a ``range`` is swept over that range (from low to high); then the
+    result is ``(N, n_drivers)`` when there are several drivers (one column each, the
+    others on their usual default).
 
     Raises
     ------
@@ -57,6 +60,8 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
                                         f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
                                      got=f"{v:g}"))
     n = steps if steps is not None else 36
+    if start is None and any(d.range is not None for d in m.drivers):
+        return _ranged_default(m, n, size)
     if start is not None:
         if n == 1:
             return np.array([start])
@@ -71,12 +76,31 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
                              got="no range"))
 
 
-def si_inputs(m: Mechanism, x_user: np.ndarray) -> np.ndarray:
-    """The inputs of :func:`input_range` in radians (R) and metres (P): ``(N,)`` for one
-    driver, ``(N, n_drivers)`` for several (what :func:`~kin.solve.solve` takes)."""
+def _ranged_default(m: Mechanism, n: int, size: float) -> np.ndarray:
+    """The default sweep when a driver has a ``range``: that range for it, the usual
+    default (a turn, or 10 % of the size) for the others; user units."""
     cols = []
     for d in m.drivers:
-        cols.append(np.radians(x_user) if m.joint(d.joint).kind is JointKind.R else x_user)
+        rotary = m.joint(d.joint).kind is JointKind.R
+        if d.range is not None:
+            lo, hi = np.degrees(d.range) if rotary else d.range
+            cols.append(np.linspace(lo, hi, n) if n > 1 else np.zeros(1))
+        elif rotary:
+            cols.append(np.arange(n) * (360.0 / n))
+        else:
+            cols.append(np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1))
+    return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
+
+
+def si_inputs(m: Mechanism, x_user: np.ndarray) -> np.ndarray:
+    """The inputs of :func:`input_range` in radians (R) and metres (P): ``(N,)`` for one
+    driver, ``(N, n_drivers)`` for several (what :func:`~kin.solve.solve` takes);
+    ``x_user`` is ``(N,)`` (every driver the same) or ``(N, n_drivers)``."""
+    x_user = np.asarray(x_user, float)
+    cols = []
+    for k, d in enumerate(m.drivers):
+        x = x_user[:, k] if x_user.ndim == 2 else x_user
+        cols.append(np.radians(x) if m.joint(d.joint).kind is JointKind.R else x)
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
 
 
@@ -110,7 +134,8 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
     if kinds[0] is JointKind.R:
         q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
     elif set(kinds) == {JointKind.P}:
-        q[:] = input_range(m, steps)[:, None]   # the solve command's default stroke
+        x = input_range(m, steps)               # the solve command's default stroke
+        q[:] = x if x.ndim == 2 else x[:, None]
     else:
         raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
                                  got="no default sweep"))

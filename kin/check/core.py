@@ -171,7 +171,8 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
                        tuple(limit_groups), tuple(sorted(bps)),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
                        angles, out[0] if out else None, unit,
-                       np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext)
+                       np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext,
+                       d.range, mo.binds)
 
 
 def _on_turn(x: float, mo) -> float:

@@ -1,7 +1,7 @@
 """The readable text form of a :class:`CheckReport`."""
 from __future__ import annotations
 
-from .verdict import fmt_input
+from .verdict import fmt_input, usable_text
 
 __all__ = ["format_report"]
 
@@ -15,6 +15,8 @@ def _driver(dc, thr: float) -> list[str]:
         L.append("  range of motion: limited; stops at " + ", ".join(fmt_input(dc, x) for x in dc.limits))
         for s in dc.limit_groups:
             L.append(f"    beyond the limit: {s}")
+        if usable_text(dc):
+            L.append(f"  {usable_text(dc)}")
     else:
         L.append("  range of motion: no limit within the swept stroke")
     for x, g in dc.branch_points:
