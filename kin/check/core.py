@@ -25,7 +25,9 @@ from .instant_centres import instant_centres
 from .motion import driver_motion
 from .report import AngleResult, CheckReport, DriverCheck
 from .transmission import angle_specs, angle_values, guide_direction
+from .sweep import mechanism_size
 from .verdict import verdict
+from .workspace import workspace as workspace_of
 
 __all__ = ["check", "watched", "signed_dets"]
 
@@ -175,6 +177,25 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
                        d.range, mo.binds)
 
 
+def usable_box(m: Mechanism, dcs) -> tuple[tuple[float, float], ...]:
+    """Each driver's usable range (low, high) from the reference: a full turn for a
+    crank that turns fully, ± the mechanism's size (P) or ± half a turn (R) on a side
+    without a limit."""
+    out = []
+    for dc in dcs:
+        far = np.pi if dc.rotary else mechanism_size(m)
+        if dc.full_rotation:
+            out.append((0.0, 2 * np.pi))
+        elif len(dc.limits) == 2:
+            out.append((float(min(dc.limits)), float(max(dc.limits))))
+        elif len(dc.limits) == 1:
+            x = float(dc.limits[0])
+            out.append((x, far) if x < 0 else (-far, x))
+        else:
+            out.append((-far, far))
+    return tuple(out)
+
+
 def _on_turn(x: float, mo) -> float:
     """A crossing of a full turn reduced to [0, 2π) (as the grid's inputs are)."""
     return float(np.mod(x, 2 * np.pi)) if mo.rotary and mo.full_rotation else float(x)
@@ -205,7 +226,7 @@ def _reachable(mo, x) -> bool:
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
-          at=None, positions=None) -> "CheckReport":
+          at=None, positions=None, workspace: str | None = None) -> "CheckReport":
     """Design check of a mechanism over its whole motion (docs/check.md).
 
     Parameters
@@ -225,6 +246,9 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     positions : dict {driver joint: sequence}, optional
         Driver values (rad or m) the design must reach: the ones outside the
         reachable motion are listed (circuit defect).
+    workspace : str, optional
+        A tracer point: its workspace over the box of every driver's usable range
+        (:func:`~kin.check.workspace.workspace`).
 
     Returns
     -------
@@ -256,6 +280,7 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     ics = instant_centres(st, 0)
     circ = group_circuits(ap, dcs)
     loops = four_bar_loops(m, dict(ap.link_numbers))
+    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs))
     rep = CheckReport(m.name, ap.formula, float(min_transmission), dcs, circ, loops, ics,
-                      tuple(float(x) for x in x0), ())
+                      tuple(float(x) for x in x0), (), ws)
     return CheckReport(**{**rep.__dict__, "verdict": verdict(rep)})

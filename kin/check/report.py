@@ -153,6 +153,7 @@ class CheckReport:
     instant_centres: tuple
     instant_centres_at: tuple[float, ...]
     verdict: tuple[str, ...]
+    workspace: object = None                       # Workspace of --workspace POINT, or None
 
     def _repr_html_(self) -> str:
         """Notebook view: verdict and drivers, bars of the transmission ranges."""
@@ -199,4 +200,5 @@ class CheckReport:
                                      for dc in self.drivers},
             "verdict": list(self.verdict),
             "ok": self.ok,
+            **({"workspace": self.workspace.as_dict()} if self.workspace is not None else {}),
         })
