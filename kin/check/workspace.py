@@ -14,12 +14,12 @@ limit (the triangles of the hydraulic machines) these are the modes continuous m
 keeps; a group with a change point inside the box would be sampled on its reference mode
 only.
 The extreme x and y are *refined*, not read off the samples: from the best sample, a
-compass search (Kolda, Lewis & Torczon 2003, "Optimization by direct search", SIAM Rev.
-45(3) 385-482, section 3) polls the ``2n`` neighbours at step h on each driver axis,
-clamped to the box, moves to a better one or halves h, down to 1e-10 of each range; all
-four extremes are polled in one solve per iteration.  The value at an extreme is then
-exact to round-off (an interior extremum is flat; an extremum on the box lies on a clamped
-face or corner, where the search moves along the others).
+zoom search (a pattern search with a full grid as its poll set; Kolda, Lewis & Torczon
+2003, "Optimization by direct search", SIAM Rev. 45(3) 385-482) solves a small grid of
+driver values around the current best, clamped to the box, moves to its best sample or
+halves the window, down to 1e-10 of each range; all four extremes are polled in one solve
+per iteration.  Polling every direction of the window (not only the driver axes) keeps
+the search moving along a curved assembly limit, where a compass search stalls.
 
 The boundary is the outline of the samples' alpha shape (Edelsbrunner, Kirkpatrick &
 Seidel 1983, "On the shape of a set of points in the plane", IEEE Trans. Inf. Theory
@@ -45,6 +45,7 @@ __all__ = ["Workspace", "workspace", "alpha_outline"]
 _GRID = {1: 401, 2: 41}
 _LINE = 61            # samples along each box-edge sweep
 _FACE = 31            # samples per driver on each face of the box (three drivers or more)
+_ZOOM = {1: 9, 2: 9, 3: 7}   # zoom-search window: samples per driver
 
 
 @dataclass(frozen=True)
@@ -112,24 +113,29 @@ def _solve_point(m, X, ip) -> np.ndarray:
 
 
 def _refine(m, ip, box: np.ndarray, starts: np.ndarray, signs: np.ndarray, coords: np.ndarray):
-    """Compass search of the four extremes at once: maximise ``signs[e] * p[coords[e]]``
-    from ``starts[e]`` inside ``box``.  Returns (inputs (E, n), values (E,))."""
+    """Zoom search of the four extremes at once: maximise ``signs[e] * p[coords[e]]`` from
+    ``starts[e]`` inside ``box``.  Each iteration solves a ``k^n`` grid of half-width h
+    around every current best (clamped to the box): a better sample becomes the new centre
+    (h kept), else h is halved; a curved assembly limit does not stall it (all directions
+    are sampled, not only the driver axes).  Returns (inputs (E, n), values (E,))."""
     n = box.shape[0]
     span = box[:, 1] - box[:, 0]
-    step = np.tile(span / (_GRID.get(n, 15) - 1), (len(starts), 1))
+    k = _ZOOM.get(n, 5)
+    offs = np.array(np.meshgrid(*[np.linspace(-1.0, 1.0, k)] * n, indexing="ij")).reshape(n, -1).T
+    h = np.tile(span / (_GRID.get(n, 15) - 1), (len(starts), 1))
     x = starts.copy()
     best = signs * _solve_point(m, x, ip)[np.arange(len(x)), coords]
-    dirs = np.vstack([np.eye(n), -np.eye(n)])                     # (2n, n)
-    while np.any(step > 1e-10 * np.maximum(span, 1e-300)):
-        cand = np.clip(x[:, None, :] + dirs[None] * step[:, None, :], box[:, 0], box[:, 1])
-        p = _solve_point(m, cand.reshape(-1, n), ip).reshape(len(x), 2 * n, 2)
-        v = signs[:, None] * p[np.arange(len(x)), :, coords]
+    E = np.arange(len(x))
+    while np.any(h > 1e-10 * np.maximum(span, 1e-300)):
+        cand = np.clip(x[:, None, :] + offs[None] * h[:, None, :], box[:, 0], box[:, 1])
+        p = _solve_point(m, cand.reshape(-1, n), ip).reshape(len(x), len(offs), 2)
+        v = signs[:, None] * p[E[:, None], np.arange(len(offs))[None, :], coords[:, None]]
         v = np.where(np.isfinite(v), v, -np.inf)
         i = np.argmax(v, axis=1)
-        better = v[np.arange(len(x)), i] > best
-        x = np.where(better[:, None], cand[np.arange(len(x)), i], x)
-        best = np.where(better, v[np.arange(len(x)), i], best)
-        step = np.where(better[:, None], step, 0.5 * step)
+        better = v[E, i] > best
+        x = np.where(better[:, None], cand[E, i], x)
+        best = np.where(better, v[E, i], best)
+        h = np.where(better[:, None], h, 0.5 * h)
     return x, signs * best
 
 
