@@ -53,6 +53,7 @@ class Status(IntEnum):
     MODE_LOST = 6           #: a tracked mode (triad, class IV, Newton) was lost earlier in the path
     NOT_CONVERGED = 7       #: Newton did not converge
     NOT_SOLVED = 8          #: not asked for (``only=``)
+    OUT_OF_RANGE = 9        #: an input lies outside its driver's ``range`` (stroke or angular limits)
 
 
 #: the short text of each code; position messages start with the group's label
@@ -66,6 +67,7 @@ MESSAGES = {
     Status.MODE_LOST: "assembly mode lost earlier in the path",
     Status.NOT_CONVERGED: "no assembly (Newton did not converge)",
     Status.NOT_SOLVED: "not solved (not asked for)",
+    Status.OUT_OF_RANGE: "out of range: an input is outside its driver's range",
 }
 
 

@@ -696,8 +696,31 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         run, notes = _solve_ranged(sp, X, needed, kernels)
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
+    _mark_out_of_range(sp, X, run)
     select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
+
+
+def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
+    """Inputs outside a driver's ``range`` are failed positions (status ``out of range``);
+    the path through them was solved as usual, so the motion on either side is unchanged.
+    A value within 1e-12 of the size (P) or 1e-12 rad (R) of an end is inside."""
+    m = sp.mechanism
+    for k, d in enumerate(m.drivers):
+        if d.range is None:
+            continue
+        rotary = m.joint(d.joint).kind is JointKind.R
+        tol = 1e-12 * (1.0 if rotary else sp.size)
+        out = (X[:, k] < d.range[0] - tol) | (X[:, k] > d.range[1] + tol)
+        if not out.any():
+            continue
+        lo, hi = np.degrees(d.range) if rotary else d.range
+        text = (f"out of range: {'angular range' if rotary else 'stroke'} of {d.joint} is "
+                f"[{lo:.6g}, {hi:.6g}] {'deg' if rotary else 'm'}")
+        for n in np.flatnonzero(out & (run.code == 0)):
+            run.reason[int(n)] = text
+        run.code[out & (run.code == 0)] = Status.OUT_OF_RANGE
+        run.G.invalidate(range(m.n_links), out)
 
 
 def _check_range(sp: SolvePlan, X: np.ndarray) -> None:

@@ -130,8 +130,8 @@ def _list(a) -> list:
 
 def _state_dict(state, formula=None, inputs_cli=None, derivatives=None) -> dict:
     """The JSON document of a :class:`~kin.state.KinematicState` (layout: module doc).
-    ``inputs_cli`` (N,): the inputs as given on the command line (deg / m), printed
-    as given (no round trip through radians)."""
+    ``inputs_cli`` (N,) or (N, n_drivers): the inputs as given on the command line
+    (deg / m), printed as given (no round trip through radians)."""
     m = state.mechanism
     drivers = []
     inp = []
@@ -139,7 +139,8 @@ def _state_dict(state, formula=None, inputs_cli=None, derivatives=None) -> dict:
         is_r = m.joint(d.joint).kind is JointKind.R
         drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
         if inputs_cli is not None:
-            inp.append(np.asarray(inputs_cli, float))
+            x = np.asarray(inputs_cli, float)
+            inp.append(x[:, k] if x.ndim == 2 else x)
         else:
             inp.append(np.degrees(state.inputs[:, k]) if is_r else state.inputs[:, k])
     doc = {"mechanism": m.name, "formula": formula,

@@ -141,14 +141,18 @@ def test_a_rocker_turned_by_a_cylinder_is_a_triangle_too():
     assert np.max(np.abs(a.velocities - n.velocities)) < 1e-10
 
 
-CYLINDER_MACHINES = ["excavator", "excavator_bucket"]
+CYLINDER_MACHINES = ["excavator", "excavator_bucket", "wheel_loader_zbar", "knuckle_boom_crane"]
 
 
 def _strokes(m, n=25):
     """All cylinders moving at once, out of phase, inside the machine's working range."""
     t = np.linspace(0.0, 1.0, n)[:, None]
     pattern = np.array([0.5, -0.35, 0.25, -0.2][:len(m.drivers)])
-    return t * pattern[None, :] + 0.05 * np.sin(7 * t) * np.ones(len(m.drivers))
+    X = t * pattern[None, :] + 0.05 * np.sin(7 * t) * np.ones(len(m.drivers))
+    for k, d in enumerate(m.drivers):        # inside a cylinder's stated range (95 % of it)
+        if d.range is not None:
+            X[:, k] = np.clip(X[:, k], 0.95 * d.range[0], 0.95 * d.range[1])
+    return X
 
 
 @pytest.mark.parametrize("name", CYLINDER_MACHINES)

@@ -386,6 +386,10 @@ def driver_path(name: str, m: Mechanism) -> np.ndarray:
     if name == "excavator_bucket":
         t = np.linspace(0.0, 1.0, 37)[1:]
         return np.stack([0.30 * np.sin(2 * np.pi * t), 0.20 * np.sin(2 * np.pi * t + 2.1)], axis=1)
+    if all(d.range is not None for d in m.drivers) and len(m.drivers) > 1:   # the hydraulic machines
+        t = np.linspace(0.0, 1.0, 37)[1:]        # each cylinder to 90 % of its range ends, out of phase
+        sn = np.stack([np.sin(2 * np.pi * t + 2.1 * k) for k in range(len(m.drivers))], axis=1)
+        return 0.9 * np.where(sn > 0, sn * [d.range[1] for d in m.drivers], -sn * [d.range[0] for d in m.drivers])
     assert len(m.drivers) == 1 and m.joint(m.drivers[0].joint).kind is JointKind.R
     return deg(np.arange(10, 370, 10))[:, None]     # a full turn of the crank in 10 deg steps
 

@@ -208,7 +208,9 @@ def test_kennedy_and_primary_centres(path):
     m = load(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        s = solve(m, np.array([[0.7] * len(m.drivers)]), derivatives=True)
+        x = [0.7 if d.range is None else min(max(0.7, 0.9 * d.range[0]), 0.9 * d.range[1])
+             for d in m.drivers]                  # a cylinder inside its stroke
+        s = solve(m, np.array([x]), derivatives=True)
     ics = instant_centres(s, 0)
     h = {frozenset((c.a, c.b)): np.array(c.homogeneous) for c in ics}
     for i, j, k in itertools.combinations(m.link_names, 3):

@@ -109,6 +109,10 @@ def test_catalogue_mechanisms_with_masses_through_the_general_solver():
         nd = len(m.drivers)
         w = np.array([d.speed or 1.0 for d in m.drivers])
         q0 = RNG.uniform(-0.2, 0.2, (12, nd))
+        for k, d in enumerate(m.drivers):          # inside a driver's own range (a cylinder's stroke)
+            if d.range is not None:
+                lo, hi = max(d.range[0], -0.2) + 1e-3, min(d.range[1], 0.2) - 1e-3
+                q0[:, k] = lo + (q0[:, k] + 0.2) / 0.4 * (hi - lo)
         from multiloop.kin.solve import solve
         fr = forces(m, q0, accelerations=np.zeros(nd))
         ok = fr.ok

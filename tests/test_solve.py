@@ -334,6 +334,7 @@ def _cycle_for(m):
         return np.linspace(0.0, 2 * np.pi, 181)
     t = np.linspace(0.0, 1.0, 61)
     cols = [t * (0.3 if m.joint(d.joint).kind.value == "R" else 0.05 * size) for d in m.drivers]
+    cols = [c if d.range is None else np.clip(c, *d.range) for c, d in zip(cols, m.drivers)]  # its stroke
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
 
 

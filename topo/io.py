@@ -44,8 +44,8 @@ _TOP_KEYS = {"name", "description", "source", "joints", "link", "joint", "driver
              "force", "gravity", "reconstruction", "notes"}
 _TABLE_KEYS = {
     "link": {"name", "frame", "mass", "cg", "inertia", "color"},
-    "joint": {"name", "kind", "links", "at", "axis"},
-    "driver": {"joint", "links", "speed", "acceleration"},
+    "joint": {"name", "kind", "links", "at", "axis", "range"},
+    "driver": {"joint", "links", "speed", "acceleration", "range"},
     "point": {"name", "link", "at"},
     "force": {"link", "at", "value", "table", "moment", "name"},
 }
@@ -364,10 +364,11 @@ def mechanism_from_dict(doc: dict[str, Any]) -> Mechanism:
     b.links += [_read_link(label, t) for label, t in _tables(doc, "link")]
     b.joints += [_read_joint(label, t) for label, t in _tables(doc, "joint")]
     for label, t in _tables(doc, "driver"):
-        b.add_driver(read_string(t["joint"], f"{label} joint"),
-                     read_names(t["links"], f"{label} links") if "links" in t else None,
+        jn = read_string(t["joint"], f"{label} joint")
+        b.add_driver(jn, read_names(t["links"], f"{label} links") if "links" in t else None,
                      read_number(t["speed"], f"{label} speed") if "speed" in t else None,
-                     read_number(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None)
+                     read_number(t["acceleration"], f"{label} acceleration") if "acceleration" in t else None,
+                     _read_range(label, t["range"], b.joints, jn) if "range" in t else None)
     b.points += [TracerPoint(read_string(t["name"], f"{label} name"), read_string(t["link"], f"{label} link"),
                              read_vector(t["at"], f"{label} at")) for label, t in _tables(doc, "point")]
     b.loads += [_read_force(label, t) for label, t in _tables(doc, "force")]
@@ -400,7 +401,25 @@ def _read_link(label: str, t: dict) -> Link:
                 read_string(t["color"], f"{label} color") if "color" in t else None)
 
 
+def _read_range(label: str, value: Any, joints, jn: str) -> tuple[float, float]:
+    """A driver's ``range = [low, high]`` in the file's units (degrees for an R joint, m
+    for a P joint), returned in rad or m; the builder checks low < high and that it
+    contains the reference."""
+    kind = next((j.kind for j in joints if j.name == jn), None)
+    rotary = kind is not None and JointKind(kind) is JointKind.R
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise InputError(explain(f"{label} range", expected="[low, high] (" + ("deg" if rotary else "m")
+                                 + ", from the reference)", got=repr(value)[:60]))
+    lo, hi = (read_number(v, f"{label} range", unit="deg" if rotary else "m") for v in value)
+    return (math.radians(lo), math.radians(hi)) if rotary else (lo, hi)
+
+
 def _read_joint(label: str, t: dict) -> Joint:
+    if "range" in t:
+        name = t.get("name")
+        raise InputError(explain(f"{label} range", expected="a range only in a [[driver]] table",
+                                 got=f"a range on [[joint]] {name!r} (a joint, not a driver)",
+                                 hint=f"write it as [[driver]] joint = {name!r} range = [low, high]"))
     kind = t.get("kind", "R")
     if kind not in ("R", "P"):
         raise InputError(explain(f"{label} kind", expected="'R' or 'P'", got=repr(kind)))
@@ -475,6 +494,9 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
                 t["speed"] = d.speed
             if d.acceleration is not None:
                 t["acceleration"] = d.acceleration
+            if d.range is not None:
+                rotary = m.joint(d.joint).kind is JointKind.R
+                t["range"] = [math.degrees(v) if rotary else v for v in d.range]
             doc["driver"].append(t)
     if m.points:
         doc["point"] = [{"name": p.name, "link": p.link, "at": list(p.at)} for p in m.points]

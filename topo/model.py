@@ -108,13 +108,17 @@ class Driver:
     """An input: relative rotation (R) or slide (P) of ``links[1]`` w.r.t. ``links[0]``.
 
     ``speed`` (rad/s or m/s) and ``acceleration`` are used by kinetostatics; the
-    kinematic analogues assume unit speed and zero acceleration.
+    kinematic analogues assume unit speed and zero acceleration.  ``range`` is the
+    driver's own limits ``(low, high)`` measured from the reference (rad or m: a motor's
+    angular limits, a cylinder's stroke from retracted to extended), or None; it
+    contains the reference (``low <= 0 <= high``).
     """
 
     joint: str
     links: tuple[str, str]
     speed: float | None = None
     acceleration: float | None = None
+    range: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -306,9 +310,12 @@ class MechanismBuilder:
                                  None if axis is None else _vec2(axis)))
 
     def add_driver(self, joint: str, links: Sequence[str] | None = None,
-                   speed: float | None = None, acceleration: float | None = None) -> None:
+                   speed: float | None = None, acceleration: float | None = None,
+                   range: Sequence[float] | None = None) -> None:
+        """A driver on ``joint``; ``range`` = (low, high) from the reference in rad (R)
+        or m (P)."""
         self.drivers.append((joint, None if links is None else tuple(links), speed,
-                             acceleration))
+                             acceleration, None if range is None else tuple(range)))
 
     def add_point(self, name: str, link: str, at: Iterable[float]) -> None:
         self.points.append(TracerPoint(name, link, _vec2(at)))
@@ -480,7 +487,8 @@ def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, 
     joint_by_name = {j.name: j for j in joints}
     drivers: list[Driver] = []
     for d in given:
-        jn, dl, speed, acc = (d.joint, d.links, d.speed, d.acceleration) if isinstance(d, Driver) else d
+        jn, dl, speed, acc, rng = ((d.joint, d.links, d.speed, d.acceleration, d.range)
+                                   if isinstance(d, Driver) else (tuple(d) + (None,))[:5])
         if jn not in joint_by_name:
             problems.append(explain(f"[[driver]] joint '{jn}'", expected="the name of a [[joint]]",
                                     got="an unknown joint",
@@ -496,8 +504,38 @@ def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, 
             continue
         if any(x.joint == jn and set(x.links) == set(dl) for x in drivers):
             problems.append(explain(f"[[driver]] on joint '{jn}'", expected="one driver per pair", got="a duplicate"))
-        drivers.append(Driver(jn, dl, speed, acc))  # type: ignore[arg-type]
+        bad = _range_problem(jn, jt.kind, rng)
+        if bad:
+            problems.append(bad)
+            rng = None
+        drivers.append(Driver(jn, dl, speed, acc, None if rng is None else (float(rng[0]), float(rng[1]))))  # type: ignore[arg-type]
     return drivers
+
+
+def _range_problem(jn: str, kind, rng) -> str | None:
+    """What is wrong with driver ``jn``'s ``range`` (SI), in the file's units (degrees
+    for an R joint, m for a P joint), or None."""
+    if rng is None:
+        return None
+    rotary = JointKind(kind) is JointKind.R
+    unit = "deg" if rotary else "m"
+    where = f"[[driver]] on joint '{jn}' range"
+    try:
+        lo, hi = (float(v) for v in rng)
+    except (TypeError, ValueError):
+        return explain(where, expected=f"[low, high] ({unit})", got=repr(rng)[:60])
+    shown = [math.degrees(v) if rotary else v for v in (lo, hi)]
+    got = f"[{shown[0]:.6g}, {shown[1]:.6g}]"
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return explain(where, expected=f"two finite numbers [low, high] ({unit})", got=got)
+    if lo >= hi:
+        return explain(where, expected=f"low < high ({unit})", got=got,
+                       hint="write the retracted (or lower) end first, e.g. [-0.4, 0.6]")
+    if lo > 0.0 or hi < 0.0:
+        return explain(where, expected=f"a range that contains the reference, low <= 0 <= high ({unit})",
+                       got=got, hint="the range is measured from the joint's reference position, "
+                                     "like --from and --to")
+    return None
 
 
 def _attachment_problems(points: Iterable[TracerPoint], loads: Iterable[Load],

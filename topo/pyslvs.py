@@ -30,7 +30,8 @@ A P joint on more than two links (several links fixed to one slider) has no
 multiloop equivalent and is refused with a message.  Writing refuses a link name that
 is not a Pyslvs name (letters, digits and ``_``, not starting with a digit: a ``,`` or
 ``]`` would change the chain read back) and names what the format cannot keep
-(:func:`pyslvs_losses`): masses, loads, gravity, driver speeds, joint and point names.
+(:func:`pyslvs_losses`): masses, loads, gravity, driver speeds and ranges, joint and
+point names.
 A driver written frame-second (``links = [b, frame]``) is exported as ``b`` driven
 relative to the frame; its input is the negative of the file's.
 
@@ -362,9 +363,11 @@ def pyslvs_losses(m: Mechanism) -> list[str]:
     named = [j.name for j in m.joints if not re.fullmatch(r"P\d+(_slot)?", j.name)]
     points = [p.name for p in m.points if not re.fullmatch(r"P\d+", p.name)]
     rates = [d.joint for d in m.drivers if d.speed is not None or d.acceleration is not None]
+    ranges = [d.joint for d in m.drivers if d.range is not None]
     reversed_ = [d.joint for d in m.drivers if m.frame is not None and d.links[1] == m.frame]
     for what, names in (("masses and inertias", heavy), ("forces", loads), ("joint names", named),
                         ("tracer point names", points), ("driver speeds and accelerations", rates),
+                        ("driver ranges", ranges),
                         ("link colours", [lk.name for lk in m.links if lk.color])):
         if names:
             shown = ", ".join(n[:40] for n in names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")

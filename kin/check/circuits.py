@@ -12,36 +12,11 @@ reference mode (its other modes are other circuits, reachable only by disassembl
 """
 from __future__ import annotations
 
-import numpy as np
-
-from multiloop.topo.assur import GroupKind
+from multiloop.kin.groups.registry import mode_count
 
 from .report import GroupCircuit
 
 __all__ = ["group_circuits"]
-
-
-def _modes(ap, g) -> int | None:
-    import multiloop.kin.groups as K
-
-    m = ap.mechanism
-    at = {j.name: np.asarray(j.at, float) for j in m.joints}
-    try:
-        if g.kind is GroupKind.TRIAD:
-            lay = g.layout
-            A = np.array([at[o] for o in lay.outers])
-            b = np.array([at[i] for i in lay.inners])
-            return int(K.triad_modes(A, b, np.hypot(*(b - A).T)).n_modes)
-        if g.kind is GroupKind.CLASS_IV:
-            lay = g.layout
-            O = np.array([at[lay.outer1], at[lay.outer2]])
-            J = np.array([at[j] for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
-            r = J - O[[0, 0, 1, 1]]
-            ll = np.array([np.hypot(*(J[2] - J[0])), np.hypot(*(J[3] - J[1]))])
-            return int(K.class4_modes(O, r, ll).n_modes)
-    except Exception:  # noqa: BLE001 - a count we cannot make is reported as unknown
-        return None
-    return {"RRR": 2, "actuated RRR": 2, "RRP": 2, "RPR": 2, "PRP": 1, "RPP": 1}.get(g.kind)
 
 
 def group_circuits(ap, drivers) -> tuple[GroupCircuit, ...]:
@@ -49,13 +24,13 @@ def group_circuits(ap, drivers) -> tuple[GroupCircuit, ...]:
     out = []
     for g in ap.groups:
         lab = g.describe()
-        n = _modes(ap, g)
+        n = mode_count(ap.mechanism, g)
         at_limit = [f"{dc.joint} limit" for dc in drivers for s in dc.limit_groups if s.startswith(lab)]
         at_branch = [f"{dc.joint} branch point" for dc in drivers for _, b in dc.branch_points if b == lab]
         if n is None:
             out.append(GroupCircuit(lab, g.kind_name, None, None,
-                                    "modes not enumerated for this group (solved by Newton "
-                                    "from the reference)"))
+                                    "modes not enumerated for this group (no kernel for its "
+                                    "kind: solved by Newton from the reference)"))
             continue
         via = at_limit + at_branch
         reach = min(n, 2) if via and n > 1 else 1

@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 from multiloop.kin.solve import compile_plan, solve
-from multiloop.topo.assur import GroupKind, decompose
+from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -24,8 +24,10 @@ from .grashof import four_bar_loops
 from .instant_centres import instant_centres
 from .motion import driver_motion
 from .report import AngleResult, CheckReport, DriverCheck
-from .transmission import angle_specs, angle_values
+from .transmission import angle_specs, angle_values, guide_direction
+from .sweep import mechanism_size
 from .verdict import verdict
+from .workspace import workspace as workspace_of
 
 __all__ = ["check", "watched", "signed_dets"]
 
@@ -62,35 +64,27 @@ def _velocity(state, w) -> np.ndarray:
 
 
 def signed_dets(plan):
-    """Dyads with a reach limit and their normalised signed determinant ``D(state)``:
-    sin of the angle at B (RRR), cos of rod–guide angle (RRP), s/|CA| (RPR)."""
-    m = plan.mechanism
-    groups = [g for g in plan.groups if g.kind in (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR)]
+    """Groups with a reach limit and their normalised signed determinant ``D(state)``,
+    from each group's monitored angle (:func:`~kin.check.transmission.angle_specs`):
+    sin of the angle at B of a triangle (an RRR dyad or an actuated triangle), cos of
+    the rod–guide angle (RRP), s/|CA| (RPR)."""
+    specs = [sp for sp in angle_specs(plan) if sp.quantity in ("transmission", "pressure")]
+    by_label = {g.describe(): g for g in plan.groups}
+    groups = [by_label[sp.group] for sp in specs]
 
     def D(state):
         P = state.positions
-        out = np.full((P.shape[0], len(groups)), np.nan)
-        for c, g in enumerate(groups):
-            o1, inner, o2, l1, _ = g.layout
-            if g.kind is GroupKind.RRR:
-                A, B, C = (P[:, state.joint_index(n)] for n in (o1, inner, o2))
+        out = np.full((P.shape[0], len(specs)), np.nan)
+        for c, sp in enumerate(specs):
+            if sp.quantity == "transmission":
+                A, B, C = (P[:, state.joint_index(n)] for n in sp.points)
                 u, v = A - B, C - B
                 out[:, c] = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (
                     np.hypot(*u.T) * np.hypot(*v.T))
                 continue
-            pj = o2 if g.kind is GroupKind.RRP else inner
-            guide = m.joint(pj).links[0]
-            if g.kind is GroupKind.RRP:
-                X, Y = P[:, state.joint_index(o1)], P[:, state.joint_index(inner)]
-            else:
-                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-                X, Y = P[:, state.joint_index(gx)], P[:, state.joint_index(bx)]
-            ax = np.asarray(m.joint(pj).axis, float)
-            th = state.angles[:, state.link_index(guide)]
-            u = np.stack([np.cos(th) * ax[0] - np.sin(th) * ax[1],
-                          np.sin(th) * ax[0] + np.cos(th) * ax[1]], -1) / np.hypot(*ax)
+            X, Y = (P[:, state.joint_index(n)] for n in sp.points)
             d = Y - X
-            out[:, c] = np.sum(d * u, axis=-1) / np.hypot(*d.T)
+            out[:, c] = np.sum(d * guide_direction(state, sp), axis=-1) / np.hypot(*d.T)
         return out
     return groups, D
 
@@ -179,7 +173,27 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
                        tuple(limit_groups), tuple(sorted(bps)),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
                        angles, out[0] if out else None, unit,
-                       np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext)
+                       np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext,
+                       d.range, mo.binds)
+
+
+def usable_box(m: Mechanism, dcs) -> tuple[tuple[float, float], ...]:
+    """Each driver's usable range (low, high) from the reference: a full turn for a
+    crank that turns fully, ± the mechanism's size (P) or ± half a turn (R) on a side
+    without a limit."""
+    out = []
+    for dc in dcs:
+        far = np.pi if dc.rotary else mechanism_size(m)
+        if dc.full_rotation:
+            out.append((0.0, 2 * np.pi))
+        elif len(dc.limits) == 2:
+            out.append((float(min(dc.limits)), float(max(dc.limits))))
+        elif len(dc.limits) == 1:
+            x = float(dc.limits[0])
+            out.append((x, far) if x < 0 else (-far, x))
+        else:
+            out.append((-far, far))
+    return tuple(out)
 
 
 def _on_turn(x: float, mo) -> float:
@@ -212,7 +226,7 @@ def _reachable(mo, x) -> bool:
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
-          at=None, positions=None) -> "CheckReport":
+          at=None, positions=None, workspace: str | None = None) -> "CheckReport":
     """Design check of a mechanism over its whole motion (docs/check.md).
 
     Parameters
@@ -232,6 +246,9 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     positions : dict {driver joint: sequence}, optional
         Driver values (rad or m) the design must reach: the ones outside the
         reachable motion are listed (circuit defect).
+    workspace : str, optional
+        A tracer point: its workspace over the box of every driver's usable range
+        (:func:`~kin.check.workspace.workspace`).
 
     Returns
     -------
@@ -263,6 +280,7 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     ics = instant_centres(st, 0)
     circ = group_circuits(ap, dcs)
     loops = four_bar_loops(m, dict(ap.link_numbers))
+    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs))
     rep = CheckReport(m.name, ap.formula, float(min_transmission), dcs, circ, loops, ics,
-                      tuple(float(x) for x in x0), ())
+                      tuple(float(x) for x in x0), (), ws)
     return CheckReport(**{**rep.__dict__, "verdict": verdict(rep)})

@@ -28,7 +28,7 @@ from multiloop.kin.solve import solve  # noqa: E402
 
 from .verdict import fmt_input  # noqa: E402
 
-__all__ = ["mechanism_axes", "transmission_axes", "instant_centre_axes", "report_figures",
+__all__ = ["mechanism_axes", "transmission_axes", "instant_centre_axes", "workspace_axes", "report_figures",
            "overview_figure", "html_page"]
 
 
@@ -126,6 +126,28 @@ def instant_centre_axes(ax, m, rep):
                         xytext=off, ha="center", va="center")
 
 
+def workspace_axes(ax, m, rep):
+    """The workspace envelope (boundary polygon), its extremes and the mechanism at the
+    reference."""
+    ws = rep.workspace
+    plot_mechanism(_solve(m, [0.0]), 0, ax=ax, title=f"{rep.mechanism}: workspace of {ws.point}")
+    b = np.asarray(ws.boundary)
+    if len(b):
+        ax.fill(b[:, 0], b[:, 1], color="tab:green", alpha=0.15, lw=0)
+        ax.plot(b[:, 0], b[:, 1], color="tab:green", lw=1.2, label=f"envelope ({ws.area:.4g} m²)")
+    ax.axvline(ws.x[0], color="grey", lw=0.6, ls=":")
+    ax.axvline(ws.x[1], color="grey", lw=0.6, ls=":")
+    ax.axhline(ws.y[0], color="grey", lw=0.6, ls=":")
+    ax.axhline(ws.y[1], color="grey", lw=0.6, ls=":")
+    ax.legend(loc="best", fontsize=7)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    x0, x1 = min(x0, ws.x[0]), max(x1, ws.x[1])
+    y0, y1 = min(y0, ws.y[0]), max(y1, ws.y[1])
+    pad = 0.05 * max(x1 - x0, y1 - y0)
+    ax.set_xlim(x0 - pad, x1 + pad)
+    ax.set_ylim(y0 - pad, y1 + pad)
+
+
 def report_figures(m, rep) -> dict:
     """``{file name: figure}`` of the HTML report."""
     f1, a1 = plt.subplots(figsize=(7, 6), dpi=100)
@@ -137,17 +159,26 @@ def report_figures(m, rep) -> dict:
     for f in (f1, f2, f3):
         f.tight_layout()
         no_mathtext(f)
-    return {"mechanism.png": f1, "transmission.png": f2, "instant_centres.png": f3}
+    out = {"mechanism.png": f1, "transmission.png": f2, "instant_centres.png": f3}
+    if rep.workspace is not None:
+        f4, a5 = plt.subplots(figsize=(7, 6), dpi=100)
+        workspace_axes(a5, m, rep)
+        f4.tight_layout()
+        out["workspace.png"] = no_mathtext(f4)
+    return out
 
 
 def overview_figure(m, rep):
-    """The three figures on one canvas (``--plot``)."""
-    fig = plt.figure(figsize=(16, 6.5), dpi=100)
-    gs = fig.add_gridspec(2, 3)
+    """The three figures on one canvas (``--plot``), and the workspace as a fourth."""
+    ws = rep.workspace is not None
+    fig = plt.figure(figsize=(21 if ws else 16, 6.5), dpi=100)
+    gs = fig.add_gridspec(2, 4 if ws else 3)
     mechanism_axes(fig.add_subplot(gs[:, 0]), m, rep)
     a2 = fig.add_subplot(gs[0, 1])
     transmission_axes(a2, fig.add_subplot(gs[1, 1], sharex=a2), m, rep)
     instant_centre_axes(fig.add_subplot(gs[:, 2]), m, rep)
+    if ws:
+        workspace_axes(fig.add_subplot(gs[:, 3]), m, rep)
     fig.tight_layout()
     return no_mathtext(fig)
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from multiloop.topo.assur import GroupKind
+from multiloop.kin.groups.registry import has_closed_form
 from multiloop.topo.errors import AssemblyError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
@@ -26,12 +26,6 @@ __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
 R_STEPS = 720            # grid steps per turn (0.5°)
 P_STEPS = 400            # grid steps over ± the mechanism's size
-#: groups with a closed-form or all-modes kernel; any other group is tracked by Newton
-#: at about a millisecond per position, so its mechanism gets a coarser P grid and
-#: fewer samples per zoom iteration (same 1e-10 tolerance, more iterations)
-#: the group kinds with a closed-form kernel
-_KERNELS = (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR, GroupKind.PRP, GroupKind.RPP, GroupKind.TRIAD,
-            GroupKind.CLASS_IV)
 
 
 @dataclass(frozen=True)
@@ -45,6 +39,7 @@ class Segment:
     limit: float | None
     limit_bracket: tuple[float, float] | None
     singular: tuple[tuple[float, str], ...]
+    bound: str | None = None         # what stops it: "assembly", "range" (the driver's own), None
 
     @property
     def x(self) -> np.ndarray:
@@ -62,6 +57,11 @@ class Motion:
     segments: tuple[Segment, ...]
     periodic: bool
     events: object = None            # MotionEvents of the certified walk (one driver), else None
+
+    @property
+    def binds(self) -> tuple[str, ...]:
+        """What stops the motion at each of :attr:`limits`: "assembly" or "range"."""
+        return tuple(s.bound or "assembly" for s in self.segments if s.limit is not None)
 
     @property
     def limits(self) -> tuple[float, ...]:
@@ -135,30 +135,56 @@ def _guarded(side: Side, st) -> Side:
     return replace(side, signs=np.sign(side.branch(st)))
 
 
+def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch) -> Side:
+    """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
+    ``range`` on that side at the same spacing (a range end at the reference: that value)."""
+    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    if rotary:
+        h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
+    else:
+        n = P_STEPS // 4 if heavy else P_STEPS
+        h = mechanism_size(m) / n
+    rng = m.drivers[k].range
+    span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
+    steps = int(np.ceil(span / h - 1e-9))
+    grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
+    return Side(m, plan, k, sign, grid, samples, stride, branch)
+
+
+def _bounded(seg: Segment, rng, sign: int) -> Segment:
+    """A segment that ran to the end of the driver's range stops there (``bound`` =
+    "range"); one stopped earlier by the assembly keeps its limit (``bound`` = "assembly")."""
+    if seg.limit is not None:
+        return replace(seg, bound="assembly")
+    if rng is None:
+        return seg
+    return replace(seg, limit=float(rng[1] if sign > 0 else rng[0]), bound="range")
+
+
 def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
     """Sample and bound the motion of driver ``k`` (see the module docstring);
     ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid);
     ``branch(state)`` gives the signed dyad determinants that guard refinements against
-    branch jumps (:meth:`Side._guard`)."""
+    branch jumps (:meth:`Side._guard`).  A driver with a ``range`` is moved within it:
+    its usable range is the intersection of the range and the assembly limits, and each
+    segment says which of the two binds."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
-    heavy = any(kd not in _KERNELS for kd in kinds)
+    rng = m.drivers[k].range
+    # a group without a closed-form or all-modes kernel is tracked by Newton at about a
+    # millisecond per position: its mechanism gets a coarser P grid and fewer samples per
+    # zoom iteration (same 1e-10 tolerance, more iterations)
+    heavy = any(not has_closed_form(kd) for kd in kinds)
     samples, stride = (8, 1) if heavy else (32, 1)
-    if rotary:
-        h = 2.0 * np.pi / R_STEPS
-        fwd = Side.make(m, plan, k, +1, R_STEPS + 3, (R_STEPS + 2) * h, samples, stride)   # to 361°
-    else:
-        n = P_STEPS // 4 if heavy else P_STEPS
-        fwd = Side.make(m, plan, k, +1, n + 1, mechanism_size(m), samples, stride)
-    fwd = replace(fwd, branch=branch)
     chunk = 8 if heavy else None
-    ev = motion_events(m, plan) if len(m.drivers) == 1 else None
+    # the certified walk searches ± the size, or to the ends of the range when it is wider
+    extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])
+    ev = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else None
     hi, lo = (ev.hi, ev.lo) if ev is not None and ev.period is None else (None, None)
-    seg_f = _segment(fwd, chunk, hi)
-    if rotary and seg_f.limit is None:
+    seg_f = _segment(_side(m, plan, k, +1, heavy, samples, stride, branch), chunk, hi)
+    if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic, ev)
-    bwd = Side(m, plan, k, -1, -fwd.grid, samples, stride, branch)
-    seg_b = _segment(bwd, chunk, lo)
-    return Motion(m, k, rotary, False, (seg_f, seg_b), False, ev)
+    seg_b = _segment(_side(m, plan, k, -1, heavy, samples, stride, branch), chunk, lo)
+    return Motion(m, k, rotary, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False, ev)

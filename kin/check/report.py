@@ -74,6 +74,23 @@ class DriverCheck:
     unreachable: tuple[float, ...] = ()
     ratio_unbounded_at: tuple[float, ...] = ()     # limits where the velocity ratio has no bound
     ratio_extreme: object = None                   # Extreme of |velocity ratio| (exact, not the grid's)
+    driver_range: tuple[float, float] | None = None  # the driver's own range (file), rad or m
+    binds: tuple[str, ...] = ()                    # per limit: "assembly" or "range"
+
+    @property
+    def usable(self) -> tuple[float, float] | None:
+        """The usable range (low, high) from the reference: the driver's range cut by
+        the assembly limits (None for a full rotation or no limit at all)."""
+        if not self.limits:
+            return None
+        return (min(self.limits), max(self.limits))
+
+    def bound_at(self, end: str) -> str | None:
+        """What stops the motion at its ``"low"`` or ``"high"`` end."""
+        for x, b in zip(self.limits, self.binds):
+            if (x > 0.0) == (end == "high") or (x == 0.0 and end == "low"):
+                return b
+        return None
 
     @property
     def unit(self) -> str:
@@ -92,6 +109,11 @@ class DriverCheck:
                        else [min(self.limits, default=None), max(self.limits, default=None)])
              if self.limits else None,
              "limit_groups": list(self.limit_groups),
+             "driver_range": (None if self.driver_range is None else
+                              [float(np.degrees(x)) if self.rotary else x for x in self.driver_range]),
+             "usable_range": (None if self.usable is None or (self.rotary and self.driver_range is None)
+                              else [float(np.degrees(x)) if self.rotary else x for x in self.usable]),
+             "binds": {e: self.bound_at(e) for e in ("low", "high")} if self.limits else None,
              "periodic": self.periodic,
              "branch_points": [{"at": v(x), "group": g} for x, g in self.branch_points],
              "dead_centres": {k: sorted(v(x) for x in xs) for k, xs in self.dead_centres},
@@ -131,6 +153,7 @@ class CheckReport:
     instant_centres: tuple
     instant_centres_at: tuple[float, ...]
     verdict: tuple[str, ...]
+    workspace: object = None                       # Workspace of --workspace POINT, or None
 
     def _repr_html_(self) -> str:
         """Notebook view: verdict and drivers, bars of the transmission ranges."""
@@ -177,4 +200,5 @@ class CheckReport:
                                      for dc in self.drivers},
             "verdict": list(self.verdict),
             "ok": self.ok,
+            **({"workspace": self.workspace.as_dict()} if self.workspace is not None else {}),
         })

@@ -121,7 +121,8 @@ class Side:
         sides is such a jump, and the row is discarded (NaN).
         """
         n = self.signs.shape[0]
-        h = abs(self.grid[1] - self.grid[0])
+        h = abs(self.grid[1] - self.grid[0]) if self.grid.size > 1 else 0.0
+        h = h if h > 0.0 else 1.0
         i = np.clip((np.abs(xs) / h).astype(int), 0, max(n - 2, 0))
         lo, hi = self.signs[i], self.signs[np.minimum(i + 1, n - 1)]
         got = np.sign(self.branch(st)[rows])

@@ -1,7 +1,7 @@
 """The readable text form of a :class:`CheckReport`."""
 from __future__ import annotations
 
-from .verdict import fmt_input
+from .verdict import fmt_input, usable_text
 
 __all__ = ["format_report"]
 
@@ -15,6 +15,8 @@ def _driver(dc, thr: float) -> list[str]:
         L.append("  range of motion: limited; stops at " + ", ".join(fmt_input(dc, x) for x in dc.limits))
         for s in dc.limit_groups:
             L.append(f"    beyond the limit: {s}")
+        if usable_text(dc):
+            L.append(f"  {usable_text(dc)}")
     else:
         L.append("  range of motion: no limit within the swept stroke")
     for x, g in dc.branch_points:
@@ -41,6 +43,18 @@ def _driver(dc, thr: float) -> list[str]:
     return L
 
 
+def _workspace(ws) -> list[str]:
+    """The workspace section (``--workspace POINT``)."""
+    if ws is None:
+        return []
+    def at(v):
+        return ", ".join(f"{x:.6g}" for x in ws.user(v))
+    return [f"workspace of {ws.point} over the usable ranges (driver values in deg / m from the reference):",
+            f"  x from {ws.x[0]:.6g} m (at {at(ws.x_at[0])}) to {ws.x[1]:.6g} m (at {at(ws.x_at[1])})",
+            f"  y from {ws.y[0]:.6g} m (at {at(ws.y_at[0])}) to {ws.y[1]:.6g} m (at {at(ws.y_at[1])})",
+            f"  area {ws.area:.6g} m², boundary polygon of {len(ws.boundary)} vertices (--json)"]
+
+
 def format_report(rep) -> str:
     """Text report: header, each driver, circuits, Grashof loops, verdict."""
     L = [f"design check of {rep.mechanism}: {rep.formula}",
@@ -60,6 +74,7 @@ def format_report(rep) -> str:
     L.append(f"instant centres: {len(rep.instant_centres)} pairs at input "
              f"{[round(x, 6) for x in rep.instant_centres_at]} ({fin} finite, "
              f"{len(rep.instant_centres) - fin} at infinity)")
+    L += _workspace(rep.workspace)
     L.append("")
     if rep.verdict:
         L.append(f"verdict: {len(rep.verdict)} problem(s)")

@@ -5,7 +5,8 @@ Definitions (all in degrees):
 * **RRR dyad** (outer A, inner B, outer C): the transmission angle μ is the angle at
   B between BA and BC, in [0°, 180°]; 90° is ideal, 0° and 180° are the toggle
   (the dyad's Jacobian determinant l₂l₃ sin(φ₂ − φ₃) vanishes there; Vasechkin et
-  al. 2017, kind 1).
+  al. 2017, kind 1).  The same angle at the inner pin of an actuated triangle (a
+  cylinder A–B driving the lever B–C) is the actuator's transmission angle.
 * **RRP dyad** (rod A–B, slider at B on a guide): the pressure angle α is the angle
   between the rod line and the guide, in [0°, 90°]; the transmission angle is
   90° − α (α = 90° is the RRP toggle, det = l cos(φ₂ − φ₃) = 0).
@@ -24,6 +25,7 @@ Definitions (all in degrees):
 
 PRP and RPP dyads have no reach limit; their only singularity (parallel guides) is a
 design error rejected when the plan is built, so no angle is reported for them.
+Which angle a group kind has is a fact of the kind (:data:`kin.groups.registry.FACTS`).
 """
 from __future__ import annotations
 
@@ -31,9 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.assur import AssurPlan, GroupKind
+from multiloop.kin.groups.registry import angle_defs
+from multiloop.topo.assur import AssurPlan
 
-__all__ = ["AngleSpec", "angle_specs", "angle_values"]
+__all__ = ["AngleSpec", "angle_specs", "angle_values", "guide_direction"]
 
 
 @dataclass(frozen=True)
@@ -60,25 +63,8 @@ def angle_specs(plan: AssurPlan) -> tuple[AngleSpec, ...]:
     m = plan.mechanism
     out: list[AngleSpec] = []
     for g in plan.groups:
-        lab = g.describe()
-        if g.kind is GroupKind.RRR:
-            o1, inner, o2, _, _ = g.layout
-            out.append(AngleSpec(inner, "transmission", lab, g.kind, (o1, inner, o2)))
-        elif g.kind is GroupKind.RRP:
-            o1, inner, o2, _, _ = g.layout
-            out.append(AngleSpec(inner, "pressure", lab, g.kind, (o1, inner),
-                                 (o2, m.joint(o2).links[0])))
-        elif g.kind is GroupKind.RPR:
-            o1, inner, o2, l1, _ = g.layout
-            guide = m.joint(inner).links[0]
-            gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-            out.append(AngleSpec(inner, "pressure", lab, g.kind, (gx, bx), (inner, guide)))
-        elif g.kind is GroupKind.TRIAD:
-            outs, inns = g.layout.outers, g.layout.inners
-            for i in range(3):
-                j, k = (i + 1) % 3, (i + 2) % 3
-                out.append(AngleSpec(inns[i], "triad", lab, g.kind,
-                                     (outs[i], inns[i], outs[j], inns[j], outs[k], inns[k])))
+        out += [AngleSpec(d.joint, d.quantity, g.describe(), g.kind, d.points, d.guide)
+                for d in angle_defs(m, g)]
     return tuple(out)
 
 
@@ -95,10 +81,12 @@ def _line_angle(u, w):
     return np.minimum(a, 180.0 - a)
 
 
-def _guide_dir(state, spec: AngleSpec):
+def guide_direction(state, spec: AngleSpec):
+    """Unit direction (N, 2) of the guide of a pressure angle ``spec`` in the world."""
     m = state.mechanism
     pj, guide = spec.guide
     ax = np.asarray(m.joint(pj).axis, float)
+    ax = ax / np.hypot(*ax)
     th = state.angles[:, state.link_index(guide)]
     c, s = np.cos(th), np.sin(th)
     return np.stack([c * ax[0] - s * ax[1], s * ax[0] + c * ax[1]], axis=-1)
@@ -129,7 +117,7 @@ def angle_values(state, specs) -> np.ndarray:
             out[:, c] = _angle(A - B, C - B)
         elif sp.quantity == "pressure":
             X, Y = (P[:, state.joint_index(n)] for n in sp.points)
-            u = _guide_dir(state, sp)
+            u = guide_direction(state, sp)
             out[:, c] = _line_angle(Y - X, u)
         else:
             a = _triad(P, sp.points, state)

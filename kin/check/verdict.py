@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["verdict", "fmt_input"]
+__all__ = ["verdict", "fmt_input", "fmt_span", "usable_text"]
 
 
 def fmt_input(dc, x: float) -> str:
@@ -11,9 +11,31 @@ def fmt_input(dc, x: float) -> str:
     return f"{dc.joint} = {dc.value(x):.6f}°" if dc.rotary else f"{dc.joint} = {x:.6g} m"
 
 
+def fmt_span(dc, pair) -> str:
+    """``[low, high]`` signed from the reference, in degrees (R) or metres (P)."""
+    lo, hi = (float(np.degrees(x)) if dc.rotary else float(x) for x in pair)
+    return f"[{lo:.6g}, {hi:.6g}] {'deg' if dc.rotary else 'm'}"
+
+
+def usable_text(dc) -> str | None:
+    """The usable range of a driver with a ``range`` and which bound binds at each end."""
+    if dc.driver_range is None or dc.usable is None:
+        return None
+    why = {"range": "its range", "assembly": "the assembly limit"}
+    return (f"usable range {fmt_span(dc, dc.usable)} (its range {fmt_span(dc, dc.driver_range)} "
+            f"∩ the assembly limits): low end set by {why[dc.bound_at('low')]}, "
+            f"high end by {why[dc.bound_at('high')]}")
+
+
 def _motion(dc) -> list[str]:
     out = []
-    if dc.rotary and not dc.full_rotation and dc.limits:
+    if dc.driver_range is not None:
+        cut = [e for e in ("low", "high") if dc.bound_at(e) == "assembly"]
+        if cut:
+            out.append(f"driver {dc.joint}: the assembly limits cut its range "
+                       f"{fmt_span(dc, dc.driver_range)} at the {' and '.join(cut)} end "
+                       f"(usable {fmt_span(dc, dc.usable)})")
+    elif dc.rotary and not dc.full_rotation and dc.limits:
         lim = " and ".join(fmt_input(dc, x) for x in dc.limits)
         out.append(f"driver {dc.joint} does not turn fully: motion stops at {lim} "
                    f"(range {np.degrees(min(dc.limits)):.6f}° … {np.degrees(max(dc.limits)):+.6f}° "

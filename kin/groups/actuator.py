@@ -79,7 +79,8 @@ class ActuatorStep(GroupStep):
             pr = self._probe(G, (ax, ay), (cx, cy), (bx, by), L, ok, why, probe)
         # the actuator's halves turn by the rotation taking d(s) to B − A (|d| = |B − A| = L)
         rx, ry = bx - ax, by - ay
-        inv = 1.0 / (L * L)
+        with np.errstate(divide="ignore"):      # L = 0: a cylinder of no length (failed row)
+            inv = 1.0 / (L * L)
         c = (dx * rx + dy * ry) * inv
         s = (dx * ry - dy * rx) * inv
         G.place_k(self.kn, ax, ay, self.A, c, s)

@@ -41,6 +41,9 @@ def add_arguments(p) -> None:
                    help="driver values the design must reach (deg or m, first driver), comma- or "
                         "space-separated: unreachable ones are flagged (circuit defect); a list "
                         "starting with a negative value: --positions -60 120, or --positions=-60,120")
+    p.add_argument("--workspace", metavar="POINT", default=None,
+                   help="workspace of tracer point POINT over the box of the drivers' usable ranges: "
+                        "extreme x and y with the driver values, boundary polygon, area")
 
 
 def _to_api(m, v: float, k: int = 0) -> float:
@@ -102,7 +105,7 @@ def run(args) -> int:
         at = np.zeros(len(m.drivers))
         at[0] = _to_api(m, _finite(args.at, "--at"))
     rep = check(m, min_transmission=args.min_transmission, output=output, at=at,
-                positions=_positions(m, args.positions))
+                positions=_positions(m, args.positions), workspace=args.workspace)
     if args.plot or args.html:
         from multiloop.kin.check.figures import html_page, overview_figure, report_figures
         with quiet_warnings("multiloop check"):

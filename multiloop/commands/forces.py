@@ -12,7 +12,9 @@ for a P driver; several drivers: comma-separated; R inputs beyond one load perio
 reduced); otherwise ``--steps`` positions (at most 100 000) over one turn of the first
 driver (720 deg when a force table runs past 360 deg), or the ``solve`` command's
 default stroke for P drivers.  The JSON report is :meth:`ForceResult.as_dict`
-(keys in docs/forces.md).
+(keys in docs/forces.md).  With several drivers and no ``--at``, each driver is also
+moved alone over its own sweep (its ``range`` if it has one), the others at the
+reference: its balancing force or torque (text section, JSON ``per_driver``).
 """
 from __future__ import annotations
 
@@ -21,7 +23,8 @@ import json
 import numpy as np
 
 from multiloop.kin.forces import forces, has_loads, table_period
-from multiloop.kin.sweep import cycle_inputs
+from multiloop.kin.result import json_ready
+from multiloop.kin.sweep import cycle_inputs, driver_forces
 from multiloop.inputs import load_mechanism_or_engine
 from multiloop.outputs import Outputs, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
@@ -58,11 +61,18 @@ def run(args) -> int:
                 fig.suptitle(note, color="tab:red", fontsize=9, y=0.995)
             outs.add_figure(args.plot, fig, dpi=110)
         outs.commit()
+    # several drivers and no --at: also each driver alone over its own sweep
+    each = driver_forces(m, args.steps, args.method) if len(m.drivers) > 1 and args.at is None else None
     if args.json:
-        print(json.dumps(fr.as_dict(), allow_nan=False))
+        doc = fr.as_dict()
+        if each is not None:
+            doc["per_driver"] = json_ready(each.as_dict())
+        print(json.dumps(doc, allow_nan=False))
         return 0
     notes = [note] if note else []
     if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):
         notes.append(f"R inputs reduced modulo {table_period(m):g} deg (one load period)")
     print(fr.to_text(notes))
+    if each is not None:
+        print(each.to_text(), end="")
     return 0
