@@ -232,6 +232,48 @@ def _resolve(evaluate, P, s_nodes, flips, k, s_star, delta):
     return "flip" if np.linalg.norm(sig[3] - pred) < np.linalg.norm(sig[2] - pred) else "keep"
 
 
+def _ready_events(event, ready: dict, last: bool) -> list:
+    """The events one round resolves: the first; for the last group (``last``), also its
+    later ones up to its first limit and before any other group's event (its own flips
+    change neither its reach margin nor any other group's probe)."""
+    i0, g, is_limit = event
+    out = [(i0, is_limit)]
+    if not last:
+        return out
+    others = [at for h, (at, _) in ready.items() if h != g and at.size]
+    stop = min((int(at[at > i0][0]) for at in others if (at > i0).any()), default=np.inf)
+    at, lim = ready[g]
+    for i, l in zip(at.tolist(), lim.tolist()):
+        if i <= i0:
+            continue
+        if i >= stop:
+            break
+        out.append((i, bool(l)))
+        if l:
+            break
+    return out
+
+
+def _crossing(evaluate, P, s_nodes, flips, handled, crossings, pr, s, i, g, delta):
+    """Resolve group ``g``'s crossing in interval ``i`` (a run of flat samples): locate it
+    at the vertex of the margin, keep or flip the sign by the tangent rule, record it;
+    returns the limit ``(a, b, g)`` when the group cannot go on there, else None."""
+    lo, hi = _zero_run(pr, s, i)
+    s_star = 0.5 * (lo + hi)
+    d = max(delta, hi - lo)
+    d = min(d, 0.25 * (s_star - s[0])) if s_star > s[0] else d
+    if pr.margin is not None and s_star - 2 * d > s[0]:
+        s_star = _vertex(evaluate, P, s_nodes, flips, g, s_star, d)
+    rule = _resolve(evaluate, P, s_nodes, flips, g, s_star, d)
+    if rule == "limit":                  # a turning point within delta: the motion stops
+        return (*_limit_root(evaluate, P, s_nodes, flips, g, lo, s_star + d), g)
+    if rule == "flip":
+        flips[g].append(s_star)
+    handled[g].append((lo - d, hi + d))
+    crossings.append((s_star, g))
+    return None
+
+
 def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
          delta: float = DELTA, kappa: float = KAPPA, max_rounds: int = 400,
          refine_limits: bool = True) -> Walk:
@@ -255,17 +297,22 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         event = None                         # (interval, group, is_limit)
         refine = np.zeros(len(s) - 1, bool)
         zoom = np.zeros(len(s) - 1, bool)     # a limit's bracket: split in LIMIT_ZOOM
+        ready = {}                           # group -> (intervals at the floor, their limit flags)
         for g in groups:
             lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
             if not refine_limits and probes[g].gap is None and probes[g].margin is None:
                 continue                     # a tracked group: its own tracker reports failures
             lim_floor = lim & (width <= floor)
             at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
+            ready[g] = (at_floor, lim[at_floor])
             if at_floor.size and (event is None or at_floor[0] < event[0]):
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
             refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
             zoom |= lim & (width > floor)
-        if event is not None:
+        # the last group's crossings change no other probe (nor its own reach margin): the
+        # walk refines past them and resolves them all in one round
+        last = event is not None and event[1] == groups[-1] and not event[2]
+        if event is not None and not last:
             refine[event[0]:] = False
             if event[2] and event[0] + 2 < len(s):
                 s = s[: event[0] + 2]         # nothing beyond the first limit matters
@@ -279,24 +326,17 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             continue
         if event is None:
             return Walk(s, _frozen(flips), tuple(crossings), None, rounds)
-        i, g, is_limit = event
-        if is_limit:
-            a, b = _limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
-            return Walk(s, _frozen(flips), tuple(crossings), (a, b, g), rounds)
-        lo, hi = _zero_run(probes[g], s, i)
-        s_star = 0.5 * (lo + hi)
-        d = max(delta, hi - lo)
-        d = min(d, 0.25 * (s_star - s[0])) if s_star > s[0] else d
-        if probes[g].margin is not None and s_star - 2 * d > s[0]:
-            s_star = _vertex(evaluate, P, s_nodes, flips, g, s_star, d)
-        rule = _resolve(evaluate, P, s_nodes, flips, g, s_star, d)
-        if rule == "limit":                  # a turning point within delta: the motion stops
-            a, b = _limit_root(evaluate, P, s_nodes, flips, g, lo, s_star + d)
-            return Walk(s, _frozen(flips), tuple(crossings), (a, b, g), rounds)
-        if rule == "flip":
-            flips[g].append(s_star)
-        handled[g].append((lo - d, hi + d))
-        crossings.append((s_star, g))
+        g = event[1]
+        done = len(handled[g])
+        for i, is_limit in _ready_events(event, ready, last):   # in order, up to a limit
+            if any(a <= s[i] < b for a, b in handled[g][done:]):
+                continue                     # inside a run resolved this round
+            if is_limit:
+                a, b = _limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+                return Walk(s[: i + 2], _frozen(flips), tuple(crossings), (a, b, g), rounds)
+            block = _crossing(evaluate, P, s_nodes, flips, handled, crossings, probes[g], s, i, g, delta)
+            if block is not None:
+                return Walk(s, _frozen(flips), tuple(crossings), block, rounds)
     raise RuntimeError("continuation did not settle")  # pragma: no cover
 
 

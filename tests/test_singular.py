@@ -367,3 +367,24 @@ def test_a_dead_zone_below_the_floor_is_a_change_point():
     ev = motion_events(m)
     assert ev.period is not None
     assert any(abs(math.remainder(x - (math.pi - th0), 2 * math.pi)) < 1e-6 for x, _ in ev.crossings)
+
+
+def test_a_grid_that_touches_a_limit_on_every_row_settles():
+    """A multi-driver grid whose values reach an assembly limit exactly (the excavator's
+    usable ranges, ends included) touches it once a row: every touch is a crossing of the
+    last group, resolved in one round of the walk (it used to take one round each and
+    give up with 'continuation did not settle')."""
+    from multiloop.catalogue.named import load_named
+    from multiloop.kin.check import check
+    m = load_named("excavator")
+    # 20 x 20 rows of the bucket cylinder, each from one end of its usable range to the
+    # other: 400 touches of the bucket linkage's limit
+    axes = [np.linspace(lo, hi, n) for (lo, hi), n in zip((dc.usable for dc in check(m).drivers), (20, 20, 2))]
+    X = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        state = solve(m, X)
+    from multiloop.kin.result import Status
+    at_limit = X[:, 2] == axes[2][-1]          # the bucket linkage's toggle: its branches meet
+    assert state.ok[~at_limit].all()
+    assert set(state.codes[at_limit].tolist()) <= {int(Status.OK), int(Status.SINGULAR)}
