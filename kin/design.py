@@ -96,6 +96,14 @@ class DesignPoses:
         out[..., 0], out[..., 1] = x, y
         return out
 
+    def angle(self, link: str) -> np.ndarray:
+        """Link ``link``'s rotation from the reference ``(D, N)``."""
+        return self.th[self.plan.mechanism.link_names.index(link)]
+
+    def axis(self, joint: str) -> np.ndarray:
+        """P joint ``joint``'s guide in each design's reference ``(D, 1, 2)``."""
+        return self.geometry.axis(joint)
+
     def point(self, name: str) -> np.ndarray:
         """Joint or tracer point ``name`` ``(D, N, 2)``, on the link that carries it in
         :func:`kin.solve.solve`."""

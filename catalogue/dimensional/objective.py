@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.topo.assur import GroupKind
 from multiloop.topo.errors import InputError, explain
@@ -70,51 +71,22 @@ class Constraints:
 
 
 def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.ndarray:
-    """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the dyads,
+    """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the groups,
     ``(P, N)``; ``inf`` when there is none.
 
-    The definitions of ``multiloop check`` (:mod:`multiloop.kin.check.transmission`):
-    RRR, the angle μ at the inner pin between the lines to the outer pins, folded to
-    ``min(μ, 180° − μ)``; RRP and RPR, 90° minus the pressure angle (the angle between
-    the rod, or the line between the pivots, and the guide).  Triads are not included.
+    The definitions and formulas of ``multiloop check``, from the group-kind registry
+    (:func:`multiloop.kin.check.transmission.angle_specs`, ``spec_value``): a triangle
+    (RRR, or an actuated one), the angle μ at the inner pin between the lines to the
+    outer pins, folded to ``min(μ, 180° − μ)``; RRP and RPR, 90° minus the pressure angle.
+    Triads' angles are not included.
     """
     out = np.full(st.ok.shape, np.inf)
-    m = ev.mechanism
-    for g in ev.plan.groups:
-        if g.kind not in (GroupKind.RRR, GroupKind.RRP, GroupKind.RPR):
+    for sp in angle_specs(ev.plan):
+        if sp.quantity == "triad":
             continue
-        o1, inner, o2, l1, l2 = g.layout
-        if g.kind is GroupKind.RRR:
-            k1, k2 = ev.links[l1], ev.links[l2]
-            A, B = st.world(k1, ev.at(X, o1)), st.world(k1, ev.at(X, inner))
-            a = _angle_deg(A - B, st.world(k2, ev.at(X, o2)) - B)
-            q = np.minimum(a, 180.0 - a)
-        else:
-            if g.kind is GroupKind.RRP:
-                pj, guide = o2, m.joint(o2).links[0]
-                k1 = ev.links[l1]
-                d = st.world(k1, ev.at(X, inner)) - st.world(k1, ev.at(X, o1))
-            else:
-                pj, guide = inner, m.joint(inner).links[0]
-                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-                kg = ev.links[guide]
-                kb = ev.links[l2 if guide == l1 else l1]
-                d = st.world(kb, ev.at(X, bx)) - st.world(kg, ev.at(X, gx))
-            u0 = ev.axis(X, pj)
-            th = st.th[ev.links[guide]]
-            c, s = np.cos(th), np.sin(th)
-            u = np.stack([c * u0[:, 0:1] - s * u0[:, 1:2], s * u0[:, 0:1] + c * u0[:, 1:2]], axis=-1)
-            a = _angle_deg(d, u)
-            q = 90.0 - np.minimum(a, 180.0 - a)
-        out = np.fmin(out, q)
+        a = spec_value(st, sp)
+        out = np.fmin(out, np.minimum(a, 180.0 - a) if sp.quantity == "transmission" else 90.0 - a)
     return out
-
-
-def _angle_deg(u, w):
-    """Unsigned angle between vectors ``(..., 2)`` in degrees, [0, 180]."""
-    cr = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
-    dt = u[..., 0] * w[..., 0] + u[..., 1] * w[..., 1]
-    return np.degrees(np.abs(np.arctan2(cr, dt)))
 
 
 def _wrap(a):

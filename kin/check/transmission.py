@@ -81,45 +81,72 @@ def _line_angle(u, w):
     return np.minimum(a, 180.0 - a)
 
 
+class _StateView:
+    """What an angle reads, from a solved state: ``point(joint)`` (N, 2), ``angle(link)``
+    (N,) and ``axis(joint)`` (2,) (a design batch, :class:`kin.design.DesignPoses`, has
+    the same three methods over (D, N))."""
+
+    def __init__(self, state):
+        self.state = state
+
+    def point(self, joint: str) -> np.ndarray:
+        return self.state.positions[:, self.state.joint_index(joint)]
+
+    def angle(self, link: str) -> np.ndarray:
+        return self.state.angles[:, self.state.link_index(link)]
+
+    def axis(self, joint: str) -> np.ndarray:
+        ax = np.asarray(self.state.mechanism.joint(joint).axis, float)
+        return ax / np.hypot(*ax)
+
+
+def _guide(view, spec: AngleSpec):
+    """Unit direction (..., 2) of the guide of a pressure angle ``spec`` in the world."""
+    pj, guide = spec.guide
+    ax = view.axis(pj)
+    th = view.angle(guide)
+    c, s = np.cos(th), np.sin(th)
+    return np.stack([c * ax[..., 0] - s * ax[..., 1], s * ax[..., 0] + c * ax[..., 1]], axis=-1)
+
+
 def guide_direction(state, spec: AngleSpec):
     """Unit direction (N, 2) of the guide of a pressure angle ``spec`` in the world."""
-    m = state.mechanism
-    pj, guide = spec.guide
-    ax = np.asarray(m.joint(pj).axis, float)
-    ax = ax / np.hypot(*ax)
-    th = state.angles[:, state.link_index(guide)]
-    c, s = np.cos(th), np.sin(th)
-    return np.stack([c * ax[0] - s * ax[1], s * ax[0] + c * ax[1]], axis=-1)
+    return _guide(_StateView(state), spec)
 
 
-def _triad(P, names, state):
-    Ai, Pi, Aj, Pj, Ak, Pk = (P[:, state.joint_index(n)] for n in names)
+def _triad(view, names):
+    Ai, Pi, Aj, Pj, Ak, Pk = (view.point(n) for n in names)
     # homogeneous lines through (A, P): l = (A,1) × (P,1); intersection I = lj × lk
     def line(A, Q):
-        return np.cross(np.concatenate([A, np.ones_like(A[:, :1])], 1),
-                        np.concatenate([Q, np.ones_like(Q[:, :1])], 1))
+        return np.cross(np.concatenate([A, np.ones_like(A[..., :1])], -1),
+                        np.concatenate([Q, np.ones_like(Q[..., :1])], -1))
     inter = np.cross(line(Aj, Pj), line(Ak, Pk))
-    w = inter[:, 2:3]
-    scale = np.maximum(np.abs(inter[:, :2]).max(axis=1, keepdims=True), 1e-300)
+    w = inter[..., 2:3]
+    scale = np.maximum(np.abs(inter[..., :2]).max(axis=-1, keepdims=True), 1e-300)
     finite = np.abs(w) > 1e-12 * scale
     # at infinity the line from Pi to I is parallel to the (parallel) legs j, k
-    to_i = np.where(finite, inter[:, :2] / np.where(finite, w, 1.0) - Pi, Pj - Aj)
+    to_i = np.where(finite, inter[..., :2] / np.where(finite, w, 1.0) - Pi, Pj - Aj)
     return _angle(Ai - Pi, to_i)
+
+
+def spec_value(view, sp: AngleSpec) -> np.ndarray:
+    """One monitored angle in degrees over a view's batch (see :class:`_StateView`):
+    a transmission angle in [0, 180], a pressure angle in [0, 90], a triad's folded
+    angle in [0, 90]."""
+    if sp.quantity == "transmission":
+        A, B, C = (view.point(n) for n in sp.points)
+        return _angle(A - B, C - B)
+    if sp.quantity == "pressure":
+        X, Y = (view.point(n) for n in sp.points)
+        return _line_angle(Y - X, _guide(view, sp))
+    a = _triad(view, sp.points)
+    return np.minimum(a, 180.0 - a)
 
 
 def angle_values(state, specs) -> np.ndarray:
     """``(N, len(specs))`` angles in degrees (NaN where the position failed)."""
-    P = state.positions
-    out = np.full((P.shape[0], len(specs)), np.nan)
+    view = _StateView(state)
+    out = np.full((state.positions.shape[0], len(specs)), np.nan)
     for c, sp in enumerate(specs):
-        if sp.quantity == "transmission":
-            A, B, C = (P[:, state.joint_index(n)] for n in sp.points)
-            out[:, c] = _angle(A - B, C - B)
-        elif sp.quantity == "pressure":
-            X, Y = (P[:, state.joint_index(n)] for n in sp.points)
-            u = guide_direction(state, sp)
-            out[:, c] = _line_angle(Y - X, u)
-        else:
-            a = _triad(P, sp.points, state)
-            out[:, c] = np.minimum(a, 180.0 - a)
+        out[:, c] = spec_value(view, sp)
     return out
