@@ -164,6 +164,11 @@ class CheckReport:
     def ok(self) -> bool:
         return not self.verdict
 
+    def to_text(self) -> str:
+        """The text report of ``multiloop check`` (:func:`kin.check.text.format_report`)."""
+        from .text import format_report
+        return format_report(self).rstrip("\n")
+
     def as_dict(self) -> dict:
         """JSON-ready dict with the documented keys (NaN and infinities as ``None``)."""
         first = self.drivers[0] if self.drivers else None

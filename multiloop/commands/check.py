@@ -10,13 +10,12 @@ Files are written only after the whole check and every figure succeeded.
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
-from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.outputs import Outputs, emit, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.model import JointKind
@@ -84,7 +83,7 @@ def _joint_as_point(m, name):
 
 
 def run(args) -> int:
-    from multiloop.kin.check import check, format_report
+    from multiloop.kin.check import check
 
     m = load(args.file)
     if not m.drivers:
@@ -118,10 +117,7 @@ def run(args) -> int:
                 for name, fig in figs.items():
                     outs.add_figure(d / name, fig, "--html")
                 outs.add(d / "index.html", html_page(rep, list(figs)), "--html")
-    if args.json:
-        print(json.dumps(rep.as_dict(), indent=1, allow_nan=False))
-    else:
-        print(format_report(rep), end="")
+    emit(rep, args.json)
     outs.commit()
     return 0
 

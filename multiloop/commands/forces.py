@@ -18,7 +18,6 @@ reference: its balancing force or torque (text section, JSON ``per_driver``).
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 
@@ -26,7 +25,7 @@ from multiloop.kin.forces import forces, has_loads, table_period
 from multiloop.kin.result import json_ready
 from multiloop.kin.sweep import cycle_inputs, driver_forces
 from multiloop.inputs import load_mechanism_or_engine
-from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.outputs import Outputs, dumps_json, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -67,7 +66,7 @@ def run(args) -> int:
         doc = fr.as_dict()
         if each is not None:
             doc["per_driver"] = json_ready(each.as_dict())
-        print(json.dumps(doc, allow_nan=False))
+        print(dumps_json(doc))
         return 0
     notes = [note] if note else []
     if args.at is not None and not np.allclose(q_user[0], [float(v) for v in args.at.split(",")]):
