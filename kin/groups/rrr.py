@@ -100,7 +100,8 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
 
     ``exact`` is True when no position was clamped to the tangent, so that
     ``|B - A| = l2`` and ``|B - C| = l3`` hold to rounding (a caller may then divide
-    by the lengths instead of normalising); else the mask of the unclamped positions.  ``det = cross(B-C, B-A)`` is ``-k d²``
+    by the lengths instead of normalising); else the mask of the unclamped positions.
+    ``det = cross(B-C, B-A)`` is ``-k d²``
     (with ``B - A = t d + k perp(d)``, ``B - C = (t-1) d + k perp(d)``); a NaN pin or
     ``A = C`` gives ``ok = False``.
     """
@@ -113,12 +114,18 @@ def rrr_xy(ax, ay, cx, cy, l2, l3, sign=1.0):
         r = l2s * inv                        # l2²/d², and t = (l2² + d² - l3²)/(2d²)
         t = 0.5 + (0.5 * (l2s - np.square(l3))) * inv
         q = r - t * t
-        ok = q >= -REACH_RTOL * r            # False where q is NaN (A = C, NaN pins)
-        exact = ~(q < 0.0)
-        exact = True if exact.all() else exact
-        k = np.sqrt(np.maximum(q, 0.0)) * sign
-        if not ok.all():
-            k = np.where(ok, k, np.nan)
+        neg = q < 0.0
+        if neg.any():                        # clamped to the tangent, or out of reach
+            exact = ~neg
+            ok = q >= -REACH_RTOL * r        # False where q is NaN (A = C, NaN pins)
+            k = np.sqrt(np.maximum(q, 0.0)) * sign
+            if not ok.all():
+                k = np.where(ok, k, np.nan)
+        else:                                # every position in reach (or NaN)
+            exact = True
+            k = np.sqrt(q)
+            ok = k == k
+            k = k * sign
     bx = ax + t * dx - k * dy
     by = ay + t * dy + k * dx
     return bx, by, ok, -(k * d2), exact
