@@ -122,7 +122,8 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
     reduced into one load period (:func:`~kin.forces.reduce_inputs`).  Otherwise
     ``steps`` positions over one load period of the first driver (360 deg, or 720 deg
     when a force table runs past 360 deg), or :func:`input_range`'s stroke when every
-    driver is a P joint.
+    driver is a P joint; when a driver has a ``range``, :func:`input_range`'s default
+    (each such driver over its range).
     """
     nd = len(m.drivers)
     kinds = [m.joint(d.joint).kind for d in m.drivers]
@@ -138,6 +139,8 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
     if not 1 <= steps <= MAX_CYCLE_STEPS:
         raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
     q = np.zeros((steps, nd))
+    if any(d.range is not None for d in m.drivers):   # a driver's range is its default sweep
+        return si_inputs(m, input_range(m, steps)).reshape(steps, nd)
     if kinds[0] is JointKind.R:
         q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
     elif set(kinds) == {JointKind.P}:

@@ -186,8 +186,14 @@ def test_excavator_bucket_range_cut_by_the_linkage_toggle():
     pivot|, with T from the actuated triangle by the law of cosines (the rocker turning
     about its pivot)."""
     m = load_named("excavator")
-    dc = check(m).drivers[2]
+    rep = check(m)
+    dc = rep.drivers[2]
     assert dc.bound_at("high") == "assembly" and dc.bound_at("low") == "range"
+    # the boom cylinder's angle is judged once, under the boom cylinder (it is constant
+    # while the stick or bucket cylinder moves)
+    lines = [v for v in rep.verdict if "at boom_cyl_end" in v]
+    assert len(lines) == 1 and "at boom_cyl_slide = 0.7 m" in lines[0]
+    assert any("assembly limits cut its range [-0.45, 0.6] m at the high end" in v for v in rep.verdict)
     at = {j.name: np.array(j.at) for j in m.joints}
     A, P, T0, Q, Bp = at["bucket_cyl_base"], at["rocker_pivot"], at["T"], at["bucket_link_pin"], at["bucket_pivot"]
     L0, r, ap = np.hypot(*(T0 - A)), np.hypot(*(T0 - P)), np.hypot(*(P - A))

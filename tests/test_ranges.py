@@ -15,9 +15,9 @@ from multiloop.cli import main
 from multiloop.kin.check import check
 from multiloop.kin.result import Status
 from multiloop.kin.solve import solve
-from multiloop.kin.sweep import input_range, si_inputs
+from multiloop.kin.sweep import cycle_inputs, input_range, si_inputs
 from multiloop.topo.errors import InputError
-from multiloop.topo.io import dumps_toml, load, loads
+from multiloop.topo.io import dumps_json, dumps_toml, load, loads
 from multiloop.topo.model import MechanismBuilder
 
 BOOM = """\
@@ -84,6 +84,8 @@ def test_rotary_range_in_degrees():
     assert np.allclose(loads(text, "toml").drivers[0].range, (math.radians(-30), math.radians(60)))
     x = input_range(m, 4)
     assert np.allclose(x, [-30, 0, 30, 60])      # the default sweep is the range, in degrees
+    assert np.allclose(cycle_inputs(m, steps=4)[:, 0], np.radians([-30, 0, 30, 60]))   # forces too
+    assert np.allclose(loads(dumps_json(m), "json").drivers[0].range, m.drivers[0].range)
     st = solve(m, np.radians([-30.0, 60.0, 61.0]))
     assert st.ok.tolist() == [True, True, False]
     assert st.status[2] == "out of range: angular range of O is [-30, 60] deg"

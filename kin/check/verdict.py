@@ -59,8 +59,8 @@ def _angles(dc, thr: float) -> list[str]:
     out = []
     for a in dc.angles:
         e = a.extreme
-        if e is None or not a.flagged(thr):
-            continue
+        if e is None or not a.flagged(thr) or e.max - e.min <= 1e-9 * max(1.0, abs(e.max)):
+            continue     # (an angle this driver does not change is judged under the driver that does)
         if a.quantity == "pressure":
             out.append(f"pressure angle at {a.joint} reaches {e.max:.3f}° at {fmt_input(dc, e.at_max)} "
                        f"(above {90 - thr:g}°) in {a.group}")
