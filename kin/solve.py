@@ -451,6 +451,8 @@ def _nearer_limit(ch: _Chart, x: float) -> str:
     """``"hi"`` or ``"lo"``: the limit the input lies beyond (the nearer one, for R modulo 2π)."""
     if "lo" not in ch.limits or "hi" not in ch.limits:
         return "hi" if "hi" in ch.limits else "lo"
+    if not ch.is_r:                          # a slide lies beyond the end it has passed
+        return "hi" if x > ch.hi else "lo"
     up, dn = x - ch.hi, ch.lo - x
     if ch.is_r:
         up, dn = up % (2 * np.pi), dn % (2 * np.pi)
