@@ -389,7 +389,9 @@ class MotionEvents:
     """The certified motion of a one-driver mechanism from its reference (rad or m):
     ``lo`` ≤ input ≤ ``hi`` (±inf when the driver turns without limit, ``period`` 2π or
     4π then), ``crossings`` (input, group label) where two assembly branches of a group
-    meet, ``limits`` {"lo"/"hi": group label} of the groups that stop the motion."""
+    meet, ``limits`` {"lo"/"hi": group label} of the groups that stop the motion.  An end
+    absent from ``limits`` is not a limit: ``lo``/``hi`` is then the end of the searched
+    extent of a P driver (the motion goes on beyond it)."""
 
     lo: float
     hi: float
