@@ -42,7 +42,8 @@ def add_arguments(p) -> None:
     loops.add_argument("--no-loops", dest="loops", action="store_false",
                        help="skip [La] (planarity is still stored)")
     p.add_argument("--mechanisms", action="store_true",
-                   help="also count the distinct frames and (frame, driver) choices")
+                   help="also count the distinct frames and (frame, driver) choices; with --dof 1, "
+                        "store every inversion with its Assur structure (resumable)")
     p.add_argument("--limit", type=int, help="list at most this many chains")
     p.add_argument("--html", metavar="DIR", help="write the HTML gallery to DIR")
     p.add_argument("--html-limit", type=int, default=2000, help="chains per gallery page (default 2000)")
@@ -110,7 +111,11 @@ def run(args) -> int:
                                 progress=not args.no_progress)
         if args.table and opts is None:
             raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
-        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built)
+        inv = None
+        if args.mechanisms and opts is not None and opts.F == 1 and args.query is None:
+            from multiloop.catalogue.inversions import build_mechanisms
+            inv = build_mechanisms(atlas, opts, progress=not args.no_progress)
+        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
         if args.json:
             json.dump(doc, sys.stdout, indent=1)
             sys.stdout.write("\n")
