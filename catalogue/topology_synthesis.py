@@ -43,8 +43,10 @@ POLISH_POINTS = 40
 @dataclass(frozen=True)
 class Design:
     """One returned design: the mechanism (tracer point ``point``), its errors relative
-    to the target's size, its number of links, structure formula and LInK's chamfer
-    score of its traced curve against the target."""
+    to the target's size at the polished points (the dimensional synthesiser's), its
+    number of links, structure formula, LInK's chamfer score of its traced curve
+    against the target, and ``deviation_max``: the largest distance from any target
+    point to the traced curve (2000 driver steps), over the target's size."""
 
     mechanism: Mechanism
     error_max: float
@@ -54,10 +56,12 @@ class Design:
     chamfer: float
     retrieved: float
     seconds: float
+    deviation_max: float = float("nan")
 
     def as_dict(self, file: str | None = None) -> dict:
         return {"error_max": self.error_max, "error_rms": self.error_rms, "links": self.links,
                 "structure": self.structure, "file": file, "chamfer": self.chamfer,
+                "deviation_max": self.deviation_max,
                 "retrieval_distance": self.retrieved, "seconds": round(self.seconds, 3)}
 
 
@@ -177,7 +181,7 @@ def _traced(m: Mechanism, point: str, inputs: np.ndarray) -> np.ndarray:
     from multiloop.kin.solve import solve
 
     lo, hi = float(np.min(inputs)), float(np.max(inputs))
-    st = solve(m, np.linspace(lo, hi, 400))
+    st = solve(m, np.linspace(lo, hi, 2000))
     P = st.point_positions[:, st.point_index(point)]
     return P[np.all(np.isfinite(P), axis=1)]
 
@@ -195,11 +199,15 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
     if not _passes_check(m, res.inputs):
         return None
     curve = _traced(m, point, res.inputs)
-    score = chamfer_score(full_target, curve, closed=closed) if len(curve) > 2 else float("inf")
+    if len(curve) < 3:
+        return None
+    score = chamfer_score(full_target, curve, closed=closed)
+    size = float(np.max(np.ptp(full_target, axis=0)))
+    gaps = np.min(np.linalg.norm(full_target[:, None, :] - curve[None, :, :], axis=2), axis=1)
     from multiloop.topo.assur import decompose
 
     return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
-                  score, float(retrieved), time.perf_counter() - t0)
+                  score, float(retrieved), time.perf_counter() - t0, float(gaps.max() / size))
 
 
 def _order(designs: list[Design], tol: float) -> list[Design]:
