@@ -24,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .atlas import Atlas, _progress
+from .atlas import Atlas, each_with_progress
 from .curves import CURVE_POINTS, DESCRIPTOR_HARMONICS, descriptor, normalise, reversed_descriptor
 from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
@@ -122,12 +122,8 @@ def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2
     if max_mechanisms is not None:
         todo = todo[:max_mechanisms]
     t0 = time.perf_counter()
-    bar = _progress(progress)
-    with bar:
-        tid = bar.add_task(f"curves n={opts.n}", total=len(todo))
-        for mid, inv in todo:
-            _store_mechanism(atlas, mid, inv, k, per_link)
-            bar.advance(tid)
+    each_with_progress(todo, f"curves n={opts.n}", progress,
+                       lambda item: _store_mechanism(atlas, item[0], item[1], k, per_link))
     ids = [i for i, _ in closed]
     n_real, n_curves = _totals(atlas, ids)
     return CurveBuild(len(closed), len(mechs) - len(closed), n_real, n_curves, len(todo),

@@ -39,7 +39,7 @@ from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 from multiloop.kin.groups.driver import is_closed_form as driver_closed_form
 from multiloop.kin.groups.registry import CLOSED_FORM
 
-from .atlas import Atlas, _progress
+from .atlas import Atlas, each_with_progress
 from .synthesis import ChainRecord, SynthesisOptions, mechanism_choices
 from .synthesis.records import _nauty_incidence
 
@@ -285,14 +285,13 @@ def build_mechanisms(atlas: Atlas, opts: SynthesisOptions, progress: bool = Fals
     if max_chains is not None:
         todo = todo[:max_chains]
     t0 = time.perf_counter()
-    bar = _progress(progress)
-    with bar:
-        tid = bar.add_task(f"mechanisms n={opts.n}", total=len(todo))
-        for rec in todo:
-            s = time.perf_counter()
-            rows, frames, order = chain_inversions(rec)
-            _store(atlas, rec, rows, frames, order, time.perf_counter() - s)
-            bar.advance(tid)
+
+    def work(rec: ChainRecord) -> None:
+        s = time.perf_counter()
+        rows, frames, order = chain_inversions(rec)
+        _store(atlas, rec, rows, frames, order, time.perf_counter() - s)
+
+    each_with_progress(todo, f"mechanisms n={opts.n}", progress, work)
     return mechanism_counts(atlas, opts, len(todo), time.perf_counter() - t0)
 
 
