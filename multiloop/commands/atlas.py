@@ -86,6 +86,9 @@ def _check_options(args) -> None:
         parse_query(args.query)
     if args.table and args.links is None:
         raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+    if args.curves is not None and not (args.mechanisms and args.links is not None and args.dof == 1):
+        raise InputError(explain("--curves", expected="--links N --dof 1 --mechanisms",
+                                 got="--curves without them", hint="the curves belong to the stored mechanisms"))
 
 
 def run(args) -> int:
