@@ -211,8 +211,15 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
 
 
 def _order(designs: list[Design], tol: float) -> list[Design]:
-    """By RMS error; designs within ``tol`` of each other's error band by fewer links."""
-    return sorted(designs, key=lambda d: (int(d.error_rms // tol) if tol > 0 else d.error_rms, d.links, d.error_rms))
+    """By RMS error, in bands: a band holds the designs within ``tol`` of its best
+    error, and inside a band fewer links come first."""
+    rest = sorted(designs, key=lambda d: d.error_rms)
+    out: list[Design] = []
+    while rest:
+        band = [d for d in rest if d.error_rms <= rest[0].error_rms + tol]
+        out += sorted(band, key=lambda d: (d.links, d.error_rms))
+        rest = rest[len(band):]
+    return out
 
 
 def _choose(ranked: list, atlas: Atlas, per_topology: int, topologies: int) -> list[tuple[float, dict, object]]:

@@ -169,3 +169,12 @@ def test_synthesis_without_start_needs_curves(tmp_path, capsys):
     assert "atlas" in capsys.readouterr().err
     assert not (tmp_path / "o.toml").exists()
     assert main(["synthesise", "--path", str(csv), "--out", str(tmp_path / "o.toml"), "--links", "5"]) == 2
+
+
+def test_fewer_links_first_when_errors_tie():
+    from multiloop.catalogue.topology_synthesis import Design, _order
+
+    ds = [Design(None, 0, e, n, "", 0, 0, 0) for e, n in [(5e-4, 8), (9e-4, 4), (2e-3, 6), (2.1e-3, 4), (1e-2, 4)]]
+    got = [(d.error_rms, d.links) for d in _order(ds, 1e-3)]
+    assert got == [(9e-4, 4), (5e-4, 8), (2.1e-3, 4), (2e-3, 6), (1e-2, 4)]
+    assert [d.links for d in _order(ds, 0.0)] == [8, 4, 6, 4, 4]
