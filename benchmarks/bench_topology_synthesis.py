@@ -90,13 +90,15 @@ def scale_benchmark(db: str, size: int, queries: int = 200, k: int = 10) -> dict
 
 def _beyond_four_bar(m) -> list[str]:
     """Links of the groups that no four-bar loop with the frame carries: a triad or
-    class IV group, or a group hinged to a floating link (one with no frame joint)."""
+    class IV group, or a group with an outer joint whose point moves with floating
+    links only (none hinged to the frame; a multiple joint shared with a crank is not)."""
     from multiloop.topo.assur import GroupKind, decompose
 
     on_frame = {x for j in m.joints if m.frame in j.links for x in j.links}
     out = []
     for g in decompose(m).groups:
-        floating = [k for k in g.known_links if k not in on_frame]
+        carriers = [set(m.joint(j).links) - set(g.links) for j in g.outer_joints]
+        floating = [c for c in carriers if c and not c & on_frame]
         if g.kind in (GroupKind.TRIAD, GroupKind.CLASS_IV) or floating:
             out += [x for x in g.links if x not in on_frame]
     return out
@@ -122,7 +124,7 @@ def _fresh_target(atlas_path: str, n: int, seed: int):
             continue
         st = solve(r.mechanism, np.linspace(0, 2 * np.pi, TURN_SAMPLES)[:-1])
         p, _, _ = st.point_on_link(far[-1], tuple(rng.uniform(-1, 1, 2)))
-        return inv.formula, p
+        return f"{inv.formula}, link {far[-1]}", p
     raise RuntimeError("no realisation found")
 
 
@@ -166,6 +168,7 @@ def letter(ch: str) -> np.ndarray:
 
 
 def letters_benchmark(db: str, letters: str, budget: float, links=(4, 6, 8)) -> list[dict]:
+    """Each letter synthesised once with ``links``; the best design per number of links."""
     from multiloop.catalogue.curves import chamfer_score
     from multiloop.kin.solve import solve
 

@@ -176,11 +176,12 @@ def _passes_check(m: Mechanism, inputs: np.ndarray) -> bool:
     return not rep.drivers[0].unreachable
 
 
-def _traced(m: Mechanism, point: str, inputs: np.ndarray) -> np.ndarray:
-    """The tracer over the inputs' span, densely (for the chamfer score)."""
+def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
+    """The tracer densely: one turn from the reference for a closed target, else over
+    the inputs' span (for the chamfer score and the deviation)."""
     from multiloop.kin.solve import solve
 
-    lo, hi = float(np.min(inputs)), float(np.max(inputs))
+    lo, hi = (0.0, 2 * np.pi) if closed else (float(np.min(inputs)), float(np.max(inputs)))
     st = solve(m, np.linspace(lo, hi, 2000))
     P = st.point_positions[:, st.point_index(point)]
     return P[np.all(np.isfinite(P), axis=1)]
@@ -196,9 +197,9 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
     except LinkageError:
         return None
     m = res.mechanism
-    if not _passes_check(m, res.inputs):
+    if not (np.isfinite(res.error_max) and np.isfinite(res.error_rms)) or not _passes_check(m, res.inputs):
         return None
-    curve = _traced(m, point, res.inputs)
+    curve = _traced(m, point, res.inputs, closed)
     if len(curve) < 3:
         return None
     score = chamfer_score(full_target, curve, closed=closed)
