@@ -23,9 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, LinkageError, explain
 from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.check import check
+from multiloop.kin.solve import solve
 
 from .atlas import Atlas
 from .curves import CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise, similarity_to
@@ -179,8 +181,6 @@ def _passes_check(m: Mechanism, inputs: np.ndarray) -> bool:
 def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
     """The tracer densely: one turn from the reference for a closed target, else over
     the inputs' span (for the chamfer score and the deviation)."""
-    from multiloop.kin.solve import solve
-
     lo, hi = (0.0, 2 * np.pi) if closed else (float(np.min(inputs)), float(np.max(inputs)))
     st = solve(m, np.linspace(lo, hi, 2000))
     P = st.point_positions[:, st.point_index(point)]
@@ -205,8 +205,6 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
     score = chamfer_score(full_target, curve, closed=closed)
     size = float(np.max(np.ptp(full_target, axis=0)))
     gaps = np.min(np.linalg.norm(full_target[:, None, :] - curve[None, :, :], axis=2), axis=1)
-    from multiloop.topo.assur import decompose
-
     return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
                   score, float(retrieved), time.perf_counter() - t0, float(gaps.max() / size))
 
