@@ -30,7 +30,7 @@ from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
 from .synthesis import SynthesisOptions
 
-__all__ = ["build_curves", "CurveBuild", "CurveIndex", "CurveHit", "curve_record", "stored_curve"]
+__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_record", "stored_curve"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS realisations (
@@ -81,7 +81,9 @@ def curve_record(points: np.ndarray) -> tuple[bytes, bytes, complex, float]:
     return d.tobytes(), z.astype(np.complex64).tobytes(), c, r
 
 
-def _store_mechanism(atlas: Atlas, mid: int, inv: InversionRecord, k: int, per_link: int) -> tuple[int, int]:
+def realise_mechanism(mid: int, inv: InversionRecord, k: int, per_link: int) -> list[tuple]:
+    """The ``k`` realisations of one mechanism with their curves, ready to store
+    (seeds from the mechanism's row id, so any process gives the same rows)."""
     rows = []
     for s in range(k):
         seed = 1_000_003 * mid + 7919 * s
@@ -91,29 +93,55 @@ def _store_mechanism(atlas: Atlas, mid: int, inv: InversionRecord, k: int, per_l
         m = r.mechanism
         curves = coupler_curves(m, (m.frame, m.drivers[0].links[1]), per_link, np.random.default_rng(seed))
         joints = {j.name: list(j.at) for j in m.joints}
-        rows.append((r, joints, curves))
-    s0 = time.perf_counter()
-    n_curves = 0
+        rows.append((r.seed, r.tries, r.min_angle, joints,
+                     [(cv.link, cv.at, *curve_record(cv.points)) for cv in curves]))
+    return rows
+
+
+def _write_mechanism(atlas: Atlas, k: int, mid: int, rows: list[tuple], seconds: float) -> None:
+    """One mechanism's realisations, curves and done mark in one transaction."""
     with atlas._tx() as con:
-        for r, joints, curves in rows:
+        for seed, tries, low, joints, curves in rows:
             rid = con.execute("INSERT INTO realisations (mechanism, seed, tries, min_angle, joints) VALUES "
-                              "(?, ?, ?, ?, ?)", (mid, r.seed, r.tries, r.min_angle, json.dumps(joints))).lastrowid
-            for cv in curves:
-                d, shape, c, rad = curve_record(cv.points)
-                con.execute("INSERT INTO curves (realisation, link, x, y, descriptor, shape, cx, cy, radius) "
+                              "(?, ?, ?, ?, ?)", (mid, seed, tries, low, json.dumps(joints))).lastrowid
+            con.executemany("INSERT INTO curves (realisation, link, x, y, descriptor, shape, cx, cy, radius) "
                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                            (rid, cv.link, cv.at[0], cv.at[1], d, shape, c.real, c.imag, rad))
-                n_curves += 1
+                            [(rid, link, at[0], at[1], d, shape, c.real, c.imag, rad)
+                             for link, at, d, shape, c, rad in curves])
         con.execute("INSERT OR REPLACE INTO curve_mechanisms (mechanism, wanted, kept, seconds) VALUES (?, ?, ?, ?)",
-                    (mid, k, len(rows), time.perf_counter() - s0))
-    return len(rows), n_curves
+                    (mid, k, len(rows), seconds))
+
+
+def _timed(mid: int, inv: InversionRecord, k: int, per_link: int) -> tuple[int, list[tuple], float]:
+    t = time.perf_counter()
+    rows = realise_mechanism(mid, inv, k, per_link)
+    return mid, rows, time.perf_counter() - t
+
+
+def _map_mechanisms(todo, k: int, per_link: int, workers: int):
+    """``(mechanism id, rows, seconds)`` as each finishes: in this process, or in a pool
+    of ``workers`` local processes that die with their parent."""
+    if workers <= 1 or len(todo) <= 1:
+        for mid, inv in todo:
+            yield _timed(mid, inv, k, per_link)
+        return
+    import os
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from .distributed import die_with_parent
+
+    with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+        futures = [pool.submit(_timed, mid, inv, k, per_link) for mid, inv in todo]
+        for fut in as_completed(futures):
+            yield fut.result()
 
 
 def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2, progress: bool = False,
-                 max_mechanisms: int | None = None) -> CurveBuild:
+                 max_mechanisms: int | None = None, workers: int = 1) -> CurveBuild:
     """Draw ``k`` certified realisations of every closed-form mechanism of ``opts``
     (mechanisms already built with :func:`.inversions.build_mechanisms`) and store
-    ``per_link`` coupler curves per moving link other than the driven one; resumes."""
+    ``per_link`` coupler curves per moving link other than the driven one; resumes.
+    ``workers`` local processes draw them (the parent writes; same rows for any count)."""
     _ensure(atlas)
     done = {r[0] for r in atlas.con.execute("SELECT mechanism FROM curve_mechanisms")}
     mechs = _mechanism_ids(atlas, opts)
@@ -122,8 +150,9 @@ def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2
     if max_mechanisms is not None:
         todo = todo[:max_mechanisms]
     t0 = time.perf_counter()
+    results = _map_mechanisms(todo, k, per_link, workers)
     each_with_progress(todo, f"curves n={opts.n}", progress,
-                       lambda item: _store_mechanism(atlas, item[0], item[1], k, per_link))
+                       lambda _: _write_mechanism(atlas, k, *next(results)))   # in completion order
     ids = [i for i, _ in closed]
     n_real, n_curves = _totals(atlas, ids)
     return CurveBuild(len(closed), len(mechs) - len(closed), n_real, n_curves, len(todo),

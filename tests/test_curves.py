@@ -119,6 +119,20 @@ def test_curve_build_resumes(curve_atlas):
 
 
 @needs_nauty
+def test_curves_same_in_two_processes(tmp_path):
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    got = []
+    for workers in (1, 2):
+        with Atlas(tmp_path / f"w{workers}.sqlite") as atlas:
+            atlas.build(opts, progress=False, loops=False)
+            build_mechanisms(atlas, opts)
+            build_curves(atlas, opts, 1, max_mechanisms=3, workers=workers)
+            got.append(atlas.con.execute("SELECT r.mechanism, c.link, c.x, c.y, c.descriptor FROM curves c JOIN "
+                                         "realisations r ON r.id = c.realisation ORDER BY 1, 2, 3").fetchall())
+    assert got[0] == got[1] and len(got[0]) > 0
+
+
+@needs_nauty
 @pytest.mark.parametrize("exact", [False, True])
 def test_retrieval_finds_own_curve_after_similarity(curve_atlas, exact):
     rng = np.random.default_rng(1)

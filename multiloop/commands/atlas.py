@@ -124,7 +124,9 @@ def run(args) -> int:
             inv = build_mechanisms(atlas, opts, progress=not args.no_progress)
             if args.curves is not None:
                 from multiloop.catalogue.curve_atlas import build_curves
-                curves = build_curves(atlas, opts, args.curves, progress=not args.no_progress)
+                from multiloop.catalogue.distributed import default_workers
+                curves = build_curves(atlas, opts, args.curves, progress=not args.no_progress,
+                                      workers=args.workers or default_workers())
                 print(curves.to_text(), file=sys.stderr)
         doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
         if args.json:
