@@ -2,7 +2,7 @@
 # Install multiloop and everything its tests use.  pip alone gives every feature:
 # nauty's geng/genbg come from the passagemath-nauty wheel and pynauty from a prebuilt
 # wheel (no C compiler on Linux x86_64, Python 3.11); extras: [test] the suite, [dask]
-# Dask clusters for `atlas --scheduler`, [notebook] the notebook widgets and the
+# Dask clusters for `atlas --scheduler`, [curves] usearch's HNSW index of the coupler curves, [notebook] the notebook widgets and the
 # executed example notebook, [web] Panel and Bokeh for `multiloop serve`,
 # [browser-test] Playwright (it drives Debian's chromium; its own browser download is
 # not used), [bench] the libraries the benchmarks compare against.
@@ -11,7 +11,7 @@
 # HTML-atlas and `multiloop serve` browser tests).  Set MULTILOOP_NO_APT=1 to skip them.
 set -euo pipefail
 cd "$(dirname "$0")"
-python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook,web,browser-test]"
+python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook,web,browser-test,curves]"
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"

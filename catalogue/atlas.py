@@ -505,6 +505,16 @@ def _progress(enabled: bool):
                     console=Console(stderr=True), transient=not sys.stderr.isatty())
 
 
+def each_with_progress(items: Sequence, label: str, progress: bool, work) -> None:
+    """Call ``work(item)`` for each item with a progress bar on stderr (when ``progress``)."""
+    bar = _progress(progress)
+    with bar:
+        tid = bar.add_task(label, total=len(items))
+        for item in items:
+            work(item)
+            bar.advance(tid)
+
+
 def build_atlas(opts: SynthesisOptions, db: str | Path = "atlas.sqlite", **kwargs) -> BuildResult:
     """Open ``db``, build (or resume) the atlas of ``opts``, close it."""
     with Atlas(db) as atlas:

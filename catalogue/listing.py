@@ -18,10 +18,12 @@ LIST_ALL = 50
 
 def atlas_listing(atlas: Atlas, opts: SynthesisOptions | None, query: str | None = None,
                   limit: int | None = None, table: bool = False, mechanisms: bool = False,
-                  built: BuildResult | None = None) -> dict:
+                  built: BuildResult | None = None, inversions=None) -> dict:
     """The JSON document of a query: ``count``, ``chains``, and with the options
     ``table`` (rows of :func:`universal_table`), ``mechanisms`` (frames and drivers per
-    chain and their totals) and ``build`` (tasks and seconds of the build)."""
+    chain and their totals; with ``inversions``, a stored
+    :class:`~.inversions.MechanismCounts`, also the counts by highest Assur class and
+    of the mechanisms solved in closed form) and ``build`` (tasks and seconds of the build)."""
     out: dict = {}
     if table:
         out["table"] = [r.as_dict() for r in universal_table(opts, atlas.chains(opts))]
@@ -33,6 +35,8 @@ def atlas_listing(atlas: Atlas, opts: SynthesisOptions | None, query: str | None
             d["frames"], d["drivers"] = c.n_frames, c.n_drivers
         out["mechanisms"] = {"frames": sum(d["frames"] for d in items),
                              "drivers": sum(d["drivers"] for d in items)}
+        if inversions is not None:
+            out["mechanisms"] = inversions.as_dict()
     out["chains"] = items
     if built is not None:
         out["build"] = {"tasks_run": built.tasks_run, "tasks_total": built.tasks_total,
@@ -57,8 +61,12 @@ def listing_text(doc: dict, opts: SynthesisOptions | None, query: str | None = N
         lines.append(f"{sum(1 for r in table if r['realisable'])} of {len(table)} assortments are realisable")
         return "\n".join(lines)
     if "mechanisms" in doc:
-        lines.append(f"  mechanisms: {doc['mechanisms']['frames']} distinct frames, "
-                     f"{doc['mechanisms']['drivers']} distinct (frame, driver) choices")
+        mech = doc["mechanisms"]
+        lines.append(f"  mechanisms: {mech['frames']} distinct frames, "
+                     f"{mech['drivers']} distinct (frame, driver) choices")
+        if "by_class" in mech:
+            lines.append("  by highest Assur class: " + ", ".join(f"{c}: {k}" for c, k in mech["by_class"].items())
+                         + f"; every group in closed form: {mech['closed_form']}")
     if limit is not None or query or doc["count"] <= LIST_ALL:
         for i, r in enumerate(doc["chains"], 1):
             extra = f"  frames {r['frames']} drivers {r['drivers']}" if "frames" in r else ""

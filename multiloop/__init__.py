@@ -83,11 +83,16 @@ def check(mechanism, **kwargs):
     return _check(_mechanism(mechanism), **kwargs)
 
 
-def synthesise(start, **kwargs):
-    """Dimensional synthesis from a start mechanism (path, function or motion targets).
-
-    Returns :class:`~multiloop.catalogue.dimensional.SynthesisResult`.
+def synthesise(start=None, **kwargs):
+    """Dimensional synthesis from a start mechanism (path, function or motion targets),
+    returning :class:`~multiloop.catalogue.dimensional.SynthesisResult`; without a
+    start, path synthesis in which the atlas chooses the topology
+    (``synthesise(path=..., links=(4, 6, 8), atlas="atlas.sqlite", top=3, budget=60)``),
+    returning :class:`~multiloop.catalogue.topology_synthesis.TopologySynthesis`.
     """
+    if start is None:
+        from multiloop.catalogue.topology_synthesis import synthesise as _topo  # noqa: PLC0415
+        return _topo(**kwargs)
     from multiloop.catalogue.dimensional import synthesise as _synthesise  # noqa: PLC0415
     return _synthesise(_mechanism(start), **kwargs)
 

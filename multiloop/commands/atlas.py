@@ -42,7 +42,11 @@ def add_arguments(p) -> None:
     loops.add_argument("--no-loops", dest="loops", action="store_false",
                        help="skip [La] (planarity is still stored)")
     p.add_argument("--mechanisms", action="store_true",
-                   help="also count the distinct frames and (frame, driver) choices")
+                   help="also count the distinct frames and (frame, driver) choices; with --dof 1, "
+                        "store every inversion with its Assur structure (resumable)")
+    p.add_argument("--curves", type=int, metavar="K",
+                   help="with --mechanisms: K certified realisations of every closed-form mechanism and their "
+                        "coupler curves with descriptors (resumable)")
     p.add_argument("--limit", type=int, help="list at most this many chains")
     p.add_argument("--html", metavar="DIR", help="write the HTML gallery to DIR")
     p.add_argument("--html-limit", type=int, default=2000, help="chains per gallery page (default 2000)")
@@ -64,6 +68,7 @@ _INT_RANGES = {"--dof": ("dof", 1, 2 ** 31 - 1),
                "--max-multiplicity": ("max_multiplicity", 1, 2 ** 31 - 1),
                "--max-link-degree": ("max_link_degree", 2, 2 ** 31 - 1),
                "--workers": ("workers", 1, 1024), "--limit": ("limit", 0, 2 ** 63 - 1),
+               "--curves": ("curves", 1, 10 ** 6),
                "--html-limit": ("html_limit", 1, 2 ** 63 - 1)}
 
 
@@ -81,6 +86,9 @@ def _check_options(args) -> None:
         parse_query(args.query)
     if args.table and args.links is None:
         raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+    if args.curves is not None and not (args.mechanisms and args.links is not None and args.dof == 1):
+        raise InputError(explain("--curves", expected="--links N --dof 1 --mechanisms",
+                                 got="--curves without them", hint="the curves belong to the stored mechanisms"))
 
 
 def run(args) -> int:
@@ -110,7 +118,17 @@ def run(args) -> int:
                                 progress=not args.no_progress)
         if args.table and opts is None:
             raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
-        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built)
+        inv = None
+        if args.mechanisms and opts is not None and opts.F == 1 and args.query is None:
+            from multiloop.catalogue.inversions import build_mechanisms
+            inv = build_mechanisms(atlas, opts, progress=not args.no_progress)
+            if args.curves is not None:
+                from multiloop.catalogue.curve_atlas import build_curves
+                from multiloop.catalogue.distributed import default_workers
+                curves = build_curves(atlas, opts, args.curves, progress=not args.no_progress,
+                                      workers=args.workers or default_workers())
+                print(curves.to_text(), file=sys.stderr)
+        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
         if args.json:
             json.dump(doc, sys.stdout, indent=1)
             sys.stdout.write("\n")

@@ -1,4 +1,4 @@
-"""``multiloop synthesise START.toml (--path T.csv --point NAME | --function F.csv --output JOINT |
+"""``multiloop synthesise [START.toml] (--path T.csv --point NAME | --function F.csv --output JOINT |
 --motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes]
 [--timing reference|absolute|step] [--bounds NAME=LOW:HIGH ...] [--grashof crank-rocker|double-crank|any]
 [--mode reference|any] [--direction ccw|cw|any] [--json] [--plot P]``: dimensional synthesis.
@@ -13,6 +13,11 @@ Tables are CSV with an optional header line:
   row being the reference configuration; the output is the relative rotation (or
   slide) of ``--output``'s ``links[1]`` w.r.t. ``links[0]``;
 * ``--motion``: rows ``x,y,angle`` (m, m, deg) of a frame attached to ``--link``.
+
+Without ``START`` (``--path`` only), the atlas chooses the topology
+(``catalogue.topology_synthesis``): ``--db ATLAS`` with stored coupler curves,
+``--links 4,6,8``, ``--top K`` designs written as ``OUT.toml``, ``OUT-2.toml``, …;
+``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``.
 
 ``OUT.toml`` is a normal mechanism file (the start's topology and names, the new
 dimensions, ``source`` citing the target).  The report gives the error (max and RMS
@@ -38,7 +43,9 @@ __all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p) -> None:
-    p.add_argument("start", help="start mechanism (.toml or .json): topology, one driver, a geometry")
+    p.add_argument("start", nargs="?", default=None,
+                   help="start mechanism (.toml or .json): topology, one driver, a geometry; without it "
+                        "(--path only) the atlas chooses the topology")
     task = p.add_mutually_exclusive_group(required=True)
     task.add_argument("--path", metavar="TARGET.csv", help="path generation: rows x,y[,input]")
     task.add_argument("--function", metavar="TABLE.csv", help="function generation: rows input,output")
@@ -49,9 +56,15 @@ def add_arguments(p) -> None:
     p.add_argument("--link", metavar="NAME", help="link of --motion")
     p.add_argument("--out", metavar="OUT.toml", required=True, help="the synthesised mechanism")
     p.add_argument("--seed", type=int, default=0, help="random seed (reproducible runs)")
-    p.add_argument("--budget", type=float, default=10.0, metavar="S", help="time budget in seconds (default 10)")
+    p.add_argument("--budget", type=float, default=None, metavar="S",
+                   help="time budget in seconds (default 10; without START 60)")
     p.add_argument("--method", choices=("de", "cmaes"), default="de", help="global search (default de)")
-    p.add_argument("--tol", type=float, default=1e-6, help="stop when the relative RMS error is below this")
+    p.add_argument("--tol", type=float, default=None,
+                   help="stop when the relative RMS error is below this (default 1e-6); without START: "
+                        "errors within it tie and fewer links win (default 1e-3)")
+    p.add_argument("--db", default="atlas.sqlite", help="without START: the atlas with coupler curves")
+    p.add_argument("--links", default="4,6,8", help="without START: numbers of links to try (default 4,6,8)")
+    p.add_argument("--top", type=int, default=3, metavar="K", help="without START: designs returned (default 3)")
     p.add_argument("--full-rotation", action="store_true", help="require a fully rotating driver")
     p.add_argument("--min-transmission", type=float, default=None, metavar="DEG",
                    help="minimum transmission angle of every RRR dyad")
@@ -83,9 +96,46 @@ def _progress(enabled: bool):
     return bar, (lambda frac, best: bar.update(task, completed=frac, best=best))
 
 
+def run_without_start(args) -> int:
+    """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
+    from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
+    from multiloop.topo.io import dumps_json
+
+    if not args.path or args.function or args.motion:
+        raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
+                                 got="no START"))
+    if args.top is None or args.top < 1:
+        raise InputError(explain("--top", expected="a positive number of designs", got=str(args.top)))
+    budget = 60.0 if args.budget is None else args.budget
+    if not budget > 0:
+        raise InputError(explain("--budget", expected="a positive number of seconds", got=str(budget)))
+    links = parse_links(args.links)
+    outs = Outputs("multiloop synthesise")
+    outs.target(args.out, "--out", formats=("toml", "json"))
+    res = topo_synthesise(args.path, links=links, atlas=args.db, top=args.top, budget=budget,
+                          point=args.point or "P", tol=1e-3 if args.tol is None else args.tol, seed=args.seed)
+    if not res.designs:
+        raise InputError(explain("--path", expected="a design that passes check",
+                                 got=f"none of {res.polished} polished candidates",
+                                 hint="a larger --budget, more --links, or more curves in the atlas"))
+    files = design_files(args.out, len(res.designs))
+    for d, f in zip(res.designs, files):
+        outs.add(f, dumps_json(d.mechanism) if f.suffix.lower() == ".json" else dumps_toml(d.mechanism), "--out")
+    outs.commit()
+    files = [str(f) for f in files]
+    print(json.dumps(res.as_list(files), indent=1, ensure_ascii=False) if args.json else res.to_text(files))
+    return 0
+
+
 def run(args) -> int:
     from multiloop.catalogue.dimensional import synthesise
 
+    if args.start is None:
+        return run_without_start(args)
+    if args.budget is None:
+        args.budget = 10.0
+    if args.tol is None:
+        args.tol = 1e-6
     m = load(args.start)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))

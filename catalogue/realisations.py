@@ -1,0 +1,156 @@
+"""Generic realisations of atlas mechanisms and their coupler curves.
+
+For a mechanism of the atlas (:class:`~.inversions.InversionRecord`), a realisation
+is a set of joint positions in a normalised frame: the driver's pin at the origin,
+the other joints of the driven link at a distance in ``[0.15, 0.45]`` from it (a
+short input link, Grashof's condition favours it; Grashof 1883), every other joint
+uniform in the square ``[−1, 1]²`` — so every link length is bounded by ``2√2``.
+Positions given this way assemble by construction at the reference.
+
+A sample is **kept** when the driver turns fully with every monitored angle (the
+transmission angle of each RRR dyad, the triad angles; Artobolevsky's and Hain's
+convention) at least ``min_transmission`` from 0° and 180°.  The sample is screened on a
+grid of driver values by :func:`kin.solve.solve` (vectorised over the positions,
+one design at a time), then **certified** by :func:`kin.check.check`, whose
+continuation and event search find limits and angle extremes between grid points
+(no claim rests on the grid alone).
+
+Coupler curves: a few random points on every moving link other than the driven
+one (whose points trace circles), traced over one turn of the driver.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.assur import decompose
+from multiloop.topo.errors import LinkageError
+from multiloop.topo.model import Mechanism
+from multiloop.kin.check import check
+from multiloop.kin.check.transmission import angle_specs, angle_values
+from multiloop.kin.solve import solve
+
+from .inversions import InversionRecord, inversion
+
+__all__ = ["Realisation", "sample_positions", "realise", "coupler_curves", "CurveSample"]
+
+#: driver samples of the screen and of a traced curve (one turn)
+TURN_SAMPLES = 181
+
+
+@dataclass(frozen=True, slots=True)
+class Realisation:
+    """A kept realisation: the mechanism (with geometry), the seed that drew it and
+    the smallest monitored angle the check certified (degrees, folded to ``[0, 90]``)."""
+
+    inversion: InversionRecord
+    mechanism: Mechanism
+    seed: int
+    min_angle: float
+    tries: int
+
+
+@dataclass(frozen=True, slots=True)
+class CurveSample:
+    """A coupler curve: the link and the reference position of the traced point, and
+    the curve over one turn, ``(TURN_SAMPLES − 1, 2)`` (the last sample repeats the first)."""
+
+    link: str
+    at: tuple[float, float]
+    points: np.ndarray
+
+
+def sample_positions(inv: InversionRecord, rng: np.random.Generator) -> dict[str, tuple[float, float]]:
+    """Joint positions of one random realisation (module docstring)."""
+    driver = inv.joint
+    on_driven = {a for a, j in enumerate(inv.joints) if inv.driven in j and a != driver}
+    at = {}
+    for a in range(len(inv.joints)):
+        if a == driver:
+            p = (0.0, 0.0)
+        elif a in on_driven:
+            r, t = rng.uniform(0.15, 0.45), rng.uniform(0, 2 * np.pi)
+            p = (r * np.cos(t), r * np.sin(t))
+        else:
+            p = tuple(rng.uniform(-1.0, 1.0, 2))
+        at[f"J{a + 1}"] = (float(p[0]), float(p[1]))
+    return at
+
+
+def _turn() -> np.ndarray:
+    return np.linspace(0.0, 2 * np.pi, TURN_SAMPLES)
+
+
+def _screen(m: Mechanism, specs, min_angle: float) -> bool:
+    """Every grid position assembled (each on the reference's branch, no continuation:
+    a quick necessary test) and every monitored angle within bounds."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = solve(m, _turn(), assemble=True)
+    if not np.all(st.ok):
+        return False
+    if not specs:
+        return True
+    A = angle_values(st, specs)
+    folded = np.minimum(A, 180.0 - A)
+    return bool(np.all(np.isfinite(folded)) and folded.min() >= min_angle)
+
+
+def _certified(m: Mechanism, min_angle: float) -> float | None:
+    """The check's smallest folded monitored angle when the driver turns fully and no
+    angle is flagged at ``min_angle``; None otherwise."""
+    try:
+        rep = check(m, min_transmission=min_angle)
+    except (LinkageError, ValueError, FloatingPointError):
+        return None
+    dc = rep.drivers[0]
+    if not dc.full_rotation or any(a.flagged(min_angle) for a in dc.angles):
+        return None
+    lows = [min(a.extreme.min, 180.0 - a.extreme.max) if a.quantity != "pressure" else 90.0 - a.extreme.max
+            for a in dc.angles if a.extreme is not None]
+    return float(min(lows, default=90.0))
+
+
+def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission: float = 20.0) -> Realisation | None:
+    """The first sample (seeds ``seed``, ``seed + 1``, …, at most ``tries``) that the
+    screen keeps and :func:`kin.check.check` certifies; None when none does."""
+    base = inv.as_mechanism()
+    specs = angle_specs(decompose(base))
+    rng = np.random.default_rng(seed)
+    for k in range(tries):
+        try:
+            m = inversion(inv.joints, inv.frame, inv.joint, inv.driven,
+                          name=f"atlas-n{inv.n}", at=sample_positions(inv, rng))
+        except LinkageError:
+            continue
+        try:
+            if not _screen(m, specs, min_transmission):
+                continue
+        except LinkageError:
+            continue
+        low = _certified(m, min_transmission)
+        if low is not None:
+            return Realisation(inv, m, seed, low, k + 1)
+    return None
+
+
+def coupler_curves(m: Mechanism, frame_driven: tuple[str, str], per_link: int,
+                   rng: np.random.Generator) -> list[CurveSample]:
+    """``per_link`` random points on every moving link other than the driven one,
+    traced over one turn (``TURN_SAMPLES`` driver values)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        st = solve(m, _turn())
+    out = []
+    for link in m.link_names:
+        if link in frame_driven:
+            continue
+        for _ in range(per_link):
+            at = tuple(float(v) for v in rng.uniform(-1.0, 1.0, 2))
+            p = np.asarray(st.point_on_link(link, at)[0][:-1])
+            length = float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)))
+            if np.isfinite(length) and length > 1e-6:      # a link at rest traces no curve
+                out.append(CurveSample(link, at, p))
+    return out

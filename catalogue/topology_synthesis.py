@@ -1,0 +1,291 @@
+"""Path synthesis without a start: the atlas chooses the topology.
+
+:func:`synthesise` normalises the target as the atlas's curves are normalised
+(:mod:`.curves`), retrieves the nearest stored coupler curves in both traversal
+directions (:class:`.curve_atlas.CurveIndex`), ranks them by the aligned distance
+(closed targets; open ones by the descriptor of the retraced curve), carries the
+best few mechanisms of each topology onto the target by the similarity that aligns
+their curves, and polishes each with the dimensional synthesiser
+(:func:`.dimensional.synthesise`, which frees every joint and the tracer point).
+A design is returned only when :func:`kin.check.check` reaches every target input
+on one continuous branch (``positions``).  Designs are ordered by RMS error, fewer
+links first when their errors agree within ``tol``.
+
+This is the retrieve-then-optimise scheme of Nobari et al. 2024 (LInK) with an
+exact, isomorph-free topology space (:mod:`.inversions`) instead of learned
+embeddings.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from multiloop.topo.assur import decompose
+from multiloop.topo.errors import InputError, LinkageError, explain
+from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
+from multiloop.kin.check import check
+from multiloop.kin.solve import solve
+
+from .atlas import Atlas
+from .curves import CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise, similarity_to
+from .curve_atlas import CurveIndex, stored_curve
+from .dimensional import synthesise as dimensional_synthesise
+from .dimensional.targets import check_rows, read_table
+from .inversions import inversion
+
+__all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files"]
+
+#: target points handed to the dimensional synthesiser (arc-length resampled)
+POLISH_POINTS = 40
+
+
+@dataclass(frozen=True)
+class Design:
+    """One returned design: the mechanism (tracer point ``point``), its errors relative
+    to the target's size at the polished points (the dimensional synthesiser's), its
+    number of links, structure formula, LInK's chamfer score of its traced curve
+    against the target, and ``deviation_max``: the largest distance from any target
+    point to the traced curve (2000 driver steps), over the target's size."""
+
+    mechanism: Mechanism
+    error_max: float
+    error_rms: float
+    links: int
+    structure: str
+    chamfer: float
+    retrieved: float
+    seconds: float
+    deviation_max: float = float("nan")
+
+    def as_dict(self, file: str | None = None) -> dict:
+        return {"error_max": self.error_max, "error_rms": self.error_rms, "links": self.links,
+                "structure": self.structure, "file": file, "chamfer": self.chamfer,
+                "deviation_max": self.deviation_max,
+                "retrieval_distance": self.retrieved, "seconds": round(self.seconds, 3)}
+
+
+@dataclass(frozen=True)
+class TopologySynthesis:
+    """Outcome of :func:`synthesise`: the designs (best first), whether the target was
+    read as closed, the candidates polished and the time."""
+
+    designs: tuple[Design, ...]
+    closed: bool
+    polished: int
+    seconds: float
+
+    def as_list(self, files=None) -> list[dict]:
+        files = list(files) if files is not None else [None] * len(self.designs)
+        return [d.as_dict(f) for d, f in zip(self.designs, files)]
+
+    def to_text(self, files=None) -> str:
+        lines = [f"{len(self.designs)} designs ({'closed' if self.closed else 'open'} target, "
+                 f"{self.polished} polished, {self.seconds:.1f} s)"]
+        for d in self.as_list(files):
+            lines.append(f"  {d['links']} links  rms {d['error_rms']:.3g}  max {d['error_max']:.3g}  "
+                         f"chamfer {d['chamfer']:.3g}  {d['structure']}" + (f"  -> {d['file']}" if d["file"] else ""))
+        return "\n".join(lines)
+
+
+def parse_links(text) -> tuple[int, ...]:
+    """``"4,6,8"`` → ``(4, 6, 8)``; even numbers of links from 4 (1-DOF chains)."""
+    try:
+        links = tuple(int(v) for v in str(text).split(","))
+    except ValueError:
+        links = ()
+    if not links or any(n < 4 or n % 2 for n in links):
+        raise InputError(explain("--links", expected="even numbers of links >= 4, e.g. 4,6,8", got=repr(text)))
+    return links
+
+
+def design_files(out, k: int) -> list[Path]:
+    """``OUT.toml``, ``OUT-2.toml``, … for ``k`` designs."""
+    p = Path(out)
+    return [p] + [p.with_name(f"{p.stem}-{i}{p.suffix}") for i in range(2, k + 1)]
+
+
+def _target(path) -> np.ndarray:
+    if isinstance(path, (str, Path)):
+        return read_table(path, (2, 3), "path")[:, :2]
+    a = np.asarray(path, float)
+    if a.ndim != 2 or a.shape[1] not in (2, 3):
+        raise InputError(explain("path target", expected="an array of shape (N, 2)", got=f"shape {a.shape}"))
+    return check_rows(a, "path", "path target")[:, :2]
+
+
+def candidate_mechanism(curve: dict, transform, point: str) -> Mechanism:
+    """The stored realisation of ``curve`` (:func:`.curve_atlas.stored_curve`) moved by
+    ``transform`` (a similarity), with the traced point named ``point``."""
+    chain = curve["joints_of_chain"]
+    at = {name: tuple(transform(np.asarray(p, float))) for name, p in curve["joints"].items()}
+    m = inversion(chain, curve["frame"], curve["joint"], curve["driven"],
+                  name=f"atlas-{curve['n']}-bar", at=at)
+    b = MechanismBuilder.from_mechanism(m)
+    b.points = [TracerPoint(point, curve["link"], tuple(float(v) for v in transform(np.asarray(curve["at"]))))]
+    return b.build()
+
+
+def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: int) -> list[tuple[float, int, object]]:
+    """(distance, curve id, similarity) of the retrieved curves, nearest first."""
+    index = CurveIndex(atlas, links)
+    if not len(index):
+        raise InputError(explain("atlas curves", expected=f"stored coupler curves of {links}-link mechanisms",
+                                 got=f"none in {atlas.path!r}",
+                                 hint="build them: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
+    zt, ct, rt = normalise(target, CURVE_POINTS, closed)
+    out = []
+    for hit in index.query(descriptor(target, closed=closed), candidates):
+        c = stored_curve(atlas, hit.curve)
+        if closed:
+            dist, _, rot, _ = aligned_distance(zt, c["shape"])
+        else:
+            dist, rot = hit.distance, _open_rotation(target, c)
+        out.append((dist, hit.curve, similarity_to(ct, rt, c["centre"], c["radius"], rot)))
+    return sorted(out, key=lambda t: t[0])
+
+
+def _open_rotation(target: np.ndarray, curve: dict) -> complex:
+    """Rotation of a stored curve best matching an open target: the direction between
+    the target's end points against the nearest chord of the same relative length."""
+    zt, _, _ = normalise(target, CURVE_POINTS, False)
+    z = curve["shape"]
+    chord = zt[CURVE_POINTS - 1] - zt[0]
+    d = z[None, :] - z[:, None]
+    i, j = np.unravel_index(np.argmin(np.abs(np.abs(d) - abs(chord))), d.shape)
+    v = d[i, j]
+    return complex(chord / v / abs(chord / v)) if abs(v) > 0 else 1.0 + 0j
+
+
+def _subset(target: np.ndarray, n: int) -> np.ndarray:
+    """At most ``n`` of the target's own points, evenly spaced by arc length (points on
+    the target, not on its chords)."""
+    if len(target) <= n:
+        return target
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(target, axis=0), axis=1))])
+    idx = np.unique(np.searchsorted(s, np.linspace(0.0, s[-1], n, endpoint=False)))
+    return target[np.minimum(idx, len(target) - 1)]
+
+
+def _passes_check(m: Mechanism, inputs: np.ndarray) -> bool:
+    """The check reaches every target input on the design's branch (no circuit defect)."""
+    try:
+        rep = check(m, min_transmission=0.0, positions={m.drivers[0].joint: [float(x) for x in inputs]})
+    except (LinkageError, ValueError, FloatingPointError):
+        return False
+    return not rep.drivers[0].unreachable
+
+
+def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
+    """The tracer densely: one turn from the reference for a closed target, else over
+    the inputs' span (for the chamfer score and the deviation)."""
+    lo, hi = (0.0, 2 * np.pi) if closed else (float(np.min(inputs)), float(np.max(inputs)))
+    st = solve(m, np.linspace(lo, hi, 2000))
+    P = st.point_positions[:, st.point_index(point)]
+    return P[np.all(np.isfinite(P), axis=1)]
+
+
+def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float, seed: int,
+            retrieved: float, full_target: np.ndarray) -> Design | None:
+    t0 = time.perf_counter()
+    pts = _subset(target, POLISH_POINTS)
+    try:
+        res = dimensional_synthesise(start, path=pts, point=point, budget=budget, seed=seed, tol=1e-9,
+                                     full_rotation=closed)
+    except LinkageError:
+        return None
+    m = res.mechanism
+    if not (np.isfinite(res.error_max) and np.isfinite(res.error_rms)) or not _passes_check(m, res.inputs):
+        return None
+    curve = _traced(m, point, res.inputs, closed)
+    if len(curve) < 3:
+        return None
+    score = chamfer_score(full_target, curve, closed=closed)
+    size = float(np.max(np.ptp(full_target, axis=0)))
+    gaps = np.min(np.linalg.norm(full_target[:, None, :] - curve[None, :, :], axis=2), axis=1)
+    return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
+                  score, float(retrieved), time.perf_counter() - t0, float(gaps.max() / size))
+
+
+def _order(designs: list[Design], tol: float) -> list[Design]:
+    """By RMS error, in bands: a band holds the designs within ``tol`` of its best
+    error, and inside a band fewer links come first."""
+    rest = sorted(designs, key=lambda d: d.error_rms)
+    out: list[Design] = []
+    while rest:
+        band = [d for d in rest if d.error_rms <= rest[0].error_rms + tol]
+        out += sorted(band, key=lambda d: (d.links, d.error_rms))
+        rest = rest[len(band):]
+    return out
+
+
+def _choose(ranked: list, atlas: Atlas, per_topology: int, topologies: int) -> list[tuple[float, dict, object]]:
+    """The best ``per_topology`` curves of each of the first ``topologies`` mechanisms
+    met per link count (nearest first)."""
+    taken: dict[int, int] = {}
+    per_n: dict[int, set] = {}
+    out = []
+    for dist, cid, tf in ranked:
+        c = stored_curve(atlas, cid)
+        mids = per_n.setdefault(c["n"], set())
+        if c["mechanism"] not in mids and len(mids) >= topologies:
+            continue
+        if taken.get(c["mechanism"], 0) >= per_topology:
+            continue
+        mids.add(c["mechanism"])
+        taken[c["mechanism"]] = taken.get(c["mechanism"], 0) + 1
+        out.append((dist, c, tf))
+    return out
+
+
+def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "atlas.sqlite", top: int = 3,
+               budget: float = 60.0, point: str = "P", tol: float = 1e-3, per_topology: int = 1,
+               topologies: int = 2, candidates: int = 200, seed: int = 0) -> TopologySynthesis:
+    """Path synthesis that chooses the topology from the atlas (module docstring).
+
+    Parameters
+    ----------
+    path : array (N, 2) or CSV path
+        The target points in order (an open or closed curve; closed when its ends
+        meet, :func:`.curves.is_closed`).
+    start : Mechanism, optional
+        Given a start, this is the dimensional synthesiser on that start (the
+        topology is fixed); without one the atlas chooses.
+    links : tuple of int
+        Numbers of links to consider.
+    atlas : str or Path
+        The atlas file with stored curves (``multiloop atlas … --mechanisms --curves K``).
+    top : int
+        Designs returned.
+    budget : float
+        Seconds in all, shared by the polished candidates.
+    point : str
+        Name of the tracer point of the designs.
+    tol : float
+        Errors (relative RMS) that agree within ``tol`` count as ties: fewer links first.
+    per_topology, topologies, candidates : int
+        Polished curves per mechanism, mechanisms per link count, curves retrieved.
+
+    Returns
+    -------
+    TopologySynthesis
+    """
+    t0 = time.perf_counter()
+    target = _target(path)
+    closed = is_closed(target)
+    if start is not None:
+        d = _polish(start, target, closed, point, budget, seed, float("nan"), target)
+        return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0)
+    if budget is None or not budget > 0:
+        raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
+    if not Path(atlas).is_file():
+        raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
+                                 hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
+    with Atlas(atlas, readonly=True) as a:
+        chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), a, per_topology, topologies)
+        starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
+    each = budget / max(len(starts), 1)
+    designs = [d for d in (_polish(m, target, closed, point, each, seed, dist, target) for dist, m in starts) if d]
+    return TopologySynthesis(tuple(_order(designs, tol)[:top]), closed, len(starts), time.perf_counter() - t0)

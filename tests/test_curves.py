@@ -1,0 +1,194 @@
+"""Coupler-curve atlas: descriptor invariances (hypothesis), aligned distance, LInK's
+chamfer score, certified realisations, retrieval of a transformed atlas curve, resume,
+and path synthesis without a start (written designs solve and pass check)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from multiloop.catalogue.atlas import Atlas
+from multiloop.catalogue.curve_atlas import CurveIndex, build_curves, stored_curve
+from multiloop.catalogue.curves import (
+    aligned_distance, chamfer_score, descriptor, is_closed, normalise, reversed_descriptor,
+)
+from multiloop.catalogue.inversions import build_mechanisms, iter_mechanisms
+from multiloop.catalogue.realisations import TURN_SAMPLES, realise
+from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
+from multiloop.cli import main
+
+needs_nauty = pytest.mark.skipif(not nauty_available(), reason="nauty's geng/genbg not installed")
+
+
+def _curve(coef, n=400, start=0.0):
+    """A smooth closed curve from a few Fourier coefficients (complex)."""
+    t = start + np.linspace(0, 2 * np.pi, n, endpoint=False)
+    z = sum(c * np.exp(1j * k * t) for k, c in coef)
+    return np.stack([z.real, z.imag], axis=1)
+
+
+coefs = st.lists(st.tuples(st.sampled_from([-3, -2, 2, 3]),
+                           st.complex_numbers(max_magnitude=0.3, allow_nan=False, allow_infinity=False)),
+                 min_size=1, max_size=3).map(lambda extra: [(1, 1.0 + 0j)] + extra)
+
+
+@given(coefs, st.floats(0, 2 * np.pi), st.floats(0.01, 100.0), st.floats(-50, 50), st.floats(-50, 50))
+def test_descriptor_invariant_under_similarity(coef, angle, scale, dx, dy):
+    P = _curve(coef)
+    c, s = np.cos(angle), np.sin(angle)
+    Q = scale * P @ np.array([[c, s], [-s, c]]) + [dx, dy]
+    assert np.allclose(descriptor(P, closed=True), descriptor(Q, closed=True), atol=1e-4)
+
+
+@given(coefs)
+def test_descriptor_reversal_swaps_harmonics(coef):
+    P = _curve(coef)
+    d, r = descriptor(P, closed=True), descriptor(P[::-1], closed=True)
+    assert np.allclose(r, reversed_descriptor(d), atol=2e-3)   # another start point: resampling differs
+    assert np.allclose(reversed_descriptor(reversed_descriptor(d)), d)
+
+
+@given(coefs, st.integers(300, 900), st.floats(0, 2 * np.pi))
+def test_descriptor_invariant_under_resampling_and_start(coef, n, start):
+    a = descriptor(_curve(coef, 1000), closed=True)
+    b = descriptor(_curve(coef, n, start), closed=True)
+    assert np.max(np.abs(a - b)) < 2e-2
+
+
+@given(coefs, st.floats(0, 2 * np.pi), st.integers(0, 63), st.booleans())
+def test_aligned_distance_finds_rotation_shift_and_direction(coef, angle, shift, rev):
+    za, _, _ = normalise(_curve(coef), 64, True)
+    zb = np.roll(za * np.exp(1j * angle), shift)
+    zb = zb[::-1] if rev else zb
+    dist, _, _, _ = aligned_distance(za, zb)
+    assert dist < 1e-6      # sqrt of a difference of sums of squares: ~1e-8 round-off
+
+
+def test_chamfer_score():
+    circle = _curve([(1, 1.0)])
+    assert chamfer_score(circle, circle) < 1e-2
+    moved = 5 * circle[::-1] @ np.array([[0, 1], [-1, 0]]) + 7
+    assert chamfer_score(circle, moved) < 1e-2           # centred, scaled, best rotation
+    ellipse = circle * [1.0, 0.5]
+    assert chamfer_score(circle, ellipse) > 0.1
+    arc = circle[:150]
+    assert not is_closed(arc) and is_closed(circle)
+    assert chamfer_score(arc, arc) < 1e-2
+
+
+@pytest.fixture(scope="module")
+def curve_atlas(tmp_path_factory):
+    if not nauty_available():
+        pytest.skip("nauty's geng/genbg not installed")
+    db = tmp_path_factory.mktemp("curves") / "atlas.sqlite"
+    with Atlas(db) as atlas:
+        for n, k in ((4, 4), (6, 1)):
+            opts = SynthesisOptions(n, 1, simple_joints=True)
+            atlas.build(opts, progress=False, loops=False)
+            build_mechanisms(atlas, opts)
+            build_curves(atlas, opts, k, max_mechanisms=4)
+    return db
+
+
+@needs_nauty
+def test_realisations_are_certified():
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    with Atlas(":memory:") as atlas:
+        atlas.build(opts, progress=False, loops=False)
+        build_mechanisms(atlas, opts)
+        inv = next(iter_mechanisms(atlas, opts, "class = 3"))
+        r = realise(inv, 3)
+        assert r is not None and r.min_angle >= 20.0
+        from multiloop.kin.check import check
+
+        dc = check(r.mechanism, min_transmission=20.0).drivers[0]
+        assert dc.full_rotation and not any(a.flagged(20.0) for a in dc.angles)
+
+
+@needs_nauty
+def test_curve_build_resumes(curve_atlas):
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    with Atlas(curve_atlas) as atlas:
+        before = atlas.con.execute("SELECT count(*) FROM curve_mechanisms").fetchone()[0]
+        again = build_curves(atlas, opts, 1, max_mechanisms=0)
+        assert again.mechanisms_run == 0
+        assert atlas.con.execute("SELECT count(*) FROM curve_mechanisms").fetchone()[0] == before
+        assert again.mechanisms == 9 and again.skipped_newton == 0
+
+
+@needs_nauty
+def test_curves_same_in_two_processes(tmp_path):
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    got = []
+    for workers in (1, 2):
+        with Atlas(tmp_path / f"w{workers}.sqlite") as atlas:
+            atlas.build(opts, progress=False, loops=False)
+            build_mechanisms(atlas, opts)
+            build_curves(atlas, opts, 1, max_mechanisms=3, workers=workers)
+            got.append(atlas.con.execute("SELECT r.mechanism, c.link, c.x, c.y, c.descriptor FROM curves c JOIN "
+                                         "realisations r ON r.id = c.realisation ORDER BY 1, 2, 3").fetchall())
+    assert got[0] == got[1] and len(got[0]) > 0
+
+
+@needs_nauty
+@pytest.mark.parametrize("exact", [False, True])
+def test_retrieval_finds_own_curve_after_similarity(curve_atlas, exact):
+    rng = np.random.default_rng(1)
+    with Atlas(curve_atlas) as atlas:
+        index = CurveIndex(atlas, exact=exact)
+        for cid in rng.choice(index.ids, 8, replace=False):
+            c = stored_curve(atlas, int(cid))
+            z = c["shape"] * 2.5 * np.exp(1j * rng.uniform(0, 6.3)) + complex(*rng.uniform(-9, 9, 2))
+            z = np.roll(z, int(rng.integers(64)))[:: 1 if rng.random() < 0.5 else -1]
+            hits = index.query(descriptor(np.stack([z.real, z.imag], 1), closed=True), 10)
+            assert int(cid) in [h.curve for h in hits]
+
+
+@needs_nauty
+def test_synthesis_without_start_writes_checked_designs(curve_atlas, tmp_path, capsys):
+    from multiloop.inputs import load_mechanism
+    from multiloop.kin.check import check
+    from multiloop.kin.solve import solve
+
+    with Atlas(curve_atlas) as atlas:
+        c = stored_curve(atlas, int(CurveIndex(atlas, links=(4,)).ids[0]))
+    # the target: that curve traced densely, then moved, turned and scaled
+    from multiloop.catalogue.topology_synthesis import candidate_mechanism
+
+    m = candidate_mechanism(c, lambda w: 2.0 * np.asarray(w) @ np.array([[0, 1], [-1, 0]]) + [3, 1], "P")
+    st_ = solve(m, np.linspace(0, 2 * np.pi, TURN_SAMPLES)[:-1])
+    target = st_.point_positions[:, 0]
+    csv = tmp_path / "t.csv"
+    np.savetxt(csv, target, delimiter=",")
+    out = tmp_path / "o.toml"
+    assert main(["synthesise", "--path", str(csv), "--out", str(out), "--db", str(curve_atlas), "--links", "4,6",
+                 "--budget", "4", "--top", "2", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc and {"error_max", "error_rms", "links", "structure", "file"} <= set(doc[0])
+    assert doc[0]["error_max"] < 1e-3 and doc[0]["links"] == 4
+    for d in doc:
+        design = load_mechanism(d["file"])
+        assert [p.name for p in design.points] == ["P"]
+        assert np.all(solve(design, np.linspace(0, 1, 5)).ok)
+        assert check(design, min_transmission=0.0).drivers[0].limits is not None
+
+
+def test_synthesis_without_start_needs_curves(tmp_path, capsys):
+    csv = tmp_path / "t.csv"
+    np.savetxt(csv, _curve([(1, 1.0)], 50), delimiter=",")
+    assert main(["synthesise", "--path", str(csv), "--out", str(tmp_path / "o.toml"),
+                 "--db", str(tmp_path / "none.sqlite")]) == 2
+    assert "atlas" in capsys.readouterr().err
+    assert not (tmp_path / "o.toml").exists()
+    assert main(["synthesise", "--path", str(csv), "--out", str(tmp_path / "o.toml"), "--links", "5"]) == 2
+
+
+def test_fewer_links_first_when_errors_tie():
+    from multiloop.catalogue.topology_synthesis import Design, _order
+
+    ds = [Design(None, 0, e, n, "", 0, 0, 0) for e, n in [(5e-4, 8), (9e-4, 4), (2e-3, 6), (2.1e-3, 4), (1e-2, 4)]]
+    got = [(d.error_rms, d.links) for d in _order(ds, 1e-3)]
+    assert got == [(9e-4, 4), (5e-4, 8), (2.1e-3, 4), (2e-3, 6), (1e-2, 4)]
+    assert [d.links for d in _order(ds, 0.0)] == [8, 4, 6, 4, 4]
