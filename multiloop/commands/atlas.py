@@ -12,11 +12,10 @@ Examples::
 from __future__ import annotations
 
 import io
-import json
 import sys
 from pathlib import Path
 
-from multiloop.outputs import Outputs, quiet_warnings
+from multiloop.outputs import Outputs, dumps_json, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -129,11 +128,7 @@ def run(args) -> int:
                                       workers=args.workers or default_workers())
                 print(curves.to_text(), file=sys.stderr)
         doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
-        if args.json:
-            json.dump(doc, sys.stdout, indent=1)
-            sys.stdout.write("\n")
-        else:
-            print(listing_text(doc, opts, args.query, args.limit))
+        print(dumps_json(doc) if args.json else listing_text(doc, opts, args.query, args.limit))
         if args.html is not None:
             from multiloop.catalogue.html import gallery_files
 

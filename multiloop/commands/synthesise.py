@@ -27,14 +27,12 @@ curve and the mechanism.  Nothing is written unless the whole run succeeds.
 """
 from __future__ import annotations
 
-import json
 import sys
-from pathlib import Path
 
-from multiloop.outputs import Outputs, figure_formats, quiet_warnings
+from multiloop.outputs import Outputs, dumps_json, figure_formats, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
-from multiloop.topo.io import dumps_toml
+from multiloop.topo.formats import dumps_mechanism
 from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
 from multiloop.catalogue.dimensional.report import parse_bounds, synthesis_text
 from multiloop.catalogue.dimensional.targets import TIMINGS
@@ -99,7 +97,6 @@ def _progress(enabled: bool):
 def run_without_start(args) -> int:
     """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
     from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
-    from multiloop.topo.io import dumps_json
 
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
@@ -120,10 +117,10 @@ def run_without_start(args) -> int:
                                  hint="a larger --budget, more --links, or more curves in the atlas"))
     files = design_files(args.out, len(res.designs))
     for d, f in zip(res.designs, files):
-        outs.add(f, dumps_json(d.mechanism) if f.suffix.lower() == ".json" else dumps_toml(d.mechanism), "--out")
+        outs.add(f, dumps_mechanism(d.mechanism, f), "--out")
     outs.commit()
     files = [str(f) for f in files]
-    print(json.dumps(res.as_list(files), indent=1, ensure_ascii=False) if args.json else res.to_text(files))
+    print(dumps_json(res.as_list(files)) if args.json else res.to_text(files))
     return 0
 
 
@@ -164,12 +161,7 @@ def run(args) -> int:
             res = synthesise(m, **kw)
     else:
         res = synthesise(m, **kw)
-    out = res.mechanism
-    if Path(args.out).suffix.lower() == ".json":
-        from multiloop.topo.io import dumps_json
-        outs.add(args.out, dumps_json(out), "--out")
-    else:
-        outs.add(args.out, dumps_toml(out), "--out")
+    outs.add(args.out, dumps_mechanism(res.mechanism, args.out), "--out")
     if args.plot is not None:
         from multiloop.catalogue.dimensional.figure import plot_synthesis
         with quiet_warnings("multiloop synthesise"):
@@ -177,8 +169,5 @@ def run(args) -> int:
     outs.commit()
     doc = res.as_dict()
     doc["out"] = str(args.out)
-    if args.json:
-        print(json.dumps(doc, indent=1, ensure_ascii=False))
-    else:
-        print(synthesis_text(doc))
+    print(dumps_json(doc) if args.json else synthesis_text(doc))
     return 0
