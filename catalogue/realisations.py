@@ -10,8 +10,8 @@ Positions given this way assemble by construction at the reference.
 A sample is **kept** when the driver turns fully with every monitored angle (the
 transmission angle of each RRR dyad, the triad angles; Artobolevsky's and Hain's
 convention) at least ``min_transmission`` from 0° and 180°.  The sample is screened on a
-grid of driver values by :func:`kin.solve.solve` (vectorised over the positions,
-one design at a time), then **certified** by :func:`kin.check.check`, whose
+grid of driver values, a batch of samples at once (:func:`kin.design.solve_designs`:
+one pass over the mechanism's compiled plan for all of them), then **certified** by :func:`kin.check.check`, whose
 continuation and event search find limits and angle extremes between grid points
 (no claim rests on the grid alone).
 
@@ -29,7 +29,8 @@ from multiloop.topo.assur import decompose
 from multiloop.topo.errors import LinkageError
 from multiloop.topo.model import Mechanism
 from multiloop.kin.check import check
-from multiloop.kin.check.transmission import angle_specs, angle_values
+from multiloop.kin.check.transmission import angle_specs, spec_value
+from multiloop.kin.design import design_names, solve_designs
 from multiloop.kin.solve import solve
 
 from .inversions import InversionRecord, inversion
@@ -83,19 +84,22 @@ def _turn() -> np.ndarray:
     return np.linspace(0.0, 2 * np.pi, TURN_SAMPLES)
 
 
-def _screen(m: Mechanism, specs, min_angle: float) -> bool:
-    """Every grid position assembled (each on the reference's branch, no continuation:
-    a quick necessary test) and every monitored angle within bounds."""
+def _screen(m: Mechanism, samples: list, specs, min_angle: float) -> np.ndarray:
+    """For each sample (joint positions of ``m``'s topology), whether every grid position
+    assembles (each design on its reference's branches, in one pass over ``m``'s plan for
+    all samples: :func:`kin.design.solve_designs`) and every monitored angle is within
+    bounds: a quick necessary test."""
+    names = design_names(m)
+    X = np.array([[at[n[:-2]][0 if n.endswith(".x") else 1] for n in names] for at in samples])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        st = solve(m, _turn(), assemble=True)
-    if not np.all(st.ok):
-        return False
-    if not specs:
-        return True
-    A = angle_values(st, specs)
-    folded = np.minimum(A, 180.0 - A)
-    return bool(np.all(np.isfinite(folded)) and folded.min() >= min_angle)
+        st = solve_designs(m, names, X, _turn())
+    keep = np.all(st.ok, axis=1)
+    for sp in specs:
+        a = spec_value(st, sp)
+        folded = np.minimum(a, 180.0 - a)
+        keep &= np.all(np.isfinite(folded) & (folded >= min_angle), axis=1)
+    return keep
 
 
 def _certified(m: Mechanism, min_angle: float) -> float | None:
@@ -113,26 +117,32 @@ def _certified(m: Mechanism, min_angle: float) -> float | None:
     return float(min(lows, default=90.0))
 
 
-def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission: float = 20.0) -> Realisation | None:
+def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission: float = 20.0,
+            batch: int = 64) -> Realisation | None:
     """The first sample (seeds ``seed``, ``seed + 1``, …, at most ``tries``) that the
-    screen keeps and :func:`kin.check.check` certifies; None when none does."""
+    screen keeps and :func:`kin.check.check` certifies; None when none does.  The samples
+    are drawn in order and screened ``batch`` at a time (the result is the one the
+    samples give one by one)."""
     base = inv.as_mechanism()
     specs = angle_specs(decompose(base))
     rng = np.random.default_rng(seed)
-    for k in range(tries):
-        try:
-            m = inversion(inv.joints, inv.frame, inv.joint, inv.driven,
-                          name=f"atlas-n{inv.n}", at=sample_positions(inv, rng))
-        except LinkageError:
-            continue
-        try:
-            if not _screen(m, specs, min_transmission):
+    done = 0
+    while done < tries:
+        drawn = [sample_positions(inv, rng) for _ in range(min(batch, tries - done))]
+        built = []
+        for k, at in enumerate(drawn):
+            try:
+                built.append((k, at, inversion(inv.joints, inv.frame, inv.joint, inv.driven,
+                                               name=f"atlas-n{inv.n}", at=at)))
+            except LinkageError:
                 continue
-        except LinkageError:
-            continue
-        low = _certified(m, min_transmission)
-        if low is not None:
-            return Realisation(inv, m, seed, low, k + 1)
+        if built:
+            keep = _screen(built[0][2], [at for _, at, _ in built], specs, min_transmission)
+            for (k, _, m), ok in zip(built, keep):
+                low = _certified(m, min_transmission) if ok else None
+                if low is not None:
+                    return Realisation(inv, m, seed, low, done + k + 1)
+        done += len(drawn)
     return None
 
 
