@@ -120,13 +120,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         sysm = ConstraintSystem.compile(m, s.constraints)
         links = (s.link,) if isinstance(s, DriverStep) else s.links
         unknown = tuple(idx[x] for x in links)
-        if isinstance(s, DriverStep):
-            solver, label = "driver", f"driver {s.joint} (I{s.number})"
-        else:
-            solver = "dyad" if s.is_dyad or s.kind is GroupKind.ACTUATED else (
-                "triad" if s.kind is GroupKind.TRIAD else
-                ("class4" if s.kind is GroupKind.CLASS_IV and s.layout else "newton"))
-            label = s.describe()
+        label = f"driver {s.joint} (I{s.number})" if isinstance(s, DriverStep) else s.describe()
         # regularity at the reference configuration
         cols = (3 * np.asarray(unknown)[:, None] + np.arange(3)).ravel()
         rel = float(relative_det(sysm.jacobian(Z0)[0][:, cols]))      # the same at any scale and place
@@ -137,8 +131,11 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
             raise SingularityError(explain(
                 label, expected="a regular group in the reference configuration",
                 got=f"a singular one (relative determinant {rel:.1e})", hint=hint))
-        st = StepPlan(s, sysm, unknown, solver, label)
-        steps.append(replace(st, closed=closed_form_step(m, st, size), newton=newton_step(m, st, size)))
+        st = StepPlan(s, sysm, unknown, "newton", label)
+        closed = closed_form_step(m, st, size)
+        # the solver's name is the closed-form step's (the registry's), else Newton's
+        solver = "driver" if isinstance(s, DriverStep) else (closed.solver if closed is not None else "newton")
+        steps.append(replace(st, solver=solver, closed=closed, newton=newton_step(m, st, size)))
     solved = dict(ap.solved_by)
     host, hstep = [], []
     for j in m.joints:

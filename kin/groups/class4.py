@@ -253,6 +253,8 @@ class Class4Step(GroupStep):
     """A class IV order-2 group of a plan, tracked in the mode of the reference
     (:func:`class4_track`); rates from the group's Jacobian."""
 
+    solver = "class4"
+
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout

@@ -401,6 +401,7 @@ class NewtonStep(GroupStep):
     configuration; rates from the group's Jacobian."""
 
     batched = False          # solved design by design (kin.design falls back)
+    solver = "newton"
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         st = self.st

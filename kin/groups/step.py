@@ -53,6 +53,9 @@ class GroupStep:
 
     #: whether the step solves a batch of designs (:mod:`kin.design`) in one pass
     batched = True
+    #: the plan's name for the solver (``StepPlan.solver``): "dyad" (closed form with two
+    #: branches or none, charted by the continuation walk), "triad", "class4", "newton"
+    solver = "dyad"
 
     def __init__(self, mechanism, st, size: float, geo=None):
         self.mechanism, self.st, self.size = mechanism, st, size

@@ -788,6 +788,8 @@ class TriadStep(GroupStep):
     """A class III triad of a plan, tracked in the mode of the reference
     (:func:`triad_track`); rates from the group's Jacobian."""
 
+    solver = "triad"
+
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout
