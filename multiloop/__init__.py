@@ -57,15 +57,26 @@ def decompose(mechanism, **kwargs):
     return _decompose(_mechanism(mechanism), **kwargs)
 
 
-def solve(mechanism, inputs, **kwargs):
+def solve(mechanism, inputs, *, designs=None, names=None, **kwargs):
     """Positions (and with ``derivatives=True`` velocities, accelerations).
 
     ``inputs`` are driver values from the reference configuration: rad for an R
     driver, m for a P driver; a scalar, shape (N,) or (N, n_drivers).  Returns
-    :class:`~multiloop.kin.state.KinematicState` (NumPy arrays per joint and link).
+    :class:`~multiloop.kin.state.KinematicState` (NumPy arrays per joint and link);
+    ``outputs=[names]`` computes only those joints, points and links.
+
+    With ``designs`` (D, p), D designs of the mechanism's topology are solved in one pass
+    (:func:`multiloop.kin.design.solve_designs`; columns named by ``names``, default
+    :func:`multiloop.kin.geometry.design_names` of the mechanism and its tracer points),
+    and the result is a :class:`~multiloop.kin.design.DesignPoses` of shape (D, N).
     """
+    m = _mechanism(mechanism)
+    if designs is not None:
+        from multiloop.kin.design import design_names, solve_designs  # noqa: PLC0415
+        names = design_names(m, [p.name for p in m.points]) if names is None else names
+        return solve_designs(m, names, designs, inputs, **kwargs)
     from multiloop.kin.solve import solve as _solve  # noqa: PLC0415
-    return _solve(_mechanism(mechanism), inputs, **kwargs)
+    return _solve(m, inputs, **kwargs)
 
 
 def forces(mechanism, state_or_inputs, **kwargs):

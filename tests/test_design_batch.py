@@ -166,3 +166,15 @@ def test_solve_outputs_compute_only_what_is_asked():
     np.testing.assert_array_equal(with_angle.angles[:, skipped[0]], full.angles[:, skipped[0]])
     moved = solve(m, x, outputs=[j], derivatives=True)   # derivatives still work when asked
     np.testing.assert_allclose(moved.velocities[:, i], solve(m, x, derivatives=True).velocities[:, i])
+
+
+def test_the_facade_solves_designs():
+    """ml.solve(m, x, designs=X): the batch through the façade, (D, N) results equal to
+    solve_designs with the default column names (joints, then tracer points)."""
+    import multiloop as ml
+    m = load_named("four_bar")
+    names, X = _designs(m, D=4)
+    x = _inputs(m)
+    r = ml.solve("four_bar", x, designs=X, outputs=["P"])
+    assert r.ok.shape == (4, len(x))
+    np.testing.assert_array_equal(r.point("P"), solve_designs(m, names, X, x).point("P"))
