@@ -83,16 +83,21 @@ def _motion_and_check(job, m, threshold, key=None):
     return doc
 
 
-def warm_up(files: dict, first: str | None) -> None:
-    """Import what a session uses and solve the sweeps of the first mechanism a page
-    shows, so that the first session is built as fast as the next ones."""
+def warm_up(files: dict, imported) -> None:
+    """Import what a session uses (then set the event ``imported``) and solve the sweeps
+    of the first mechanism a page shows, so that the first session is built as fast as
+    the next ones and shows its motion at once."""
     from multiloop.inputs import load_mechanism
 
     from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
-    name = first or _first_choice(files)
-    m = files[name] if name in files else load_mechanism(name)
-    if m.drivers and m.has_geometry:
-        _sweeps(m, name)
+    imported.set()
+    name = _first_choice(files)
+    try:
+        m = files[name] if name in files else load_mechanism(name)
+        if m.drivers and m.has_geometry:
+            _sweeps(m, name)
+    except Exception:  # noqa: BLE001 - the session's own job computes it again and reports
+        pass
 
 
 def _first_choice(files: dict) -> str:
@@ -273,15 +278,26 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
         # every stylesheet of this document from this server (Panel defaults to its CDN
         # for models made outside the page's first render, e.g. a tab opened later)
         pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
-        wb = Workbench(files, atlases, threshold)
-        cb = pn.state.add_periodic_callback(wb.poll, period=150)
+        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
 
-        def closed(_ctx):
-            cb.stop()
-            wb.close()
-        pn.state.on_session_destroyed(closed)
-        return wb.panel
+        def build():
+            # after the browser has loaded the page's scripts: the two overlap with the
+            # warm-up below instead of waiting for each other
+            imported.wait(timeout=60)
+            wb = Workbench(files, atlases, threshold)
+            root.objects = [wb.panel]
+            cb = pn.state.add_periodic_callback(wb.poll, period=150)
 
+            def closed(_ctx):
+                cb.stop()
+                wb.close()
+            pn.state.on_session_destroyed(closed)
+        pn.state.onload(build)
+        return root
+
+    import threading
+    imported = threading.Event()
+    threading.Thread(target=warm_up, args=(files, imported), name="multiloop-web-warm-up", daemon=True).start()
     server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
                       websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
                       verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)
