@@ -278,22 +278,15 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
         # every stylesheet of this document from this server (Panel defaults to its CDN
         # for models made outside the page's first render, e.g. a tab opened later)
         pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
-        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
+        imported.wait(timeout=60)
+        wb = Workbench(files, atlases, threshold)
+        cb = pn.state.add_periodic_callback(wb.poll, period=150)
 
-        def build():
-            # after the browser has loaded the page's scripts: the two overlap with the
-            # warm-up below instead of waiting for each other
-            imported.wait(timeout=60)
-            wb = Workbench(files, atlases, threshold)
-            root.objects = [wb.panel]
-            cb = pn.state.add_periodic_callback(wb.poll, period=150)
-
-            def closed(_ctx):
-                cb.stop()
-                wb.close()
-            pn.state.on_session_destroyed(closed)
-        pn.state.onload(build)
-        return root
+        def closed(_ctx):
+            cb.stop()
+            wb.close()
+        pn.state.on_session_destroyed(closed)
+        return wb.panel
 
     import threading
     imported = threading.Event()
