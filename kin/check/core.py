@@ -250,9 +250,9 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
         A tracer point: its workspace over the box of every driver's usable range
         (:func:`~kin.check.workspace.workspace`).
     cancel : callable, optional
-        Called with no argument before every solve of a driver's motion and between
-        the stages; it stops the check by raising (its exception propagates), e.g. when
-        an interactive caller's user cancels.
+        Called with no argument before every solve of a driver's motion and once
+        after the drivers; it stops the check by raising (its exception propagates),
+        e.g. when the user of an interactive caller cancels.
 
     Returns
     -------

@@ -87,10 +87,12 @@ def warm_up(files: dict, imported) -> None:
     """Import what a session uses (then set the event ``imported``) and solve the sweeps
     of the first mechanism a page shows, so that the first session is built as fast as
     the next ones and shows its motion at once."""
-    from multiloop.inputs import load_mechanism
+    try:
+        from multiloop.inputs import load_mechanism
 
-    from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
-    imported.set()
+        from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
+    finally:
+        imported.set()                      # a session never waits for a failed warm-up
     name = _first_choice(files)
     try:
         m = files[name] if name in files else load_mechanism(name)
