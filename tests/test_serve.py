@@ -3,6 +3,7 @@ the read-only atlas, the sweeps the slider indexes, the command's start-up check
 from __future__ import annotations
 
 import os
+import time
 import subprocess
 import sys
 
@@ -119,3 +120,57 @@ def test_serve_warns_when_bound_beyond_localhost(tmp_path):
         p.terminate()
         p.wait(timeout=20)
     assert list(tmp_path.iterdir()) == []            # nothing written
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_the_check_stops_at_its_cancel_hook_and_a_silent_hook_changes_nothing():
+    from multiloop.kin.check import check
+    m = load_mechanism("four_bar")
+    calls = []
+    assert check(m, cancel=lambda: calls.append(1)).as_dict() == check(m).as_dict()
+    assert calls                                   # the hook was polled
+    # excavator_bucket's check runs for half a minute or more (Newton groups)
+    t0 = time.perf_counter()
+
+    def hook():
+        if time.perf_counter() - t0 > 0.5:
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        check(load_mechanism("excavator_bucket"), cancel=hook)
+    assert time.perf_counter() - t0 < 5.0
+
+
+def _workbench():
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    from multiloop.web.app import Workbench
+    return Workbench({}, (), 40.0)
+
+
+def test_the_page_cancels_a_running_check_and_its_thread_ends():
+    wb = _workbench()
+    wb.open_name("excavator_bucket")
+    job = wb.job
+    time.sleep(0.5)
+    assert job.running and not wb.check.stop.disabled
+    wb.check.stop.clicks += 1                      # the Cancel button, as a click does
+    job.thread.join(timeout=5.0)
+    assert not job.thread.is_alive() and job.state == "cancelled"
+    wb.poll()
+    assert "check cancelled" in wb.check.verdict.object and wb.check.stop.disabled and wb.job is None
+
+
+def test_opening_another_mechanism_cancels_the_old_check():
+    wb = _workbench()
+    wb.open_name("excavator_bucket")
+    old = wb.job
+    time.sleep(0.3)
+    wb.pick.value = "crank_slider"                 # the page's mechanism menu
+    old.thread.join(timeout=5.0)
+    assert not old.thread.is_alive() and old.state == "cancelled"
+    wb.job.thread.join(timeout=20.0)
+    wb.poll()
+    assert wb.check.doc is not None and wb.check.doc["mechanism"] == "crank_slider"

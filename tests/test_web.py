@@ -231,6 +231,18 @@ def test_two_tabs_do_not_share_state(browser, server, requests_seen, page):
         other.close()
 
 
+def test_cancel_check_stops_a_running_check(page):
+    # the excavator's motion and check take many seconds: cancel them from the page
+    page.locator(".ml-pick select").select_option("excavator")
+    button = page.locator(".ml-check-cancel button")
+    sync_api.expect(button).to_be_enabled(timeout=20000)
+    button.click()
+    # "check cancelled" is shown only once the worker thread has ended (Job._run)
+    sync_api.expect(page.locator("#ml-check-status")).to_have_text("check cancelled", timeout=20000)
+    sync_api.expect(button).to_be_disabled()
+    _pick(page, "four_bar")                     # the page goes on
+
+
 def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory):
     page.get_by_text("Synthesis", exact=True).click()
     page.locator(".ml-start select").select_option("four_bar")

@@ -113,12 +113,12 @@ def _ratio(state, out) -> np.ndarray:
     return _velocity(state, [out])[:, 0]
 
 
-def _driver_check(m, ap, plan, k, specs, w, output, positions) -> DriverCheck:
+def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = dj.kind is JointKind.R
     groups, D = signed_dets(ap)
-    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None)
+    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None, cancel)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     ev = mo.events
     limit_groups = []
@@ -226,7 +226,7 @@ def _reachable(mo, x) -> bool:
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
-          at=None, positions=None, workspace: str | None = None) -> "CheckReport":
+          at=None, positions=None, workspace: str | None = None, cancel=None) -> "CheckReport":
     """Design check of a mechanism over its whole motion (docs/check.md).
 
     Parameters
@@ -249,6 +249,10 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     workspace : str, optional
         A tracer point: its workspace over the box of every driver's usable range
         (:func:`~kin.check.workspace.workspace`).
+    cancel : callable, optional
+        Called with no argument before every solve of a driver's motion and once
+        after the drivers; it stops the check by raising (its exception propagates),
+        e.g. when the user of an interactive caller cancels.
 
     Returns
     -------
@@ -268,8 +272,10 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     unknown = set(positions) - {d.joint for d in m.drivers}
     if unknown:
         raise InputError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))))
-    dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint))
+    dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
                 for k, d in enumerate(m.drivers))
+    if cancel is not None:                  # before the workspace and the last solve
+        cancel()
     x0 = np.zeros(len(m.drivers)) if at is None else np.asarray(at, float).reshape(len(m.drivers))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

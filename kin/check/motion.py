@@ -135,7 +135,8 @@ def _guarded(side: Side, st) -> Side:
     return replace(side, signs=np.sign(side.branch(st)))
 
 
-def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch) -> Side:
+def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch,
+          cancel=None) -> Side:
     """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
     ``range`` on that side at the same spacing (a range end at the reference: that value)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
@@ -148,7 +149,7 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
-    return Side(m, plan, k, sign, grid, samples, stride, branch)
+    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel)
 
 
 def _bounded(seg: Segment, rng, sign: int) -> Segment:
@@ -161,13 +162,14 @@ def _bounded(seg: Segment, rng, sign: int) -> Segment:
     return replace(seg, limit=float(rng[1] if sign > 0 else rng[0]), bound="range")
 
 
-def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
+def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None) -> Motion:
     """Sample and bound the motion of driver ``k`` (see the module docstring);
     ``kinds`` are the kinds of the Assur groups (a group without a kernel coarsens the P grid);
     ``branch(state)`` gives the signed dyad determinants that guard refinements against
     branch jumps (:meth:`Side._guard`).  A driver with a ``range`` is moved within it:
     its usable range is the intersection of the range and the assembly limits, and each
-    segment says which of the two binds."""
+    segment says which of the two binds.  ``cancel()`` is called before every solve of
+    the sides (:attr:`Side.cancel`)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
@@ -180,11 +182,11 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None) -> Motion:
     extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])
     ev = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else None
     hi, lo = (ev.hi, ev.lo) if ev is not None and ev.period is None else (None, None)
-    seg_f = _segment(_side(m, plan, k, +1, heavy, samples, stride, branch), chunk, hi)
+    seg_f = _segment(_side(m, plan, k, +1, heavy, samples, stride, branch, cancel), chunk, hi)
     if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
         return Motion(m, k, True, True, (seg_f,), periodic, ev)
-    seg_b = _segment(_side(m, plan, k, -1, heavy, samples, stride, branch), chunk, lo)
+    seg_b = _segment(_side(m, plan, k, -1, heavy, samples, stride, branch, cancel), chunk, lo)
     return Motion(m, k, rotary, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False, ev)

@@ -62,6 +62,7 @@ class Side:
     stride: int = _STRIDE
     branch: object = None            # D(state) -> (N, q) signed dyad determinants
     signs: np.ndarray | None = None  # sign of D on the assembled grid
+    cancel: object = None            # callable polled before every solve; it stops the check by raising
 
     @classmethod
     def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
@@ -84,6 +85,8 @@ class Side:
 
     def solve(self, x, derivatives: bool = False):
         """The solver's state along ``x`` (a path that must start at the reference)."""
+        if self.cancel is not None:
+            self.cancel()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             rates = np.zeros(len(self.mechanism.drivers))

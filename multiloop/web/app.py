@@ -51,17 +51,60 @@ def _analysis(m):
                   f"{grows}</table>")
 
 
-def _motion_and_check(job, m, threshold):
-    """Worker: the sweeps of every driver, then the check (its JSON document)."""
+#: results shared read-only by every session of this server: the sweeps of a named
+#: mechanism (catalogue name or FILE) and its check documents per threshold
+_SWEEPS: dict[str, tuple] = {}
+_CHECKS: dict[tuple[str, float], dict] = {}
+
+
+def _sweeps(m, key: str | None, cancel=None) -> tuple:
+    """The sweep of every driver of ``m``, from the server's cache when ``key`` names it."""
+    from .scene import sweep_driver
+    if key is not None and key in _SWEEPS:
+        return _SWEEPS[key]
+    out = tuple(sweep_driver(m, k, cancel=cancel) for k in range(len(m.drivers)))
+    if key is not None:
+        _SWEEPS[key] = out
+    return out
+
+
+def _motion_and_check(job, m, threshold, key=None):
+    """Worker: the sweeps of every driver, then the check (its JSON document); both
+    stop at the next solve once the job is cancelled."""
     from multiloop.kin.check import check
 
-    from .scene import sweep_driver
-    sweeps = []
-    for k in range(len(m.drivers)):
-        sweeps.append(sweep_driver(m, k))
-        job.report((k + 1) / (len(m.drivers) + 1))
-    job.sweeps = sweeps
-    return check(m, min_transmission=threshold).as_dict()
+    job.sweeps = _sweeps(m, key, job.poll)
+    job.report(1 / 2)
+    if key is not None and (key, threshold) in _CHECKS:
+        return _CHECKS[key, threshold]
+    doc = check(m, min_transmission=threshold, cancel=job.poll).as_dict()
+    if key is not None:
+        _CHECKS[key, threshold] = doc
+    return doc
+
+
+def warm_up(files: dict, imported) -> None:
+    """Import what a session uses (then set the event ``imported``) and solve the sweeps
+    of the first mechanism a page shows, so that the first session is built as fast as
+    the next ones and shows its motion at once."""
+    try:
+        from multiloop.inputs import load_mechanism
+
+        from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
+    finally:
+        imported.set()                      # a session never waits for a failed warm-up
+    name = _first_choice(files)
+    try:
+        m = files[name] if name in files else load_mechanism(name)
+        if m.drivers and m.has_geometry:
+            _sweeps(m, name)
+    except Exception:  # noqa: BLE001 - the session's own job computes it again and reports
+        pass
+
+
+def _first_choice(files: dict) -> str:
+    choices = list(files) + catalogue_names()
+    return choices[0] if files or "four_bar" not in choices else "four_bar"
 
 
 class Workbench:
@@ -79,10 +122,10 @@ class Workbench:
         self.mechanism, self.mechanism_name = None, ""
         self.job = None
         self.message = pn.pane.HTML('<div id="ml-message"></div>', sizing_mode="stretch_width")
-        self.check = CheckView(self.move_to)
+        self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
-        first = choices[0] if self.files or "four_bar" not in choices else "four_bar"
+        first = _first_choice(self.files)
         self.pick = pn.widgets.Select(name="mechanism", options=choices, value=first, width=240,
                                       css_classes=["ml-pick"])
         self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
@@ -123,7 +166,7 @@ class Workbench:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.open_design(m, name)
+        self.open_design(m, name, key=name)
 
     def open_upload(self) -> None:
         from multiloop.inputs import load_upload
@@ -145,8 +188,10 @@ class Workbench:
         from multiloop.inputs import load_mechanism
         return self.files[name] if name in self.files else load_mechanism(name)
 
-    def open_design(self, m, name: str | None = None) -> None:
-        """Show ``m``: the reference drawing and the structure now, motion and check later."""
+    def open_design(self, m, name: str | None = None, key: str | None = None) -> None:
+        """Show ``m``: the reference drawing and the structure now, motion and check later
+        (at once when the server has them for ``key``, a catalogue name or FILE); the job
+        of the mechanism shown before is cancelled."""
         from multiloop.topo.errors import LinkageError
 
         from .jobs import Job
@@ -161,17 +206,24 @@ class Workbench:
             self.job.cancel()
         self.clear()
         self.mechanism, self.mechanism_name = m, name or m.name or "design"
-        self.scene, self.shown_sweeps = scene, False
+        self.scene = scene
         self.structure.object = structure
-        self.view.show(scene, [], self.mechanism_name)
+        ready = _SWEEPS.get(key) if key is not None else None
+        self.shown_sweeps = ready is not None
+        self.view.show(scene, list(ready or ()), self.mechanism_name)
         if not m.drivers:
             self.check.show(None, None, self.threshold)
         elif not m.has_geometry:
             self.check.busy("no geometry: nothing to move or check")
         else:
-            self.check.busy("motion and check: computing…")
-            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold), "check")
+            self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
+            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check")
         self.tabs.active = 0
+
+    def cancel_check(self) -> None:
+        """The check panel's Cancel: the running motion / check job stops at its next solve."""
+        if self.job is not None:
+            self.job.cancel()
 
     # ------------------------------------------------------------------ updates
     def poll(self) -> None:
@@ -183,11 +235,13 @@ class Workbench:
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
             self.view.show(self.scene, job.sweeps, self.mechanism_name)
-            self.check.busy("check: computing…")
+            self.check.busy("check: computing…", running=True)
         if job.running:
             return
         self.job = None
-        if job.state == "failed":
+        if job.state == "cancelled":
+            self.check.busy("check cancelled")
+        elif job.state == "failed":
             self.say(job.error)
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
@@ -226,6 +280,7 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
         # every stylesheet of this document from this server (Panel defaults to its CDN
         # for models made outside the page's first render, e.g. a tab opened later)
         pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
+        imported.wait(timeout=60)
         wb = Workbench(files, atlases, threshold)
         cb = pn.state.add_periodic_callback(wb.poll, period=150)
 
@@ -235,6 +290,9 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
         pn.state.on_session_destroyed(closed)
         return wb.panel
 
+    import threading
+    imported = threading.Event()
+    threading.Thread(target=warm_up, args=(files, imported), name="multiloop-web-warm-up", daemon=True).start()
     server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
                       websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
                       verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)

@@ -49,7 +49,7 @@ def on_axis(x: float, sw: Sweep) -> float:
 class CheckView:
     """The check panel of one session."""
 
-    def __init__(self, move_to):
+    def __init__(self, move_to, cancel=None):
         self.move_to = move_to
         self.curves = ColumnDataSource(dict(xs=[], ys=[], name=[], colour=[]))
         self.events = ColumnDataSource(dict(x=[], label=[]))
@@ -64,11 +64,18 @@ class CheckView:
         self.verdict = pn.pane.HTML("", sizing_mode="stretch_width")
         self.table = pn.pane.HTML("", sizing_mode="stretch_width")
         self.json = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.panel = pn.Column(self.verdict, pn.pane.Bokeh(self.fig), self.table,
+        # stops the running motion / check job (``cancel``), enabled while one runs
+        self.stop = pn.widgets.Button(name="Cancel check", button_type="warning", width=130, disabled=True,
+                                      css_classes=["ml-check-cancel"])
+        if cancel is not None:
+            self.stop.on_click(lambda e: cancel())
+        self.panel = pn.Column(pn.Row(self.verdict, self.stop), pn.pane.Bokeh(self.fig), self.table,
                                pn.Card(self.json, title="check --json", collapsed=True))
         self.doc: dict | None = None
 
-    def busy(self, text: str) -> None:
+    def busy(self, text: str, running: bool = False) -> None:
+        """A status line instead of a report; ``running``: a job computes it (Cancel enabled)."""
+        self.stop.disabled = not running
         self.verdict.object = f'<p id="ml-check-status">{html.escape(text)}</p>'
         self.json.object = self.table.object = ""
         self.events.data = dict(x=[], label=[])
@@ -78,6 +85,7 @@ class CheckView:
         """Fill the panel from a check JSON document (None: nothing to check); returns the
         events of the current driver on its axis."""
         self.doc = doc
+        self.stop.disabled = True
         if doc is None:
             self.busy("no check: the mechanism has no drivers")
             return []

@@ -2,8 +2,9 @@
 
 The page never waits for a job: a periodic callback of the session reads
 :attr:`Job.state` and updates the widgets.  :meth:`Job.cancel` sets an event that the
-job's progress callback checks; the callback then raises ``_Cancelled`` inside the
-worker, which unwinds the optimiser and ends the thread (the work stops, it is not
+job's progress callback (:meth:`Job.report`) or cancel hook (:meth:`Job.poll`, given to
+``check(..., cancel=)``) checks; it then raises ``_Cancelled`` inside the worker, which
+unwinds the optimiser or the check and ends the thread (the work stops, it is not
 merely hidden).
 """
 from __future__ import annotations
@@ -59,6 +60,11 @@ class Job:
         self.fraction, self.best = float(fraction), float(best)
         if note:
             self.note = note
+        self.poll()
+
+    def poll(self) -> None:
+        """Raise ``_Cancelled`` once :meth:`cancel` was called: the ``cancel`` hook of a
+        library call (``check(..., cancel=job.poll)``) that has no progress of its own."""
         if self._stop.is_set():
             raise _Cancelled(self.name)
 

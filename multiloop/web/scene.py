@@ -120,7 +120,9 @@ def _nodes(st) -> np.ndarray:
     return np.concatenate([st.positions, P], axis=1)
 
 
-def _solve(m: Mechanism, k: int, x: np.ndarray):
+def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
+    if cancel is not None:
+        cancel()
     X = np.zeros((x.size, len(m.drivers)))
     X[:, k] = x
     with warnings.catch_warnings():
@@ -128,7 +130,7 @@ def _solve(m: Mechanism, k: int, x: np.ndarray):
         return solve(m, X, plan=plan_of(m))
 
 
-def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24) -> tuple[float, float]:
+def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24, cancel=None) -> tuple[float, float]:
     """How far driver ``k`` moves from the reference in direction ``sign`` (≤ span):
     a coarse path solved in growing prefixes that stop at the first failure (a failed
     Newton position costs many retries, so the failures are not all paid).  Also
@@ -136,7 +138,7 @@ def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24) -> tup
     grid = sign * np.linspace(0.0, span, probe + 1)
     end, t0, solved = 4, time.perf_counter(), 0
     while True:
-        ok = _solve(m, k, grid[:end]).ok
+        ok = _solve(m, k, grid[:end], cancel).ok
         if not ok.all():
             bad = int(np.argmin(ok))
             return float(grid[max(bad - 1, 0)]), (time.perf_counter() - t0) / max(solved + bad, 1)
@@ -154,27 +156,28 @@ def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
     return [angle_values(st, specs) for st in states], names
 
 
-def sweep_driver(m: Mechanism, k: int, seconds: float = 2.0) -> Sweep:
+def sweep_driver(m: Mechanism, k: int, seconds: float = 2.0, cancel=None) -> Sweep:
     """The motion of driver ``k`` (others at the reference) as slider frames; a limited
     motion gets at most :data:`P_FRAMES` frames, fewer when a position costs so much
-    (Newton groups) that the sweep would take longer than about ``seconds``."""
+    (Newton groups) that the sweep would take longer than about ``seconds``.  ``cancel()``
+    is called before every solve (it stops the sweep by raising)."""
     from multiloop.kin.check.sweep import mechanism_size   # the size of check's P grid
 
     joint = m.drivers[k].joint
     rotary = m.joint(joint).kind is JointKind.R
     if rotary:
         x = np.linspace(0.0, 2 * np.pi, R_FRAMES)
-        st = _solve(m, k, x)
+        st = _solve(m, k, x, cancel)
         if st.ok.all():
             (a,), names = _angles(m, [st])
             return Sweep(k, joint, True, True, np.degrees(x), _nodes(st), np.asarray(st.ok, bool), a, names)
         span = 2 * np.pi
     else:
         span = mechanism_size(m)
-    (hi, t1), (lo, t2) = _reach(m, k, +1, span), _reach(m, k, -1, span)
+    (hi, t1), (lo, t2) = _reach(m, k, +1, span, cancel=cancel), _reach(m, k, -1, span, cancel=cancel)
     half = int(np.clip(seconds / (2 * max(t1, t2, 1e-9)), 20, P_FRAMES // 2))
     fwd, bwd = np.linspace(0.0, hi, half + 1), np.linspace(0.0, lo, half + 1)
-    sf, sb = _solve(m, k, fwd), _solve(m, k, bwd)
+    sf, sb = _solve(m, k, fwd, cancel), _solve(m, k, bwd, cancel)
     (af, ab), names = _angles(m, [sf, sb])
     x = np.concatenate([bwd[:0:-1], fwd])
     nodes = np.concatenate([_nodes(sb)[:0:-1], _nodes(sf)])
