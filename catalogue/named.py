@@ -25,7 +25,7 @@ from multiloop.topo.io import load
 from multiloop.topo.model import Mechanism
 from multiloop.topo.numbers import structural_codes
 
-__all__ = ["names", "path", "load_named", "CatalogueEntry", "entry"]
+__all__ = ["names", "path", "load_named", "CatalogueEntry", "entry", "CatalogueListing", "listing"]
 
 _PACKAGE = "multiloop.catalogue"
 _FOLDER = "mechanisms"
@@ -108,3 +108,32 @@ def entry(name: str) -> CatalogueEntry:
     codes = structural_codes([m.degree(x) for x in m.link_names], [j.multiplicity for j in m.joints])
     return CatalogueEntry(name, m.n_links, m.n_links - 1 - 2 * codes.K, codes.K, codes.code,
                           len(m.drivers), m.description, m.source)
+
+
+@dataclass(frozen=True)
+class CatalogueListing:
+    """Every bundled mechanism with its basic numbers (``multiloop catalogue``)."""
+
+    entries: tuple[CatalogueEntry, ...]
+
+    def as_dict(self) -> list[dict]:
+        """The JSON document: a list of :meth:`CatalogueEntry.as_dict`."""
+        return [e.as_dict() for e in self.entries]
+
+    def to_text(self) -> str:
+        """A table: name, n, F, K, code and the first clause of the source."""
+        head = ("name", "n", "F", "K", "code", "source")
+        table = [(e.name, str(e.n), str(e.F), str(e.K), e.code, _short(e.source or "")) for e in self.entries]
+        widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head[:-1])]
+        fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
+        return "\n".join(fmt.format(*t) for t in [head, *table])
+
+
+def _short(text: str, width: int = 70) -> str:
+    text = " ".join(text.split()).split("; ")[0]
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def listing() -> CatalogueListing:
+    """The listing of every bundled mechanism (:func:`entry` of each name)."""
+    return CatalogueListing(tuple(entry(name) for name in names()))

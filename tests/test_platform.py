@@ -458,7 +458,7 @@ def test_statics_and_modes_own_their_json_and_are_read_only():
     st = platform_statics(p)
     with pytest.raises(ValueError):
         st.forces[0] = 0.0
-    doc = json.loads(json.dumps(platform_report(p, "mass"), allow_nan=False))
+    doc = json.loads(json.dumps(platform_report(p, "mass").as_dict(), allow_nan=False))
     assert doc["forces"] == pytest.approx(st.forces.tolist())
     assert [s["strut"] for s in doc["screws"]] == [s.name for s in p.struts]
     assert len(doc["modes"]) == 6 and doc["modes_normalisation"] == "mass"

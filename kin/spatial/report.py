@@ -3,10 +3,11 @@ the data (keys in docs/platform.md; Doronin 2015)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from .platform import COORDINATES, Platform, platform_modes, platform_statics
 
-__all__ = ["CONVENTIONS", "platform_report", "report_text"]
+__all__ = ["CONVENTIONS", "PlatformReport", "platform_report", "report_text"]
 
 #: the sign and frame conventions, as printed in every report
 CONVENTIONS = {
@@ -20,7 +21,21 @@ CONVENTIONS = {
 }
 
 
-def platform_report(platform: Platform, normalise: str = "first") -> dict:
+@dataclass(frozen=True)
+class PlatformReport:
+    """The report of ``multiloop platform``: its JSON document (:meth:`as_dict`, keys in
+    docs/platform.md) and its text (:meth:`to_text`)."""
+
+    doc: dict
+
+    def as_dict(self) -> dict:
+        return self.doc
+
+    def to_text(self) -> str:
+        return report_text(self.doc)
+
+
+def platform_report(platform: Platform, normalise: str = "first") -> PlatformReport:
     """Statics (:meth:`PlatformStatics.as_dict`) and, when every strut has a stiffness
     and the body is given, the modes (:meth:`PlatformModes.as_dict`)."""
     out = {"name": platform.name, "source": platform.source, "conventions": dict(CONVENTIONS),
@@ -28,7 +43,7 @@ def platform_report(platform: Platform, normalise: str = "first") -> dict:
            "frequencies": None, "frequencies_hz": None, "modes": None}
     if platform.has_vibration_data:
         out.update(platform_modes(platform).as_dict(normalise))
-    return out
+    return PlatformReport(out)
 
 
 _SYMBOL = {"x": "x", "y": "y", "z": "z", "phi_x": "φx", "phi_y": "φy", "phi_z": "φz"}

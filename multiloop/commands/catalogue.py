@@ -7,9 +7,8 @@ path; print(path('excavator'))")``, or in Python ``structural_report(load_named(
 """
 from __future__ import annotations
 
-
-from multiloop.catalogue.named import entry, names
-from multiloop.outputs import dumps_json
+from multiloop.catalogue.named import listing
+from multiloop.outputs import emit
 
 
 def add_arguments(p) -> None:
@@ -18,21 +17,5 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    rows = [entry(name).as_dict() for name in names()]
-    if args.json:
-        print(dumps_json(rows))
-        return 0
-    head = ("name", "n", "F", "K", "code", "source")
-    table = [(r["name"], str(r["n"]), str(r["F"]), str(r["K"]), r["code"],
-              _short(r["source"] or "")) for r in rows]
-    widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head[:-1])]
-    fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
-    print(fmt.format(*head))
-    for t in table:
-        print(fmt.format(*t))
+    emit(listing(), args.json)
     return 0
-
-
-def _short(text: str, width: int = 70) -> str:
-    text = " ".join(text.split()).split("; ")[0]
-    return text if len(text) <= width else text[: width - 3] + "..."

@@ -13,9 +13,9 @@ import argparse
 
 
 from multiloop.kin.spatial.platform import load_platform
-from multiloop.kin.spatial.report import platform_report, report_text
+from multiloop.kin.spatial.report import platform_report
 from multiloop.inputs import resolve
-from multiloop.outputs import dumps_json, figure_formats, Outputs, quiet_warnings
+from multiloop.outputs import emit, figure_formats, Outputs, quiet_warnings
 
 __all__ = ["add_arguments", "run"]
 
@@ -42,10 +42,7 @@ def run(args: argparse.Namespace) -> int:
         with quiet_warnings("multiloop platform"):
             outs.add_figure(args.plot, plot_platform(platform), dpi=120)
         outs.commit()
-    if args.json:
-        print(dumps_json(rep))
-    else:
-        print(report_text(rep))
-        if args.plot:
-            print(f"\nplot written to {args.plot}")
+    emit(rep, args.json)
+    if args.plot and not args.json:
+        print(f"\nplot written to {args.plot}")
     return 0
