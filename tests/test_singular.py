@@ -394,18 +394,11 @@ def test_an_unreachable_slide_names_the_limit_it_lies_beyond():
     """A one-cylinder boom (s in [sqrt 2 - 2, sqrt 2]): an input past the upper end names
     the upper limit, one past the lower end the lower (the slide's limits used to be
     picked by a modular 'nearer' rule meant for turns, which swapped them)."""
+    from test_ranges import BOOM, S_HI as hi, S_LO as lo     # the boom of the range tests, no range
+
     from multiloop.kin.result import Status
-    b = MechanismBuilder()
-    b.add_link("ground", frame=True)
-    for lk in ("boom", "barrel", "rod"):
-        b.add_link(lk)
-    b.add_joint("foot", "R", ("ground", "boom"), at=(0.0, 0.0))
-    b.add_joint("base", "R", ("ground", "barrel"), at=(1.0, 0.0))
-    b.add_joint("slide", "P", ("barrel", "rod"), at=(1.0, 0.5), axis=(0.0, 1.0))
-    b.add_joint("end", "R", ("rod", "boom"), at=(1.0, 1.0))
-    b.add_driver("slide")
-    m = b.build()
-    lo, hi = math.sqrt(2.0) - 2.0, math.sqrt(2.0)
+    from multiloop.topo.io import loads
+    m = loads(BOOM.replace("RANGE", ""), "toml")
     state = solve(m, np.array([0.0, 1.0, 1.5, -0.7]))
     assert state.codes.tolist()[:2] == [0, 0] and set(state.codes[2:].tolist()) == {int(Status.LIMIT)}
     assert f"limit at {hi:.6g} m" in state.status[2] and f"limit at {lo:.6g} m" in state.status[3]
