@@ -169,9 +169,6 @@ def letter(ch: str) -> np.ndarray:
 
 def letters_benchmark(db: str, letters: str, budget: float, links=(4, 6, 8)) -> list[dict]:
     """Each letter synthesised once with ``links``; the best design per number of links."""
-    from multiloop.catalogue.curves import chamfer_score
-    from multiloop.kin.solve import solve
-
     rows = []
     for ch in letters:
         T = letter(ch)

@@ -43,7 +43,7 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
 
-from .continuation import Probe, Walk, walk
+from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
 from .groups.step import SINGULAR

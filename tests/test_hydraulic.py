@@ -18,7 +18,7 @@ from scipy.optimize import brentq, minimize
 from multiloop.catalogue.named import load_named
 from multiloop.kin.check import check
 from multiloop.kin.check.transmission import angle_specs, angle_values
-from multiloop.kin.groups.registry import FACTS, angle_defs, mode_count
+from multiloop.kin.groups.registry import FACTS, mode_count
 from multiloop.kin.solve import solve
 from multiloop.kin.sweep import driver_forces
 from multiloop.topo.assur import GroupKind, decompose

@@ -120,7 +120,6 @@ class DriverCheck:
              "angles": {a.joint: _angle_dict(a, v) for a in self.angles},
              "unreachable_positions": [v(x) for x in self.unreachable]}
         if self.output is not None:
-            r = self.ratio[np.isfinite(self.ratio)]
             d["mechanical_advantage"] = {
                 "output": self.output, "velocity_ratio_unit": self.output_unit,
                 "input": [v(x) for x in self.ratio_x],

@@ -269,7 +269,7 @@ class Class4Step(GroupStep):
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         if not G.reasons:
             return self._designs(G)
-        lay, N, Oref, Jref = self.layout, G.M, self.O, self.J
+        N, Oref = G.M, self.O
         O = np.stack([G.point(self.known[0], Oref[0]), G.point(self.known[1], Oref[1])], axis=1)
         good = np.all(np.isfinite(O.reshape(N, -1)), axis=1)
         J, th, ok = np.full((N, 4, 2), np.nan), np.full((N, 2), np.nan), np.zeros(N, bool)

@@ -803,7 +803,7 @@ class TriadStep(GroupStep):
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         if not G.reasons:
             return self._designs(G)
-        lay, N = self.layout, G.M
+        N = G.M
         A = np.stack([G.point(k, a) for k, a in zip(self.known, self.A)], axis=1)
         good = np.all(np.isfinite(A.reshape(N, -1)), axis=1)
         P, th, ok = np.full((N, 3, 2), np.nan), np.full(N, np.nan), np.zeros(N, bool)
