@@ -279,7 +279,9 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         d = _polish(start, target, closed, point, budget, seed, float("nan"), target)
         return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0)
     if budget is None or not budget > 0:
-        raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
+        raise InputError(explain("budget (--budget)", expected="a positive number of seconds", got=repr(budget)))
+    if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
+        raise InputError(explain("top (--top)", expected="a positive number of designs", got=repr(top)))
     if not Path(atlas).is_file():
         raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                  hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))

@@ -7,6 +7,8 @@ targets says so.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import math
 
 import numpy as np
@@ -15,7 +17,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text"]
+__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text", "progress_bar"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -132,3 +134,18 @@ def _fmt(v) -> str:
     if isinstance(v, dict):
         return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
     return str(v)
+
+
+@contextmanager
+def progress_bar(enabled: bool):
+    """A progress bar of a synthesis run on the terminal (rich): yields the ``progress``
+    callback ``(fraction, best)`` of :func:`.synthesise.synthesise`, or None when off."""
+    if not enabled:
+        yield None
+        return
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    bar = Progress(TextColumn("synthesis"), BarColumn(), TextColumn("best {task.fields[best]:.3g}"),
+                   TimeElapsedColumn(), transient=True, console=None)
+    task = bar.add_task("s", total=1.0, best=float("inf"))
+    with bar:
+        yield lambda frac, best: bar.update(task, completed=frac, best=best)

@@ -185,10 +185,10 @@ def _target(m, path, point, shape_only, function, output, motion, link, timing="
                                  got="function generation" if function is not None else "motion generation"))
     if function is not None:
         if output is None:
-            raise InputError(explain("function generation", expected="an output joint", got="none"))
+            raise InputError(explain("function generation", expected="an output joint (--output JOINT)", got="none"))
         return "function", function_target(m, function, output)
     if link is None:
-        raise InputError(explain("motion generation", expected="a link", got="none"))
+        raise InputError(explain("motion generation", expected="a link (--link NAME)", got="none"))
     return "motion", motion_target(m, motion, link)
 
 

@@ -34,7 +34,7 @@ from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.formats import dumps_mechanism
 from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
-from multiloop.catalogue.dimensional.report import parse_bounds, synthesis_text
+from multiloop.catalogue.dimensional.report import parse_bounds, progress_bar, synthesis_text
 from multiloop.catalogue.dimensional.targets import TIMINGS
 
 __all__ = ["add_arguments", "run"]
@@ -84,16 +84,6 @@ def add_arguments(p) -> None:
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
 
-def _progress(enabled: bool):
-    if not enabled:
-        return None, None
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-    bar = Progress(TextColumn("synthesis"), BarColumn(), TextColumn("best {task.fields[best]:.3g}"),
-                   TimeElapsedColumn(), transient=True, console=None)
-    task = bar.add_task("s", total=1.0, best=float("inf"))
-    return bar, (lambda frac, best: bar.update(task, completed=frac, best=best))
-
-
 def run_without_start(args) -> int:
     """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
     from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
@@ -101,11 +91,7 @@ def run_without_start(args) -> int:
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
                                  got="no START"))
-    if args.top is None or args.top < 1:
-        raise InputError(explain("--top", expected="a positive number of designs", got=str(args.top)))
-    budget = 60.0 if args.budget is None else args.budget
-    if not budget > 0:
-        raise InputError(explain("--budget", expected="a positive number of seconds", got=str(budget)))
+    budget = 60.0 if args.budget is None else args.budget      # (the library checks both)
     links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
@@ -138,29 +124,14 @@ def run(args) -> int:
     outs.target(args.out, "--out", formats=("toml", "json"))
     if args.plot is not None:
         outs.target(args.plot, "--plot", formats=("",) + figure_formats())
-    if args.budget is None or not args.budget > 0:
-        raise InputError(explain("--budget", expected="a positive number of seconds", got=str(args.budget)))
-    bar, cb = _progress(sys.stderr.isatty() and not args.json)
-    kw = dict(seed=args.seed, budget=args.budget, method=args.method, tol=args.tol,
-              full_rotation=args.full_rotation, min_transmission=args.min_transmission,
-              max_ratio=args.max_ratio, length_bounds=args.length_bounds, progress=cb,
-              timing=args.timing, grashof=args.grashof, mode=args.mode, direction=args.direction,
-              bounds=parse_bounds(args.bounds))
-    if args.path:
-        kw.update(path=args.path, point=args.point, shape_only=args.shape_only)
-    elif args.function:
-        if not args.output:
-            raise InputError(explain("--function", expected="--output JOINT", got="none"))
-        kw.update(function=args.function, output=args.output)
-    else:
-        if not args.link:
-            raise InputError(explain("--motion", expected="--link NAME", got="none"))
-        kw.update(motion=args.motion, link=args.link)
-    if bar is not None:
-        with bar:
-            res = synthesise(m, **kw)
-    else:
-        res = synthesise(m, **kw)
+    with progress_bar(sys.stderr.isatty() and not args.json) as cb:     # the library checks the task
+        res = synthesise(m, path=args.path, point=args.point, shape_only=args.shape_only, function=args.function,
+                         output=args.output, motion=args.motion, link=args.link, seed=args.seed,
+                         budget=args.budget, method=args.method, tol=args.tol, full_rotation=args.full_rotation,
+                         min_transmission=args.min_transmission, max_ratio=args.max_ratio,
+                         length_bounds=args.length_bounds, progress=cb, timing=args.timing,
+                         grashof=args.grashof, mode=args.mode, direction=args.direction,
+                         bounds=parse_bounds(args.bounds))
     outs.add(args.out, dumps_mechanism(res.mechanism, args.out), "--out")
     if args.plot is not None:
         from multiloop.catalogue.dimensional.figure import plot_synthesis
