@@ -24,7 +24,7 @@ import numpy as np
 
 from .layout import ChainLayout, chain_layout, has_crossings
 
-__all__ = ["ChainLayout", "chain_layout", "has_crossings", "chain_svg", "draw_chain",
+__all__ = ["atlas_chart_files", "ChainLayout", "chain_layout", "has_crossings", "chain_svg", "draw_chain",
            "existence_domain_chart", "invariant_merges", "invariant_merge_chart"]
 
 
@@ -228,3 +228,16 @@ def invariant_merge_chart(atlas, path, pairs=None) -> dict:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return data
+
+
+def atlas_chart_files(atlas) -> dict[str, bytes]:
+    """The atlas's two charts as PNG bytes by file name (``multiloop atlas --charts``):
+    :func:`existence_domain_chart` and :func:`invariant_merge_chart`."""
+    import io
+    out = {}
+    for name, chart in (("atlas_existence_domain.png", existence_domain_chart),
+                        ("atlas_invariant_merges.png", invariant_merge_chart)):
+        buf = io.BytesIO()
+        chart(atlas, buf)
+        out[name] = buf.getvalue()
+    return out

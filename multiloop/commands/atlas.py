@@ -11,7 +11,6 @@ Examples::
 """
 from __future__ import annotations
 
-import io
 import sys
 from pathlib import Path
 
@@ -115,8 +114,6 @@ def run(args) -> int:
             loops = args.loops if args.loops is not None else opts.n <= 10
             built = atlas.build(opts, loops=loops, workers=args.workers, scheduler=args.scheduler,
                                 progress=not args.no_progress)
-        if args.table and opts is None:
-            raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
         inv = None
         if args.mechanisms and opts is not None and opts.F == 1 and args.query is None:
             from multiloop.catalogue.inversions import build_mechanisms
@@ -136,15 +133,10 @@ def run(args) -> int:
             for name, text in gallery_files(atlas, pairs, args.query, args.html_limit).items():
                 outs.add(Path(args.html) / name, text, "--html")
         if args.charts is not None:
-            from multiloop.kin.figures.chains import existence_domain_chart, invariant_merge_chart
-
-            d = Path(args.charts)
-            for name, chart in (("atlas_existence_domain.png", existence_domain_chart),
-                                ("atlas_invariant_merges.png", invariant_merge_chart)):
-                buf = io.BytesIO()
-                with quiet_warnings("multiloop atlas"):
-                    chart(atlas, buf)
-                outs.add(d / name, buf.getvalue(), "--charts")
+            from multiloop.kin.figures.chains import atlas_chart_files
+            with quiet_warnings("multiloop atlas"):
+                for name, data in atlas_chart_files(atlas).items():
+                    outs.add(Path(args.charts) / name, data, "--charts")
         outs.commit()
         if args.html is not None:
             print(f"gallery: {Path(args.html) / 'index.html'}", file=sys.stderr)
