@@ -44,10 +44,11 @@ __all__ = ["DesignPoses", "solve_designs", "design_names", "design_mechanism", "
 
 @dataclass(frozen=True, eq=False)
 class _BoundPlan:
-    """What the pose store reads from a plan, for a batch of designs."""
+    """What the pose store reads from a plan: the links' reference points ``origins`` (one
+    design), or, for a batch, their per-design arrays in ``extra["origins_xy"]``."""
 
     mechanism: Mechanism
-    origins: np.ndarray
+    origins: np.ndarray | None
     extra: dict = field(default_factory=dict)
 
 
@@ -70,13 +71,14 @@ class DesignPoses:
         return self.store.T[:, 2]
 
     def _translation(self, i: int) -> np.ndarray:
-        """``t`` of the map ``world = R(θ) r + t`` of every link (rows x or y)."""
-        self.store.angles()
-        T = self.store.T
-        o = np.stack([self.geometry.origin(x)[..., 0, :] for x in self.plan.mechanism.link_names])  # (nl, D, 2)
-        c, s = np.cos(T[:, 2]), np.sin(T[:, 2])
-        ox, oy = o[..., 0:1], o[..., 1:2]
-        return T[:, i] - ((c * ox - s * oy) if i == 0 else (s * ox + c * oy))
+        """``t`` of the map ``world = R(θ) r + t`` of every link (rows x or y), from the
+        store's positions and the cos and sin it keeps."""
+        G = self.store
+        out = np.empty(G.T.shape[:1] + G.T.shape[2:])
+        for k, (ox, oy) in enumerate(G.org):
+            c, s = G.c[k], G.s[k]
+            out[k] = G.T[k, i] - ((c * ox - s * oy) if i == 0 else (s * ox + c * oy))
+        return out
 
     @property
     def tx(self) -> np.ndarray:
@@ -188,8 +190,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
-    bp = _BoundPlan(mechanism, sp.origins, {"origins_xy": geo.origins_xy()})
-    G = Poses(bp, shape)
+    G = Poses(_BoundPlan(mechanism, None, {"origins_xy": geo.origins_xy()}), shape)
     for k, step in zip(steps, bound):
         okk = step.positions(G, X).ok
         G.invalidate(sp.steps[k].unknown, ~okk)
@@ -245,8 +246,7 @@ def _per_design(sp: SolvePlan, geo: Geometry, X, shape, outputs, deadline) -> De
     """The fallback for plans with a step that has no batched form: each design alone
     (no design after ``deadline``)."""
     m = sp.mechanism
-    bp = _BoundPlan(m, sp.origins, {"origins_xy": geo.origins_xy()})
-    G = Poses(bp, shape)
+    G = Poses(_BoundPlan(m, None, {"origins_xy": geo.origins_xy()}), shape)
     T = np.full(G.T.shape, np.nan)
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     closed = all(sp.steps[k].closed is not None for k in steps)
