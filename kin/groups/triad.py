@@ -731,14 +731,12 @@ def track_designs(A, b, l, start, *, stride=32):
     status = np.full((Dn, N), 3)
     finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     alone = ~finite
-    if N > 2 * stride and finite.any():
+    if finite.any():                              # a short path: all modes at every input
         rows = np.flatnonzero(finite)
-        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride)
+        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride if N > 2 * stride else 1)
         P[rows[k]], th[rows[k]], status[rows[k]] = Pd, thd, 0
         alone[rows] = True
         alone[rows[k]] = False
-    else:
-        alone[:] = True
     for d in np.flatnonzero(alone):               # the single-design tracker, as alone
         if finite[d]:
             P[d], th[d], status[d] = _track(A[d], b[d], L[d], start[d], stride)
@@ -762,6 +760,8 @@ def _fill(A, b, L, start, stride):
     other = np.isfinite(thm[g]) & (np.arange(MAX_MODES) != ic[..., None])
     sep = np.min(np.where(other, np.nan_to_num(_dist(Pm[g], Pc[:, :, None]), nan=np.inf), np.inf), axis=-1)
     fine = np.setdiff1d(np.arange(N), c, assume_unique=True)
+    if not fine.size:
+        return g, Pc, thc
     left = np.searchsorted(c, fine, side="right") - 1
     right = np.minimum(left + 1, len(c) - 1)
     kn = np.where(fine - c[left] <= c[right] - fine, left, right)
