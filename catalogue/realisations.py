@@ -119,17 +119,18 @@ def _certified(m: Mechanism, min_angle: float) -> float | None:
 
 
 def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission: float = 20.0,
-            batch: int = 64) -> Realisation | None:
+            batch: int = 64, first: int = 16) -> Realisation | None:
     """The first sample (seeds ``seed``, ``seed + 1``, …, at most ``tries``) that the
     screen keeps and :func:`kin.check.driver_angles` certifies; None when none does.  The samples
-    are drawn in order and screened ``batch`` at a time (the result is the one the
-    samples give one by one)."""
+    are drawn in order and screened in batches of ``first``, twice as many, … up to
+    ``batch`` (the result is the one the samples give one by one)."""
     base = inv.as_mechanism()
     specs = angle_specs(decompose(base))
     rng = np.random.default_rng(seed)
-    done = 0
+    done, size = 0, min(first, batch)
     while done < tries:
-        drawn = [sample_positions(inv, rng) for _ in range(min(batch, tries - done))]
+        drawn = [sample_positions(inv, rng) for _ in range(min(size, tries - done))]
+        size = min(2 * size, batch)
         built = []
         for k, at in enumerate(drawn):
             try:
