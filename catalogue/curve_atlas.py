@@ -13,11 +13,14 @@ transaction (a killed build resumes).
 :class:`CurveIndex` answers nearest-descriptor queries in both traversal directions
 with usearch's HNSW graph (Malkov & Yashunin 2020) when the ``usearch`` package is
 installed (extra ``[curves]``), else by an exact NumPy scan; ``exact=True`` forces the
-scan (the reference of the recall measurement).
+scan (the reference of the recall measurement).  The build stores one graph per number
+of links in the atlas (table ``curve_indexes``), so a query loads it instead of
+building it.
 """
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from dataclasses import dataclass
 from typing import Sequence
@@ -31,7 +34,8 @@ from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
 from .synthesis import SynthesisOptions
 
-__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_record", "stored_curve"]
+__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_record", "stored_curve",
+           "save_index"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS realisations (
@@ -45,6 +49,9 @@ CREATE TABLE IF NOT EXISTS curves (
 );
 CREATE TABLE IF NOT EXISTS curve_mechanisms (
     mechanism INTEGER PRIMARY KEY, wanted INTEGER NOT NULL, kept INTEGER NOT NULL, seconds REAL
+);
+CREATE TABLE IF NOT EXISTS curve_indexes (
+    n INTEGER PRIMARY KEY, curves INTEGER NOT NULL, data BLOB NOT NULL
 );
 """
 
@@ -140,6 +147,7 @@ def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2
     each_with_progress(todo, f"curves n={opts.n}", progress,
                        lambda _: _write_mechanism(atlas, k, *next(results)))   # in completion order
     ids = [i for i, _ in closed]
+    save_index(atlas, opts.n)
     n_real, n_curves = _totals(atlas, ids)
     return CurveBuild(len(closed), len(mechs) - len(closed), n_real, n_curves, len(todo),
                       time.perf_counter() - t0)
@@ -174,8 +182,62 @@ def _usearch():
     return Index
 
 
+def _hnsw(Index):
+    return Index(ndim=2 * DESCRIPTOR_HARMONICS, metric="l2sq", dtype="f32", connectivity=32,
+                 expansion_add=128, expansion_search=256)
+
+
+def _rows(atlas: Atlas, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row ids and descriptors of the curves of ``n``-link mechanisms."""
+    rows = atlas.con.execute(
+        "SELECT c.id, c.descriptor FROM curves c JOIN realisations r ON r.id = c.realisation "
+        "JOIN mechanisms m ON m.id = r.mechanism WHERE m.n = ? ORDER BY c.id", (int(n),)).fetchall()
+    width = 2 * DESCRIPTOR_HARMONICS
+    ids = np.array([r[0] for r in rows], dtype=np.int64)
+    vectors = (np.frombuffer(b"".join(r[1] for r in rows), dtype=np.float32).reshape(-1, width)
+               if rows else np.zeros((0, width), np.float32))
+    return ids, vectors
+
+
+def _count(atlas: Atlas, n: int) -> int:
+    return atlas.con.execute("SELECT count(*) FROM curves c JOIN realisations r ON r.id = c.realisation "
+                             "JOIN mechanisms m ON m.id = r.mechanism WHERE m.n = ?", (int(n),)).fetchone()[0]
+
+
+def _stored_index(atlas: Atlas, n: int, count: int):
+    """The HNSW graph stored for ``n`` links when it covers all ``count`` curves."""
+    Index = _usearch()
+    try:
+        row = atlas.con.execute("SELECT curves, data FROM curve_indexes WHERE n = ?", (int(n),)).fetchone()
+    except sqlite3.OperationalError:          # an atlas written before the table existed
+        return None
+    if Index is None or row is None or row[0] != count:
+        return None
+    return Index.restore(bytes(row[1]))
+
+
+def save_index(atlas: Atlas, n: int) -> int:
+    """Build the HNSW graph of the curves of ``n``-link mechanisms (keys: curve row ids)
+    and store it in the atlas, so that a query loads it instead of building it; the
+    number of curves indexed (0 without usearch)."""
+    _ensure(atlas)
+    Index = _usearch()
+    ids, vectors = _rows(atlas, n)
+    if Index is None or not len(ids):
+        return 0
+    ix = _hnsw(Index)
+    ix.add(ids.astype(np.uint64), vectors)
+    with atlas._tx() as con:
+        con.execute("INSERT OR REPLACE INTO curve_indexes (n, curves, data) VALUES (?, ?, ?)",
+                    (int(n), len(ids), bytes(ix.save())))
+    return len(ids)
+
+
 class CurveIndex:
     """Nearest-descriptor search over the stored curves (optionally of given link counts).
+
+    One graph per number of links: the one stored by :func:`save_index` when it is
+    current, else one built in memory.
 
     Parameters
     ----------
@@ -187,48 +249,75 @@ class CurveIndex:
     """
 
     def __init__(self, atlas: Atlas, links: Sequence[int] | None = None, exact: bool = False):
-        _ensure(atlas)
-        where, params = "1", []
-        if links:
-            where = f"m.n IN ({','.join('?' * len(links))})"
-            params = [int(n) for n in links]
-        rows = atlas.con.execute(
-            "SELECT c.id, c.descriptor FROM curves c JOIN realisations r ON r.id = c.realisation "
-            f"JOIN mechanisms m ON m.id = r.mechanism WHERE {where} ORDER BY c.id", params).fetchall()
-        self.ids = np.array([r[0] for r in rows], dtype=np.int64)
-        width = 2 * DESCRIPTOR_HARMONICS
-        self.vectors = (np.frombuffer(b"".join(r[1] for r in rows), dtype=np.float32).reshape(-1, width)
-                        if rows else np.zeros((0, width), np.float32))
+        try:
+            _ensure(atlas)
+        except sqlite3.OperationalError:      # read-only, written before a table existed
+            pass
+        self.atlas = atlas
+        ns = sorted({int(r[0]) for r in atlas.con.execute(
+            "SELECT DISTINCT m.n FROM curve_mechanisms c JOIN mechanisms m ON m.id = c.mechanism")}
+                    if not links else {int(n) for n in links})
         Index = None if exact else _usearch()
-        self.kind = "exact" if Index is None or not len(rows) else "usearch-hnsw"
-        self._index = None
-        if self.kind != "exact":
-            self._index = Index(ndim=width, metric="l2sq", dtype="f32", connectivity=32,
-                                expansion_add=128, expansion_search=256)
-            self._index.add(np.arange(len(rows), dtype=np.uint64), self.vectors)
+        self._parts, kinds, self._size = [], set(), 0
+        for n in ns:
+            count = _count(atlas, n)
+            if not count:
+                continue
+            self._size += count
+            ix = None if Index is None else _stored_index(atlas, n, count)
+            if ix is not None:
+                self._parts.append((ix, None, None))
+                kinds.add("usearch-hnsw (stored)")
+                continue
+            ids, vectors = _rows(atlas, n)
+            if Index is None:
+                self._parts.append((None, ids, vectors))
+                kinds.add("exact")
+            else:
+                ix = _hnsw(Index)
+                ix.add(ids.astype(np.uint64), vectors)
+                self._parts.append((ix, None, None))
+                kinds.add("usearch-hnsw")
+        self.kind = "+".join(sorted(kinds)) or "exact"
+        self._links = ns
 
     def __len__(self) -> int:
-        return len(self.ids)
+        return self._size
+
+    @property
+    def ids(self) -> np.ndarray:
+        """Row ids of the indexed curves (read from the atlas)."""
+        return np.concatenate([_rows(self.atlas, n)[0] for n in self._links] or [np.zeros(0, np.int64)])
+
+    @property
+    def vectors(self) -> np.ndarray:
+        """Descriptors of the indexed curves, in :attr:`ids` order (read from the atlas)."""
+        return np.concatenate([_rows(self.atlas, n)[1] for n in self._links]
+                              or [np.zeros((0, 2 * DESCRIPTOR_HARMONICS), np.float32)])
 
     def _search(self, q: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-        k = min(k, len(self.ids))
-        if self._index is None:
-            d = np.sum((self.vectors - q[None, :]) ** 2, axis=1)
-            top = np.argpartition(d, k - 1)[:k]
-            top = top[np.argsort(d[top])]
-            return top, d[top]
-        m = self._index.search(q, k)
-        return np.asarray(m.keys, dtype=np.int64), np.asarray(m.distances, dtype=float)
+        """Curve ids and squared distances of the ``k`` nearest in every part."""
+        keys, dists = [], []
+        for ix, ids, vectors in self._parts:
+            if ix is None:
+                d = np.sum((vectors - q[None, :]) ** 2, axis=1)
+                top = np.argpartition(d, min(k, len(d)) - 1)[:k]
+                keys.append(ids[top])
+                dists.append(d[top])
+            else:
+                m = ix.search(q, min(k, len(ix)))
+                keys.append(np.asarray(m.keys, dtype=np.int64))
+                dists.append(np.asarray(m.distances, dtype=float))
+        return np.concatenate(keys), np.concatenate(dists)
 
     def query(self, d: np.ndarray, k: int = 50) -> list[CurveHit]:
         """The ``k`` nearest curves to descriptor ``d`` over both directions."""
-        if not len(self.ids) or k <= 0:
+        if not self._size or k <= 0:
             return []
         best: dict[int, CurveHit] = {}
         for rev, q in ((False, d), (True, reversed_descriptor(d))):
             keys, dist = self._search(np.asarray(q, np.float32), k)
-            for key, dd in zip(keys, dist):
-                cid = int(self.ids[key])
+            for cid, dd in zip(keys.tolist(), dist):
                 if cid not in best or dd < best[cid].distance:
                     best[cid] = CurveHit(cid, float(np.sqrt(max(dd, 0.0))), rev)
         return sorted(best.values(), key=lambda h: h.distance)[:k]

@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["resample", "is_closed", "normalise", "descriptor", "reversed_descriptor",
-           "aligned_distance", "similarity_to", "chamfer_score", "DESCRIPTOR_HARMONICS",
+__all__ = ["resample", "is_closed", "normalise", "normalise_closed", "descriptor", "reversed_descriptor",
+           "aligned_distance", "aligned_distances", "similarity_to", "chamfer_score", "polyline_distance", "DESCRIPTOR_HARMONICS",
            "CURVE_POINTS"]
 
 #: harmonics per sign in a descriptor (its length is twice this)
@@ -55,6 +55,24 @@ def is_closed(path, ratio: float = 1.1) -> bool:
     return bool(np.linalg.norm(P[-1] - P[0]) <= ratio * float(steps.max()))
 
 
+def _arc_resample(P: np.ndarray, m: int, endpoint: bool) -> np.ndarray:
+    """Polylines ``P`` (K, n, 2) resampled at ``m`` points equally spaced by arc length
+    (the last vertex included when ``endpoint``), all rows at once: ``(K, m, 2)``."""
+    seg = np.linalg.norm(np.diff(P, axis=1), axis=2)
+    s = np.concatenate([np.zeros((len(P), 1)), np.cumsum(seg, axis=1)], axis=1)
+    if np.any(s[:, -1] <= 0):
+        raise ValueError("a curve of zero length")
+    t = np.linspace(0.0, 1.0, m, endpoint=endpoint)[None, :] * s[:, -1:]
+    off = 2.0 * np.arange(len(P))[:, None] * (s[:, -1:].max() + 1.0)      # rows apart on one axis
+    i = np.searchsorted((s + off).ravel(), (t + off).ravel(), side="right").reshape(t.shape) - 1
+    i = np.clip(i - np.arange(len(P))[:, None] * s.shape[1], 0, s.shape[1] - 2)
+    s0 = np.take_along_axis(s, i, axis=1)
+    w = np.clip((t - s0) / np.maximum(np.take_along_axis(seg, i, axis=1), 1e-300), 0.0, 1.0)[..., None]
+    a = np.take_along_axis(P, i[..., None], axis=1)
+    b = np.take_along_axis(P, i[..., None] + 1, axis=1)
+    return a + w * (b - a)
+
+
 def resample(path, m: int = CURVE_POINTS, closed: bool = True) -> np.ndarray:
     """``m`` points equally spaced by arc length, shape ``(m, 2)``.  A closed curve
     wraps from its last point to its first (which is not repeated).
@@ -67,12 +85,7 @@ def resample(path, m: int = CURVE_POINTS, closed: bool = True) -> np.ndarray:
     P = _as_points(path)
     if closed:
         P = np.vstack([P, P[:1]])
-    seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    if s[-1] <= 0:
-        raise ValueError("a curve of zero length")
-    t = np.linspace(0.0, s[-1], m, endpoint=not closed)
-    return np.stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])], axis=1)
+    return _arc_resample(P[None], m, not closed)[0]
 
 
 def normalise(path, m: int = CURVE_POINTS, closed: bool = True) -> tuple[np.ndarray, complex, float]:
@@ -109,6 +122,36 @@ def reversed_descriptor(d: np.ndarray) -> np.ndarray:
     return np.concatenate([d[..., h:], d[..., :h]], axis=-1)
 
 
+def normalise_closed(curves, m: int = CURVE_POINTS) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`normalise` for a batch of closed curves ``(K, n, 2)`` at once: ``z`` (K, m),
+    the centres (K,) and the radii (K,)."""
+    P = np.asarray(curves, float)
+    R = _arc_resample(np.concatenate([P, P[:, :1]], axis=1), m, False)
+    z = R[..., 0] + 1j * R[..., 1]
+    c = z.mean(axis=1)
+    r = np.sqrt(np.mean(np.abs(z - c[:, None]) ** 2, axis=1))
+    return (z - c[:, None]) / np.where(r > 0, r, 1.0)[:, None], c, r
+
+
+def aligned_distances(a: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`aligned_distance` of ``a`` (m,) to every row of ``B`` (K, m): distances,
+    shifts, rotations and reversal flags, each (K,)."""
+    B = np.atleast_2d(B)
+    na = float(np.sum(np.abs(a) ** 2))
+    fa = np.conj(np.fft.fft(a))
+    out = []
+    for bb in (B, B[:, ::-1]):
+        corr = np.fft.ifft(fa[None, :] * np.fft.fft(bb, axis=1), axis=1)     # Σ conj(a_i) b_{i+s}
+        s = np.argmax(np.abs(corr), axis=1)
+        top = corr[np.arange(len(B)), s]
+        d2 = na + np.sum(np.abs(bb) ** 2, axis=1) - 2.0 * np.abs(top)
+        rot = np.where(np.abs(top) > 0, np.conj(top) / np.maximum(np.abs(top), 1e-300), 1.0 + 0j)
+        out.append((np.sqrt(np.maximum(d2, 0.0) / B.shape[1]), s, rot))
+    rev = out[1][0] < out[0][0]
+    return (np.where(rev, out[1][0], out[0][0]), np.where(rev, out[1][1], out[0][1]),
+            np.where(rev, out[1][2], out[0][2]), rev)
+
+
 def aligned_distance(a: np.ndarray, b: np.ndarray) -> tuple[float, int, complex, bool]:
     """RMS distance between normalised closed curves ``a`` and ``b`` (complex, same
     length), minimised over the start shift, the rotation and the direction of ``b``.
@@ -116,18 +159,8 @@ def aligned_distance(a: np.ndarray, b: np.ndarray) -> tuple[float, int, complex,
     Returns ``(distance, shift, rotation, reversed)``: ``a ≈ rotation · b'[i + shift]``
     with ``b' = b`` or ``b`` reversed, ``|rotation| = 1``.
     """
-    best = (np.inf, 0, 1.0 + 0j, False)
-    na = float(np.sum(np.abs(a) ** 2))
-    for rev in (False, True):
-        bb = b[::-1] if rev else b
-        corr = np.fft.ifft(np.conj(np.fft.fft(a)) * np.fft.fft(bb))   # Σ conj(a_i) b_{i+s}
-        s = int(np.argmax(np.abs(corr)))
-        d2 = na + float(np.sum(np.abs(bb) ** 2)) - 2.0 * abs(corr[s])
-        dist = float(np.sqrt(max(d2, 0.0) / len(a)))
-        if dist < best[0]:
-            rot = np.conj(corr[s]) / abs(corr[s]) if abs(corr[s]) > 0 else 1.0 + 0j
-            best = (dist, s, complex(rot), rev)
-    return best
+    d, s, rot, rev = aligned_distances(a, np.asarray(b)[None, :])
+    return float(d[0]), int(s[0]), complex(rot[0]), bool(rev[0])
 
 
 def similarity_to(target_centre: complex, target_radius: float, cand_centre: complex,
@@ -174,3 +207,25 @@ def chamfer_score(target, curve, closed: bool | None = None, n: int = 200, angle
     step = 2 * np.pi / (angles // 5)
     fine = best + np.linspace(-step, step, 11)
     return float(min(scores(coarse).min(), scores(fine).min()))
+
+
+def polyline_distance(points, curve, block: int = 256) -> np.ndarray:
+    """The distance from each of ``points`` (n, 2) to the polyline ``curve`` (m, 2): to
+    its nearest segment, not its nearest vertex, so the answer does not depend on how
+    densely the curve is sampled (the error of a chord is second order in the step).
+
+    Examples
+    --------
+    >>> polyline_distance([[0.5, 1.0], [2.0, 0.0]], [[0, 0], [1, 0]]).tolist()
+    [1.0, 1.0]
+    """
+    P = np.asarray(points, float)[:, None, :2]
+    C = _as_points(curve) if len(curve) >= 3 else np.asarray(curve, float)
+    a, v = C[:-1], np.diff(C, axis=0)
+    vv = np.maximum(np.sum(v * v, axis=1), 1e-300)
+    out = np.empty(len(P))
+    for i in range(0, len(P), block):
+        w = P[i:i + block] - a
+        t = np.clip(np.sum(w * v, axis=2) / vv, 0.0, 1.0)
+        out[i:i + block] = np.min(np.linalg.norm(w - t[..., None] * v, axis=2), axis=1)
+    return out

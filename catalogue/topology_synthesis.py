@@ -17,6 +17,7 @@ embeddings.
 """
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,16 +31,27 @@ from multiloop.kin.check import check
 from multiloop.kin.solve import solve
 
 from .atlas import Atlas
-from .curves import CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise, similarity_to
+from .curves import (CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise,
+                     polyline_distance, similarity_to)
 from .curve_atlas import CurveIndex, stored_curve
-from .dimensional import synthesise as dimensional_synthesise
+from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
+from .tracers import best_tracers
 
 __all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files"]
 
 #: target points handed to the dimensional synthesiser (arc-length resampled)
 POLISH_POINTS = 40
+#: ... and to the finalists' second polish (the whole curve between the screen's points)
+REFINE_POINTS = 120
+#: share of the budget for the screen (every retrieved start polished briefly) ...
+SCREEN_SHARE = 0.5
+#: ... and kept for the final checks (the finalists' second polish has the rest)
+ASSESS_SHARE = 0.15
+#: realisations read with their best tracer points (closed targets), and points per link
+REFIT_REALISATIONS = 60
+REFIT_PER_LINK = 2
 
 
 @dataclass(frozen=True)
@@ -48,7 +60,8 @@ class Design:
     to the target's size at the polished points (the dimensional synthesiser's), its
     number of links, structure formula, LInK's chamfer score of its traced curve
     against the target, and ``deviation_max``: the largest distance from any target
-    point to the traced curve (2000 driver steps), over the target's size."""
+    point to the traced curve (the polyline of 2000 driver steps,
+    :func:`.curves.polyline_distance`), over the target's size."""
 
     mechanism: Mechanism
     error_max: float
@@ -128,23 +141,48 @@ def candidate_mechanism(curve: dict, transform, point: str) -> Mechanism:
     return b.build()
 
 
-def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: int) -> list[tuple[float, int, object]]:
-    """(distance, curve id, similarity) of the retrieved curves, nearest first."""
+def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: int) -> list[tuple[float, dict, object]]:
+    """(distance, curve, similarity) of the retrieved curves, nearest first.  A closed
+    target reads each retrieved realisation with its best tracer points
+    (:func:`.tracers.best_tracers`) instead of the stored ones."""
     index = CurveIndex(atlas, links)
     if not len(index):
         raise InputError(explain("atlas curves", expected=f"stored coupler curves of {links}-link mechanisms",
                                  got=f"none in {atlas.path!r}",
                                  hint="build them: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
     zt, ct, rt = normalise(target, CURVE_POINTS, closed)
-    out = []
-    for hit in index.query(descriptor(target, closed=closed), candidates):
-        c = stored_curve(atlas, hit.curve)
-        if closed:
-            dist, _, rot, _ = aligned_distance(zt, c["shape"])
-        else:
-            dist, rot = hit.distance, _open_rotation(target, c)
-        out.append((dist, hit.curve, similarity_to(ct, rt, c["centre"], c["radius"], rot)))
+    hits = index.query(descriptor(target, closed=closed), candidates)
+    curves = [stored_curve(atlas, hit.curve) for hit in hits]
+    if closed:
+        out = _refit(curves, zt, ct, rt)
+    else:
+        out = [(hit.distance, c, similarity_to(ct, rt, c["centre"], c["radius"], _open_rotation(target, c)))
+               for hit, c in zip(hits, curves)]
     return sorted(out, key=lambda t: t[0])
+
+
+def _refit(curves: list[dict], zt: np.ndarray, ct: complex, rt: float) -> list[tuple[float, dict, object]]:
+    """The stored curves ranked by the aligned distance, and for each of the first
+    :data:`REFIT_REALISATIONS` realisations met, its :data:`REFIT_PER_LINK` best tracer
+    points on every moving link but the driven one (the realisations of one mechanism
+    solved together)."""
+    out, first, by_mechanism = [], {}, {}
+    for c in curves:
+        dist, _, rot, _ = aligned_distance(zt, c["shape"])
+        out.append((dist, c, similarity_to(ct, rt, c["centre"], c["radius"], rot)))
+        key = (c["mechanism"], json.dumps(c["joints"], sort_keys=True))
+        if key not in first and len(first) < REFIT_REALISATIONS:
+            first[key] = c
+            by_mechanism.setdefault(c["mechanism"], []).append(c)
+    for group in by_mechanism.values():
+        c0 = group[0]
+        m = inversion(c0["joints_of_chain"], c0["frame"], c0["joint"], c0["driven"], at=c0["joints"])
+        moving = [k for k in m.link_names if k not in (m.frame, m.drivers[0].links[1])]
+        fits = best_tracers(m, [c["joints"] for c in group], zt, moving, per_link=REFIT_PER_LINK)
+        for c, fs in zip(group, fits):
+            out += [(f.distance, {**c, "link": f.link, "at": f.at}, similarity_to(ct, rt, f.centre, f.radius, f.rotation))
+                    for f in fs]
+    return out
 
 
 def _open_rotation(target: np.ndarray, curve: dict) -> complex:
@@ -187,48 +225,67 @@ def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.nd
     return P[np.all(np.isfinite(P), axis=1)]
 
 
-def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float, seed: int,
-            retrieved: float, full_target: np.ndarray) -> Design | None:
-    t0 = time.perf_counter()
-    pts = _subset(target, POLISH_POINTS)
+def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float,
+           seed: int, points: int = POLISH_POINTS) -> SynthesisResult | None:
+    """The dimensional synthesiser's local polish of ``start`` (``method="local"``: no
+    global search) on at most ``points`` target points, for ``budget`` s."""
     try:
-        res = dimensional_synthesise(start, path=pts, point=point, budget=budget, seed=seed, tol=1e-9,
-                                     full_rotation=closed)
+        res = dimensional_synthesise(start, path=_subset(target, points), point=point, budget=budget,
+                                     seed=seed, tol=1e-12, full_rotation=closed, method="local")
     except LinkageError:
         return None
+    return res if np.isfinite(res.error_max) and np.isfinite(res.error_rms) else None
+
+
+def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, seconds: float,
+            target: np.ndarray) -> Design | None:
+    """A :class:`Design` of a polished result, when :func:`kin.check.check` reaches every
+    target input on one branch; with LInK's chamfer score and the dense deviation."""
     m = res.mechanism
-    if not (np.isfinite(res.error_max) and np.isfinite(res.error_rms)) or not _passes_check(m, res.inputs):
+    if not _passes_check(m, res.inputs):
         return None
     curve = _traced(m, point, res.inputs, closed)
     if len(curve) < 3:
         return None
-    score = chamfer_score(full_target, curve, closed=closed)
-    size = float(np.max(np.ptp(full_target, axis=0)))
-    gaps = np.min(np.linalg.norm(full_target[:, None, :] - curve[None, :, :], axis=2), axis=1)
+    size = float(np.max(np.ptp(target, axis=0)))
+    gaps = polyline_distance(target, curve)
     return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
-                  score, float(retrieved), time.perf_counter() - t0, float(gaps.max() / size))
+                  chamfer_score(target, curve, closed=closed), float(retrieved), seconds, float(gaps.max() / size))
 
 
-def _order(designs: list[Design], tol: float) -> list[Design]:
-    """By RMS error, in bands: a band holds the designs within ``tol`` of its best
-    error, and inside a band fewer links come first."""
-    rest = sorted(designs, key=lambda d: d.error_rms)
-    out: list[Design] = []
+def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float, seed: int,
+            retrieved: float, full_target: np.ndarray) -> Design | None:
+    """A given start through the whole dimensional synthesiser (global search, then polish)."""
+    t0 = time.perf_counter()
+    try:
+        res = dimensional_synthesise(start, path=_subset(target, POLISH_POINTS), point=point, budget=budget,
+                                     seed=seed, tol=1e-9, full_rotation=closed)
+    except LinkageError:
+        return None
+    if not (np.isfinite(res.error_max) and np.isfinite(res.error_rms)):
+        return None
+    return _design(res, closed, point, retrieved, time.perf_counter() - t0, full_target)
+
+
+def _order(items: list, tol: float, key=lambda d: (d.error_rms, d.links)) -> list:
+    """By RMS error, in bands: a band holds the items within ``tol`` of its best error,
+    and inside a band fewer links come first (``key(item) = (rms, links)``)."""
+    rest = sorted(items, key=lambda d: key(d)[0])
+    out: list = []
     while rest:
-        band = [d for d in rest if d.error_rms <= rest[0].error_rms + tol]
-        out += sorted(band, key=lambda d: (d.links, d.error_rms))
+        band = [d for d in rest if key(d)[0] <= key(rest[0])[0] + tol]
+        out += sorted(band, key=lambda d: (key(d)[1], key(d)[0]))
         rest = rest[len(band):]
     return out
 
 
-def _choose(ranked: list, atlas: Atlas, per_topology: int, topologies: int) -> list[tuple[float, dict, object]]:
+def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[float, dict, object]]:
     """The best ``per_topology`` curves of each of the first ``topologies`` mechanisms
     met per link count (nearest first)."""
     taken: dict[int, int] = {}
     per_n: dict[int, set] = {}
     out = []
-    for dist, cid, tf in ranked:
-        c = stored_curve(atlas, cid)
+    for dist, c, tf in ranked:
         mids = per_n.setdefault(c["n"], set())
         if c["mechanism"] not in mids and len(mids) >= topologies:
             continue
@@ -241,8 +298,8 @@ def _choose(ranked: list, atlas: Atlas, per_topology: int, topologies: int) -> l
 
 
 def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "atlas.sqlite", top: int = 3,
-               budget: float = 60.0, point: str = "P", tol: float = 1e-3, per_topology: int = 1,
-               topologies: int = 2, candidates: int = 200, seed: int = 0) -> TopologySynthesis:
+               budget: float = 60.0, point: str = "P", tol: float = 1e-4, per_topology: int = 2,
+               topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0) -> TopologySynthesis:
     """Path synthesis that chooses the topology from the atlas (module docstring).
 
     Parameters
@@ -267,6 +324,8 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         Errors (relative RMS) that agree within ``tol`` count as ties: fewer links first.
     per_topology, topologies, candidates : int
         Polished curves per mechanism, mechanisms per link count, curves retrieved.
+    finalists : int
+        Screened designs polished again (at least ``top``).
 
     Returns
     -------
@@ -286,8 +345,46 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                  hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
     with Atlas(atlas, readonly=True) as a:
-        chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), a, per_topology, topologies)
+        chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), per_topology, topologies)
         starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
-    each = budget / max(len(starts), 1)
-    designs = [d for d in (_polish(m, target, closed, point, each, seed, dist, target) for dist, m in starts) if d]
-    return TopologySynthesis(tuple(_order(designs, tol)[:top]), closed, len(starts), time.perf_counter() - t0)
+    polished = _screen_and_refine(starts, target, closed, point, seed, t0, budget, tol, max(top, finalists))
+    designs = []
+    for res, dist, seconds in polished:
+        d = _design(res, closed, point, dist, seconds, target)
+        if d is not None:
+            designs.append(d)
+            if len(designs) == top:
+                break
+    return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0)
+
+
+def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, t0: float,
+                       budget: float, tol: float, finalists: int) -> list[tuple[SynthesisResult, float, float]]:
+    """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
+    points for an equal share of what is left of :data:`SCREEN_SHARE` of the budget; the best ``finalists`` (in
+    :func:`_order`) polished again on :data:`REFINE_POINTS`, sharing the time left but
+    :data:`ASSESS_SHARE` of the budget (kept for the checks).  Returns
+    ``(result, retrieval distance, seconds)``, best first."""
+    key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
+    screen_end = t0 + SCREEN_SHARE * budget
+    screened = []
+    for k, (dist, m) in enumerate(starts):
+        t = time.perf_counter()
+        each = (screen_end - t) / (len(starts) - k)       # (what one start overran, the next ones lose)
+        if each < 0.05:
+            break
+        res = _local(m, target, closed, point, each, seed)
+        if res is not None:
+            screened.append((res, dist, time.perf_counter() - t))
+    ranked = _order(screened, tol, key)
+    best, rest = ranked[:finalists], ranked[finalists:]
+    left = t0 + (1.0 - ASSESS_SHARE) * budget - time.perf_counter()
+    refined = []
+    for k, (res, dist, secs) in enumerate(best):
+        share = left / (len(best) - k)
+        t = time.perf_counter()
+        again = _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS) if share > 0.05 else None
+        used = time.perf_counter() - t
+        left -= used
+        refined.append((res if again is None else again, dist, secs + used))     # (errors at more points)
+    return _order(refined, tol, key) + rest

@@ -511,3 +511,16 @@ def test_triad_targets_are_met():
     st2 = solve(res.mechanism, res.inputs)
     got = st2.point_positions[:, st2.point_index("P")]
     assert np.max(np.hypot(*(got - target).T)) / float(np.max(np.ptp(target, axis=0))) < 1e-3
+
+
+@pytest.mark.parametrize("name,link", [("watt_1", "link_5"), ("stephenson_1", "link_4")])
+def test_local_method_polishes_a_near_start_without_global_search(name, link):
+    """``method="local"``: no population is drawn (the history stays empty), the start's
+    own polish meets a target that the mechanism traces exactly (free timing)."""
+    m, pt = _with_point(load_named(name), link)
+    st = solve(m, np.radians(np.arange(7.0, 300.0, 29.0)))
+    target = st.point_positions[:, st.point_index(pt)]
+    res = synthesise(_perturbed(m, 0.01), path=target, point=pt, budget=4.0, method="local", tol=1e-10)
+    assert res.history == () or len(res.history) <= 1
+    assert res.stopped in ("local", "tolerance")
+    assert res.error_max < 1e-6, res.error_max

@@ -1,5 +1,8 @@
 """Global search (differential evolution or CMA-ES) and the local polish.
 
+``"local"`` is no global search at all: the start design goes straight to the
+polish (a start already near a solution, e.g. one retrieved from a curve atlas).
+
 Both global methods see the design in the unit box and score whole populations
 in one call of :meth:`~.objective.Problem.batch`:
 
@@ -28,7 +31,7 @@ from .objective import Problem
 
 __all__ = ["SearchResult", "global_search", "polish", "METHODS"]
 
-METHODS = ("de", "cmaes")
+METHODS = ("de", "cmaes", "local")
 
 #: how many distinct good designs the probe polishes during the search
 ELITE = 3
@@ -130,7 +133,9 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget
         c.done = bool(probe(problem.x0.copy()))
         c.probe_time = c.elapsed()
     stopped = "tolerance"
-    if c.best_f > tol and not c.done:
+    if method == "local":
+        stopped = "tolerance" if c.best_f <= tol or c.done else "local"
+    elif c.best_f > tol and not c.done:
         if method == "de":
             _de(c, u0, seed, popsize)
         else:
@@ -177,6 +182,25 @@ def _residuals(problem: Problem, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
     return R
 
 
+def _jacobian(problem: Problem, split, u: np.ndarray, hi: np.ndarray, nz: int, free: bool) -> tuple[np.ndarray, int]:
+    """Forward differences (step 1e-7, backwards at the upper bound) of the polish's
+    residuals at ``u``, and the number of designs evaluated.  Target i's residuals
+    depend on the design and on its own driver value only: all driver values are
+    perturbed in one row, which gives the driver columns' diagonal blocks."""
+    h = np.where(u + 1e-7 > hi, -1e-7, 1e-7)
+    U = np.vstack([u, u[None, :] + np.diag(h)[:nz]] + ([np.r_[u[:nz], u[nz:] + 1e-7]] if free else []))
+    R = _residuals(problem, *split(U))
+    R = np.where(np.isfinite(R), R, 1.0)
+    J = np.zeros((R.shape[1], len(u)))
+    J[:, :nz] = ((R[1:nz + 1] - R[0]) / h[:nz, None]).T
+    if free:
+        n_phi = len(u) - nz
+        c = (R.shape[1] - int(problem.constrained)) // n_phi
+        i = np.arange(c * n_phi)
+        J[i, nz + i // c] = (R[-1, i] - R[0, i]) / 1e-7
+    return J, U.shape[0]
+
+
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
            deadline: float | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and, with free timing, the driver
@@ -186,7 +210,10 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     radians (or to the mechanism's size for a slider input), and the trust region
     works with unit variable scales (``x_scale=1``); the Jacobian is forward
     differences of step 1e-7 in these units, all perturbed designs in one batched
-    call (Moré 1978 on the scaling of Levenberg–Marquardt steps).  The trust region
+    call (Moré 1978 on the scaling of Levenberg–Marquardt steps); target i depends on
+    its own driver value only, so one row with every driver value perturbed gives all
+    of their columns (Curtis, Powell & Reid 1974: columns that share no row are
+    differenced together).  The trust region
     runs unbounded first and, only when it leaves the box, again within the box from
     the best point inside it; only points inside the box are kept.  Stops at
     ``max_nfev`` residual evaluations or at ``deadline`` (a ``time.perf_counter()``
@@ -229,12 +256,9 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
 
     def jac(u):
         late()
-        h = np.where(u + 1e-7 > hi, -1e-7, 1e-7)
-        U = np.vstack([u, u + np.diag(h)])
-        count[0] += U.shape[0]
-        R = _residuals(problem, *split(U))
-        R = np.where(np.isfinite(R), R, 1.0)
-        return ((R[1:] - R[0]) / h[:, None]).T
+        J, rows = _jacobian(problem, split, u, hi, nz, free)
+        count[0] += rows
+        return J
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
     # trust-region subproblem is solved iteratively)

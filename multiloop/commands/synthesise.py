@@ -1,5 +1,5 @@
 """``multiloop synthesise [START.toml] (--path T.csv --point NAME | --function F.csv --output JOINT |
---motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes]
+--motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes|local]
 [--timing reference|absolute|step] [--bounds NAME=LOW:HIGH ...] [--grashof crank-rocker|double-crank|any]
 [--mode reference|any] [--direction ccw|cw|any] [--json] [--plot P]``: dimensional synthesis.
 
@@ -56,10 +56,11 @@ def add_arguments(p) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (reproducible runs)")
     p.add_argument("--budget", type=float, default=None, metavar="S",
                    help="time budget in seconds (default 10; without START 60)")
-    p.add_argument("--method", choices=("de", "cmaes"), default="de", help="global search (default de)")
+    p.add_argument("--method", choices=("de", "cmaes", "local"), default="de",
+                   help="global search (default de); local: polish the start only")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
-                        "errors within it tie and fewer links win (default 1e-3)")
+                        "errors within it tie and fewer links win (default 1e-4)")
     p.add_argument("--db", default="atlas.sqlite", help="without START: the atlas with coupler curves")
     p.add_argument("--links", default="4,6,8", help="without START: numbers of links to try (default 4,6,8)")
     p.add_argument("--top", type=int, default=3, metavar="K", help="without START: designs returned (default 3)")
@@ -96,7 +97,7 @@ def run_without_start(args) -> int:
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
     res = topo_synthesise(args.path, links=links, atlas=args.db, top=args.top, budget=budget,
-                          point=args.point or "P", tol=1e-3 if args.tol is None else args.tol, seed=args.seed)
+                          point=args.point or "P", tol=1e-4 if args.tol is None else args.tol, seed=args.seed)
     if not res.designs:
         raise InputError(explain("--path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
