@@ -10,11 +10,12 @@ Positions given this way assemble by construction at the reference.
 A sample is **kept** when the driver turns fully with every monitored angle (the
 transmission angle of each RRR dyad, the triad angles; Artobolevsky's and Hain's
 convention) at least ``min_transmission`` from 0° and 180°.  The sample is screened on a
-grid of driver values, a batch of samples at once (:func:`kin.design.solve_designs`:
-one pass over the mechanism's compiled plan for all of them), then **certified** by the
-design check's motion and angle extremes
-(:func:`kin.check.driver_angles`), whose continuation and event search find limits and
-angle extremes between grid points (no claim rests on the grid alone).
+grid of driver values, a batch of samples at once (16, then 32, then 64:
+:func:`kin.design.solve_designs`, one pass over the mechanism's compiled plan for all of
+them); the samples it keeps are then **certified** in order by the design check's
+motion and angle extremes (:func:`kin.check.driver_angles`), whose continuation and
+event search find limits and angle extremes between grid points (no claim rests on the
+grid alone).
 
 Coupler curves: a few random points on every moving link other than the driven
 one (whose points trace circles), traced over one turn of the driver.

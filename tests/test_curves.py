@@ -108,6 +108,20 @@ def test_realisations_are_certified():
 
 
 @needs_nauty
+def test_realisation_does_not_depend_on_the_batches():
+    """Samples screened one by one, 64 at once, or 16, 32, 64: the same kept sample."""
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    with Atlas(":memory:") as atlas:
+        atlas.build(opts, progress=False, loops=False)
+        build_mechanisms(atlas, opts)
+        for inv in (next(iter_mechanisms(atlas, opts, "class = 3")), next(iter_mechanisms(atlas, opts, "class = 2"))):
+            got = {(r.seed, r.tries, r.min_angle, tuple(j.at for j in r.mechanism.joints))
+                   for first, batch in ((1, 1), (64, 64), (16, 64), (3, 8))
+                   for r in [realise(inv, 11, tries=120, first=first, batch=batch)]}
+            assert len(got) == 1 and next(iter(got))[1] > 1     # one answer, not the first sample
+
+
+@needs_nauty
 def test_curve_build_resumes(curve_atlas):
     opts = SynthesisOptions(6, 1, simple_joints=True)
     with Atlas(curve_atlas) as atlas:
