@@ -132,21 +132,39 @@ class Workbench:
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
         self.pick.param.watch(lambda e: self.open_name(e.new), "value")
         self.upload.param.watch(lambda e: self.open_upload(), "value")
-        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
+        self.synthesis, self.atlas = None, None
+        # the tabs behind the first are built when first shown: the first page then
+        # carries (and the browser renders) the mechanism tab alone
+        self._later = {2: lambda: self._synthesis_view(choices)}
         tabs = [("Mechanism", pn.Row(self.view.panel, self.check.panel)), ("Structure", self.structure),
-                ("Synthesis", self.synthesis.panel)]
-        self.atlas = None
+                ("Synthesis", pn.Column())]
         if atlases:
-            from .atlas_view import AtlasView
-            self.atlas = AtlasView(list(atlases), self.say)
-            tabs.append(("Atlas", self.atlas.panel))
+            self._later[3] = lambda: self._atlas_view(list(atlases))
+            tabs.append(("Atlas", pn.Column()))
         header = pn.Row(pn.pane.HTML("<b>multiloop workbench</b>"), self.pick,
                         pn.Column(pn.pane.HTML("open a .toml, .json or .pyslvs file:"), self.upload))
         # not dynamic: a tab rendered later by the server fetches Panel's stylesheets from
         # its CDN, whatever the resources setting (seen with Panel 1.9.4)
         self.tabs = pn.Tabs(*tabs, dynamic=False)
+        self.tabs.param.watch(lambda e: self._show_tab(e.new), "active")
         self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(first)
+
+    def _synthesis_view(self, choices):
+        from .synthesis_view import SynthesisView
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
+        return self.synthesis.panel
+
+    def _atlas_view(self, atlases):
+        from .atlas_view import AtlasView
+        self.atlas = AtlasView(atlases, self.say)
+        return self.atlas.panel
+
+    def _show_tab(self, i: int) -> None:
+        """Build tab ``i`` the first time it is shown."""
+        build = self._later.pop(i, None)
+        if build is not None:
+            self.tabs[i].objects = [build()]
 
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
@@ -228,7 +246,8 @@ class Workbench:
     # ------------------------------------------------------------------ updates
     def poll(self) -> None:
         """The session's periodic callback: results of the background jobs."""
-        self.synthesis.poll()
+        if self.synthesis is not None:
+            self.synthesis.poll()
         job = self.job
         if job is None:
             return
@@ -256,7 +275,8 @@ class Workbench:
     def close(self) -> None:
         if self.job is not None:
             self.job.cancel()
-        self.synthesis.cancel()
+        if self.synthesis is not None:
+            self.synthesis.cancel()
         if self.atlas is not None:
             self.atlas.close()
 
