@@ -83,14 +83,14 @@ def _motion_and_check(job, m, threshold, key=None):
     return doc
 
 
-def warm_up(files: dict, imported) -> None:
+def warm_up(files: dict, imported, swept) -> None:
     """Import what a session uses (then set the event ``imported``) and solve the sweeps
-    of the first mechanism a page shows, so that the first session is built as fast as
-    the next ones and shows its motion at once."""
+    of the first mechanism a page shows (then set ``swept``), so that the first session
+    is built as fast as the next ones and shows its motion at once."""
     try:
         from multiloop.inputs import load_mechanism
 
-        from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
+        from . import check_view, mechanism_view  # noqa: F401 - imported for the sessions
     finally:
         imported.set()                      # a session never waits for a failed warm-up
     name = _first_choice(files)
@@ -100,6 +100,8 @@ def warm_up(files: dict, imported) -> None:
             _sweeps(m, name)
     except Exception:  # noqa: BLE001 - the session's own job computes it again and reports
         pass
+    finally:
+        swept.set()
 
 
 def _first_choice(files: dict) -> str:
@@ -299,20 +301,38 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
     def page():
         # every stylesheet of this document from this server (Panel defaults to its CDN
         # for models made outside the page's first render, e.g. a tab opened later)
-        pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
-        imported.wait(timeout=60)
-        wb = Workbench(files, atlases, threshold)
-        cb = pn.state.add_periodic_callback(wb.poll, period=150)
+        doc = pn.state.curdoc
+        doc._template_variables["dist_url"] = LOCAL_DIST
+        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
 
-        def closed(_ctx):
-            cb.stop()
-            wb.close()
-        pn.state.on_session_destroyed(closed)
-        return wb.panel
+        def build():
+            wb = Workbench(files, atlases, threshold)
+            root.objects = [wb.panel]
+            cb = pn.state.add_periodic_callback(wb.poll, period=150)
+
+            def closed(_ctx):
+                cb.stop()
+                wb.close()
+            pn.state.on_session_destroyed(closed)
+
+        # the page's HTML goes out now; the workbench is built on the server's loop once
+        # the warm-up is done, while the browser loads and runs the page's scripts (the
+        # only Document method safe to call from another thread: add_next_tick_callback)
+        if swept.is_set():
+            doc.add_next_tick_callback(build)
+        else:
+            threading.Thread(target=_when_warm, args=(doc, build), name="multiloop-web-session", daemon=True).start()
+        return root
+
+    def _when_warm(doc, build):
+        imported.wait(timeout=60)
+        swept.wait(timeout=1.0)         # a long first sweep is left to the session's job
+        doc.add_next_tick_callback(build)
 
     import threading
-    imported = threading.Event()
-    threading.Thread(target=warm_up, args=(files, imported), name="multiloop-web-warm-up", daemon=True).start()
+    imported, swept = threading.Event(), threading.Event()
+    threading.Thread(target=warm_up, args=(files, imported, swept), name="multiloop-web-warm-up",
+                     daemon=True).start()
     server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
                       websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
                       verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)
