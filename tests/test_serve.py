@@ -174,3 +174,24 @@ def test_opening_another_mechanism_cancels_the_old_check():
     wb.job.thread.join(timeout=20.0)
     wb.poll()
     assert wb.check.doc is not None and wb.check.doc["mechanism"] == "crank_slider"
+
+
+def test_the_mechanism_menu_follows_an_uploaded_or_opened_design():
+    """After an upload or "Open in mechanism view" the menu names the design shown, and
+    choosing an entry of the menu again shows that design."""
+    wb = _workbench()
+    p = resolve("crank_slider")
+    wb.upload.filename, wb.upload.value = "mine.toml", p.read_bytes()        # as the file input does
+    assert wb.mechanism_name.endswith("mine.toml")
+    assert wb.pick.value == wb.mechanism_name and wb.pick.value in wb.pick.options
+    uploaded = wb.mechanism
+    wb.open_design(load_mechanism("watt_1"))                                 # a synthesised candidate
+    assert wb.pick.value == wb.mechanism_name and wb.mechanism_name != "four_bar"
+    assert wb.view.name == wb.mechanism_name
+    wb.pick.value = "stephenson_2"
+    assert wb.mechanism_name == "stephenson_2"
+    wb.pick.value = [o for o in wb.pick.options if o.endswith("mine.toml")][0]   # back to the upload
+    assert wb.mechanism is uploaded and wb.pick.value.endswith("mine.toml")
+    wb.upload.filename, wb.upload.value = "bad.toml", b"x = ["               # a bad file: nothing changes
+    assert wb.mechanism is uploaded and wb.pick.value.endswith("mine.toml")
+    wb.close()

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -270,6 +271,8 @@ def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory
     assert st.ok[0] and np.isfinite(st.point_positions[0]).all()
     page.get_by_role("button", name="Open in mechanism view").click()
     _wait_frames(page)
+    # the mechanism menu names the candidate shown, not the catalogue entry opened before
+    sync_api.expect(page.locator(".ml-pick select")).to_have_value(re.compile(r"^design: "), timeout=20000)
     page.get_by_text("Mechanism", exact=True).first.click()
 
 

@@ -132,7 +132,8 @@ class Workbench:
                                       css_classes=["ml-pick"])
         self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.pick.param.watch(lambda e: self.open_name(e.new), "value")
+        self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
+        self.pick.param.watch(lambda e: None if e.new == self.mechanism_name else self.open_name(e.new), "value")
         self.upload.param.watch(lambda e: self.open_upload(), "value")
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
@@ -179,14 +180,28 @@ class Workbench:
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:
+        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue name."""
         from multiloop.inputs import load_mechanism
         from multiloop.topo.errors import LinkageError
+        if name in self.designs:
+            self.open_design(self.designs[name], name)
+            return
         try:
             m = self.files[name] if name in self.files else load_mechanism(name)
         except LinkageError as exc:
             self.say(str(exc))
+            self._follow()
             return
         self.open_design(m, name, key=name)
+
+    def _follow(self) -> None:
+        """The menu names the mechanism shown (a new entry for an uploaded or synthesised
+        design), without opening it again."""
+        name = self.mechanism_name
+        if name and name not in self.pick.options:
+            self.pick.options = [name] + list(self.pick.options)
+        if name:
+            self.pick.value = name
 
     def open_upload(self) -> None:
         from multiloop.inputs import load_upload
@@ -197,7 +212,7 @@ class Workbench:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.open_design(m, name)
+        self.open_design(m, f"upload: {name}")
 
     def _start(self, name: str):
         if name == "(open mechanism)":
@@ -221,11 +236,15 @@ class Workbench:
             structure = _analysis(m)
         except LinkageError as exc:
             self.say(str(exc))
+            self._follow()                  # the menu goes back to the mechanism shown
             return
         if self.job is not None:
             self.job.cancel()
         self.clear()
-        self.mechanism, self.mechanism_name = m, name or m.name or "design"
+        self.mechanism, self.mechanism_name = m, name or f"design: {m.name or 'unnamed'}"
+        if key is None:
+            self.designs[self.mechanism_name] = m
+        self._follow()
         self.scene = scene
         self.structure.object = structure
         ready = _SWEEPS.get(key) if key is not None else None
