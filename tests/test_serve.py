@@ -195,3 +195,26 @@ def test_the_mechanism_menu_follows_an_uploaded_or_opened_design():
     wb.upload.filename, wb.upload.value = "bad.toml", b"x = ["               # a bad file: nothing changes
     assert wb.mechanism is uploaded and wb.pick.value.endswith("mine.toml")
     wb.close()
+
+
+def test_the_warm_up_process_sends_what_a_session_computes_itself():
+    """``serve`` prepares the first page in a child process (multiloop.web.prepare): its
+    drawing, structure, motion and check are those the session computes in-process."""
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    from multiloop.kin.check import check
+    from multiloop.web.app import _analysis
+    from multiloop.web.prepare import results, start
+    from multiloop.web.scene import scene_of, sweep_driver
+    m = load_mechanism("crank_slider")
+    got = dict(results(start(m, 35.0)))
+    assert set(got) == {"scene", "sweeps", "check"}
+    scene, structure = got["scene"]
+    mine = scene_of(m)
+    assert (scene.node_names, scene.links, scene.joint_kind) == (mine.node_names, mine.links, mine.joint_kind)
+    np.testing.assert_array_equal(scene.reference, mine.reference)
+    assert structure == _analysis(m)
+    (sw,) = got["sweeps"]
+    own = sweep_driver(m, 0)
+    assert sw.joint == own.joint and sw.full_rotation == own.full_rotation
+    np.testing.assert_allclose(sw.nodes, own.nodes, rtol=0, atol=1e-12)
+    assert got["check"] == check(m, min_transmission=35.0).as_dict()

@@ -51,10 +51,24 @@ def _analysis(m):
                   f"{grows}</table>")
 
 
-#: results shared read-only by every session of this server: the sweeps of a named
-#: mechanism (catalogue name or FILE) and its check documents per threshold
+#: results shared read-only by every session of this server, per named mechanism
+#: (catalogue name or FILE): its drawing and structure tab, the sweeps of its drivers,
+#: its check documents per threshold; the events of the first mechanism's warm-up
+_SCENES: dict[str, tuple] = {}
 _SWEEPS: dict[str, tuple] = {}
 _CHECKS: dict[tuple[str, float], dict] = {}
+_WARMING: dict = {}
+
+
+def _scene(m, key: str | None) -> tuple:
+    """(Scene, structure HTML) of ``m``, from the server's cache when ``key`` names it."""
+    from .scene import scene_of
+    if key is not None and key in _SCENES:
+        return _SCENES[key]
+    out = (scene_of(m), _analysis(m))
+    if key is not None:
+        _SCENES[key] = out
+    return out
 
 
 def _sweeps(m, key: str | None, cancel=None) -> tuple:
@@ -70,38 +84,51 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 
 def _motion_and_check(job, m, threshold, key=None):
     """Worker: the sweeps of every driver, then the check (its JSON document); both
-    stop at the next solve once the job is cancelled."""
-    from multiloop.kin.check import check
-
+    stop at the next solve once the job is cancelled.  The first mechanism's warm-up
+    computes the same: its results are awaited, not computed twice."""
+    warming = _WARMING.get(key)
+    while warming is not None and not warming.wait(0.1):
+        job.poll()
     job.sweeps = _sweeps(m, key, job.poll)
     job.report(1 / 2)
     if key is not None and (key, threshold) in _CHECKS:
         return _CHECKS[key, threshold]
+    from multiloop.kin.check import check
     doc = check(m, min_transmission=threshold, cancel=job.poll).as_dict()
     if key is not None:
         _CHECKS[key, threshold] = doc
     return doc
 
 
-def warm_up(files: dict, imported, swept) -> None:
-    """Import what a session uses (then set the event ``imported``) and solve the sweeps
-    of the first mechanism a page shows (then set ``swept``), so that the first session
-    is built as fast as the next ones and shows its motion at once."""
+def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
+    """Fill the server's cache for the first mechanism a page shows (``name``, ``m``):
+    from the child process ``child`` (:mod:`.prepare`) when there is one, else here;
+    ``ready`` is set once its drawing and motion are there (or failed) and
+    ``_WARMING[name]`` once the warm-up ends.  Then, after the first page was shown
+    (``shown``), import what the other mechanisms and the synthesis use."""
     try:
-        from multiloop.inputs import load_mechanism
-
-        from . import check_view, mechanism_view  # noqa: F401 - imported for the sessions
-    finally:
-        imported.set()                      # a session never waits for a failed warm-up
-    name = _first_choice(files)
-    try:
-        m = files[name] if name in files else load_mechanism(name)
-        if m.drivers and m.has_geometry:
-            _sweeps(m, name)
-    except Exception:  # noqa: BLE001 - the session's own job computes it again and reports
+        if child is not None:
+            from .prepare import results
+            for kind, value in results(child):
+                cache, k = {"scene": (_SCENES, name), "sweeps": (_SWEEPS, name),
+                            "check": (_CHECKS, (name, threshold))}[kind]
+                cache[k] = value
+                if kind == "sweeps" or not (m.drivers and m.has_geometry):
+                    ready.set()
+        else:
+            _scene(m, name)
+            if m.drivers and m.has_geometry:
+                _sweeps(m, name)
+    except Exception:  # noqa: BLE001 - a session computes what is missing and reports its errors
         pass
     finally:
-        swept.set()
+        ready.set()                         # a session never waits for a failed warm-up
+        _WARMING.pop(name).set()
+    shown.wait(timeout=20)
+    from multiloop.kin.check import check  # noqa: F401 - imported for the sessions' next jobs
+    from multiloop.topo.assur import decompose  # noqa: F401
+
+    from . import synthesis_view  # noqa: F401
 
 
 def _first_choice(files: dict) -> str:
@@ -112,7 +139,9 @@ def _first_choice(files: dict) -> str:
 class Workbench:
     """Every widget and result of one browser session."""
 
-    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0):
+    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
+        """``later``: the check panel joins the page at :meth:`show_rest` (the first
+        render then carries the drawing and its player alone)."""
         import panel as pn
 
         from .check_view import CheckView
@@ -139,7 +168,8 @@ class Workbench:
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
         self._later = {2: lambda: self._synthesis_view(choices)}
-        tabs = [("Mechanism", pn.Row(self.view.panel, self.check.panel)), ("Structure", self.structure),
+        self.mechanism_tab = pn.Row(self.view.panel, *([] if later else [self.check.panel]))
+        tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure),
                 ("Synthesis", pn.Column())]
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
@@ -230,10 +260,8 @@ class Workbench:
         from multiloop.topo.errors import LinkageError
 
         from .jobs import Job
-        from .scene import scene_of
         try:
-            scene = scene_of(m)
-            structure = _analysis(m)
+            scene, structure = _scene(m, key)
         except LinkageError as exc:
             self.say(str(exc))
             self._follow()                  # the menu goes back to the mechanism shown
@@ -293,6 +321,11 @@ class Workbench:
         if x is not None and self.view.sweeps and np.isfinite(x):
             self.view.move_to(float(x))
 
+    def show_rest(self) -> None:
+        """Add the check panel to the mechanism tab (once)."""
+        if self.check.panel not in self.mechanism_tab.objects:
+            self.mechanism_tab.append(self.check.panel)
+
     def close(self) -> None:
         if self.job is not None:
             self.job.cancel()
@@ -300,6 +333,77 @@ class Workbench:
             self.synthesis.cancel()
         if self.atlas is not None:
             self.atlas.close()
+
+
+def _start_warm_up(files: dict, threshold: float):
+    """Start the warm-up of the first mechanism a page shows: a child process
+    (:mod:`.prepare`) when one starts.  Returns a function that starts :func:`warm_up`'s
+    thread (after Panel's import: in this process they would only take turns) and
+    returns its events (ready, first page shown)."""
+    import threading
+
+    from multiloop.inputs import load_mechanism
+
+    from .prepare import start
+    name = _first_choice(files)
+    m = files[name] if name in files else load_mechanism(name)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    child = start(m, threshold) if cores > 1 else None       # on one core it would only take turns
+    _WARMING[name] = threading.Event()
+
+    def then():
+        warm, shown = threading.Event(), threading.Event()
+        threading.Thread(target=warm_up, args=(name, m, threshold, child, warm, shown),
+                         name="multiloop-web-warm-up", daemon=True).start()
+        return warm, shown
+    return then
+
+
+def _page_maker(files: dict, atlases, threshold: float, warm, shown):
+    """The server's page function.  The page's HTML goes out at once with a placeholder;
+    a thread builds the session's :class:`Workbench` once the warm-up is ``warm`` (its
+    objects only: the server's loop meanwhile serves the page's scripts) and the loop
+    then puts it in the document (``add_next_tick_callback``: the one Document method
+    safe to call from another thread).  The check panel follows once the browser shows
+    the drawing (``shown``)."""
+    import threading
+
+    import panel as pn
+    from panel.io.resources import LOCAL_DIST
+
+    def page():
+        # every stylesheet of this document from this server (Panel defaults to its CDN
+        # for models made outside the page's first render, e.g. a tab opened later)
+        doc = pn.state.curdoc
+        doc._template_variables["dist_url"] = LOCAL_DIST
+        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
+        threading.Thread(target=build, args=(doc, root), name="multiloop-web-session", daemon=True).start()
+        return root
+
+    def build(doc, root):
+        warm.wait(timeout=3.0)
+        try:
+            wb = Workbench(files, atlases, threshold, later=True)
+        except Exception as exc:  # noqa: BLE001 - shown in the page
+            message = html.escape(f"internal error: {type(exc).__name__}: {exc}")
+            doc.add_next_tick_callback(lambda: setattr(root[0], "object", f'<p id="ml-message">{message}</p>'))
+            return
+        doc.add_next_tick_callback(lambda: attach(doc, root, wb))
+
+    def attach(doc, root, wb):
+        root.objects = [wb.panel]
+        cb = pn.state.add_periodic_callback(wb.poll, period=150)
+
+        def rest():                     # a second message, after the drawing's
+            wb.show_rest()
+            shown.set()
+        pn.state.onload(lambda: doc.add_next_tick_callback(rest))
+
+        def closed(_ctx):
+            cb.stop()
+            wb.close()
+        pn.state.on_session_destroyed(closed)
+    return page
 
 
 def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: bool = False,
@@ -310,48 +414,15 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
     once the server listens (the command prints the address).
     """
     os.environ["BOKEH_RESOURCES"] = "server"      # Bokeh's and Panel's JS from this server, no CDN
+    warm_up_then = _start_warm_up(files, threshold)     # before Panel's import: they overlap
     import panel as pn
+
+    warm, shown = warm_up_then()
 
     pn.config.inline = False
     pn.extension(design="native", notifications=False)
 
-    from panel.io.resources import LOCAL_DIST
-
-    def page():
-        # every stylesheet of this document from this server (Panel defaults to its CDN
-        # for models made outside the page's first render, e.g. a tab opened later)
-        doc = pn.state.curdoc
-        doc._template_variables["dist_url"] = LOCAL_DIST
-        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
-
-        def build():
-            wb = Workbench(files, atlases, threshold)
-            root.objects = [wb.panel]
-            cb = pn.state.add_periodic_callback(wb.poll, period=150)
-
-            def closed(_ctx):
-                cb.stop()
-                wb.close()
-            pn.state.on_session_destroyed(closed)
-
-        # the page's HTML goes out now; the workbench is built on the server's loop once
-        # the warm-up is done, while the browser loads and runs the page's scripts (the
-        # only Document method safe to call from another thread: add_next_tick_callback)
-        if swept.is_set():
-            doc.add_next_tick_callback(build)
-        else:
-            threading.Thread(target=_when_warm, args=(doc, build), name="multiloop-web-session", daemon=True).start()
-        return root
-
-    def _when_warm(doc, build):
-        imported.wait(timeout=60)
-        swept.wait(timeout=1.0)         # a long first sweep is left to the session's job
-        doc.add_next_tick_callback(build)
-
-    import threading
-    imported, swept = threading.Event(), threading.Event()
-    threading.Thread(target=warm_up, args=(files, imported, swept), name="multiloop-web-warm-up",
-                     daemon=True).start()
+    page = _page_maker(files, atlases, threshold, warm, shown)
     server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
                       websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
                       verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)
