@@ -291,7 +291,9 @@ def test_page_is_usable_soon_and_asks_nothing_from_the_internet(page, requests_s
     print(f"usable after {page.usable_after:.2f} s; {len(requests_seen)} requests")
     assert requests_seen and all(u.startswith(("http://127.0.0.1:", "ws://127.0.0.1:", "data:", "blob:"))
                                  for u in requests_seen), [u for u in requests_seen if "127.0.0.1" not in u]
-    assert page.usable_after < 60
+    # the goal is 3 s on an idle machine (measured in docs/web.md); this bound only
+    # catches a page that stopped loading fast (CI machines are shared and slower)
+    assert page.usable_after < 15
 
 
 def test_cancel_stops_the_synthesis_worker():
