@@ -202,9 +202,9 @@ def test_the_warm_up_process_sends_what_a_session_computes_itself():
     drawing, structure, motion and check are those the session computes in-process."""
     pytest.importorskip("panel") if not os.environ.get("CI") else None
     from multiloop.kin.check import check
-    from multiloop.web.app import _analysis
     from multiloop.web.prepare import results, start
     from multiloop.web.scene import scene_of, sweep_driver
+    from multiloop.web.structure_view import structure_html
     m = load_mechanism("crank_slider")
     got = dict(results(start(m, 35.0)))
     assert set(got) == {"scene", "sweeps", "check"}
@@ -212,7 +212,7 @@ def test_the_warm_up_process_sends_what_a_session_computes_itself():
     mine = scene_of(m)
     assert (scene.node_names, scene.links, scene.joint_kind) == (mine.node_names, mine.links, mine.joint_kind)
     np.testing.assert_array_equal(scene.reference, mine.reference)
-    assert structure == _analysis(m)
+    assert structure == structure_html(m)
     (sw,) = got["sweeps"]
     own = sweep_driver(m, 0)
     assert sw.joint == own.joint and sw.full_rotation == own.full_rotation

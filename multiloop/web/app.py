@@ -26,31 +26,6 @@ def catalogue_names() -> list[str]:
     return sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".toml"))
 
 
-def _analysis(m):
-    """The structural report and the Assur plan of ``m`` as HTML tables."""
-    from multiloop.topo.assur import decompose
-    from multiloop.topo.errors import LinkageError
-    from multiloop.topo.numbers import structural_report
-
-    rep = structural_report(m).as_dict()
-    keep = ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc", "SL", "La", "L0", "code", "code_star",
-            "planar", "degenerate", "fractionated", "actual_F", "redundant", "canonical")
-    rows = "".join(f"<tr><td>{k}</td><td>{html.escape(str(rep.get(k)))}</td></tr>" for k in keep if k in rep)
-    out = f'<h3>Structural report</h3><table id="ml-structure">{rows}</table>'
-    if not m.drivers:
-        return out
-    try:
-        plan = decompose(m).as_dict()
-    except LinkageError as exc:
-        return out + f"<p>{html.escape(str(exc))}</p>"
-    grows = "".join(f"<tr><td>{html.escape(g['label'])}</td><td>{html.escape(str(g['kind']))}</td>"
-                    f"<td>{html.escape(', '.join(g['links']))}</td><td>{html.escape(', '.join(g['joints']))}</td></tr>"
-                    for g in plan["groups"])
-    return out + (f'<h3>Structure formula</h3><p id="ml-formula">{html.escape(plan["formula"])}</p>'
-                  f'<table id="ml-groups"><tr><th>group</th><th>kind</th><th>links</th><th>joints</th></tr>'
-                  f"{grows}</table>")
-
-
 #: results shared read-only by every session of this server, per named mechanism
 #: (catalogue name or FILE): its drawing and structure tab, the sweeps of its drivers,
 #: its check documents per threshold; the events of the first mechanism's warm-up
@@ -63,9 +38,10 @@ _WARMING: dict = {}
 def _scene(m, key: str | None) -> tuple:
     """(Scene, structure HTML) of ``m``, from the server's cache when ``key`` names it."""
     from .scene import scene_of
+    from .structure_view import structure_html
     if key is not None and key in _SCENES:
         return _SCENES[key]
-    out = (scene_of(m), _analysis(m))
+    out = (scene_of(m), structure_html(m))
     if key is not None:
         _SCENES[key] = out
     return out

@@ -69,9 +69,9 @@ def main(argv: list[str]) -> int:
 
     from multiloop.kin.check import check
 
-    from .app import _analysis
     from .scene import scene_of, sweep_driver
-    send("scene", (scene_of(m), _analysis(m)))
+    from .structure_view import structure_html
+    send("scene", (scene_of(m), structure_html(m)))
     if m.drivers and m.has_geometry:
         send("sweeps", tuple(sweep_driver(m, k, cancel=cancel) for k in range(len(m.drivers))))
         send("check", check(m, min_transmission=threshold, cancel=cancel).as_dict())
