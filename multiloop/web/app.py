@@ -338,10 +338,9 @@ def _start_warm_up(files: dict, threshold: float):
 def _page_maker(files: dict, atlases, threshold: float, warm, shown):
     """The server's page function.  The page's HTML goes out at once with a placeholder;
     a thread builds the session's :class:`Workbench` once the warm-up is ``warm`` (its
-    objects only: the server's loop meanwhile serves the page's scripts) and the loop
-    then puts it in the document (``add_next_tick_callback``: the one Document method
-    safe to call from another thread).  The check panel follows once the browser shows
-    the drawing (``shown``)."""
+    objects only: the server's loop meanwhile serves the page's scripts), and the loop,
+    which looks every 20 ms, puts it in the document.  The check panel follows once the
+    browser shows the drawing (``shown``)."""
     import threading
 
     import panel as pn
@@ -353,20 +352,27 @@ def _page_maker(files: dict, atlases, threshold: float, warm, shown):
         doc = pn.state.curdoc
         doc._template_variables["dist_url"] = LOCAL_DIST
         root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
-        threading.Thread(target=build, args=(doc, root), name="multiloop-web-session", daemon=True).start()
+        built: dict = {}
+        threading.Thread(target=build, args=(built,), name="multiloop-web-session", daemon=True).start()
+
+        def attach():
+            if not built:
+                doc.add_timeout_callback(attach, 20)
+            elif "error" in built:
+                root[0].object = f'<p id="ml-message">{html.escape(built["error"])}</p>'
+            else:
+                show(doc, root, built["wb"])
+        doc.add_next_tick_callback(attach)
         return root
 
-    def build(doc, root):
+    def build(built):
         warm.wait(timeout=3.0)
         try:
-            wb = Workbench(files, atlases, threshold, later=True)
+            built["wb"] = Workbench(files, atlases, threshold, later=True)
         except Exception as exc:  # noqa: BLE001 - shown in the page
-            message = html.escape(f"internal error: {type(exc).__name__}: {exc}")
-            doc.add_next_tick_callback(lambda: setattr(root[0], "object", f'<p id="ml-message">{message}</p>'))
-            return
-        doc.add_next_tick_callback(lambda: attach(doc, root, wb))
+            built["error"] = f"internal error: {type(exc).__name__}: {exc}"
 
-    def attach(doc, root, wb):
+    def show(doc, root, wb):
         root.objects = [wb.panel]
         cb = pn.state.add_periodic_callback(wb.poll, period=150)
 
