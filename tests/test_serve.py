@@ -218,3 +218,21 @@ def test_the_warm_up_process_sends_what_a_session_computes_itself():
     assert sw.joint == own.joint and sw.full_rotation == own.full_rotation
     np.testing.assert_allclose(sw.nodes, own.nodes, rtol=0, atol=1e-12)
     assert got["check"] == check(m, min_transmission=35.0).as_dict()
+
+
+@pytest.mark.parametrize("with_child", [False, True])
+def test_the_warm_up_fills_the_shared_cache(with_child):
+    """serve's warm-up of the first mechanism, from the child process or in-process (one core)."""
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    import threading
+    from multiloop.web import app
+    from multiloop.web.prepare import start
+    m, name = load_mechanism("dyad_rrr"), f"warm-up test {with_child}"
+    app._WARMING[name] = threading.Event()
+    ready, shown = threading.Event(), threading.Event()
+    shown.set()
+    app.warm_up(name, m, 40.0, start(m, 40.0) if with_child else None, ready, shown)
+    assert ready.is_set() and name not in app._WARMING
+    assert app._SCENES[name][0].node_names == tuple(m.joint_names) + tuple(p.name for p in m.points)
+    assert len(app._SWEEPS[name]) == len(m.drivers)
+    assert ((name, 40.0) in app._CHECKS) == with_child          # in-process the session's job checks
