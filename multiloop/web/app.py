@@ -336,44 +336,21 @@ def _start_warm_up(files: dict, threshold: float):
 
 
 def _page_maker(files: dict, atlases, threshold: float, warm, shown):
-    """The server's page function.  The page's HTML goes out at once with a placeholder;
-    a thread builds the session's :class:`Workbench` once the warm-up is ``warm`` (its
-    objects only: the server's loop meanwhile serves the page's scripts), and the loop,
-    which looks every 20 ms, puts it in the document.  The check panel follows once the
-    browser shows the drawing (``shown``)."""
-    import threading
-
+    """The server's page function: the session's :class:`Workbench` once the warm-up is
+    ``warm``; the check panel follows once the browser shows the drawing (``shown``)."""
     import panel as pn
     from panel.io.resources import LOCAL_DIST
 
     def page():
         # every stylesheet of this document from this server (Panel defaults to its CDN
-        # for models made outside the page's first render, e.g. a tab opened later)
+        # for models made outside the page's first render, e.g. a tab opened later).
+        # The workbench is in the first document: swapped into a placeholder after the
+        # browser had loaded it, its patch once referred to models the browser did not
+        # know (Bokeh 3.9, Panel 1.9), and the page stayed empty
         doc = pn.state.curdoc
         doc._template_variables["dist_url"] = LOCAL_DIST
-        root = pn.Column(pn.pane.HTML("<b>multiloop workbench</b>: loading…"), sizing_mode="stretch_width")
-        built: dict = {}
-        threading.Thread(target=build, args=(built,), name="multiloop-web-session", daemon=True).start()
-
-        def attach():
-            if not built:
-                doc.add_timeout_callback(attach, 20)
-            elif "error" in built:
-                root[0].object = f'<p id="ml-message">{html.escape(built["error"])}</p>'
-            else:
-                show(doc, root, built["wb"])
-        doc.add_next_tick_callback(attach)
-        return root
-
-    def build(built):
         warm.wait(timeout=3.0)
-        try:
-            built["wb"] = Workbench(files, atlases, threshold, later=True)
-        except Exception as exc:  # noqa: BLE001 - shown in the page
-            built["error"] = f"internal error: {type(exc).__name__}: {exc}"
-
-    def show(doc, root, wb):
-        root.objects = [wb.panel]
+        wb = Workbench(files, atlases, threshold, later=True)
         cb = pn.state.add_periodic_callback(wb.poll, period=150)
 
         def rest():                     # a second message, after the drawing's
@@ -385,6 +362,7 @@ def _page_maker(files: dict, atlases, threshold: float, warm, shown):
             cb.stop()
             wb.close()
         pn.state.on_session_destroyed(closed)
+        return wb.panel
     return page
 
 
