@@ -349,7 +349,7 @@ def _page_maker(files: dict, atlases, threshold: float, warm, shown):
         # know (Bokeh 3.9, Panel 1.9), and the page stayed empty
         doc = pn.state.curdoc
         doc._template_variables["dist_url"] = LOCAL_DIST
-        warm.wait(timeout=3.0)
+        warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         wb = Workbench(files, atlases, threshold, later=True)
         cb = pn.state.add_periodic_callback(wb.poll, period=150)
 

@@ -12,7 +12,8 @@ writes its results pickled to its stdout, as they come:
 * ``("sweeps", (Sweep, ...))``: the motion of every driver;
 * ``("check", dict)``: ``check(...).as_dict()``, the document of ``multiloop check --json``.
 
-The child writes nothing else and stops at its next solve once the server is gone.
+The child writes nothing else, runs at a lower priority (the server's own start comes
+first when the cores are busy) and stops at its next solve once the server is gone.
 """
 from __future__ import annotations
 
@@ -27,9 +28,12 @@ __all__ = ["start", "results", "main"]
 def start(m, threshold: float):
     """Start the child for mechanism ``m``; None when it cannot be started (the server
     then computes the first page itself)."""
+    # one BLAS thread: the problems are small, and idle BLAS threads that spin would take
+    # the core the server needs
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     try:
         proc = subprocess.Popen([sys.executable, "-m", "multiloop.web.prepare", str(os.getpid())],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env)
     except OSError:
         return None
     try:
@@ -55,6 +59,8 @@ def results(proc):
 
 def main(argv: list[str]) -> int:
     parent = int(argv[0])
+    if hasattr(os, "nice"):
+        os.nice(10)                     # the server's own start comes first when cores are busy
 
     def cancel():                       # the server is gone: stop at the next solve
         if os.getppid() != parent:
