@@ -174,3 +174,65 @@ def test_opening_another_mechanism_cancels_the_old_check():
     wb.job.thread.join(timeout=20.0)
     wb.poll()
     assert wb.check.doc is not None and wb.check.doc["mechanism"] == "crank_slider"
+
+
+def test_the_mechanism_menu_follows_an_uploaded_or_opened_design():
+    """After an upload or "Open in mechanism view" the menu names the design shown, and
+    choosing an entry of the menu again shows that design."""
+    wb = _workbench()
+    p = resolve("crank_slider")
+    wb.upload.filename, wb.upload.value = "mine.toml", p.read_bytes()        # as the file input does
+    assert wb.mechanism_name.endswith("mine.toml")
+    assert wb.pick.value == wb.mechanism_name and wb.pick.value in wb.pick.options
+    uploaded = wb.mechanism
+    wb.open_design(load_mechanism("watt_1"))                                 # a synthesised candidate
+    assert wb.pick.value == wb.mechanism_name and wb.mechanism_name != "four_bar"
+    assert wb.view.name == wb.mechanism_name
+    wb.pick.value = "stephenson_2"
+    assert wb.mechanism_name == "stephenson_2"
+    wb.pick.value = [o for o in wb.pick.options if o.endswith("mine.toml")][0]   # back to the upload
+    assert wb.mechanism is uploaded and wb.pick.value.endswith("mine.toml")
+    wb.upload.filename, wb.upload.value = "bad.toml", b"x = ["               # a bad file: nothing changes
+    assert wb.mechanism is uploaded and wb.pick.value.endswith("mine.toml")
+    wb.close()
+
+
+def test_the_warm_up_process_sends_what_a_session_computes_itself():
+    """``serve`` prepares the first page in a child process (multiloop.web.prepare): its
+    drawing, structure, motion and check are those the session computes in-process."""
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    from multiloop.kin.check import check
+    from multiloop.web.prepare import results, start
+    from multiloop.web.scene import scene_of, sweep_driver
+    from multiloop.web.structure_view import structure_html
+    m = load_mechanism("crank_slider")
+    got = dict(results(start(m, 35.0)))
+    assert set(got) == {"scene", "sweeps", "check"}
+    scene, structure = got["scene"]
+    mine = scene_of(m)
+    assert (scene.node_names, scene.links, scene.joint_kind) == (mine.node_names, mine.links, mine.joint_kind)
+    np.testing.assert_array_equal(scene.reference, mine.reference)
+    assert structure == structure_html(m)
+    (sw,) = got["sweeps"]
+    own = sweep_driver(m, 0)
+    assert sw.joint == own.joint and sw.full_rotation == own.full_rotation
+    np.testing.assert_allclose(sw.nodes, own.nodes, rtol=0, atol=1e-12)
+    assert got["check"] == check(m, min_transmission=35.0).as_dict()
+
+
+@pytest.mark.parametrize("with_child", [False, True])
+def test_the_warm_up_fills_the_shared_cache(with_child):
+    """serve's warm-up of the first mechanism, from the child process or in-process (one core)."""
+    pytest.importorskip("panel") if not os.environ.get("CI") else None
+    import threading
+    from multiloop.web import app
+    from multiloop.web.prepare import start
+    m, name = load_mechanism("dyad_rrr"), f"warm-up test {with_child}"
+    app._WARMING[name] = threading.Event()
+    ready, shown = threading.Event(), threading.Event()
+    shown.set()
+    app.warm_up(name, m, 40.0, start(m, 40.0) if with_child else None, ready, shown)
+    assert ready.is_set() and name not in app._WARMING
+    assert app._SCENES[name][0].node_names == tuple(m.joint_names) + tuple(p.name for p in m.points)
+    assert len(app._SWEEPS[name]) == len(m.drivers)
+    assert ((name, 40.0) in app._CHECKS) == with_child          # in-process the session's job checks

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -270,6 +271,8 @@ def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory
     assert st.ok[0] and np.isfinite(st.point_positions[0]).all()
     page.get_by_role("button", name="Open in mechanism view").click()
     _wait_frames(page)
+    # the mechanism menu names the candidate shown, not the catalogue entry opened before
+    sync_api.expect(page.locator(".ml-pick select")).to_have_value(re.compile(r"^design: "), timeout=20000)
     page.get_by_text("Mechanism", exact=True).first.click()
 
 
@@ -288,7 +291,9 @@ def test_page_is_usable_soon_and_asks_nothing_from_the_internet(page, requests_s
     print(f"usable after {page.usable_after:.2f} s; {len(requests_seen)} requests")
     assert requests_seen and all(u.startswith(("http://127.0.0.1:", "ws://127.0.0.1:", "data:", "blob:"))
                                  for u in requests_seen), [u for u in requests_seen if "127.0.0.1" not in u]
-    assert page.usable_after < 60
+    # the goal is 3 s on an idle machine (measured in docs/web.md); this bound only
+    # catches a page that stopped loading fast (CI machines are shared and slower)
+    assert page.usable_after < 15
 
 
 def test_cancel_stops_the_synthesis_worker():

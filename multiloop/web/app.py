@@ -26,35 +26,25 @@ def catalogue_names() -> list[str]:
     return sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".toml"))
 
 
-def _analysis(m):
-    """The structural report and the Assur plan of ``m`` as HTML tables."""
-    from multiloop.topo.assur import decompose
-    from multiloop.topo.errors import LinkageError
-    from multiloop.topo.numbers import structural_report
-
-    rep = structural_report(m).as_dict()
-    keep = ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc", "SL", "La", "L0", "code", "code_star",
-            "planar", "degenerate", "fractionated", "actual_F", "redundant", "canonical")
-    rows = "".join(f"<tr><td>{k}</td><td>{html.escape(str(rep.get(k)))}</td></tr>" for k in keep if k in rep)
-    out = f'<h3>Structural report</h3><table id="ml-structure">{rows}</table>'
-    if not m.drivers:
-        return out
-    try:
-        plan = decompose(m).as_dict()
-    except LinkageError as exc:
-        return out + f"<p>{html.escape(str(exc))}</p>"
-    grows = "".join(f"<tr><td>{html.escape(g['label'])}</td><td>{html.escape(str(g['kind']))}</td>"
-                    f"<td>{html.escape(', '.join(g['links']))}</td><td>{html.escape(', '.join(g['joints']))}</td></tr>"
-                    for g in plan["groups"])
-    return out + (f'<h3>Structure formula</h3><p id="ml-formula">{html.escape(plan["formula"])}</p>'
-                  f'<table id="ml-groups"><tr><th>group</th><th>kind</th><th>links</th><th>joints</th></tr>'
-                  f"{grows}</table>")
-
-
-#: results shared read-only by every session of this server: the sweeps of a named
-#: mechanism (catalogue name or FILE) and its check documents per threshold
+#: results shared read-only by every session of this server, per named mechanism
+#: (catalogue name or FILE): its drawing and structure tab, the sweeps of its drivers,
+#: its check documents per threshold; the events of the first mechanism's warm-up
+_SCENES: dict[str, tuple] = {}
 _SWEEPS: dict[str, tuple] = {}
 _CHECKS: dict[tuple[str, float], dict] = {}
+_WARMING: dict = {}
+
+
+def _scene(m, key: str | None) -> tuple:
+    """(Scene, structure HTML) of ``m``, from the server's cache when ``key`` names it."""
+    from .scene import scene_of
+    from .structure_view import structure_html
+    if key is not None and key in _SCENES:
+        return _SCENES[key]
+    out = (scene_of(m), structure_html(m))
+    if key is not None:
+        _SCENES[key] = out
+    return out
 
 
 def _sweeps(m, key: str | None, cancel=None) -> tuple:
@@ -70,36 +60,51 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 
 def _motion_and_check(job, m, threshold, key=None):
     """Worker: the sweeps of every driver, then the check (its JSON document); both
-    stop at the next solve once the job is cancelled."""
-    from multiloop.kin.check import check
-
+    stop at the next solve once the job is cancelled.  The first mechanism's warm-up
+    computes the same: its results are awaited, not computed twice."""
+    warming = _WARMING.get(key)
+    while warming is not None and not warming.wait(0.1):
+        job.poll()
     job.sweeps = _sweeps(m, key, job.poll)
     job.report(1 / 2)
     if key is not None and (key, threshold) in _CHECKS:
         return _CHECKS[key, threshold]
+    from multiloop.kin.check import check
     doc = check(m, min_transmission=threshold, cancel=job.poll).as_dict()
     if key is not None:
         _CHECKS[key, threshold] = doc
     return doc
 
 
-def warm_up(files: dict, imported) -> None:
-    """Import what a session uses (then set the event ``imported``) and solve the sweeps
-    of the first mechanism a page shows, so that the first session is built as fast as
-    the next ones and shows its motion at once."""
+def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
+    """Fill the server's cache for the first mechanism a page shows (``name``, ``m``):
+    from the child process ``child`` (:mod:`.prepare`) when there is one, else here;
+    ``ready`` is set once its drawing and motion are there (or failed) and
+    ``_WARMING[name]`` once the warm-up ends.  Then, after the first page was shown
+    (``shown``), import what the other mechanisms and the synthesis use."""
     try:
-        from multiloop.inputs import load_mechanism
-
-        from . import check_view, mechanism_view, synthesis_view  # noqa: F401 - imported for the sessions
-    finally:
-        imported.set()                      # a session never waits for a failed warm-up
-    name = _first_choice(files)
-    try:
-        m = files[name] if name in files else load_mechanism(name)
-        if m.drivers and m.has_geometry:
-            _sweeps(m, name)
-    except Exception:  # noqa: BLE001 - the session's own job computes it again and reports
+        if child is not None:
+            from .prepare import results
+            for kind, value in results(child):
+                cache, k = {"scene": (_SCENES, name), "sweeps": (_SWEEPS, name),
+                            "check": (_CHECKS, (name, threshold))}[kind]
+                cache[k] = value
+                if kind == "sweeps" or not (m.drivers and m.has_geometry):
+                    ready.set()
+        else:
+            _scene(m, name)
+            if m.drivers and m.has_geometry:
+                _sweeps(m, name)
+    except Exception:  # noqa: BLE001 - a session computes what is missing and reports its errors
         pass
+    finally:
+        ready.set()                         # a session never waits for a failed warm-up
+        _WARMING.pop(name).set()
+    shown.wait(timeout=20)
+    from multiloop.kin.check import check  # noqa: F401 - imported for the sessions' next jobs
+    from multiloop.topo.assur import decompose  # noqa: F401
+
+    from . import synthesis_view  # noqa: F401
 
 
 def _first_choice(files: dict) -> str:
@@ -110,7 +115,9 @@ def _first_choice(files: dict) -> str:
 class Workbench:
     """Every widget and result of one browser session."""
 
-    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0):
+    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
+        """``later``: the check panel joins the page at :meth:`show_rest` (the first
+        render then carries the drawing and its player alone)."""
         import panel as pn
 
         from .check_view import CheckView
@@ -130,23 +137,43 @@ class Workbench:
                                       css_classes=["ml-pick"])
         self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.pick.param.watch(lambda e: self.open_name(e.new), "value")
+        self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
+        self.pick.param.watch(lambda e: None if e.new == self.mechanism_name else self.open_name(e.new), "value")
         self.upload.param.watch(lambda e: self.open_upload(), "value")
-        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
-        tabs = [("Mechanism", pn.Row(self.view.panel, self.check.panel)), ("Structure", self.structure),
-                ("Synthesis", self.synthesis.panel)]
-        self.atlas = None
+        self.synthesis, self.atlas = None, None
+        # the tabs behind the first are built when first shown: the first page then
+        # carries (and the browser renders) the mechanism tab alone
+        self._later = {2: lambda: self._synthesis_view(choices)}
+        self.mechanism_tab = pn.Row(self.view.panel, *([] if later else [self.check.panel]))
+        tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure),
+                ("Synthesis", pn.Column())]
         if atlases:
-            from .atlas_view import AtlasView
-            self.atlas = AtlasView(list(atlases), self.say)
-            tabs.append(("Atlas", self.atlas.panel))
+            self._later[3] = lambda: self._atlas_view(list(atlases))
+            tabs.append(("Atlas", pn.Column()))
         header = pn.Row(pn.pane.HTML("<b>multiloop workbench</b>"), self.pick,
                         pn.Column(pn.pane.HTML("open a .toml, .json or .pyslvs file:"), self.upload))
         # not dynamic: a tab rendered later by the server fetches Panel's stylesheets from
         # its CDN, whatever the resources setting (seen with Panel 1.9.4)
         self.tabs = pn.Tabs(*tabs, dynamic=False)
+        self.tabs.param.watch(lambda e: self._show_tab(e.new), "active")
         self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(first)
+
+    def _synthesis_view(self, choices):
+        from .synthesis_view import SynthesisView
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
+        return self.synthesis.panel
+
+    def _atlas_view(self, atlases):
+        from .atlas_view import AtlasView
+        self.atlas = AtlasView(atlases, self.say)
+        return self.atlas.panel
+
+    def _show_tab(self, i: int) -> None:
+        """Build tab ``i`` the first time it is shown."""
+        build = self._later.pop(i, None)
+        if build is not None:
+            self.tabs[i].objects = [build()]
 
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
@@ -159,14 +186,28 @@ class Workbench:
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:
+        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue name."""
         from multiloop.inputs import load_mechanism
         from multiloop.topo.errors import LinkageError
+        if name in self.designs:
+            self.open_design(self.designs[name], name)
+            return
         try:
             m = self.files[name] if name in self.files else load_mechanism(name)
         except LinkageError as exc:
             self.say(str(exc))
+            self._follow()
             return
         self.open_design(m, name, key=name)
+
+    def _follow(self) -> None:
+        """The menu names the mechanism shown (a new entry for an uploaded or synthesised
+        design), without opening it again."""
+        name = self.mechanism_name
+        if name and name not in self.pick.options:
+            self.pick.options = [name] + list(self.pick.options)
+        if name:
+            self.pick.value = name
 
     def open_upload(self) -> None:
         from multiloop.inputs import load_upload
@@ -177,7 +218,7 @@ class Workbench:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.open_design(m, name)
+        self.open_design(m, f"upload: {name}")
 
     def _start(self, name: str):
         if name == "(open mechanism)":
@@ -195,17 +236,19 @@ class Workbench:
         from multiloop.topo.errors import LinkageError
 
         from .jobs import Job
-        from .scene import scene_of
         try:
-            scene = scene_of(m)
-            structure = _analysis(m)
+            scene, structure = _scene(m, key)
         except LinkageError as exc:
             self.say(str(exc))
+            self._follow()                  # the menu goes back to the mechanism shown
             return
         if self.job is not None:
             self.job.cancel()
         self.clear()
-        self.mechanism, self.mechanism_name = m, name or m.name or "design"
+        self.mechanism, self.mechanism_name = m, name or f"design: {m.name or 'unnamed'}"
+        if key is None:
+            self.designs[self.mechanism_name] = m
+        self._follow()
         self.scene = scene
         self.structure.object = structure
         ready = _SWEEPS.get(key) if key is not None else None
@@ -228,7 +271,8 @@ class Workbench:
     # ------------------------------------------------------------------ updates
     def poll(self) -> None:
         """The session's periodic callback: results of the background jobs."""
-        self.synthesis.poll()
+        if self.synthesis is not None:
+            self.synthesis.poll()
         job = self.job
         if job is None:
             return
@@ -253,12 +297,73 @@ class Workbench:
         if x is not None and self.view.sweeps and np.isfinite(x):
             self.view.move_to(float(x))
 
+    def show_rest(self) -> None:
+        """Add the check panel to the mechanism tab (once)."""
+        if self.check.panel not in self.mechanism_tab.objects:
+            self.mechanism_tab.append(self.check.panel)
+
     def close(self) -> None:
         if self.job is not None:
             self.job.cancel()
-        self.synthesis.cancel()
+        if self.synthesis is not None:
+            self.synthesis.cancel()
         if self.atlas is not None:
             self.atlas.close()
+
+
+def _start_warm_up(files: dict, threshold: float):
+    """Start the warm-up of the first mechanism a page shows: a child process
+    (:mod:`.prepare`) when one starts.  Returns a function that starts :func:`warm_up`'s
+    thread (after Panel's import: in this process they would only take turns) and
+    returns its events (ready, first page shown)."""
+    import threading
+
+    from multiloop.inputs import load_mechanism
+
+    from .prepare import start
+    name = _first_choice(files)
+    m = files[name] if name in files else load_mechanism(name)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    child = start(m, threshold) if cores > 1 else None       # on one core it would only take turns
+    _WARMING[name] = threading.Event()
+
+    def then():
+        warm, shown = threading.Event(), threading.Event()
+        threading.Thread(target=warm_up, args=(name, m, threshold, child, warm, shown),
+                         name="multiloop-web-warm-up", daemon=True).start()
+        return warm, shown
+    return then
+
+
+def _page_maker(files: dict, atlases, threshold: float, warm, shown):
+    """The server's page function: the session's :class:`Workbench` once the warm-up is
+    ``warm``; the check panel follows once the browser shows the drawing (``shown``)."""
+    import panel as pn
+    from panel.io.resources import LOCAL_DIST
+
+    def page():
+        # every stylesheet of this document from this server (Panel defaults to its CDN
+        # for models made outside the page's first render, e.g. a tab opened later).
+        # The workbench is in the first document: swapped into a placeholder after the
+        # browser had loaded it, its patch once referred to models the browser did not
+        # know (Bokeh 3.9, Panel 1.9), and the page stayed empty
+        doc = pn.state.curdoc
+        doc._template_variables["dist_url"] = LOCAL_DIST
+        warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
+        wb = Workbench(files, atlases, threshold, later=True)
+        cb = pn.state.add_periodic_callback(wb.poll, period=150)
+
+        def rest():                     # a second message, after the drawing's
+            wb.show_rest()
+            shown.set()
+        pn.state.onload(lambda: doc.add_next_tick_callback(rest))
+
+        def closed(_ctx):
+            cb.stop()
+            wb.close()
+        pn.state.on_session_destroyed(closed)
+        return wb.panel
+    return page
 
 
 def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: bool = False,
@@ -269,30 +374,15 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
     once the server listens (the command prints the address).
     """
     os.environ["BOKEH_RESOURCES"] = "server"      # Bokeh's and Panel's JS from this server, no CDN
+    warm_up_then = _start_warm_up(files, threshold)     # before Panel's import: they overlap
     import panel as pn
+
+    warm, shown = warm_up_then()
 
     pn.config.inline = False
     pn.extension(design="native", notifications=False)
 
-    from panel.io.resources import LOCAL_DIST
-
-    def page():
-        # every stylesheet of this document from this server (Panel defaults to its CDN
-        # for models made outside the page's first render, e.g. a tab opened later)
-        pn.state.curdoc._template_variables["dist_url"] = LOCAL_DIST
-        imported.wait(timeout=60)
-        wb = Workbench(files, atlases, threshold)
-        cb = pn.state.add_periodic_callback(wb.poll, period=150)
-
-        def closed(_ctx):
-            cb.stop()
-            wb.close()
-        pn.state.on_session_destroyed(closed)
-        return wb.panel
-
-    import threading
-    imported = threading.Event()
-    threading.Thread(target=warm_up, args=(files, imported), name="multiloop-web-warm-up", daemon=True).start()
+    page = _page_maker(files, atlases, threshold, warm, shown)
     server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
                       websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
                       verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)

@@ -15,8 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.kin.solve import plan_of, solve
-from multiloop.topo.assur import AssurGroup, decompose
 from multiloop.topo.model import JointKind, Mechanism
 
 __all__ = ["Scene", "Sweep", "scene_of", "sweep_driver", "PALETTE", "R_FRAMES", "P_FRAMES"]
@@ -76,6 +74,7 @@ class Scene:
 
 def _group_colours(m: Mechanism) -> dict[str, tuple[str, str]]:
     """Link → (colour, label) by the step of the Assur plan that solves it."""
+    from multiloop.topo.assur import AssurGroup, decompose    # here: this module loads without the solvers
     plan = decompose(m)
     out: dict[str, tuple[str, str]] = {}
     for i, step in enumerate(plan.steps):
@@ -121,6 +120,7 @@ def _nodes(st) -> np.ndarray:
 
 
 def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
+    from multiloop.kin.solve import plan_of, solve
     if cancel is not None:
         cancel()
     X = np.zeros((x.size, len(m.drivers)))
@@ -150,6 +150,7 @@ def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24, cancel
 
 def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
     from multiloop.kin.check.transmission import angle_specs, angle_values
+    from multiloop.topo.assur import decompose
 
     specs = angle_specs(decompose(m))
     names = tuple(f"{sp.quantity} {sp.joint}" for sp in specs)
