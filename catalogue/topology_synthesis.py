@@ -20,6 +20,7 @@ embeddings.
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -147,8 +148,12 @@ def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: i
     """(distance, curve, similarity) of the retrieved curves, nearest first.  A closed
     target reads each retrieved realisation with its best tracer points
     (:func:`.tracers.best_tracers`) instead of the stored ones."""
-    index = CurveIndex(atlas, links)
-    if not len(index):
+    try:
+        index = CurveIndex(atlas, links)
+        count = len(index)
+    except sqlite3.OperationalError:        # an atlas without the curve tables
+        count = 0
+    if not count:
         raise InputError(explain("atlas curves", expected=f"stored coupler curves of {links}-link mechanisms",
                                  got=f"none in {atlas.path!r}",
                                  hint="build them: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))

@@ -132,7 +132,7 @@ class Workbench:
         self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
         self.pick.param.watch(lambda e: self.open_name(e.new), "value")
         self.upload.param.watch(lambda e: self.open_upload(), "value")
-        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say, atlases)
         tabs = [("Mechanism", pn.Row(self.view.panel, self.check.panel)), ("Structure", self.structure),
                 ("Synthesis", self.synthesis.panel)]
         self.atlas = None
