@@ -121,16 +121,25 @@ def test_a_missing_or_empty_atlas_is_one_line_in_the_page(tmp_path, what):
     assert wb.mechanism.name and wb.message.object == '<div id="ml-message"></div>'
 
 
-def test_cancel_stops_the_page_waiting_and_discards_the_designs(tiny_atlas):
+def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atlas):
+    """The tiny atlas gives 2 starts: each polish has a quarter of the budget (half of it
+    screens); the run would take the whole budget."""
     wb = Workbench()
-    sv = _no_start(wb, tiny_atlas, budget=2.0)
+    budget = 20.0
+    sv = _no_start(wb, tiny_atlas, budget=budget)
     sv.run()
     job = sv.job
+    t0 = time.perf_counter()
+    while job.fraction <= 0 and time.perf_counter() - t0 < 30:     # the polish has begun
+        time.sleep(0.05)
     sv.cancel()
-    assert sv.job is None and sv.w["run"].disabled is False
+    t1 = time.perf_counter()
+    assert sv.job is None and sv.w["run"].disabled is False      # the page waits no more
     assert 'data-state="cancelled"' in sv.status.object
-    job.thread.join(timeout=60)
-    assert job.state == "cancelled"
+    job.thread.join(timeout=budget)
+    stopped = time.perf_counter() - t1
+    assert not job.thread.is_alive() and job.state == "cancelled"
+    assert stopped < 0.5 * budget, stopped                        # one polish's share, not the budget
     sv.poll()
     assert sv.results == [] and sv.table.object == ""
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import html
 import io
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,14 +86,13 @@ def run_candidates(job: Job, start, target: np.ndarray, n: int, options: dict) -
 
 def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
     """The synthesis without a start in the worker of ``job``: its designs, each with its
-    traced path, in ``job.partial``.  The library call reports no progress, so a cancel
-    takes effect when it returns (its designs are then discarded): the page stops waiting
-    at once (:meth:`SynthesisView.cancel`)."""
+    traced path, in ``job.partial``.  The library reports the share of the budget spent
+    before every polish (not inside one): a cancel ends the run at the next polish, and
+    the page stops waiting at once (:meth:`SynthesisView.cancel`)."""
     from multiloop.catalogue.topology_synthesis import synthesise
 
     job.partial = []
-    res = synthesise(path=target, **options)
-    job.poll()                      # cancelled meanwhile: the designs are discarded
+    res = synthesise(path=target, progress=lambda f: job.report(0.95 * f), **options)
     out = []
     for d in res.designs:
         P = traced(d.mechanism)
@@ -282,7 +280,7 @@ class SynthesisView:
         self.results = []
         if none:
             self.job = Job(lambda job: run_atlas(job, target, atlas), "synthesis")
-            self.job.clock = atlas["budget"]        # no progress reports: the bar follows the clock
+            self.job.detach = True          # cancel: stops at the next polish, the page at once
         else:
             self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
         self.w["run"].disabled, self.w["cancel"].disabled = True, False
@@ -298,27 +296,24 @@ class SynthesisView:
                     tol=float(w["ties"].value or 0.0), seed=int(options["seed"] or 0))
 
     def cancel(self) -> None:
-        """Stop the run.  A run without a start cannot be stopped inside the library call:
-        the page stops waiting at once, and its designs are discarded when it returns."""
+        """Stop the run.  A run without a start stops at its next polish (one share of the
+        budget at most); the page stops waiting for it at once, its designs discarded."""
         job = self.job
         if job is None:
             return
         job.cancel()
-        if getattr(job, "clock", None) is not None and job.running:
+        if getattr(job, "detach", False) and job.running:
             self.job = None
             self.w["run"].disabled, self.w["cancel"].disabled = False, True
-            self.w["progress"].value = 0
             self.status.object = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
-                                  "the atlas search ends within its budget, its designs discarded</p>")
+                                  "the atlas search stops at its next polish</p>")
 
     def poll(self) -> None:
         """Called by the session's periodic callback: progress, then the candidates."""
         job = self.job
         if job is None:
             return
-        clock = getattr(job, "clock", None)
-        fraction = job.fraction if clock is None or not job.running else min((time.perf_counter() - job.started) / clock, 0.99)
-        self.w["progress"].value = int(1000 * min(fraction, 1.0))
+        self.w["progress"].value = int(1000 * min(job.fraction, 1.0))
         done = list(getattr(job, "partial", []))
         if len(done) != len(self.results):
             self.results = done
@@ -326,7 +321,7 @@ class SynthesisView:
         if job.running:
             best = "" if not np.isfinite(job.best) else f", best objective {job.best:.3g}"
             self.status.object = (f'<p id="ml-synthesis-status" data-state="running">running '
-                                  f'{100 * fraction:.0f} %{best}</p>')
+                                  f'{100 * job.fraction:.0f} %{best}</p>')
             return
         self.job = None
         self.w["run"].disabled, self.w["cancel"].disabled = False, True
