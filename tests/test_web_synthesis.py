@@ -150,3 +150,78 @@ def test_a_bad_links_choice_is_one_line(tiny_atlas):
     sv.w["links"].value = []
     sv.run()
     assert sv.job is None and "--links: expected even numbers" in wb.message.object
+
+
+@pytest.fixture(scope="module")
+def served(tiny_atlas):
+    """``multiloop serve --atlas TINY`` on a free port (tests/test_web.py's way)."""
+    import subprocess
+
+    from tests.test_web import MULTILOOP, _free_port
+    port = _free_port()
+    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(tiny_atlas)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
+    yield f"http://127.0.0.1:{port}/"
+    proc.terminate()
+    proc.wait(timeout=20)
+
+
+def _on_synthesis_tab(page, locator):
+    """``locator`` once shown: the Synthesis tab clicked until it is (the server's switch
+    to the mechanism tab, after a page load or an open, may come after a click)."""
+    for _ in range(40):
+        if locator.is_visible():
+            return locator
+        page.get_by_text("Synthesis", exact=True).click()
+        page.wait_for_timeout(250)
+    raise AssertionError(f"{locator} never shown")
+
+
+@pytest.mark.browser
+def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_path, tmp_path_factory):
+    """In headless chromium: choose no start, upload a target CSV, run; the designs are
+    listed, one downloads as .pyslvs and opens; a missing atlas is one line."""
+    web = pytest.importorskip("tests.test_web")
+    if web.CHROMIUM is None:
+        pytest.skip("chromium not installed (install.sh installs it)")
+    from multiloop.kin.solve import solve
+    from multiloop.topo.pyslvs import read_pyslvs
+
+    csv = tmp_path / "ellipse.csv"
+    csv.write_text("x,y\n" + "\n".join(f"{x:.6f},{y:.6f}" for x, y in _ellipse()) + "\n")
+    with web.sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=web.CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        try:
+            page = web._page(browser, served, [])
+            _on_synthesis_tab(page, page.locator(".ml-start select")).select_option(NO_START)
+            field = page.locator(".ml-atlas input")
+            sync_api = web.sync_api
+            sync_api.expect(field).to_have_value(str(tiny_atlas))
+            page.locator("input[type=file][accept*='.csv']").set_input_files(str(csv))
+            sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=20000)
+            page.locator(".ml-budget input").fill("3")
+            page.locator(".ml-budget input").press("Enter")
+            _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
+            page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=90000)
+            assert page.locator("#ml-candidates tr[data-candidate]").count() >= 1
+            web._shot(page, "web_synthesis_atlas.png", tmp_path_factory)
+            with page.expect_download() as dl:
+                page.get_by_text("Download .pyslvs").click()
+            path = tmp_path / "design.pyslvs"
+            dl.value.save_as(path)
+            m = read_pyslvs(path)
+            assert m.n_links == 4 and solve(m, np.linspace(0.0, 1.0, 5)).ok.all()
+            page.get_by_role("button", name="Open in mechanism view").click()
+            web._wait_frames(page)
+            page.wait_for_timeout(1000)
+            _on_synthesis_tab(page, field).fill(str(tmp_path / "missing.sqlite"))
+            field.press("Enter")
+            _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
+            sync_api.expect(page.locator("#ml-message")).to_contain_text("--db: expected an atlas file",
+                                                                         timeout=20000)
+            web._pick(page, "crank_slider")                       # the page goes on
+            sync_api.expect(page.locator("#ml-message")).not_to_have_attribute("data-error", "1")
+        finally:
+            browser.close()

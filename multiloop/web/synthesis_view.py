@@ -182,7 +182,8 @@ class SynthesisView:
         self.table = pn.pane.HTML("")
         self.downloads = [pn.widgets.FileDownload(callback=lambda f=f: self._download(f), filename=f"candidate.{f}",
                                                   label=f"Download .{f}", width=150) for f in ("toml", "pyslvs")]
-        self.atlas_box = pn.Column(w["atlas"], w["links"], pn.Row(w["top"], w["ties"]), visible=False)
+        self.atlas_box = pn.Column(w["atlas"], pn.Row(pn.pane.HTML("links (--links):"), w["links"]),
+                                   pn.Row(w["top"], w["ties"]), visible=False)
         self.panel = pn.Row(
             pn.Column(w["start"], self.atlas_box, w["point"], w["csv"], pn.Row(w["method"], w["seed"], w["budget"]),
                       pn.Row(w["tol"], w["candidates"]), pn.Row(w["shape_only"], w["full_rotation"]),
