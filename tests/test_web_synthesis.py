@@ -11,25 +11,20 @@ import pytest
 pytest.importorskip("panel")
 
 from multiloop.catalogue.atlas import Atlas  # noqa: E402
-from multiloop.catalogue.curve_atlas import build_curves  # noqa: E402
-from multiloop.catalogue.inversions import build_mechanisms  # noqa: E402
-from multiloop.catalogue.synthesis import SynthesisOptions  # noqa: E402
+from multiloop.catalogue.synthesis import nauty_available  # noqa: E402
 from multiloop.kin.check import check  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
 from multiloop.web.app import Workbench  # noqa: E402
 from multiloop.web.synthesis_view import NO_START, AtlasDesign  # noqa: E402
+from tests.common import four_bar_curve_atlas  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def tiny_atlas(tmp_path_factory):
     """Four-bar curves only (as tests/test_curve_index.py's atlas): 6 realisations."""
-    db = tmp_path_factory.mktemp("web-atlas") / "atlas.sqlite"
-    with Atlas(db) as atlas:
-        opts = SynthesisOptions(4, 1, simple_joints=True)
-        atlas.build(opts, progress=False, loops=False)
-        build_mechanisms(atlas, opts)
-        build_curves(atlas, opts, 6)
-    return db
+    if not nauty_available():
+        pytest.skip("nauty's geng/genbg not installed")
+    return four_bar_curve_atlas(tmp_path_factory.mktemp("web-atlas") / "atlas.sqlite")
 
 
 def _ellipse(n: int = 25) -> np.ndarray:
