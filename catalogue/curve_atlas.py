@@ -29,6 +29,7 @@ import numpy as np
 
 from .atlas import Atlas, each_with_progress
 from .curves import CURVE_POINTS, DESCRIPTOR_HARMONICS, descriptor, normalise, reversed_descriptor
+from .distributed import map_calls
 from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
 from .synthesis import SynthesisOptions
@@ -125,30 +126,15 @@ def _timed(mid: int, inv: InversionRecord, k: int, per_link: int) -> tuple[int, 
     return mid, rows, time.perf_counter() - t
 
 
-def _map_mechanisms(todo, k: int, per_link: int, workers: int):
-    """``(mechanism id, rows, seconds)`` as each finishes: in this process, or in a pool
-    of ``workers`` local processes that die with their parent."""
-    if workers <= 1 or len(todo) <= 1:
-        for mid, inv in todo:
-            yield _timed(mid, inv, k, per_link)
-        return
-    import os
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    from .distributed import die_with_parent
-
-    with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
-        futures = [pool.submit(_timed, mid, inv, k, per_link) for mid, inv in todo]
-        for fut in as_completed(futures):
-            yield fut.result()
-
-
 def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2, progress: bool = False,
-                 max_mechanisms: int | None = None, workers: int = 1) -> CurveBuild:
+                 max_mechanisms: int | None = None, workers: int = 1, scheduler=None) -> CurveBuild:
     """Draw ``k`` certified realisations of every closed-form mechanism of ``opts``
     (mechanisms already built with :func:`.inversions.build_mechanisms`) and store
     ``per_link`` coupler curves per moving link other than the driven one; resumes.
-    ``workers`` local processes draw them (the parent writes; same rows for any count)."""
+    ``workers`` local processes, or one Dask task per mechanism on ``scheduler`` (an
+    address or a ``distributed.Client``), draw them (:func:`.distributed.map_calls`);
+    this process writes each mechanism in one transaction, so the rows are the same for
+    any count or cluster."""
     _ensure(atlas)
     done = {r[0] for r in atlas.con.execute("SELECT mechanism FROM curve_mechanisms")}
     mechs = _mechanism_ids(atlas, opts)
@@ -157,7 +143,7 @@ def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2
     if max_mechanisms is not None:
         todo = todo[:max_mechanisms]
     t0 = time.perf_counter()
-    results = _map_mechanisms(todo, k, per_link, workers)
+    results = map_calls(_timed, [(mid, inv, k, per_link) for mid, inv in todo], workers, scheduler)
     each_with_progress(todo, f"curves n={opts.n}", progress,
                        lambda _: _write_mechanism(atlas, k, *next(results)))   # in completion order
     ids = [i for i, _ in closed]

@@ -3,7 +3,8 @@
 * ``workers=1``: in this process, task after task;
 * ``workers=k`` (default: all local cores): a :class:`concurrent.futures.ProcessPoolExecutor`;
 * ``scheduler="tcp://host:8786"`` (or a :class:`distributed.Client`): one Dask task per
-  synthesis task.  Start a cluster with::
+  synthesis task (:func:`map_calls` does the same for any module-level function: the
+  curve atlas runs one task per mechanism).  Start a cluster with::
 
       dask scheduler                       # prints tcp://HOST:8786
       dask worker tcp://HOST:8786 --nthreads 1 --nworkers 4    # on every machine
@@ -32,7 +33,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
 
-__all__ = ["map_tasks", "default_workers", "type_synthesis", "die_with_parent", "connect_scheduler", "require_dask",
+__all__ = ["map_calls", "map_tasks", "default_workers", "type_synthesis", "die_with_parent", "connect_scheduler", "require_dask",
            "SCHEDULER_TIMEOUT"]
 
 #: seconds to wait for a Dask scheduler before giving up
@@ -77,6 +78,32 @@ def _run(task: Task, opts: SynthesisOptions, loops: bool) -> tuple[Task, list[Ch
     return task, run_task(task, opts, loops)
 
 
+def map_calls(fn, calls: Sequence[tuple], workers: int = 1, scheduler=None) -> Iterator:
+    """``fn(*args)`` for every ``args`` of ``calls``, yielded as each finishes: in this
+    process one after the other (``workers`` 1), in a pool of ``workers`` local processes
+    that die with their parent, or as one Dask task each on ``scheduler`` (an address or
+    a :class:`distributed.Client`; it overrides ``workers``).  ``fn`` must be importable
+    by the workers (a module-level function)."""
+    calls = list(calls)
+    if scheduler is not None:       # (connects even when nothing is pending: a bad address is reported)
+        yield from _dask(fn, calls, scheduler)
+        return
+    if workers <= 1 or len(calls) <= 1:
+        for c in calls:
+            yield fn(*c)
+        return
+    with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent,
+                             initargs=(os.getpid(),)) as pool:
+        futures = [pool.submit(fn, *c) for c in calls]
+        try:
+            for fut in as_completed(futures):
+                yield fut.result()
+        except BaseException:
+            for fut in futures:
+                fut.cancel()
+            raise
+
+
 def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
               workers: int | None = None, scheduler=None) -> Iterator[tuple[Task, list[ChainRecord]]]:
     """Run ``tasks`` and yield ``(task, records)`` as each finishes.
@@ -93,28 +120,11 @@ def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
         Address of a Dask scheduler (or a client); overrides ``workers``.
     """
     tasks = list(tasks)
-    if scheduler is not None:       # (connects even when nothing is pending: a bad address is reported)
-        yield from _dask(tasks, opts, loops, scheduler)
-        return
-    if not tasks:
-        return
     workers = default_workers() if workers is None else max(1, int(workers))
-    if workers == 1 or len(tasks) == 1:
-        for t in tasks:
-            yield _run(t, opts, loops)
-        return
-    # largest tasks first (fewest joints are the big genbg runs at n >= 12)
-    order = sorted(tasks, key=lambda t: (abs(t.m - (opts.p * 3) // 4), t.res))
-    with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent,
-                             initargs=(os.getpid(),)) as pool:
-        futures = [pool.submit(_run, t, opts, loops) for t in order]
-        try:
-            for fut in as_completed(futures):
-                yield fut.result()
-        except BaseException:
-            for fut in futures:
-                fut.cancel()
-            raise
+    if scheduler is None and workers > 1:
+        # largest tasks first (fewest joints are the big genbg runs at n >= 12)
+        tasks = sorted(tasks, key=lambda t: (abs(t.m - (opts.p * 3) // 4), t.res))
+    yield from map_calls(_run, [(t, opts, loops) for t in tasks], workers, scheduler)
 
 
 def require_dask() -> None:
@@ -128,14 +138,14 @@ def require_dask() -> None:
                                       "or drop --scheduler to use local processes"))
 
 
-def _dask(tasks, opts, loops, scheduler):
+def _dask(fn, calls, scheduler):
     require_dask()
     from distributed import Client, as_completed as dask_completed
 
     own = not isinstance(scheduler, Client)
     client = connect_scheduler(scheduler) if own else scheduler
     try:
-        futures = [client.submit(_run, t, opts, loops, pure=False) for t in tasks]
+        futures = [client.submit(fn, *c, pure=False) for c in calls]
         for fut in dask_completed(futures):
             yield fut.result()
     finally:

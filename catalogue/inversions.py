@@ -211,9 +211,10 @@ def explicit_inversions(record: ChainRecord) -> dict[bytes, tuple[int, int, int]
     the incidence graph with the frame, the driver joint and the driven link coloured
     (nauty, McKay & Piperno 2014); the value is the first triple met.
 
-    ``topo.isomorphism.canonical_form(…, "mechanism")`` colours the driver joint but
-    not the driven link, so it cannot tell apart two drivers on one multiple joint (a
-    pin on links 3, 4, 5 of a frame 3 driving 4 or 5); this route colours both.
+    ``topo.isomorphism.canonical_form(…, "mechanism")`` is the independent route (its
+    own coloured graph, with the pair of links the driver turns marked: a pin on links
+    3, 4, 5 of a frame 3 driving 4 or 5 are different mechanisms); the tests compare
+    the counts of both.
     """
     masks = _masks(record)
     seen: dict[bytes, tuple[int, int, int]] = {}

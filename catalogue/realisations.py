@@ -10,10 +10,12 @@ Positions given this way assemble by construction at the reference.
 A sample is **kept** when the driver turns fully with every monitored angle (the
 transmission angle of each RRR dyad, the triad angles; Artobolevsky's and Hain's
 convention) at least ``min_transmission`` from 0° and 180°.  The sample is screened on a
-grid of driver values, a batch of samples at once (:func:`kin.design.solve_designs`:
-one pass over the mechanism's compiled plan for all of them), then **certified** by :func:`kin.check.check`, whose
-continuation and event search find limits and angle extremes between grid points
-(no claim rests on the grid alone).
+grid of driver values, a batch of samples at once (16, then 32, then 64:
+:func:`kin.design.solve_designs`, one pass over the mechanism's compiled plan for all of
+them); the samples it keeps are then **certified** in order by the design check's
+motion and angle extremes (:func:`kin.check.driver_angles`), whose continuation and
+event search find limits and angle extremes between grid points (no claim rests on the
+grid alone).
 
 Coupler curves: a few random points on every moving link other than the driven
 one (whose points trace circles), traced over one turn of the driver.
@@ -28,7 +30,7 @@ import numpy as np
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import LinkageError
 from multiloop.topo.model import Mechanism
-from multiloop.kin.check import check
+from multiloop.kin.check import driver_angles
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import design_names, solve_designs
 from multiloop.kin.solve import solve
@@ -103,14 +105,14 @@ def _screen(m: Mechanism, samples: list, specs, min_angle: float) -> np.ndarray:
 
 
 def _certified(m: Mechanism, min_angle: float) -> float | None:
-    """The check's smallest folded monitored angle when the driver turns fully and no
-    angle is flagged at ``min_angle``; None otherwise."""
+    """The smallest folded monitored angle when the driver turns fully and no angle is
+    flagged at ``min_angle`` (the check's motion and exact angle extremes,
+    :func:`kin.check.driver_angles`); None otherwise."""
     try:
-        rep = check(m, min_transmission=min_angle)
+        dc = driver_angles(m)
     except (LinkageError, ValueError, FloatingPointError):
         return None
-    dc = rep.drivers[0]
-    if not dc.full_rotation or any(a.flagged(min_angle) for a in dc.angles):
+    if not dc.full_rotation or dc.flagged(min_angle):
         return None
     lows = [min(a.extreme.min, 180.0 - a.extreme.max) if a.quantity != "pressure" else 90.0 - a.extreme.max
             for a in dc.angles if a.extreme is not None]
@@ -118,17 +120,18 @@ def _certified(m: Mechanism, min_angle: float) -> float | None:
 
 
 def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission: float = 20.0,
-            batch: int = 64) -> Realisation | None:
+            batch: int = 64, first: int = 16) -> Realisation | None:
     """The first sample (seeds ``seed``, ``seed + 1``, …, at most ``tries``) that the
-    screen keeps and :func:`kin.check.check` certifies; None when none does.  The samples
-    are drawn in order and screened ``batch`` at a time (the result is the one the
-    samples give one by one)."""
+    screen keeps and :func:`kin.check.driver_angles` certifies; None when none does.  The samples
+    are drawn in order and screened in batches of ``first``, twice as many, … up to
+    ``batch`` (the result is the one the samples give one by one)."""
     base = inv.as_mechanism()
     specs = angle_specs(decompose(base))
     rng = np.random.default_rng(seed)
-    done = 0
+    done, size = 0, min(first, batch)
     while done < tries:
-        drawn = [sample_positions(inv, rng) for _ in range(min(batch, tries - done))]
+        drawn = [sample_positions(inv, rng) for _ in range(min(size, tries - done))]
+        size = min(2 * size, batch)
         built = []
         for k, at in enumerate(drawn):
             try:

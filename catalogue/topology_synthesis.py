@@ -52,6 +52,11 @@ REFINE_POINTS = 120
 SCREEN_SHARE = 0.5
 #: ... and kept for the final checks (the finalists' second polish has the rest)
 ASSESS_SHARE = 0.15
+#: the nearest start's least share of the budget, however long the retrieval took
+MIN_SHARE = 0.1
+#: a screened design this close (relative to the target's size) ends the screen when no
+#: start has fewer links
+EXACT = 1e-9
 #: realisations read with their best tracer points (closed targets), and points per link
 REFIT_REALISATIONS = 60
 REFIT_PER_LINK = 2
@@ -377,7 +382,8 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
 def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, t0: float,
                        budget: float, tol: float, finalists: int, tick=None) -> list[tuple[SynthesisResult, float, float]]:
     """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
-    points for an equal share of what is left of :data:`SCREEN_SHARE` of the budget; the best ``finalists`` (in
+    points for an equal share of what is left of :data:`SCREEN_SHARE` of the budget (the
+    first at least :data:`MIN_SHARE` of it); the best ``finalists`` (in
     :func:`_order`) polished again on :data:`REFINE_POINTS`, sharing the time left but
     :data:`ASSESS_SHARE` of the budget (kept for the checks).  Returns
     ``(result, retrieval distance, seconds)``, best first.  ``tick()`` (progress) is
@@ -385,16 +391,21 @@ def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: st
     key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
     tick = tick or (lambda: None)
     screen_end = t0 + SCREEN_SHARE * budget
+    fewest = min((m.n_links for _, m in starts), default=0)
     screened = []
     for k, (dist, m) in enumerate(starts):
         t = time.perf_counter()
         each = (screen_end - t) / (len(starts) - k)       # (what one start overran, the next ones lose)
-        if each < 0.05:
+        if k == 0:
+            each = max(each, MIN_SHARE * budget)           # the nearest start is always polished
+        elif each < 0.05:
             break
         tick()
         res = _local(m, target, closed, point, each, seed, tick=tick)
         if res is not None:
             screened.append((res, dist, time.perf_counter() - t))
+            if res.error_max <= EXACT and m.n_links == fewest:
+                break                                      # exact with the fewest links: nothing to beat
     ranked = _order(screened, tol, key)
     best, rest = ranked[:finalists], ranked[finalists:]
     left = t0 + (1.0 - ASSESS_SHARE) * budget - time.perf_counter()

@@ -153,6 +153,10 @@ def test_crank_rocker_transmission_extremes_at_ground_collinear(a, b, c, t0):
 def test_rocker_dead_centres_where_crank_and_coupler_collinear(a, b, c, t0):
     d = 2.0
     assume(a + max(b, c, d) < sum(sorted((b, c, d))[:2]) + 0.05 * d)
+    # not at Grashof's equality s + l = p + q (a change point, e.g. 0.5, 1.5, 1, 2): there
+    # all four links fold onto one line once a turn, a branch point, where the check
+    # reports the branch point and not the rocker's second dead centre
+    assume(_margin((a, b, c, d)) > 0.05)
     m = four_bar(a, b, c, d, t0)
     assume(m is not None)
     dc = check(m).drivers[0]
@@ -348,3 +352,27 @@ def test_two_drivers_each_moves_only_its_own_loop():
         assert dead[f"rocker{3 - k}"] == () and dead[f"crank{3 - k}"] == ()
         assert dead[f"rocker{k}"] == pytest.approx(dict(one.dead_centres)["rocker"], abs=1e-9)
         assert dc.output == f"rocker{k}"
+
+
+# ---------------------------------------------------------------- driver_angles (the narrow route)
+@pytest.mark.parametrize("name", ["four_bar", "knitting_needle_drive", "stephenson_3_triad", "crank_slider"])
+def test_driver_angles_equal_the_check_s(name):
+    from multiloop.kin.check import driver_angles
+    m = load(CAT / f"{name}.toml")
+    dc = check(m).drivers[0]
+    da = driver_angles(m)
+    assert (da.joint, da.rotary, da.full_rotation, da.limits) == (dc.joint, dc.rotary, dc.full_rotation, dc.limits)
+    assert da.angles == dc.angles             # the same exact extremes, bit for bit
+    assert da.flagged(40.0) == tuple(a for a in dc.angles if a.flagged(40.0))
+
+
+def test_driver_angles_of_a_limited_crank_and_bad_index():
+    from multiloop.kin.check import driver_angles
+    from multiloop.topo.errors import InputError
+    m = four_bar(1.0, 1.0, 2.0, 2.5, math.radians(60.0))      # triple rocker: two limits
+    da, dc = driver_angles(m), check(m).drivers[0]
+    assert not da.full_rotation and len(da.limits) == 2 and da.limits == dc.limits
+    assert da.angles == dc.angles
+    assert da.flagged(20.0)                   # stretched to 180° at its limits
+    with pytest.raises(InputError, match="driver index"):
+        driver_angles(m, 1)

@@ -93,7 +93,9 @@ def curve_atlas(tmp_path_factory):
 
 
 @needs_nauty
-def test_realisations_are_certified():
+def test_realisations_are_certified_and_do_not_depend_on_the_batches():
+    """A kept realisation passes the whole check; the samples screened one by one, 64 at
+    once, or 16, 32, 64: the same kept sample."""
     opts = SynthesisOptions(6, 1, simple_joints=True)
     with Atlas(":memory:") as atlas:
         atlas.build(opts, progress=False, loops=False)
@@ -105,6 +107,11 @@ def test_realisations_are_certified():
 
         dc = check(r.mechanism, min_transmission=20.0).drivers[0]
         assert dc.full_rotation and not any(a.flagged(20.0) for a in dc.angles)
+        for inv in (inv, next(iter_mechanisms(atlas, opts, "class = 2"))):
+            got = {(r.seed, r.tries, r.min_angle, tuple(j.at for j in r.mechanism.joints))
+                   for first, batch in ((1, 1), (64, 64), (16, 64), (3, 8))
+                   for r in [realise(inv, 11, tries=120, first=first, batch=batch)]}
+            assert len(got) == 1 and next(iter(got))[1] > 1     # one answer, not the first sample
 
 
 @needs_nauty
@@ -130,6 +137,39 @@ def test_curves_same_in_two_processes(tmp_path):
             got.append(atlas.con.execute("SELECT r.mechanism, c.link, c.x, c.y, c.descriptor FROM curves c JOIN "
                                          "realisations r ON r.id = c.realisation ORDER BY 1, 2, 3").fetchall())
     assert got[0] == got[1] and len(got[0]) > 0
+
+
+def _curve_rows(db):
+    with Atlas(db) as atlas:
+        return atlas.con.execute(
+            "SELECT r.mechanism, r.seed, r.tries, r.min_angle, r.joints, c.link, c.x, c.y, c.descriptor, c.shape "
+            "FROM curves c JOIN realisations r ON r.id = c.realisation ORDER BY 1, 2, 6, 7, 8").fetchall()
+
+
+@needs_nauty
+def test_curves_same_on_a_dask_cluster_and_resumed(tmp_path):
+    """One Dask task per mechanism (a local cluster), the parent writing: the rows of the
+    local run, also when a partial build is resumed through the CLI's --scheduler."""
+    distributed = pytest.importorskip("distributed")
+    from multiloop.cli import main
+
+    opts = SynthesisOptions(6, 1, simple_joints=True)
+    for name in ("local", "dask"):
+        with Atlas(tmp_path / f"{name}.sqlite") as atlas:
+            atlas.build(opts, progress=False, loops=False)
+            build_mechanisms(atlas, opts)
+            if name == "local":
+                build_curves(atlas, opts, 1, workers=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        with Atlas(tmp_path / "dask.sqlite") as atlas:
+            part = build_curves(atlas, opts, 1, max_mechanisms=4, scheduler=client)
+            assert part.mechanisms_run == 4
+        assert main(["atlas", "--links", "6", "--dof", "1", "--simple-joints", "--db", str(tmp_path / "dask.sqlite"),
+                     "--no-loops", "--no-progress", "--mechanisms", "--curves", "1",
+                     "--scheduler", cluster.scheduler_address]) == 0
+    local = _curve_rows(tmp_path / "local.sqlite")
+    assert _curve_rows(tmp_path / "dask.sqlite") == local and len({r[0] for r in local}) == 9
 
 
 @needs_nauty
@@ -164,7 +204,7 @@ def test_synthesis_without_start_writes_checked_designs(curve_atlas, tmp_path, c
     np.savetxt(csv, target, delimiter=",")
     out = tmp_path / "o.toml"
     assert main(["synthesise", "--path", str(csv), "--out", str(out), "--db", str(curve_atlas), "--links", "4,6",
-                 "--budget", "4", "--top", "2", "--json"]) == 0
+                 "--budget", "10", "--top", "2", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc and {"error_max", "error_rms", "links", "structure", "file"} <= set(doc[0])
     assert doc[0]["error_max"] < 1e-3 and doc[0]["links"] == 4

@@ -19,6 +19,7 @@ from multiloop.catalogue.inversions import (
 )
 from multiloop.catalogue.synthesis import SynthesisOptions, mechanism_choices, nauty_available
 from multiloop.cli import main
+from multiloop.topo.isomorphism import canonical_form
 
 pytestmark = pytest.mark.skipif(not nauty_available(),
                                 reason="nauty's geng/genbg not installed (apt-get install nauty)")
@@ -45,6 +46,14 @@ def _explicit_classes(atlas, opts) -> tuple[int, Counter]:
     return total, classes
 
 
+def _canonical_form_route(atlas, opts) -> int:
+    """Fourth route: distinct ``topo.isomorphism.canonical_form(…, "mechanism")`` over
+    every (frame, driver joint, driven link) of every chain."""
+    return sum(len({canonical_form(inversion(rec.joints, f, a, x), "mechanism")
+                    for a, j in enumerate(rec.joints) for f in j for x in j if x != f})
+               for rec in atlas.chains(opts))
+
+
 def test_four_bar_inversion():
     m = inversion([(0, 1), (1, 2), (2, 3), (3, 0)], 0, 0, 1)
     assert classify(m) == ("I(0,1) → II1(2,3)", 2, True, ("RRR",))
@@ -57,7 +66,8 @@ def test_four_bar_inversion():
     pytest.param(8, False, None, marks=pytest.mark.benchmark),
     pytest.param(10, True, 1834, marks=pytest.mark.benchmark)])
 def test_counts_by_three_routes(n, sj, frames):
-    """Orbit representatives vs Burnside vs explicit certificates (with the class counts)."""
+    """Orbit representatives vs Burnside vs explicit certificates (with the class counts)
+    vs the mechanism-mode canonical form of topo/isomorphism."""
     opts = SynthesisOptions(n, 1, simple_joints=sj)
     atlas, counts = _built(opts)
     with atlas:
@@ -67,7 +77,7 @@ def test_counts_by_three_routes(n, sj, frames):
         assert counts.frames == sum(b[0] for b in burn)
         assert counts.drivers == sum(b[1] for b in burn)
         total, classes = _explicit_classes(atlas, opts)
-        assert counts.drivers == total
+        assert counts.drivers == total == _canonical_form_route(atlas, opts)
         assert dict(counts.by_class) == dict(classes)
         stored = list(iter_mechanisms(atlas, opts))
         assert len(stored) == counts.drivers

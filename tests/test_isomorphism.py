@@ -88,6 +88,25 @@ def test_mechanism_mode_sees_frame_and_driver():
     assert are_isomorphic_vf2(m1, m2, "mechanism") and not are_isomorphic_vf2(m1, m3, "mechanism")
 
 
+def test_mechanism_mode_sees_the_driven_link_of_a_multiple_joint():
+    """Frame 3, driver on the triple pin (3, 4, 5): driving 4 leaves two RRR dyads,
+    driving 5 one triad (Assur 1914); the forms must differ, as VF2 says."""
+    from multiloop.catalogue.inversions import classify, inversion
+    joints = [(0, 1), (0, 2), (1, 3), (0, 4), (2, 5), (3, 4, 5)]
+    four, five = inversion(joints, 3, 5, 4), inversion(joints, 3, 5, 5)
+    assert classify(four)[3] == ("RRR", "RRR") and classify(five)[3] == ("triad",)
+    assert canonical_form(four, "chain") == canonical_form(five, "chain")
+    assert canonical_form(four, "mechanism") != canonical_form(five, "mechanism")
+    assert not are_isomorphic_vf2(four, five, "mechanism")
+    # links renamed by s and joints reordered (the pin moves to position 0): still the triad
+    s = [4, 2, 0, 5, 1, 3]
+    moved = [tuple(s[x] for x in joints[a]) for a in (5, 0, 1, 2, 3, 4)]
+    back = inversion(moved, s[3], 0, s[5])
+    assert classify(back)[3] == ("triad",)
+    assert canonical_form(back, "mechanism") == canonical_form(five, "mechanism")
+    assert are_isomorphic_vf2(back, five, "mechanism")
+
+
 def test_slider_kind_is_a_colour():
     r = MechanismBuilder()
     for name, kind, links in [("O", "R", ("f", "c")), ("A", "R", ("c", "r")), ("B", "R", ("r", "p")), ("S", "P", ("f", "p"))]:

@@ -3,8 +3,9 @@
 The exact test works on the **coloured link–joint incidence graph**: link vertices
 and joint vertices are different colours; a joint's kind (R/P) is a colour.  In
 ``mode="mechanism"`` the frame link, the driven joints and the guide side of every
-P joint are colours too, so two mechanisms are equal only if they are the same
-inversion with the same inputs.
+P joint are colours too, and so is the pair of links each driver turns (a driver on a
+multiple joint turns one pair of its links), so two mechanisms are equal only if they
+are the same inversion with the same inputs (up to the sign of an input).
 
 * :func:`canonical_form` — nauty's canonical labelling (pynauty) of the coloured
   graph, written out as a string: the colour-class sizes, then the upper triangle of
@@ -61,6 +62,12 @@ def _coloured(m: Mechanism, mode: str):
     if mech:  # a marker vertex on the P joint – guide link incidence
         markers = [("G", j.name) for j in m.joints if j.kind is JointKind.P]
     classes.append(markers)
+    # a marker per driver joined to its joint and to the two links it turns relative to each
+    # other (on a multiple joint the joint alone does not say which pair; which of the two is
+    # the reference is only the sign of the input)
+    drivers = list(enumerate(m.drivers)) if mech else []
+    if mech:                                   # (chain mode keeps its seven classes)
+        classes.append([("D", k) for k, _ in drivers])
     order = [v for cls in classes for v in cls]
     index = {v: i for i, v in enumerate(order)}
     adj: dict[int, list[int]] = {i: [] for i in range(len(order))}
@@ -74,6 +81,8 @@ def _coloured(m: Mechanism, mode: str):
                 adj[gv].append(lv)
             else:
                 adj[jv].append(lv)
+    for k, d in drivers:
+        adj[index[("D", k)]] += [index[("J", d.joint)]] + [index[("L", x)] for x in d.links]
     return order, classes, adj
 
 

@@ -23,13 +23,13 @@ from .events import extremes, roots
 from .grashof import four_bar_loops
 from .instant_centres import instant_centres
 from .motion import driver_motion
-from .report import AngleResult, CheckReport, DriverCheck
+from .report import AngleResult, CheckReport, DriverAngles, DriverCheck
 from .transmission import angle_specs, angle_values, guide_direction
 from .sweep import mechanism_size
 from .verdict import verdict
 from .workspace import workspace as workspace_of
 
-__all__ = ["check", "watched", "signed_dets"]
+__all__ = ["check", "driver_angles", "watched", "signed_dets"]
 
 
 def watched(m: Mechanism) -> tuple[tuple[str, str, str | None], ...]:
@@ -113,12 +113,26 @@ def _ratio(state, out) -> np.ndarray:
     return _velocity(state, [out])[:, 0]
 
 
+def _motion(m, ap, plan, k, cancel=None):
+    """The groups with a reach limit, their signed determinants ``D`` and the motion of
+    driver ``k`` guarded by them (:func:`~kin.check.motion.driver_motion`)."""
+    groups, D = signed_dets(ap)
+    return groups, D, driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None, cancel)
+
+
+def _angles(mo, specs) -> tuple[AngleResult, ...]:
+    """Exact extremes of every monitored angle over the motion ``mo``, read on both sides
+    of the certified walk's crossings (:func:`~kin.check.events.extremes`)."""
+    crossings = [x for x, _ in mo.events.crossings] if mo.events is not None else []
+    ext = extremes(mo, lambda s: angle_values(s, specs), events=crossings)
+    return tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
+
+
 def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = dj.kind is JointKind.R
-    groups, D = signed_dets(ap)
-    mo = driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None, cancel)
+    groups, D, mo = _motion(m, ap, plan, k, cancel)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     ev = mo.events
     limit_groups = []
@@ -143,8 +157,7 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
     else:
         bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
     dead = found[len(groups):] or [[] for _ in ww]
-    ext = extremes(mo, lambda s: angle_values(s, specs), events=crossings)
-    angles = tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
+    angles = _angles(mo, specs)
     out = _output(m, w, output, driver_link)
     if output is None and out is not None:
         # the default output must move with this driver: the last watched link that does
@@ -223,6 +236,36 @@ def _reachable(mo, x) -> bool:
         x = float(np.mod(x, 2 * np.pi))
         return x <= hi or x - 2 * np.pi >= lo
     return lo <= x <= hi
+
+
+def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
+    """The range of motion of driver ``k`` and the exact extremes of every monitored
+    angle over it: the same motion and the same values as :func:`check`'s, without the
+    branch points, dead centres, velocity ratio, instant centres and Grashof classes.
+
+    The motion is the certified walk's (its limits and crossings found by continuation,
+    not read off a grid); an extreme is refined from the grid's bracket by a zoom search
+    to 1e-10 rad, and read beside each crossing (:func:`~kin.check.events.extremes`).
+    Transmission angles as Alt (1932), triad angles as Hunt (1983).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        With geometry, a frame and drivers (the others are held at the reference).
+    k : int
+        Index of the driver in ``mechanism.drivers``.
+
+    Returns
+    -------
+    DriverAngles
+    """
+    m = mechanism
+    if not 0 <= k < len(m.drivers):
+        raise InputError(explain("driver index", expected=f"0…{len(m.drivers) - 1}" if m.drivers
+                                 else "a mechanism with a driver", got=repr(k)))
+    ap = decompose(m)
+    _, _, mo = _motion(m, ap, compile_plan(m, ap), k)
+    return DriverAngles(m.drivers[k].joint, mo.rotary, mo.full_rotation, mo.limits, _angles(mo, angle_specs(ap)))
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,

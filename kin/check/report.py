@@ -8,7 +8,7 @@ import numpy as np
 from ..result import json_ready
 from .events import Extreme
 
-__all__ = ["AngleResult", "DriverCheck", "GroupCircuit", "CheckReport"]
+__all__ = ["AngleResult", "DriverAngles", "DriverCheck", "GroupCircuit", "CheckReport"]
 
 
 def _deg(x: float, rotary: bool) -> float:
@@ -37,6 +37,23 @@ class AngleResult:
         if self.quantity == "triad":
             return e.min < threshold
         return e.min < threshold or e.max > 180.0 - threshold
+
+
+@dataclass(frozen=True)
+class DriverAngles:
+    """Range of motion of one driver and the exact extremes of every monitored angle over
+    it: the part of a :class:`DriverCheck` that a screen of many designs asks for
+    (:func:`multiloop.kin.check.driver_angles`)."""
+
+    joint: str
+    rotary: bool
+    full_rotation: bool
+    limits: tuple[float, ...]                       # signed, forward then backward
+    angles: tuple[AngleResult, ...]
+
+    def flagged(self, threshold: float) -> tuple[AngleResult, ...]:
+        """The angles that come closer than ``threshold`` (degrees) to a toggle."""
+        return tuple(a for a in self.angles if a.flagged(threshold))
 
 
 @dataclass(frozen=True)

@@ -122,7 +122,7 @@ def run(args) -> int:
                 from multiloop.catalogue.curve_atlas import build_curves
                 from multiloop.catalogue.distributed import default_workers
                 curves = build_curves(atlas, opts, args.curves, progress=not args.no_progress,
-                                      workers=args.workers or default_workers())
+                                      workers=args.workers or default_workers(), scheduler=args.scheduler)
                 print(curves.to_text(), file=sys.stderr)
         doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
         print(dumps_json(doc) if args.json else listing_text(doc, opts, args.query, args.limit))
