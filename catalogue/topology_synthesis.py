@@ -20,6 +20,7 @@ embeddings.
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -152,8 +153,12 @@ def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: i
     """(distance, curve, similarity) of the retrieved curves, nearest first.  A closed
     target reads each retrieved realisation with its best tracer points
     (:func:`.tracers.best_tracers`) instead of the stored ones."""
-    index = CurveIndex(atlas, links)
-    if not len(index):
+    try:
+        index = CurveIndex(atlas, links)
+        count = len(index)
+    except sqlite3.OperationalError:        # an atlas without the curve tables
+        count = 0
+    if not count:
         raise InputError(explain("atlas curves", expected=f"stored coupler curves of {links}-link mechanisms",
                                  got=f"none in {atlas.path!r}",
                                  hint="build them: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
@@ -233,12 +238,14 @@ def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.nd
 
 
 def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float,
-           seed: int, points: int = POLISH_POINTS) -> SynthesisResult | None:
+           seed: int, points: int = POLISH_POINTS, tick=None) -> SynthesisResult | None:
     """The dimensional synthesiser's local polish of ``start`` (``method="local"``: no
-    global search) on at most ``points`` target points, for ``budget`` s."""
+    global search) on at most ``points`` target points, for ``budget`` s; ``tick()`` is
+    called at its progress reports."""
     try:
         res = dimensional_synthesise(start, path=_subset(target, points), point=point, budget=budget,
-                                     seed=seed, tol=1e-12, full_rotation=closed, method="local")
+                                     seed=seed, tol=1e-12, full_rotation=closed, method="local",
+                                     progress=None if tick is None else (lambda f, b: tick()))
     except LinkageError:
         return None
     return res if np.isfinite(res.error_max) and np.isfinite(res.error_rms) else None
@@ -306,7 +313,8 @@ def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[floa
 
 def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "atlas.sqlite", top: int = 3,
                budget: float = 60.0, point: str = "P", tol: float = 1e-4, per_topology: int = 2,
-               topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0) -> TopologySynthesis:
+               topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
+               progress=None) -> TopologySynthesis:
     """Path synthesis that chooses the topology from the atlas (module docstring).
 
     Parameters
@@ -333,6 +341,9 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         Polished curves per mechanism, mechanisms per link count, curves retrieved.
     finalists : int
         Screened designs polished again (at least ``top``).
+    progress : callable(fraction), optional
+        Called with the share of the budget spent, before every polish and during it;
+        an exception it raises (a cancel) ends the run.
 
     Returns
     -------
@@ -354,9 +365,12 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     with Atlas(atlas, readonly=True) as a:
         chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), per_topology, topologies)
         starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
-    polished = _screen_and_refine(starts, target, closed, point, seed, t0, budget, tol, max(top, finalists))
+    tick = None if progress is None else (lambda: progress(min((time.perf_counter() - t0) / budget, 1.0)))
+    polished = _screen_and_refine(starts, target, closed, point, seed, t0, budget, tol, max(top, finalists), tick)
     designs = []
     for res, dist, seconds in polished:
+        if tick is not None:
+            tick()
         d = _design(res, closed, point, dist, seconds, target)
         if d is not None:
             designs.append(d)
@@ -366,14 +380,16 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
 
 
 def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, t0: float,
-                       budget: float, tol: float, finalists: int) -> list[tuple[SynthesisResult, float, float]]:
+                       budget: float, tol: float, finalists: int, tick=None) -> list[tuple[SynthesisResult, float, float]]:
     """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
     points for an equal share of what is left of :data:`SCREEN_SHARE` of the budget (the
     first at least :data:`MIN_SHARE` of it); the best ``finalists`` (in
     :func:`_order`) polished again on :data:`REFINE_POINTS`, sharing the time left but
     :data:`ASSESS_SHARE` of the budget (kept for the checks).  Returns
-    ``(result, retrieval distance, seconds)``, best first."""
+    ``(result, retrieval distance, seconds)``, best first.  ``tick()`` (progress) is
+    called before every polish and at the polish's own reports."""
     key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
+    tick = tick or (lambda: None)
     screen_end = t0 + SCREEN_SHARE * budget
     fewest = min((m.n_links for _, m in starts), default=0)
     screened = []
@@ -384,7 +400,8 @@ def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: st
             each = max(each, MIN_SHARE * budget)           # the nearest start is always polished
         elif each < 0.05:
             break
-        res = _local(m, target, closed, point, each, seed)
+        tick()
+        res = _local(m, target, closed, point, each, seed, tick=tick)
         if res is not None:
             screened.append((res, dist, time.perf_counter() - t))
             if res.error_max <= EXACT and m.n_links == fewest:
@@ -396,7 +413,8 @@ def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: st
     for k, (res, dist, secs) in enumerate(best):
         share = left / (len(best) - k)
         t = time.perf_counter()
-        again = _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS) if share > 0.05 else None
+        tick()
+        again = _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS, tick) if share > 0.05 else None
         used = time.perf_counter() - t
         left -= used
         refined.append((res if again is None else again, dist, secs + used))     # (errors at more points)

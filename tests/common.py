@@ -91,3 +91,19 @@ at = [1.0, 1.0]
 [[driver]]
 joint = "A"
 """
+
+
+def four_bar_curve_atlas(db):
+    """An atlas at ``db`` with the four-bar's mechanisms and 6 curve realisations each
+    (small and quick: the tests of the curve index and of synthesis without a start)."""
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.curve_atlas import build_curves
+    from multiloop.catalogue.inversions import build_mechanisms
+    from multiloop.catalogue.synthesis import SynthesisOptions
+
+    with Atlas(db) as atlas:
+        opts = SynthesisOptions(4, 1, simple_joints=True)
+        atlas.build(opts, progress=False, loops=False)
+        build_mechanisms(atlas, opts)
+        build_curves(atlas, opts, 6)
+    return db

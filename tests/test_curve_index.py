@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from multiloop.catalogue.atlas import Atlas
-from multiloop.catalogue.curve_atlas import CurveIndex, build_curves, save_index
-from multiloop.catalogue.inversions import build_mechanisms
-from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
+from multiloop.catalogue.curve_atlas import CurveIndex, save_index
+from multiloop.catalogue.synthesis import nauty_available
+from tests.common import four_bar_curve_atlas
 
 pytest.importorskip("usearch")
 pytestmark = pytest.mark.skipif(not nauty_available(), reason="nauty's geng/genbg not installed")
@@ -18,13 +18,7 @@ pytestmark = pytest.mark.skipif(not nauty_available(), reason="nauty's geng/genb
 
 @pytest.fixture(scope="module")
 def four_bar_atlas(tmp_path_factory):
-    db = tmp_path_factory.mktemp("index") / "atlas.sqlite"
-    with Atlas(db) as atlas:
-        opts = SynthesisOptions(4, 1, simple_joints=True)
-        atlas.build(opts, progress=False, loops=False)
-        build_mechanisms(atlas, opts)
-        build_curves(atlas, opts, 6)
-    return db
+    return four_bar_curve_atlas(tmp_path_factory.mktemp("index") / "atlas.sqlite")
 
 
 def _answers(index: CurveIndex, queries) -> list[list[int]]:

@@ -56,7 +56,7 @@ from pathlib import Path
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder
 
-__all__ = ["PyslvsJoint", "parse_expression", "mechanism_from_expression", "read_pyslvs", "loads_pyslvs",
+__all__ = ["PyslvsJoint", "with_pyslvs_names", "parse_expression", "mechanism_from_expression", "read_pyslvs", "loads_pyslvs",
            "expression_of", "dumps_expression", "dumps_pyslvs", "write_pyslvs", "pyslvs_losses",
            "MAX_YAML_DEPTH"]
 
@@ -391,6 +391,34 @@ def expression_of(m: Mechanism) -> tuple[str, list[tuple[int, int]]]:
 def dumps_expression(m: Mechanism) -> str:
     """The bare Pyslvs expression (no inputs)."""
     return expression_of(m)[0] + "\n"
+
+
+def with_pyslvs_names(m: Mechanism) -> Mechanism:
+    """``m`` with every moving link whose name Pyslvs cannot read (e.g. the atlas's
+    numbered links ``2``, ``3``) renamed ``L2``, ``L3``, … (a free name); the chain,
+    joints and geometry unchanged."""
+    from dataclasses import replace
+
+    taken = set(m.link_names)
+    new = {}
+    for lk in m.link_names:
+        if lk != m.frame and not _NAME.fullmatch(lk):
+            base = "L" + re.sub(r"[^A-Za-z0-9_]", "_", lk)
+            name, k = base, 1
+            while name in taken:
+                name, k = f"{base}_{k}", k + 1
+            taken.add(name)
+            new[lk] = name
+    if not new:
+        return m
+    r = lambda lk: new.get(lk, lk)      # noqa: E731
+    b = MechanismBuilder.from_mechanism(m)
+    b.links = [replace(lk, name=r(lk.name)) for lk in b.links]
+    b.joints = [replace(j, links=tuple(map(r, j.links))) for j in b.joints]
+    b.drivers = [replace(d, links=tuple(map(r, d.links))) for d in b.drivers]
+    b.points = [replace(p, link=r(p.link)) for p in b.points]
+    b.loads = [replace(ld, link=r(ld.link)) for ld in b.loads]
+    return b.build()
 
 
 def dumps_pyslvs(m: Mechanism) -> str:

@@ -143,7 +143,7 @@ class Workbench:
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
-        self._later = {2: lambda: self._synthesis_view(choices)}
+        self._later = {2: lambda: self._synthesis_view(choices, atlases)}
         self.mechanism_tab = pn.Row(self.view.panel, *([] if later else [self.check.panel]))
         tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure),
                 ("Synthesis", pn.Column())]
@@ -159,9 +159,10 @@ class Workbench:
         self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(first)
 
-    def _synthesis_view(self, choices):
+    def _synthesis_view(self, choices, atlases):
         from .synthesis_view import SynthesisView
-        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say)
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say,
+                                       atlases)
         return self.synthesis.panel
 
     def _atlas_view(self, atlases):

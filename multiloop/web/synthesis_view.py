@@ -2,14 +2,17 @@
 ``multiloop synthesise``, a background run with progress and cancel, the candidates.
 
 Each candidate is one :func:`multiloop.catalogue.dimensional.synthesise` run (seeds
-``seed``, ``seed + 1``, …, each with its share of the budget).  A candidate is drawn over
-the target, opens in the mechanism view, and downloads as ``.toml`` or ``.pyslvs``
-(:mod:`multiloop.topo.pyslvs`).
+``seed``, ``seed + 1``, …, each with its share of the budget), or, with no start, one
+design of :func:`multiloop.catalogue.topology_synthesis.synthesise` (the atlas chooses
+the topology: retrieval of stored coupler curves, then local polish; Nobari et al.
+2024).  A candidate is drawn over the target, opens in the mechanism view, and
+downloads as ``.toml`` or ``.pyslvs`` (:mod:`multiloop.topo.pyslvs`).
 """
 from __future__ import annotations
 
 import html
 import io
+from dataclasses import dataclass
 
 import numpy as np
 import panel as pn
@@ -20,9 +23,36 @@ from multiloop.topo.errors import InputError, LinkageError, explain
 
 from .jobs import Job
 
-__all__ = ["SynthesisView", "resample", "run_candidates"]
+__all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
 
 TARGET_POINTS = 24      # points of a freehand target after resampling
+#: the start menu's entry for synthesis without a start
+NO_START = "none: the atlas chooses the topology"
+
+
+@dataclass(frozen=True)
+class AtlasDesign:
+    """A design of the synthesis without a start, as a candidate of the list: the
+    mechanism, its errors, its structure formula and ``achieved``, its tracer's path over
+    the driver's motion (drawn over the target)."""
+
+    mechanism: object
+    error_max: float
+    error_rms: float
+    structure: str
+    achieved: np.ndarray
+    seed: str = "atlas"
+    stopped: str = ""
+
+
+def traced(m) -> np.ndarray:
+    """The path of every tracer point of ``m`` over its first driver's motion,
+    (points, frames, 2); NaN where the motion does not reach."""
+    from .scene import sweep_driver
+    sw = sweep_driver(m, 0)
+    P = np.array(sw.nodes[:, len(m.joints):len(m.joints) + len(m.points)], float).transpose(1, 0, 2)
+    P[:, ~np.asarray(sw.ok, bool)] = np.nan
+    return P
 
 
 def resample(xs, ys, n: int = TARGET_POINTS) -> np.ndarray:
@@ -51,6 +81,30 @@ def run_candidates(job: Job, start, target: np.ndarray, n: int, options: dict) -
                          progress=lambda f, b, c=c: job.report((c + f) / n, b), **options)
         out.append(res)
         job.report((c + 1) / n, min(r.error_rms for r in out))
+    return out
+
+
+def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
+    """The synthesis without a start in the worker of ``job``: its designs, each with its
+    traced path, in ``job.partial``.  The library reports the share of the budget spent
+    before every polish (not inside one): a cancel ends the run at the next polish, and
+    the page stops waiting at once (:meth:`SynthesisView.cancel`)."""
+    from multiloop.catalogue.topology_synthesis import synthesise
+
+    job.partial = []
+    res = synthesise(path=target, progress=lambda f: job.report(0.95 * f), **options)
+    out = []
+    for d in res.designs:
+        P = traced(d.mechanism)
+        i = [p.name for p in d.mechanism.points].index(options["point"])
+        out.append(AtlasDesign(d.mechanism, d.error_max, d.error_rms, d.structure, P[i],
+                               stopped=f"deviation {d.deviation_max:.3g}"))
+    if not out:
+        raise InputError(explain("target path", expected="a design that passes check",
+                                 got=f"none of {res.polished} polished candidates",
+                                 hint="a larger budget, more links, or more curves in the atlas"))
+    job.partial = out
+    job.report(1.0, min(d.error_rms for d in out))
     return out
 
 
@@ -88,6 +142,10 @@ def _widgets() -> dict:
         cancel=w.Button(name="Cancel", button_type="warning", width=90, disabled=True),
         clear=w.Button(name="Clear target", width=110),
         progress=pn.indicators.Progress(value=0, max=1000, width=300, name="progress"),
+        atlas=w.TextInput(name="atlas (--db)", value="atlas.sqlite", width=260, css_classes=["ml-atlas"]),
+        links=w.CheckBoxGroup(name="links (--links)", options=["4", "6", "8"], value=["4", "6", "8"], inline=True),
+        top=w.IntInput(name="designs (--top)", value=3, start=1, end=10, width=110),
+        ties=w.FloatInput(name="ties (--tol)", value=1e-4, start=0.0, width=100),
         pick=w.Select(name="candidate", options=[], width=120),
         open=w.Button(name="Open in mechanism view", width=190),
     )
@@ -96,12 +154,15 @@ def _widgets() -> dict:
 class SynthesisView:
     """The synthesis panel of one session.  ``load_start(name)`` gives a start mechanism
     (a catalogue name, or the open one), ``open_design(m)`` shows a candidate, ``say``
-    shows a one-line message."""
+    shows a one-line message.  The start :data:`NO_START` lets the atlas choose the
+    topology; its atlas file is the first of ``atlases`` (``multiloop serve --atlas``),
+    else ``atlas.sqlite``."""
 
-    def __init__(self, starts: list[str], load_start, open_design, say):
+    def __init__(self, starts: list[str], load_start, open_design, say, atlases=()):
         self.load_start, self.open_design, self.say = load_start, open_design, say
         self.w = w = _widgets()
-        w["start"].options = starts
+        w["start"].options = list(starts[:1]) + [NO_START] + list(starts[1:])
+        w["atlas"].value = str((list(atlases) or ["atlas.sqlite"])[0])
         self.target = None
         self.job: Job | None = None
         self.results: list = []
@@ -121,8 +182,10 @@ class SynthesisView:
         self.table = pn.pane.HTML("")
         self.downloads = [pn.widgets.FileDownload(callback=lambda f=f: self._download(f), filename=f"candidate.{f}",
                                                   label=f"Download .{f}", width=150) for f in ("toml", "pyslvs")]
+        self.atlas_box = pn.Column(w["atlas"], pn.Row(pn.pane.HTML("links (--links):"), w["links"]),
+                                   pn.Row(w["top"], w["ties"]), visible=False)
         self.panel = pn.Row(
-            pn.Column(w["start"], w["point"], w["csv"], pn.Row(w["method"], w["seed"], w["budget"]),
+            pn.Column(w["start"], self.atlas_box, w["point"], w["csv"], pn.Row(w["method"], w["seed"], w["budget"]),
                       pn.Row(w["tol"], w["candidates"]), pn.Row(w["shape_only"], w["full_rotation"]),
                       pn.Row(w["min_transmission"], w["max_ratio"]), pn.Row(w["length_low"], w["length_high"]),
                       pn.Row(w["run"], w["cancel"], w["clear"]), w["progress"], self.status, width=380),
@@ -141,6 +204,14 @@ class SynthesisView:
         return f
 
     def _start_changed(self) -> None:
+        none = self.w["start"].value == NO_START
+        self.atlas_box.visible = none
+        for k in ("method", "candidates"):
+            self.w[k].disabled = none
+        if none:                    # the designs' tracer point is named by the run
+            self.w["point"].options, self.w["point"].value = ["P"], "P"
+            self.start_src.data = dict(xs=[], ys=[])
+            return
         try:
             m = self.load_start(self.w["start"].value)
         except LinkageError as exc:
@@ -148,12 +219,9 @@ class SynthesisView:
             return
         self.w["point"].options = [p.name for p in m.points]
         self.w["point"].value = m.points[0].name if m.points else None
-        from .scene import sweep_driver
         if len(m.drivers) == 1 and m.points:
-            sw = sweep_driver(m, 0)
-            n0 = len(m.joints)
-            self.start_src.data = dict(xs=[sw.nodes[:, n0 + p, 0].tolist() for p in range(len(m.points))],
-                                       ys=[sw.nodes[:, n0 + p, 1].tolist() for p in range(len(m.points))])
+            P = traced(m)
+            self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
 
 
     def _upload(self) -> None:
@@ -203,19 +271,43 @@ class SynthesisView:
             target, options = self._target(), self._options()
             if not options["budget"] or options["budget"] <= 0:
                 raise InputError(explain("budget", expected="a positive number of seconds", got=str(options["budget"])))
-            start = self.load_start(self.w["start"].value)
+            none = self.w["start"].value == NO_START
+            atlas = self._atlas_options(options) if none else None
+            start = None if none else self.load_start(self.w["start"].value)
         except LinkageError as exc:
             self.say(str(exc))
             return
         n = int(self.w["candidates"].value or 1)
         self.results = []
-        self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
+        if none:
+            self.job = Job(lambda job: run_atlas(job, target, atlas), "synthesis")
+            self.job.detach = True          # cancel: stops at the next polish, the page at once
+        else:
+            self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
         self.w["run"].disabled, self.w["cancel"].disabled = True, False
         self.status.object = '<p id="ml-synthesis-status" data-state="running">running…</p>'
 
+    def _atlas_options(self, options: dict) -> dict:
+        """The keywords of the synthesis without a start (as ``multiloop synthesise``
+        without START: ``--db``, ``--links``, ``--top``, ``--tol``, ``--budget``, ``--seed``)."""
+        from multiloop.catalogue.topology_synthesis import parse_links
+        w = self.w
+        return dict(atlas=(w["atlas"].value or "").strip(), links=parse_links(",".join(sorted(w["links"].value))),
+                    top=int(w["top"].value or 0), budget=float(options["budget"]), point="P",
+                    tol=float(w["ties"].value or 0.0), seed=int(options["seed"] or 0))
+
     def cancel(self) -> None:
-        if self.job is not None:
-            self.job.cancel()
+        """Stop the run.  A run without a start stops at its next polish (one share of the
+        budget at most); the page stops waiting for it at once, its designs discarded."""
+        job = self.job
+        if job is None:
+            return
+        job.cancel()
+        if getattr(job, "detach", False) and job.running:
+            self.job = None
+            self.w["run"].disabled, self.w["cancel"].disabled = False, True
+            self.status.object = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
+                                  "the atlas search stops at its next polish</p>")
 
     def poll(self) -> None:
         """Called by the session's periodic callback: progress, then the candidates."""
@@ -246,7 +338,7 @@ class SynthesisView:
         for i, r in enumerate(self.results, 1):
             m = r.mechanism
             try:
-                formula = decompose(m).formula
+                formula = r.structure if isinstance(r, AtlasDesign) else decompose(m).formula
             except LinkageError as exc:
                 formula = str(exc)
             rows.append(f'<tr data-candidate="{i}"><td>{i}</td><td>{r.error_max:.3g}</td><td>{r.error_rms:.3g}</td>'
@@ -291,8 +383,8 @@ class SynthesisView:
                 from multiloop.topo.io import dumps_toml
                 text = dumps_toml(m)
             else:
-                from multiloop.topo.pyslvs import dumps_pyslvs
-                text = dumps_pyslvs(m)
+                from multiloop.topo.pyslvs import dumps_pyslvs, with_pyslvs_names
+                text = dumps_pyslvs(with_pyslvs_names(m))
         except LinkageError as exc:
             self.say(str(exc))
             return None

@@ -1,0 +1,228 @@
+"""The workbench's Synthesis tab without a start: the atlas chooses the topology
+(``catalogue.topology_synthesis``), at the level of :class:`multiloop.web.app.Workbench`
+(no browser), and once in the headless browser of tests/test_web.py."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("panel")
+
+from multiloop.catalogue.atlas import Atlas  # noqa: E402
+from multiloop.catalogue.synthesis import nauty_available  # noqa: E402
+from multiloop.kin.check import check  # noqa: E402
+from multiloop.kin.solve import solve  # noqa: E402
+from multiloop.web.app import Workbench  # noqa: E402
+from multiloop.web.synthesis_view import NO_START, AtlasDesign  # noqa: E402
+from tests.common import four_bar_curve_atlas  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def tiny_atlas(tmp_path_factory):
+    """Four-bar curves only (as tests/test_curve_index.py's atlas): 6 realisations."""
+    if not nauty_available():
+        pytest.skip("nauty's geng/genbg not installed")
+    return four_bar_curve_atlas(tmp_path_factory.mktemp("web-atlas") / "atlas.sqlite")
+
+
+def _ellipse(n: int = 25) -> np.ndarray:
+    t = np.linspace(0.0, 2 * np.pi, n)
+    return np.column_stack([0.3 + 0.2 * np.cos(t), 0.5 + 0.1 * np.sin(t)])
+
+
+def _finish(sv, timeout: float = 120.0) -> None:
+    t0 = time.perf_counter()
+    while sv.job is not None:
+        assert time.perf_counter() - t0 < timeout, "synthesis did not finish"
+        sv.poll()
+        time.sleep(0.1)
+
+
+def _synthesis(wb):
+    """The workbench's Synthesis view (the tab is built when first shown)."""
+    wb.tabs.active = 2
+    return wb.synthesis
+
+
+def _no_start(wb, atlas, budget=3.0, top=2):
+    sv = _synthesis(wb)
+    sv.w["start"].value = NO_START
+    sv.w["atlas"].value = str(atlas)
+    sv.w["links"].value = ["4"]
+    sv.w["budget"].value, sv.w["top"].value = budget, top
+    sv.target = _ellipse()
+    return sv
+
+
+def test_the_atlas_field_defaults_to_the_served_atlas(tiny_atlas):
+    assert _synthesis(Workbench(atlases=[str(tiny_atlas)])).w["atlas"].value == str(tiny_atlas)
+    sv = _synthesis(Workbench())
+    assert sv.w["atlas"].value == "atlas.sqlite"
+    assert sv.w["start"].value != NO_START and sv.w["start"].options[:2] == ["(open mechanism)", NO_START]
+    assert not sv.atlas_box.visible
+    sv.w["start"].value = NO_START
+    assert sv.atlas_box.visible and sv.w["point"].value == "P"
+
+
+def test_no_start_lists_designs_that_solve_pass_check_and_open_and_download(tiny_atlas):
+    from multiloop.inputs import load_upload
+
+    wb = Workbench()
+    sv = _no_start(wb, tiny_atlas)
+    sv.run()
+    assert sv.job is not None and sv.w["cancel"].disabled is False
+    _finish(sv)
+    assert 'data-state="done"' in sv.status.object, sv.status.object + wb.message.object
+    assert 1 <= len(sv.results) <= 2 and all(isinstance(r, AtlasDesign) for r in sv.results)
+    assert sv.table.object.count("<tr data-candidate=") == len(sv.results)
+    for r in sv.results:
+        m = r.mechanism
+        assert f"<td>{m.n_links}</td><td>{r.structure}</td>" in sv.table.object
+        assert r.error_rms < 0.05 and np.isfinite(r.error_max)
+        st = solve(m, np.linspace(0.0, 1.0, 5))
+        assert st.ok.all()
+        assert not check(m).drivers[0].unreachable
+    # every design drawn over the target (its tracer's path), the chosen one in red
+    assert len(sv.curves.data["xs"]) == len(sv.results)
+    drawn = np.column_stack([sv.curves.data["xs"][0], sv.curves.data["ys"][0]])
+    drawn = drawn[np.all(np.isfinite(drawn), axis=1)]
+    gap = np.min(np.linalg.norm(_ellipse()[:, None] - drawn[None], axis=2), axis=1)
+    assert gap.max() < 0.05 * 0.4, gap.max()            # 5 % of the target's size
+    sv.w["pick"].value = "1"
+    sv._open()
+    assert wb.mechanism is sv.results[0].mechanism and wb.message.object == '<div id="ml-message"></div>'
+    toml = load_upload("d.toml", sv._download("toml").read())           # read back as an upload
+    pys = load_upload("d.pyslvs", sv._download("pyslvs").read())
+    assert wb.message.object == '<div id="ml-message"></div>'
+    ref = solve(sv.results[0].mechanism, [0.0, 0.5]).point_positions
+    assert np.allclose(solve(toml, [0.0, 0.5]).point_positions, ref, atol=1e-9)
+    assert pys.n_links == toml.n_links and pys.n_joints == toml.n_joints
+
+
+@pytest.mark.parametrize("what", ["missing", "empty", "not sqlite"])
+def test_a_missing_or_empty_atlas_is_one_line_in_the_page(tmp_path, what):
+    db = tmp_path / "atlas.sqlite"
+    if what == "empty":
+        Atlas(db).close()
+    elif what == "not sqlite":
+        db.write_text("x,y\n1,2\n")
+    wb = Workbench()
+    sv = _no_start(wb, db)
+    sv.run()
+    _finish(sv, 30.0)
+    msg = wb.message.object
+    assert 'data-error="1"' in msg and "expected" in msg and "\n" not in msg, msg
+    assert 'data-state="failed"' in sv.status.object and not sv.results
+    assert sv.w["run"].disabled is False
+    if what != "not sqlite":
+        assert "hint: build" in msg
+    wb.open_name("four_bar")                        # the page goes on
+    assert wb.mechanism.name and wb.message.object == '<div id="ml-message"></div>'
+
+
+def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atlas):
+    """The tiny atlas gives 2 starts: each polish has a quarter of the budget (half of it
+    screens); the run would take the whole budget."""
+    wb = Workbench()
+    budget = 20.0
+    sv = _no_start(wb, tiny_atlas, budget=budget)
+    sv.run()
+    job = sv.job
+    t0 = time.perf_counter()
+    while job.fraction <= 0 and time.perf_counter() - t0 < 30:     # the polish has begun
+        time.sleep(0.05)
+    sv.cancel()
+    t1 = time.perf_counter()
+    assert sv.job is None and sv.w["run"].disabled is False      # the page waits no more
+    assert 'data-state="cancelled"' in sv.status.object
+    job.thread.join(timeout=budget)
+    stopped = time.perf_counter() - t1
+    assert not job.thread.is_alive() and job.state == "cancelled"
+    assert stopped < 0.5 * budget, stopped                        # one polish's share, not the budget
+    sv.poll()
+    assert sv.results == [] and sv.table.object == ""
+
+
+def test_a_bad_links_choice_is_one_line(tiny_atlas):
+    wb = Workbench()
+    sv = _no_start(wb, tiny_atlas)
+    sv.w["links"].value = []
+    sv.run()
+    assert sv.job is None and "--links: expected even numbers" in wb.message.object
+
+
+@pytest.fixture(scope="module")
+def served(tiny_atlas):
+    """``multiloop serve --atlas TINY`` on a free port (tests/test_web.py's way)."""
+    import subprocess
+
+    from tests.test_web import MULTILOOP, _free_port
+    port = _free_port()
+    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(tiny_atlas)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = proc.stdout.readline()
+    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
+    yield f"http://127.0.0.1:{port}/"
+    proc.terminate()
+    proc.wait(timeout=20)
+
+
+def _on_synthesis_tab(page, locator):
+    """``locator`` once shown: the Synthesis tab clicked until it is (the server's switch
+    to the mechanism tab, after a page load or an open, may come after a click)."""
+    for _ in range(40):
+        if locator.is_visible():
+            return locator
+        page.get_by_text("Synthesis", exact=True).click()
+        page.wait_for_timeout(250)
+    raise AssertionError(f"{locator} never shown")
+
+
+@pytest.mark.browser
+def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_path, tmp_path_factory):
+    """In headless chromium: choose no start, upload a target CSV, run; the designs are
+    listed, one downloads as .pyslvs and opens; a missing atlas is one line."""
+    web = pytest.importorskip("tests.test_web")
+    if web.CHROMIUM is None:
+        pytest.skip("chromium not installed (install.sh installs it)")
+    from multiloop.kin.solve import solve
+    from multiloop.topo.pyslvs import read_pyslvs
+
+    csv = tmp_path / "ellipse.csv"
+    csv.write_text("x,y\n" + "\n".join(f"{x:.6f},{y:.6f}" for x, y in _ellipse()) + "\n")
+    with web.sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=web.CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        try:
+            page = web._page(browser, served, [])
+            _on_synthesis_tab(page, page.locator(".ml-start select")).select_option(NO_START)
+            field = page.locator(".ml-atlas input")
+            sync_api = web.sync_api
+            sync_api.expect(field).to_have_value(str(tiny_atlas))
+            page.locator("input[type=file][accept*='.csv']").set_input_files(str(csv))
+            sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=20000)
+            page.locator(".ml-budget input").fill("3")
+            page.locator(".ml-budget input").press("Enter")
+            _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
+            page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=90000)
+            assert page.locator("#ml-candidates tr[data-candidate]").count() >= 1
+            web._shot(page, "web_synthesis_atlas.png", tmp_path_factory)
+            with page.expect_download() as dl:
+                page.get_by_text("Download .pyslvs").click()
+            path = tmp_path / "design.pyslvs"
+            dl.value.save_as(path)
+            m = read_pyslvs(path)
+            assert m.n_links == 4 and solve(m, np.linspace(0.0, 1.0, 5)).ok.all()
+            page.get_by_role("button", name="Open in mechanism view").click()
+            web._wait_frames(page)
+            page.wait_for_timeout(1000)
+            _on_synthesis_tab(page, field).fill(str(tmp_path / "missing.sqlite"))
+            field.press("Enter")
+            _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
+            sync_api.expect(page.locator("#ml-message")).to_contain_text("--db: expected an atlas file",
+                                                                         timeout=20000)
+            web._pick(page, "crank_slider")                       # the page goes on
+            sync_api.expect(page.locator("#ml-message")).not_to_have_attribute("data-error", "1")
+        finally:
+            browser.close()
