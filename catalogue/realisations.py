@@ -32,7 +32,8 @@ from multiloop.topo.errors import LinkageError
 from multiloop.topo.model import Mechanism
 from multiloop.kin.check import driver_angles
 from multiloop.kin.check.transmission import angle_specs, spec_value
-from multiloop.kin.design import design_names, solve_designs
+from multiloop.kin.design import solve_designs
+from multiloop.kin.geometry import design_matrix, design_names
 from multiloop.kin.solve import solve
 
 from .inversions import InversionRecord, inversion
@@ -92,7 +93,7 @@ def _screen(m: Mechanism, samples: list, specs, min_angle: float) -> np.ndarray:
     all samples: :func:`kin.design.solve_designs`) and every monitored angle is within
     bounds: a quick necessary test."""
     names = design_names(m)
-    X = np.array([[at[n[:-2]][0 if n.endswith(".x") else 1] for n in names] for at in samples])
+    X = design_matrix(names, samples)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         st = solve_designs(m, names, X, _turn())

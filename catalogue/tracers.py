@@ -21,7 +21,7 @@ import numpy as np
 
 from multiloop.topo.model import Mechanism
 from multiloop.kin.design import solve_designs
-from multiloop.kin.geometry import design_names
+from multiloop.kin.geometry import design_matrix, design_names
 
 from .curves import CURVE_POINTS, aligned_distances, normalise_closed
 
@@ -53,7 +53,7 @@ def _traces(m: Mechanism, designs: list[dict], links) -> tuple[np.ndarray, dict]
     each ``(D, TURN − 1, 2)``, from one batched solve (:func:`kin.design.solve_designs`);
     and which designs turn fully."""
     names = design_names(m)
-    X = np.array([[d[n[:-2]][0 if n.endswith(".x") else 1] for n in names] for d in designs], float)
+    X = design_matrix(names, designs)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         st = solve_designs(m, names, X, np.linspace(0.0, 2 * np.pi, TURN))

@@ -19,7 +19,7 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from .poses import unit
 
-__all__ = ["Geometry", "design_names"]
+__all__ = ["Geometry", "design_names", "design_matrix"]
 
 
 def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
@@ -36,6 +36,13 @@ def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
         if p.name in chosen:
             names += [f"{p.name}.x", f"{p.name}.y"]
     return tuple(names)
+
+
+def design_matrix(names, positions) -> np.ndarray:
+    """The design matrix ``(D, len(names))`` of designs given as point positions by name
+    (``{"J1": (x, y), ...}``, one dict per design), for names ``"J.x"`` / ``"J.y"`` only
+    (pin-jointed designs; a guide angle has no position)."""
+    return np.array([[at[n[:-2]][0 if n.endswith(".x") else 1] for n in names] for at in positions], float)
 
 
 class Geometry:
