@@ -34,7 +34,7 @@ from multiloop.kin.check import check
 from multiloop.kin.solve import solve
 
 from .atlas import Atlas
-from .curves import (CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise,
+from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor, is_closed, normalise,
                      polyline_distance, similarity_to)
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
@@ -179,9 +179,9 @@ def _refit(curves: list[dict], zt: np.ndarray, ct: complex, rt: float) -> list[t
     points on every moving link but the driven one (the realisations of one mechanism
     solved together)."""
     out, first, by_mechanism = [], {}, {}
-    for c in curves:
-        dist, _, rot, _ = aligned_distance(zt, c["shape"])
-        out.append((dist, c, similarity_to(ct, rt, c["centre"], c["radius"], rot)))
+    dists, _, rots, _ = aligned_distances(zt, np.array([c["shape"] for c in curves])) if curves else ((), 0, (), 0)
+    for c, dist, rot in zip(curves, dists, rots):
+        out.append((float(dist), c, similarity_to(ct, rt, c["centre"], c["radius"], complex(rot))))
         key = (c["mechanism"], json.dumps(c["joints"], sort_keys=True))
         if key not in first and len(first) < REFIT_REALISATIONS:
             first[key] = c
@@ -238,13 +238,14 @@ def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.nd
 
 
 def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float,
-           seed: int, points: int = POLISH_POINTS, tick=None) -> SynthesisResult | None:
-    """The dimensional synthesiser's local polish of ``start`` (``method="local"``: no
-    global search) on at most ``points`` target points, for ``budget`` s; ``tick()`` is
-    called at its progress reports."""
+           seed: int, points: int = POLISH_POINTS, tick=None, method: str = "local",
+           tol: float = 1e-12) -> SynthesisResult | None:
+    """The dimensional synthesiser on ``start`` (by default its local polish,
+    ``method="local"``: no global search) on at most ``points`` target points, for
+    ``budget`` s; ``tick()`` is called at its progress reports."""
     try:
         res = dimensional_synthesise(start, path=_subset(target, points), point=point, budget=budget,
-                                     seed=seed, tol=1e-12, full_rotation=closed, method="local",
+                                     seed=seed, tol=tol, full_rotation=closed, method=method,
                                      progress=None if tick is None else (lambda f, b: tick()))
     except LinkageError:
         return None
@@ -271,14 +272,8 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
             retrieved: float, full_target: np.ndarray) -> Design | None:
     """A given start through the whole dimensional synthesiser (global search, then polish)."""
     t0 = time.perf_counter()
-    try:
-        res = dimensional_synthesise(start, path=_subset(target, POLISH_POINTS), point=point, budget=budget,
-                                     seed=seed, tol=1e-9, full_rotation=closed)
-    except LinkageError:
-        return None
-    if not (np.isfinite(res.error_max) and np.isfinite(res.error_rms)):
-        return None
-    return _design(res, closed, point, retrieved, time.perf_counter() - t0, full_target)
+    res = _local(start, target, closed, point, budget, seed, method="de", tol=1e-9)
+    return None if res is None else _design(res, closed, point, retrieved, time.perf_counter() - t0, full_target)
 
 
 def _order(items: list, tol: float, key=lambda d: (d.error_rms, d.links)) -> list:
