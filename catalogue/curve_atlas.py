@@ -23,6 +23,7 @@ import json
 import sqlite3
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -284,16 +285,21 @@ class CurveIndex:
     def __len__(self) -> int:
         return self._size
 
+    @cached_property
+    def _table(self) -> tuple[np.ndarray, np.ndarray]:
+        rows = [_rows(self.atlas, n) for n in self._links]
+        return (np.concatenate([r[0] for r in rows] or [np.zeros(0, np.int64)]),
+                np.concatenate([r[1] for r in rows] or [np.zeros((0, 2 * DESCRIPTOR_HARMONICS), np.float32)]))
+
     @property
     def ids(self) -> np.ndarray:
-        """Row ids of the indexed curves (read from the atlas)."""
-        return np.concatenate([_rows(self.atlas, n)[0] for n in self._links] or [np.zeros(0, np.int64)])
+        """Row ids of the indexed curves (read from the atlas once, when first asked for)."""
+        return self._table[0]
 
     @property
     def vectors(self) -> np.ndarray:
-        """Descriptors of the indexed curves, in :attr:`ids` order (read from the atlas)."""
-        return np.concatenate([_rows(self.atlas, n)[1] for n in self._links]
-                              or [np.zeros((0, 2 * DESCRIPTOR_HARMONICS), np.float32)])
+        """Descriptors of the indexed curves, in :attr:`ids` order."""
+        return self._table[1]
 
     def _search(self, q: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Curve ids and squared distances of the ``k`` nearest in every part."""
