@@ -3,7 +3,7 @@
 # nauty's geng/genbg come from the passagemath-nauty wheel and pynauty from a prebuilt
 # wheel (no C compiler on Linux x86_64, Python 3.11); extras: [test] the suite, [dask]
 # Dask clusters for `atlas --scheduler`, [curves] usearch's HNSW index of the coupler curves, [notebook] the notebook widgets and the
-# executed example notebook, [web] Panel and Bokeh for `multiloop serve`,
+# executed example notebook, [web] Bokeh for `multiloop serve`,
 # [browser-test] Playwright (it drives Debian's chromium; its own browser download is
 # not used), [bench] the libraries the benchmarks compare against.
 # System packages are installed with apt-get when it is available and we are root:

@@ -20,8 +20,20 @@ names); the value types are re-exported.
 * ``kin.spatial`` — six-strut spatial platforms by screw theory (``Screw``, ``Twist``,
   ``Wrench``, ``reciprocal``, ``Platform``), separate from the planar pipeline.
 """
-from .forces import ForceResult
-from .spatial.screws import Screw, Twist, Wrench, reciprocal
 from .state import KinematicState
 
 __all__ = ["KinematicState", "ForceResult", "Screw", "Twist", "Wrench", "reciprocal"]
+
+#: the value types re-exported from modules with heavy imports (scipy.linalg, networkx),
+#: loaded when first asked for (PEP 562): ``kin.solve`` alone does not pay for them
+_LAZY = {"ForceResult": ".forces", "Screw": ".spatial.screws", "Twist": ".spatial.screws",
+         "Wrench": ".spatial.screws", "reciprocal": ".spatial.screws"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        from importlib import import_module
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-pytest.importorskip("panel")
+pytest.importorskip("bokeh")
 
 from multiloop.catalogue.atlas import Atlas  # noqa: E402
 from multiloop.catalogue.synthesis import nauty_available  # noqa: E402
@@ -50,7 +50,7 @@ def _no_start(wb, atlas, budget=3.0, top=2):
     sv = _synthesis(wb)
     sv.w["start"].value = NO_START
     sv.w["atlas"].value = str(atlas)
-    sv.w["links"].value = ["4"]
+    sv.w["links"].active = [0]                  # 4 links
     sv.w["budget"].value, sv.w["top"].value = budget, top
     sv.target = _ellipse()
     return sv
@@ -74,12 +74,12 @@ def test_no_start_lists_designs_that_solve_pass_check_and_open_and_download(tiny
     sv.run()
     assert sv.job is not None and sv.w["cancel"].disabled is False
     _finish(sv)
-    assert 'data-state="done"' in sv.status.object, sv.status.object + wb.message.object
+    assert 'data-state="done"' in sv.status.text, sv.status.text + wb.message.text
     assert 1 <= len(sv.results) <= 2 and all(isinstance(r, AtlasDesign) for r in sv.results)
-    assert sv.table.object.count("<tr data-candidate=") == len(sv.results)
+    assert sv.table.text.count("<tr data-candidate=") == len(sv.results)
     for r in sv.results:
         m = r.mechanism
-        assert f"<td>{m.n_links}</td><td>{r.structure}</td>" in sv.table.object
+        assert f"<td>{m.n_links}</td><td>{r.structure}</td>" in sv.table.text
         assert r.error_rms < 0.05 and np.isfinite(r.error_max)
         st = solve(m, np.linspace(0.0, 1.0, 5))
         assert st.ok.all()
@@ -92,10 +92,10 @@ def test_no_start_lists_designs_that_solve_pass_check_and_open_and_download(tiny
     assert gap.max() < 0.05 * 0.4, gap.max()            # 5 % of the target's size
     sv.w["pick"].value = "1"
     sv._open()
-    assert wb.mechanism is sv.results[0].mechanism and wb.message.object == '<div id="ml-message"></div>'
+    assert wb.mechanism is sv.results[0].mechanism and wb.message.text == '<div id="ml-message"></div>'
     toml = load_upload("d.toml", sv._download("toml").read())           # read back as an upload
     pys = load_upload("d.pyslvs", sv._download("pyslvs").read())
-    assert wb.message.object == '<div id="ml-message"></div>'
+    assert wb.message.text == '<div id="ml-message"></div>'
     ref = solve(sv.results[0].mechanism, [0.0, 0.5]).point_positions
     assert np.allclose(solve(toml, [0.0, 0.5]).point_positions, ref, atol=1e-9)
     assert pys.n_links == toml.n_links and pys.n_joints == toml.n_joints
@@ -112,14 +112,14 @@ def test_a_missing_or_empty_atlas_is_one_line_in_the_page(tmp_path, what):
     sv = _no_start(wb, db)
     sv.run()
     _finish(sv, 30.0)
-    msg = wb.message.object
+    msg = wb.message.text
     assert 'data-error="1"' in msg and "expected" in msg and "\n" not in msg, msg
-    assert 'data-state="failed"' in sv.status.object and not sv.results
+    assert 'data-state="failed"' in sv.status.text and not sv.results
     assert sv.w["run"].disabled is False
     if what != "not sqlite":
         assert "hint: build" in msg
     wb.open_name("four_bar")                        # the page goes on
-    assert wb.mechanism.name and wb.message.object == '<div id="ml-message"></div>'
+    assert wb.mechanism.name and wb.message.text == '<div id="ml-message"></div>'
 
 
 def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atlas):
@@ -136,21 +136,21 @@ def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atla
     sv.cancel()
     t1 = time.perf_counter()
     assert sv.job is None and sv.w["run"].disabled is False      # the page waits no more
-    assert 'data-state="cancelled"' in sv.status.object
+    assert 'data-state="cancelled"' in sv.status.text
     job.thread.join(timeout=budget)
     stopped = time.perf_counter() - t1
     assert not job.thread.is_alive() and job.state == "cancelled"
     assert stopped < 0.5 * budget, stopped                        # one polish's share, not the budget
     sv.poll()
-    assert sv.results == [] and sv.table.object == ""
+    assert sv.results == [] and sv.table.text == ""
 
 
 def test_a_bad_links_choice_is_one_line(tiny_atlas):
     wb = Workbench()
     sv = _no_start(wb, tiny_atlas)
-    sv.w["links"].value = []
+    sv.w["links"].active = []
     sv.run()
-    assert sv.job is None and "--links: expected even numbers" in wb.message.object
+    assert sv.job is None and "--links: expected even numbers" in wb.message.text
 
 
 @pytest.fixture(scope="module")

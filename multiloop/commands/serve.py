@@ -1,6 +1,6 @@
 """``multiloop serve [FILE ...] [--port P] [--host H] [--open] [--atlas DB]``: the web workbench.
 
-Serves a local page (Panel + Bokeh, the ``[web]`` extra) to open a mechanism, move it,
+Serves a local page (a Bokeh server, the ``[web]`` extra) to open a mechanism, move it,
 see its design check and structure, synthesise a path generator from a drawn or uploaded
 target, and browse stored atlases (docs/web.md).  It binds 127.0.0.1 unless ``--host``
 asks for another address (with a warning: the page has no login).  The files given are
@@ -29,20 +29,22 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    try:
-        from multiloop.web import serve
-    except ImportError as exc:
-        raise InputError(explain("multiloop serve", expected="Panel and Bokeh", got=f"not installed ({exc.name})",
-                                 hint="pip install 'multiloop[web]'")) from None
-    from multiloop.catalogue.atlas import Atlas
+    from importlib.util import find_spec
+
+    from multiloop.web import serve
+    if find_spec("bokeh") is None:
+        raise InputError(explain("multiloop serve", expected="Bokeh", got="not installed (bokeh)",
+                                 hint="pip install 'multiloop[web]'"))
     from multiloop.inputs import load_mechanism
 
     if not 0 <= args.port <= 65535:
         raise InputError(explain("--port", expected="0 … 65535", got=str(args.port)))
     port = args.port or _free_port(args.host)
     files = {str(f): load_mechanism(f) for f in args.files}
-    for db in args.atlas:
-        Atlas(db, readonly=True).close()            # a bad atlas is an error before serving
+    if args.atlas:
+        from multiloop.catalogue.atlas import Atlas
+        for db in args.atlas:
+            Atlas(db, readonly=True).close()        # a bad atlas is an error before serving
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"multiloop serve: warning: binding {args.host}: the page is reachable from the network "
               "and has no login; anyone who reaches it can run computations on this machine", file=sys.stderr)

@@ -1,4 +1,4 @@
-"""The web workbench of ``multiloop serve`` (the optional ``[web]`` extra: Panel + Bokeh).
+"""The web workbench of ``multiloop serve`` (the optional ``[web]`` extra: Bokeh).
 
 One page per browser session: a mechanism moved by a player, its structural report,
 its design check marked on the input axis and the drawing, dimensional synthesis from a
@@ -11,6 +11,6 @@ __all__ = ["serve"]
 
 
 def serve(*args, **kwargs):
-    """:func:`multiloop.web.app.serve` (imports Panel only when called)."""
+    """:func:`multiloop.web.app.serve` (imports Bokeh only when called)."""
     from .app import serve as _serve
     return _serve(*args, **kwargs)

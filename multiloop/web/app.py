@@ -118,45 +118,41 @@ class Workbench:
     def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
         render then carries the drawing and its player alone)."""
-        import panel as pn
+        from bokeh.models import Column, FileInput, Row, Select, TabPanel, Tabs
 
         from .check_view import CheckView
+        from .glue import div, on_upload
         from .mechanism_view import MechanismView
-        from .synthesis_view import SynthesisView
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
         self.mechanism, self.mechanism_name = None, ""
         self.job = None
-        self.message = pn.pane.HTML('<div id="ml-message"></div>', sizing_mode="stretch_width")
+        self.message = div('<div id="ml-message"></div>')
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
         first = _first_choice(self.files)
-        self.pick = pn.widgets.Select(name="mechanism", options=choices, value=first, width=240,
-                                      css_classes=["ml-pick"])
-        self.upload = pn.widgets.FileInput(name="upload", accept=".toml,.json,.pyslvs", multiple=False)
-        self.structure = pn.pane.HTML("", sizing_mode="stretch_width")
+        self.pick = Select(title="mechanism", options=choices, value=first, width=240, css_classes=["ml-pick"])
+        self.upload = FileInput(title="open a .toml, .json or .pyslvs file", accept=".toml,.json,.pyslvs",
+                                multiple=False)
+        self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
-        self.pick.param.watch(lambda e: None if e.new == self.mechanism_name else self.open_name(e.new), "value")
-        self.upload.param.watch(lambda e: self.open_upload(), "value")
+        self.pick.on_change("value", lambda attr, old, new: None if new == self.mechanism_name else self.open_name(new))
+        on_upload(self.upload, self.open_upload, self.say)
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
         self._later = {2: lambda: self._synthesis_view(choices, atlases)}
-        self.mechanism_tab = pn.Row(self.view.panel, *([] if later else [self.check.panel]))
-        tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure),
-                ("Synthesis", pn.Column())]
+        self.mechanism_tab = Row(self.view.panel, *([] if later else [self.check.panel]))
+        tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure), ("Synthesis", div("…"))]
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
-            tabs.append(("Atlas", pn.Column()))
-        header = pn.Row(pn.pane.HTML("<b>multiloop workbench</b>"), self.pick,
-                        pn.Column(pn.pane.HTML("open a .toml, .json or .pyslvs file:"), self.upload))
-        # not dynamic: a tab rendered later by the server fetches Panel's stylesheets from
-        # its CDN, whatever the resources setting (seen with Panel 1.9.4)
-        self.tabs = pn.Tabs(*tabs, dynamic=False)
-        self.tabs.param.watch(lambda e: self._show_tab(e.new), "active")
-        self.panel = pn.Column(header, self.message, self.tabs, sizing_mode="stretch_width")
+            tabs.append(("Atlas", div("…")))
+        header = Row(div("<b>multiloop workbench</b>", width=200), self.pick, self.upload)
+        self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
+        self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
+        self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(first)
 
     def _synthesis_view(self, choices, atlases):
@@ -173,17 +169,20 @@ class Workbench:
     def _show_tab(self, i: int) -> None:
         """Build tab ``i`` the first time it is shown."""
         build = self._later.pop(i, None)
-        if build is not None:
-            self.tabs[i].objects = [build()]
+        if build is not None:               # a new panel: BokehJS 3.9 redraws a tab on a new list
+            from bokeh.models import TabPanel
+            tabs = list(self.tabs.tabs)
+            tabs[i] = TabPanel(title=tabs[i].title, child=build())
+            self.tabs.tabs = tabs
 
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
         """One line at the top of the page (the message of a bad file or option)."""
-        self.message.object = (f'<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
-                               f"{html.escape(text)}</div>")
+        self.message.text = (f'<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
+                             f"{html.escape(text)}</div>")
 
     def clear(self) -> None:
-        self.message.object = '<div id="ml-message"></div>'
+        self.message.text = '<div id="ml-message"></div>'
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:
@@ -210,12 +209,11 @@ class Workbench:
         if name:
             self.pick.value = name
 
-    def open_upload(self) -> None:
+    def open_upload(self, name: str, data: bytes) -> None:
         from multiloop.inputs import load_upload
         from multiloop.topo.errors import LinkageError
-        name = self.upload.filename or "upload"
         try:
-            m = load_upload(name, self.upload.value or b"")
+            m = load_upload(name, data)
         except LinkageError as exc:
             self.say(str(exc))
             return
@@ -251,7 +249,7 @@ class Workbench:
             self.designs[self.mechanism_name] = m
         self._follow()
         self.scene = scene
-        self.structure.object = structure
+        self.structure.text = structure
         ready = _SWEEPS.get(key) if key is not None else None
         self.shown_sweeps = ready is not None
         self.view.show(scene, list(ready or ()), self.mechanism_name)
@@ -300,8 +298,8 @@ class Workbench:
 
     def show_rest(self) -> None:
         """Add the check panel to the mechanism tab (once)."""
-        if self.check.panel not in self.mechanism_tab.objects:
-            self.mechanism_tab.append(self.check.panel)
+        if self.check.panel not in self.mechanism_tab.children:
+            self.mechanism_tab.children = [*self.mechanism_tab.children, self.check.panel]
 
     def close(self) -> None:
         if self.job is not None:
@@ -315,7 +313,7 @@ class Workbench:
 def _start_warm_up(files: dict, threshold: float):
     """Start the warm-up of the first mechanism a page shows: a child process
     (:mod:`.prepare`) when one starts.  Returns a function that starts :func:`warm_up`'s
-    thread (after Panel's import: in this process they would only take turns) and
+    thread (after Bokeh's import: in this process they would only take turns) and
     returns its events (ready, first page shown)."""
     import threading
 
@@ -339,55 +337,67 @@ def _start_warm_up(files: dict, threshold: float):
 def _page_maker(files: dict, atlases, threshold: float, warm, shown):
     """The server's page function: the session's :class:`Workbench` once the warm-up is
     ``warm``; the check panel follows once the browser shows the drawing (``shown``)."""
-    import panel as pn
-    from panel.io.resources import LOCAL_DIST
+    from bokeh.events import DocumentReady
 
-    def page():
-        # every stylesheet of this document from this server (Panel defaults to its CDN
-        # for models made outside the page's first render, e.g. a tab opened later).
-        # The workbench is in the first document: swapped into a placeholder after the
-        # browser had loaded it, its patch once referred to models the browser did not
-        # know (Bokeh 3.9, Panel 1.9), and the page stayed empty
-        doc = pn.state.curdoc
-        doc._template_variables["dist_url"] = LOCAL_DIST
+    def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         wb = Workbench(files, atlases, threshold, later=True)
-        cb = pn.state.add_periodic_callback(wb.poll, period=150)
+        cb = doc.add_periodic_callback(wb.poll, 150)
 
-        def rest():                     # a second message, after the drawing's
+        def rest(_event):               # a second message, after the drawing's
             wb.show_rest()
             shown.set()
-        pn.state.onload(lambda: doc.add_next_tick_callback(rest))
+        doc.on_event(DocumentReady, rest)
 
         def closed(_ctx):
-            cb.stop()
+            doc.remove_periodic_callback(cb)
             wb.close()
-        pn.state.on_session_destroyed(closed)
-        return wb.panel
+        doc.on_session_destroyed(closed)
+        doc.title = "multiloop"
+        doc.add_root(wb.panel)
     return page
+
+
+def _make_server(page, port: int, host: str):
+    """Bokeh's server for ``page`` on ``host:port``, every script from this server
+    (no CDN) and only the BokehJS bundles the page uses (not MathJax's, nor the data
+    table's nor WebGL's: 2.3 MB of script that a first load would run for nothing)."""
+    from bokeh.application import Application
+    from bokeh.application.handlers.function import FunctionHandler
+    from bokeh.server.server import BaseServer
+    from bokeh.server.tornado import BokehTornado
+    from bokeh.server.util import bind_sockets, create_hosts_allowlist
+    from tornado.httpserver import HTTPServer
+    from tornado.ioloop import IOLoop
+
+    class Tornado(BokehTornado):
+        def resources(self, absolute_url=None):
+            res = super().resources(absolute_url)
+            return res.clone(components=[c for c in res.components if c in ("bokeh", "bokeh-widgets")])
+
+    sockets, port = bind_sockets(host, port)
+    origins = create_hosts_allowlist([f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"], port)
+    app = Tornado({"/": Application(FunctionHandler(page))}, extra_websocket_origins=origins,
+                  absolute_url=f"http://{host}:{port}", check_unused_sessions_milliseconds=1000,
+                  unused_session_lifetime_milliseconds=15000)
+    http = HTTPServer(app)
+    http.add_sockets(sockets)
+    return BaseServer(IOLoop.current(), app, http), port
 
 
 def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: bool = False,
           atlases=(), threshold: float = 40.0, ready=None) -> None:
-    """Serve the workbench until interrupted (Panel/Bokeh server, every asset served by it).
+    """Serve the workbench until interrupted (Bokeh's server, every asset served by it).
 
     ``files`` maps names to mechanisms read before serving; ``ready(url)`` is called
     once the server listens (the command prints the address).
     """
-    os.environ["BOKEH_RESOURCES"] = "server"      # Bokeh's and Panel's JS from this server, no CDN
-    warm_up_then = _start_warm_up(files, threshold)     # before Panel's import: they overlap
-    import panel as pn
-
-    warm, shown = warm_up_then()
-
-    pn.config.inline = False
-    pn.extension(design="native", notifications=False)
-
-    page = _page_maker(files, atlases, threshold, warm, shown)
-    server = pn.serve({"/": page}, port=port, address=host, show=False, start=False, title="multiloop",
-                      websocket_origin=[f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"],
-                      verbose=False, check_unused_sessions=1000, unused_session_lifetime=15000)
-    url = f"http://{host}:{server.port}/"
+    os.environ["BOKEH_RESOURCES"] = "server"      # BokehJS from this server, no CDN
+    warm_up_then = _start_warm_up(files, threshold)     # before Bokeh's import: they overlap
+    import bokeh.server.server  # noqa: F401 - imported first, then the warm-up's thread starts
+    page = _page_maker(files, atlases, threshold, *warm_up_then())
+    server, port = _make_server(page, port, host)
+    url = f"http://{host}:{port}/"
     if ready is not None:
         ready(url)
     if open_browser:

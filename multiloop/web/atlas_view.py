@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import html
 
-import panel as pn
+from bokeh.models import Button, Column, NumericInput, Row, Select, TextInput
 
 from multiloop.catalogue.atlas import Atlas
 from multiloop.catalogue.html import CSS, chain_card
 from multiloop.catalogue.synthesis import SynthesisOptions
 from multiloop.topo.errors import LinkageError
+
+from .glue import div
 
 __all__ = ["AtlasView"]
 
@@ -21,18 +23,18 @@ class AtlasView:
     def __init__(self, paths: list[str], say):
         self.say = say
         self.atlases = {p: Atlas(p, readonly=True) for p in paths}
-        self.file = pn.widgets.Select(name="atlas", options=list(self.atlases), width=260)
-        self.pair = pn.widgets.Select(name="n, F", options=[], width=120)
-        self.query = pn.widgets.TextInput(name="query (as atlas --query)", placeholder="V>=1 and planar",
-                                          width=280)
-        self.limit = pn.widgets.IntInput(name="at most", value=60, start=1, end=2000, width=90)
-        self.button = pn.widgets.Button(name="Show", button_type="primary", width=80)
-        self.cards = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.file.param.watch(lambda e: self._pairs(), "value")
-        self.button.on_click(lambda e: self.show())
-        self.pair.param.watch(lambda e: self.show(), "value")
-        self.query.param.watch(lambda e: self.show(), "value")
-        self.panel = pn.Column(pn.Row(self.file, self.pair, self.query, self.limit, self.button), self.cards)
+        paths = list(self.atlases)
+        self.file = Select(title="atlas", options=paths, value=paths[0] if paths else "", width=260)
+        self.pair = Select(title="n, F", options=[], width=120)
+        self.query = TextInput(title="query (as atlas --query)", placeholder="V>=1 and planar", width=280)
+        self.limit = NumericInput(title="at most", value=60, low=1, high=2000, mode="int", width=90)
+        self.button = Button(label="Show", button_type="primary", width=80, align="end")
+        self.cards = div("")
+        self.file.on_change("value", lambda attr, old, new: self._pairs())
+        self.button.on_click(lambda: self.show())
+        self.pair.on_change("value", lambda attr, old, new: self.show())
+        self.query.on_change("value", lambda attr, old, new: self.show())
+        self.panel = Column(Row(self.file, self.pair, self.query, self.limit, self.button), self.cards)
         self._pairs()
 
     def _pairs(self) -> None:
@@ -48,20 +50,20 @@ class AtlasView:
     def show(self) -> None:
         a = self.atlases.get(self.file.value)
         if a is None or not self.pair.value:
-            self.cards.object = "<p>no chains stored</p>"
+            self.cards.text = "<p>no chains stored</p>"
             return
         n, F = (int(v) for v in self.pair.value.split(","))
         q = self.query.value.strip() or None
         try:
             opts = SynthesisOptions(n, F)
             total = a.count(opts, q)
-            cards = [chain_card(i, r) for i, r in enumerate(a.chains(opts, q, limit=self.limit.value), 1)]
+            cards = [chain_card(i, r) for i, r in enumerate(a.chains(opts, q, limit=int(self.limit.value or 60)), 1)]
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.cards.object = (f"<style>{CSS}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
-                             f"{'' if q is None else ' matching ' + html.escape(q)}; {len(cards)} shown</p>"
-                             f"<div class='grid'>{''.join(cards)}</div>")
+        self.cards.text = (f"<style>{CSS}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
+                           f"{'' if q is None else ' matching ' + html.escape(q)}; {len(cards)} shown</p>"
+                           f"<div class='grid'>{''.join(cards)}</div>")
 
     def close(self) -> None:
         for a in self.atlases.values():

@@ -11,11 +11,11 @@ import html
 import json
 
 import numpy as np
-import panel as pn
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, Range1d, Span
+from bokeh.models import Button, Column, ColumnDataSource, Range1d, Row, Span
 from bokeh.plotting import figure
 
+from .glue import div
 from .scene import PALETTE, Sweep
 
 __all__ = ["CheckView", "events_of"]
@@ -61,23 +61,22 @@ class CheckView:
         self.fig.scatter("x", 0, source=self.events, marker="inverted_triangle", size=10, color="#d62728")
         self.fig.add_layout(self.cursor)
         self.fig.on_event(Tap, lambda e: self.move_to(e.x))
-        self.verdict = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.table = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.json = pn.pane.HTML("", sizing_mode="stretch_width")
+        self.verdict = div("", width=480)
+        self.table = div("")
+        self.json = div("")            # the JSON document, folded (<details>)
         # stops the running motion / check job (``cancel``), enabled while one runs
-        self.stop = pn.widgets.Button(name="Cancel check", button_type="warning", width=130, disabled=True,
-                                      css_classes=["ml-check-cancel"])
+        self.stop = Button(label="Cancel check", button_type="warning", width=130, disabled=True,
+                           css_classes=["ml-check-cancel"])
         if cancel is not None:
-            self.stop.on_click(lambda e: cancel())
-        self.panel = pn.Column(pn.Row(self.verdict, self.stop), pn.pane.Bokeh(self.fig), self.table,
-                               pn.Card(self.json, title="check --json", collapsed=True))
+            self.stop.on_click(lambda: cancel())
+        self.panel = Column(Row(self.verdict, self.stop), self.fig, self.table, self.json)
         self.doc: dict | None = None
 
     def busy(self, text: str, running: bool = False) -> None:
         """A status line instead of a report; ``running``: a job computes it (Cancel enabled)."""
         self.stop.disabled = not running
-        self.verdict.object = f'<p id="ml-check-status">{html.escape(text)}</p>'
-        self.json.object = self.table.object = ""
+        self.verdict.text = f'<p id="ml-check-status">{html.escape(text)}</p>'
+        self.json.text = self.table.text = ""
         self.events.data = dict(x=[], label=[])
         self.curves.data = dict(xs=[], ys=[], name=[], colour=[])
 
@@ -91,9 +90,11 @@ class CheckView:
             return []
         ok = "ok" if doc["ok"] else "faults found"
         items = "".join(f"<li>{html.escape(v)}</li>" for v in doc["verdict"]) or "<li>no fault found</li>"
-        self.verdict.object = (f'<h3 id="ml-check-status" data-ok="{str(doc["ok"]).lower()}">Verdict: {ok}</h3>'
-                               f"<ul>{items}</ul>")
-        self.json.object = f'<pre id="ml-check-json" data-mechanism="{html.escape(doc["mechanism"])}">{html.escape(json.dumps(doc, indent=1, allow_nan=False))}</pre>'
+        self.verdict.text = (f'<h3 id="ml-check-status" data-ok="{str(doc["ok"]).lower()}">Verdict: {ok}</h3>'
+                             f"<ul>{items}</ul>")
+        self.json.text = (f'<details><summary>check --json</summary><pre id="ml-check-json" '
+                          f'data-mechanism="{html.escape(doc["mechanism"])}">'
+                          f"{html.escape(json.dumps(doc, indent=1, allow_nan=False))}</pre></details>")
         if sw is None:
             return []
         ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]
@@ -106,7 +107,7 @@ class CheckView:
                                 name=list(sw.angle_names),
                                 colour=[PALETTE[c % len(PALETTE)] for c in range(A.shape[1])])
         rows = "".join(f"<tr><td>{x:.4g}</td><td>{html.escape(lb)}</td></tr>" for x, lb in sorted(ev))
-        self.table.object = (f'<table id="ml-check-events"><tr><th>{html.escape(sw.joint)} ({sw.unit})</th>'
-                             f"<th>event</th></tr>{rows}</table>"
-                             f"<p>flagged below {threshold:g}° (or above {180 - threshold:g}°)</p>")
+        self.table.text = (f'<table id="ml-check-events"><tr><th>{html.escape(sw.joint)} ({sw.unit})</th>'
+                           f"<th>event</th></tr>{rows}</table>"
+                           f"<p>flagged below {threshold:g}° (or above {180 - threshold:g}°)</p>")
         return ev

@@ -13,10 +13,10 @@ import html
 import json
 
 import numpy as np
-import panel as pn
-from bokeh.models import ColumnDataSource, Div, HoverTool, Range1d
+from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row, Select
 from bokeh.plotting import figure
 
+from .glue import Player, div
 from .scene import Scene, Sweep
 
 __all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
@@ -56,14 +56,6 @@ if (el) {
 """
 
 
-#: Panel's Player does not pass a new start/end to its range input: this glue does
-RANGE_JS = """
-const walk = (root, out) => { root.querySelectorAll('input[type=range]').forEach(e => out.push(e));
-  root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot, out); }); return out; };
-for (const el of walk(document, [])) { el.min = cb_obj.start; el.max = cb_obj.end; el.value = cb_obj.value; }
-"""
-
-
 def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
@@ -96,17 +88,16 @@ class MechanismView:
         self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
-        self.driver = pn.widgets.Select(name="driver", options=[], width=160)
-        self.player = pn.widgets.Player(name="", show_value=False, start=0, end=1, value=0, interval=40,
-                                        loop_policy="loop", width=380, show_loop_controls=False)
-        self.player.jscallback(value=REDRAW_JS, args=dict(sweep=self.sweep, links=self.links, joints=self.joints,
-                                                          readout=self.readout, cursors=self.cursors))
-        self.player.jscallback(start=RANGE_JS, end=RANGE_JS)
-        self.driver.param.watch(lambda e: self.use_driver(self.driver.options.index(e.new)
-                                                          if e.new in self.driver.options else 0), "value")
-        self.status = pn.pane.HTML("", sizing_mode="stretch_width")
-        self.panel = pn.Column(pn.Row(self.driver, self.player), self.status,
-                               pn.pane.Bokeh(self.readout), pn.pane.Bokeh(self.fig))
+        self.driver = Select(title="driver", options=[], width=160, visible=False)
+        self.player = Player(interval=40, width=380)
+        self.player.slider.js_on_change("value", CustomJS(
+            args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
+                      cursors=self.cursors), code=REDRAW_JS))
+        self.driver.on_change("value", lambda attr, old, new: self.use_driver(
+            self.driver.options.index(new) if new in self.driver.options else 0))
+        self.status = div("")
+        self.panel = Column(Row(self.driver, self.player.play, self.player.slider), self.status,
+                            self.readout, self.fig)
 
     def _figure(self):
         # fixed ranges (set from the whole sweep): a frame repaints the glyphs, never the axes
@@ -174,9 +165,9 @@ class MechanismView:
         self.player.disabled = False
         self._fit(sw.nodes)
         i = sw.reference_index
-        self.player.param.update(start=0, end=max(len(sw.x) - 1, 1), value=i)
-        self.status.object = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
-                              f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
+        self.player.frames(len(sw.x), i)
+        self.status.text = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
+                            f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
         self.draw_frame(i)
 
     def _fit(self, nodes: np.ndarray) -> None:
@@ -210,7 +201,7 @@ class MechanismView:
     def move_to(self, x: float) -> None:
         """Move the player to the frame nearest driver value ``x`` (deg or m)."""
         i = int(np.argmin(np.abs(self.current.x - x)))
-        self.player.value = i
+        self.player.slider.value = i
         self.draw_frame(i)
 
     def mark(self, events: list[tuple[float, str]]) -> None:

@@ -1,6 +1,6 @@
 """The first page's content, computed by a second process while the server starts.
 
-``multiloop serve`` spends about a second importing Panel and Bokeh before it listens;
+``multiloop serve`` spends about a second importing Bokeh before it listens;
 the first mechanism's drawing, structure, motion and check need about as long again,
 mostly to import the solvers (networkx, SciPy).  Done one after the other in the server's
 process they are the larger part of the page's load time.  A child process
@@ -73,13 +73,12 @@ def main(argv: list[str]) -> int:
         pickle.dump((kind, value), out)
         out.flush()
 
-    from multiloop.kin.check import check
-
     from .scene import scene_of, sweep_driver
     from .structure_view import structure_html
     send("scene", (scene_of(m), structure_html(m)))
     if m.drivers and m.has_geometry:
         send("sweeps", tuple(sweep_driver(m, k, cancel=cancel) for k in range(len(m.drivers))))
+        from multiloop.kin.check import check      # after the first page's needs
         send("check", check(m, min_transmission=threshold, cancel=cancel).as_dict())
     return 0
 

@@ -15,12 +15,13 @@ import io
 from dataclasses import dataclass
 
 import numpy as np
-import panel as pn
-from bokeh.models import ColumnDataSource, FreehandDrawTool
+from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FileInput, FreehandDrawTool,
+                          NumericInput, Row, Select, TextInput)
 from bokeh.plotting import figure
 
 from multiloop.topo.errors import InputError, LinkageError, explain
 
+from .glue import Download, div, on_upload, progress_html
 from .jobs import Job
 
 __all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
@@ -121,33 +122,37 @@ def _float_or_none(text: str, what: str):
     return v
 
 
+#: the link counts offered to the synthesis without a start (``--links``)
+LINK_CHOICES = ("4", "6", "8")
+
+
 def _widgets() -> dict:
-    w = pn.widgets
+    def number(title, value, mode="float", width=100, **kw):
+        return NumericInput(title=title, value=value, mode=mode, width=width, **kw)
     return dict(
-        start=w.Select(name="start mechanism", options=[], width=200, css_classes=["ml-start"]),
-        point=w.Select(name="tracer point (--point)", options=[], width=160),
-        csv=w.FileInput(name="target CSV", accept=".csv,.txt", multiple=False),
-        method=w.Select(name="method", options=["de", "cmaes"], value="de", width=90),
-        seed=w.IntInput(name="seed", value=0, width=90),
-        budget=w.FloatInput(name="budget (s)", value=4.0, start=0.1, width=100, css_classes=["ml-budget"]),
-        tol=w.FloatInput(name="tol", value=1e-6, width=100),
-        candidates=w.IntInput(name="candidates", value=1, start=1, end=8, width=100),
-        shape_only=w.Checkbox(name="shape only", value=False),
-        full_rotation=w.Checkbox(name="full rotation", value=False),
-        min_transmission=w.TextInput(name="min transmission (deg)", value="", width=150),
-        max_ratio=w.TextInput(name="max ratio", value="", width=100),
-        length_low=w.TextInput(name="length ≥ (m)", value="", width=100),
-        length_high=w.TextInput(name="length ≤ (m)", value="", width=100),
-        run=w.Button(name="Run", button_type="primary", width=90),
-        cancel=w.Button(name="Cancel", button_type="warning", width=90, disabled=True),
-        clear=w.Button(name="Clear target", width=110),
-        progress=pn.indicators.Progress(value=0, max=1000, width=300, name="progress"),
-        atlas=w.TextInput(name="atlas (--db)", value="atlas.sqlite", width=260, css_classes=["ml-atlas"]),
-        links=w.CheckBoxGroup(name="links (--links)", options=["4", "6", "8"], value=["4", "6", "8"], inline=True),
-        top=w.IntInput(name="designs (--top)", value=3, start=1, end=10, width=110),
-        ties=w.FloatInput(name="ties (--tol)", value=1e-4, start=0.0, width=100),
-        pick=w.Select(name="candidate", options=[], width=120),
-        open=w.Button(name="Open in mechanism view", width=190),
+        start=Select(title="start mechanism", options=[], width=200, css_classes=["ml-start"]),
+        point=Select(title="tracer point (--point)", options=[], width=160),
+        csv=FileInput(title="target CSV", accept=".csv,.txt", multiple=False),
+        method=Select(title="method", options=["de", "cmaes", "local"], value="de", width=90),
+        seed=number("seed", 0, "int", 90),
+        budget=number("budget (s)", 4.0, low=0.1, css_classes=["ml-budget"]),
+        tol=number("tol", 1e-6),
+        candidates=number("candidates", 1, "int", low=1, high=8),
+        shape_only=Checkbox(label="shape only", active=False),
+        full_rotation=Checkbox(label="full rotation", active=False),
+        min_transmission=TextInput(title="min transmission (deg)", value="", width=150),
+        max_ratio=TextInput(title="max ratio", value="", width=100),
+        length_low=TextInput(title="length ≥ (m)", value="", width=100),
+        length_high=TextInput(title="length ≤ (m)", value="", width=100),
+        run=Button(label="Run", button_type="primary", width=90),
+        cancel=Button(label="Cancel", button_type="warning", width=90, disabled=True),
+        clear=Button(label="Clear target", width=110),
+        atlas=TextInput(title="atlas (--db)", value="atlas.sqlite", width=260, css_classes=["ml-atlas"]),
+        links=CheckboxGroup(labels=list(LINK_CHOICES), active=list(range(len(LINK_CHOICES))), inline=True),
+        top=number("designs (--top)", 3, "int", 110, low=1, high=10),
+        ties=number("ties (--tol)", 1e-4, low=0.0),
+        pick=Select(title="candidate", options=[], width=120),
+        open=Button(label="Open in mechanism view", width=190),
     )
 
 
@@ -171,25 +176,25 @@ class SynthesisView:
         self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
-        w["start"].param.watch(lambda e: self._start_changed(), "value")
-        w["csv"].param.watch(lambda e: self._upload(), "value")
-        w["run"].on_click(lambda e: self.run())
-        w["cancel"].on_click(lambda e: self.cancel())
-        w["clear"].on_click(lambda e: self._clear())
-        w["open"].on_click(lambda e: self._open())
-        w["pick"].param.watch(lambda e: self._draw_candidates(), "value")
-        self.status = pn.pane.HTML('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
-        self.table = pn.pane.HTML("")
-        self.downloads = [pn.widgets.FileDownload(callback=lambda f=f: self._download(f), filename=f"candidate.{f}",
-                                                  label=f"Download .{f}", width=150) for f in ("toml", "pyslvs")]
-        self.atlas_box = pn.Column(w["atlas"], pn.Row(pn.pane.HTML("links (--links):"), w["links"]),
-                                   pn.Row(w["top"], w["ties"]), visible=False)
-        self.panel = pn.Row(
-            pn.Column(w["start"], self.atlas_box, w["point"], w["csv"], pn.Row(w["method"], w["seed"], w["budget"]),
-                      pn.Row(w["tol"], w["candidates"]), pn.Row(w["shape_only"], w["full_rotation"]),
-                      pn.Row(w["min_transmission"], w["max_ratio"]), pn.Row(w["length_low"], w["length_high"]),
-                      pn.Row(w["run"], w["cancel"], w["clear"]), w["progress"], self.status, width=380),
-            pn.Column(pn.pane.Bokeh(self.fig), self.table, pn.Row(w["pick"], w["open"]), pn.Row(*self.downloads)))
+        w["start"].on_change("value", lambda attr, old, new: self._start_changed())
+        on_upload(w["csv"], self._upload, say)
+        w["run"].on_click(lambda: self.run())
+        w["cancel"].on_click(lambda: self.cancel())
+        w["clear"].on_click(lambda: self._clear())
+        w["open"].on_click(lambda: self._open())
+        w["pick"].on_change("value", lambda attr, old, new: self._draw_candidates())
+        self.status = div('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
+        self.progress = div(progress_html(0.0))
+        self.table = div("")
+        self.downloads = [Download(f"Download .{f}", lambda f=f: self._named_download(f)) for f in ("toml", "pyslvs")]
+        self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
+                                Row(w["top"], w["ties"]), visible=False)
+        self.panel = Row(
+            Column(w["start"], self.atlas_box, w["point"], w["csv"], Row(w["method"], w["seed"], w["budget"]),
+                   Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
+                   Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
+                   Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
+            Column(self.fig, self.table, Row(w["pick"], w["open"]), Row(*(d.button for d in self.downloads))))
 
     def _figure(self):
         f = figure(width=560, height=440, match_aspect=True, tools="pan,wheel_zoom,reset", name="ml-target",
@@ -218,25 +223,24 @@ class SynthesisView:
             self.say(str(exc))
             return
         self.w["point"].options = [p.name for p in m.points]
-        self.w["point"].value = m.points[0].name if m.points else None
+        self.w["point"].value = m.points[0].name if m.points else ""
         if len(m.drivers) == 1 and m.points:
             P = traced(m)
             self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
 
 
-    def _upload(self) -> None:
+    def _upload(self, name: str, data: bytes) -> None:
         from multiloop.catalogue.dimensional.targets import parse_table
         from multiloop.inputs import upload_text
-        name = self.w["csv"].filename or "target.csv"
         try:
-            a = parse_table(upload_text(name, self.w["csv"].value or b""), (2, 3), "path", name)
+            a = parse_table(upload_text(name, data), (2, 3), "path", name)
         except LinkageError as exc:
             self.say(str(exc))
             return
         self.target = a
         self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
         self.strokes.data = dict(xs=[], ys=[])
-        self.status.object = f'<p id="ml-synthesis-status">target: {html.escape(name)}, {len(a)} rows</p>'
+        self.status.text = f'<p id="ml-synthesis-status">target: {html.escape(name)}, {len(a)} rows</p>'
 
     def _clear(self) -> None:
         self.target = None
@@ -256,9 +260,9 @@ class SynthesisView:
         lo, hi = (_float_or_none(w["length_low"].value, "length ≥"), _float_or_none(w["length_high"].value, "length ≤"))
         if (lo is None) != (hi is None):
             raise InputError(explain("length bounds", expected="both LOW and HIGH, or neither", got="one of them"))
-        return dict(point=w["point"].value or None, shape_only=w["shape_only"].value, method=w["method"].value,
-                    seed=w["seed"].value, budget=w["budget"].value, tol=w["tol"].value,
-                    full_rotation=w["full_rotation"].value,
+        return dict(point=w["point"].value or None, shape_only=w["shape_only"].active, method=w["method"].value,
+                    seed=w["seed"].value or 0, budget=w["budget"].value, tol=w["tol"].value,
+                    full_rotation=w["full_rotation"].active,
                     min_transmission=_float_or_none(w["min_transmission"].value, "min transmission"),
                     max_ratio=_float_or_none(w["max_ratio"].value, "max ratio"),
                     length_bounds=None if lo is None else (lo, hi))
@@ -285,14 +289,15 @@ class SynthesisView:
         else:
             self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
         self.w["run"].disabled, self.w["cancel"].disabled = True, False
-        self.status.object = '<p id="ml-synthesis-status" data-state="running">running…</p>'
+        self.status.text = '<p id="ml-synthesis-status" data-state="running">running…</p>'
 
     def _atlas_options(self, options: dict) -> dict:
         """The keywords of the synthesis without a start (as ``multiloop synthesise``
         without START: ``--db``, ``--links``, ``--top``, ``--tol``, ``--budget``, ``--seed``)."""
         from multiloop.catalogue.topology_synthesis import parse_links
         w = self.w
-        return dict(atlas=(w["atlas"].value or "").strip(), links=parse_links(",".join(sorted(w["links"].value))),
+        links = ",".join(LINK_CHOICES[i] for i in sorted(w["links"].active))
+        return dict(atlas=(w["atlas"].value or "").strip(), links=parse_links(links),
                     top=int(w["top"].value or 0), budget=float(options["budget"]), point="P",
                     tol=float(w["ties"].value or 0.0), seed=int(options["seed"] or 0))
 
@@ -306,30 +311,30 @@ class SynthesisView:
         if getattr(job, "detach", False) and job.running:
             self.job = None
             self.w["run"].disabled, self.w["cancel"].disabled = False, True
-            self.status.object = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
-                                  "the atlas search stops at its next polish</p>")
+            self.status.text = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
+                                "the atlas search stops at its next polish</p>")
 
     def poll(self) -> None:
         """Called by the session's periodic callback: progress, then the candidates."""
         job = self.job
         if job is None:
             return
-        self.w["progress"].value = int(1000 * min(job.fraction, 1.0))
+        self.progress.text = progress_html(job.fraction)
         done = list(getattr(job, "partial", []))
         if len(done) != len(self.results):
             self.results = done
             self._list()
         if job.running:
             best = "" if not np.isfinite(job.best) else f", best objective {job.best:.3g}"
-            self.status.object = (f'<p id="ml-synthesis-status" data-state="running">running '
-                                  f'{100 * job.fraction:.0f} %{best}</p>')
+            self.status.text = (f'<p id="ml-synthesis-status" data-state="running">running '
+                                f'{100 * job.fraction:.0f} %{best}</p>')
             return
         self.job = None
         self.w["run"].disabled, self.w["cancel"].disabled = False, True
         if job.state == "failed":
             self.say(job.error)
-        self.status.object = (f'<p id="ml-synthesis-status" data-state="{job.state}">{job.state}: '
-                              f'{len(self.results)} candidate(s)</p>')
+        self.status.text = (f'<p id="ml-synthesis-status" data-state="{job.state}">{job.state}: '
+                            f'{len(self.results)} candidate(s)</p>')
 
 
     def _list(self) -> None:
@@ -344,9 +349,9 @@ class SynthesisView:
             rows.append(f'<tr data-candidate="{i}"><td>{i}</td><td>{r.error_max:.3g}</td><td>{r.error_rms:.3g}</td>'
                         f"<td>{len(m.links)}</td><td>{html.escape(formula)}</td><td>{r.seed}</td>"
                         f"<td>{html.escape(r.stopped)}</td></tr>")
-        self.table.object = ('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
-                             "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>"
-                             + "".join(rows) + "</table>")
+        self.table.text = ('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
+                           "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>"
+                           + "".join(rows) + "</table>")
         self.w["pick"].options = [str(i) for i in range(1, len(self.results) + 1)]
         if self.results:
             best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms)
@@ -388,7 +393,11 @@ class SynthesisView:
         except LinkageError as exc:
             self.say(str(exc))
             return None
-        for d in self.downloads:
-            if d.filename.endswith(fmt):
-                d.filename = f"{m.name or 'candidate'}.{fmt}"
         return io.BytesIO(text.encode("utf-8"))
+
+    def _named_download(self, fmt: str):
+        """(file name, text) of the chosen candidate for the download button, or None."""
+        out = self._download(fmt)
+        if out is None:
+            return None
+        return f"{self._chosen().mechanism.name or 'candidate'}.{fmt}", out.getvalue().decode("utf-8")

@@ -1,0 +1,144 @@
+"""The three widgets the page needs that Bokeh does not have, each a Bokeh model plus a
+few lines of BokehJS glue: a player (a frame slider and a play toggle), a download
+button for text made on the server, and a progress bar.
+
+Everything else on the page is a stock Bokeh model (``bokeh.models``).  Bokeh alone,
+without a widget layer on top, is what makes the page load fast: a server that imports
+Panel as well spends ~0.6 s more before it listens and sends ~0.8 MB more script
+(docs/web.md gives the measurements).
+"""
+from __future__ import annotations
+
+import base64
+
+from bokeh.models import Button, CustomJS, Div, Slider, Toggle
+
+from multiloop.topo.errors import InputError, explain
+
+__all__ = ["Player", "Download", "progress_html", "div", "upload_bytes", "on_upload"]
+
+#: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
+#: from the end back to the start (one timer per slider, stopped with the toggle)
+PLAY_JS = """
+const key = '__mlPlay' + slider.id;
+if (window[key]) { clearInterval(window[key]); window[key] = null; }
+if (cb_obj.active) {
+  window[key] = setInterval(() => {
+    slider.value = slider.value >= slider.end ? slider.start : slider.value + 1;
+  }, interval);
+}
+cb_obj.label = cb_obj.active ? '❚❚ pause' : '▶ play';
+"""
+
+#: the download button's glue: the server puts [count, file name, text] in the button's
+#: tags; the browser saves the text under that name (a blob: URL, nothing fetched)
+DOWNLOAD_JS = """
+const [count, name, text] = cb_obj.tags;
+if (!name) { return; }
+const a = document.createElement('a');
+a.href = URL.createObjectURL(new Blob([text], {type: 'text/plain'}));
+a.download = name;
+document.body.appendChild(a); a.click(); a.remove();
+setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+"""
+
+
+class Player:
+    """A frame slider (``slider``, model name ``ml-frame``) and a play toggle (``play``)
+    that steps it in the browser every ``interval`` ms: playing costs the server nothing."""
+
+    def __init__(self, interval: int = 40, width: int = 380):
+        self.slider = Slider(start=0, end=1, value=0, step=1, title="frame", show_value=False, width=width,
+                             name="ml-frame", css_classes=["ml-frame"])
+        self.play = Toggle(label="▶ play", width=90, css_classes=["ml-play"])
+        self.play.js_on_change("active", CustomJS(args=dict(slider=self.slider, interval=int(interval)),
+                                                  code=PLAY_JS))
+
+    def frames(self, n: int, value: int) -> None:
+        """``n`` frames (at least 2 positions on the slider), at frame ``value``."""
+        self.slider.update(start=0, end=max(n - 1, 1), value=int(value))
+
+    @property
+    def disabled(self) -> bool:
+        return self.slider.disabled
+
+    @disabled.setter
+    def disabled(self, off: bool) -> None:
+        self.slider.disabled = self.play.disabled = bool(off)
+        if off:
+            self.play.active = False
+
+
+class Download:
+    """A button that downloads text the server makes when it is clicked:
+    ``make()`` returns (file name, text), or None when there is nothing to download."""
+
+    def __init__(self, label: str, make, width: int = 150):
+        self.make = make
+        self.count = 0
+        self.button = Button(label=label, width=width, tags=[0, "", ""])
+        self.button.js_on_change("tags", CustomJS(code=DOWNLOAD_JS))
+        self.button.on_click(lambda: self.click())
+
+    def click(self) -> None:
+        out = self.make()
+        if out is not None:
+            self.count += 1
+            self.button.tags = [self.count, out[0], out[1]]
+
+
+def progress_html(fraction: float) -> str:
+    """A progress bar (``<progress id="ml-progress">``) at ``fraction`` of 1."""
+    v = int(round(1000 * min(max(fraction, 0.0), 1.0)))
+    return f'<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>'
+
+
+def div(text: str = "", **kw) -> Div:
+    """A Div of page HTML (stretching to the width unless a width is given)."""
+    if "width" not in kw:
+        kw.setdefault("sizing_mode", "stretch_width")
+    return Div(text=text, **kw)
+
+
+def upload_bytes(value) -> bytes:
+    """The bytes of a file input's value (Bokeh's FileInput sends them base64-encoded)."""
+    if isinstance(value, (bytes, bytearray)):
+        return bytes(value)
+    try:
+        return base64.b64decode(value or "", validate=True)
+    except ValueError:
+        raise InputError(explain("upload", expected="a file's bytes (base64 from the page)",
+                                 got="an undecodable value")) from None
+
+
+def on_upload(file_input, fn, fail) -> None:
+    """Call ``fn(file name, bytes)`` when the page sends a file through ``file_input``
+    (``fail(message)`` if its bytes cannot be read).
+
+    The browser sends the file's value and its name in one message, in either order:
+    in a served page the call waits for the next tick, when both are set (outside a
+    page, a new value calls at once)."""
+    pending = []
+
+    def read():
+        pending.clear()
+        try:
+            name = file_input.filename
+        except ValueError:                 # not sent (yet): Bokeh's UnsetValueError
+            name = ""
+        try:
+            data = upload_bytes(file_input.value)
+        except InputError as exc:
+            fail(str(exc))
+            return
+        fn(name or "upload", data)
+
+    def changed(attr, old, new):
+        doc = file_input.document
+        if doc is None or getattr(doc, "session_context", None) is None:
+            if attr == "value":
+                read()
+        elif not pending:
+            pending.append(doc.add_next_tick_callback(read))
+    file_input.on_change("value", changed)
+    file_input.on_change("filename", changed)
