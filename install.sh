@@ -12,6 +12,10 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook,web,browser-test,curves]"
+# byte-compile the package now, as pip does for a regular install and not for an editable
+# one: the first run of each command (and every run where PYTHONDONTWRITEBYTECODE is set)
+# then reads bytecode instead of compiling its modules
+python3 -m compileall -q multiloop topo kin catalogue >/dev/null
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"
