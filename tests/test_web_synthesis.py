@@ -93,8 +93,8 @@ def test_no_start_lists_designs_that_solve_pass_check_and_open_and_download(tiny
     sv.w["pick"].value = "1"
     sv._open()
     assert wb.mechanism is sv.results[0].mechanism and wb.message.text == '<div id="ml-message"></div>'
-    toml = load_upload("d.toml", sv._download("toml").read())           # read back as an upload
-    pys = load_upload("d.pyslvs", sv._download("pyslvs").read())
+    toml = load_upload("d.toml", sv._download("toml")[1].encode())           # read back as an upload
+    pys = load_upload("d.pyslvs", sv._download("pyslvs")[1].encode())
     assert wb.message.text == '<div id="ml-message"></div>'
     ref = solve(sv.results[0].mechanism, [0.0, 0.5]).point_positions
     assert np.allclose(solve(toml, [0.0, 0.5]).point_positions, ref, atol=1e-9)

@@ -11,7 +11,6 @@ downloads as ``.toml`` or ``.pyslvs`` (:mod:`multiloop.topo.pyslvs`).
 from __future__ import annotations
 
 import html
-import io
 from dataclasses import dataclass
 
 import numpy as np
@@ -186,7 +185,7 @@ class SynthesisView:
         self.status = div('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
         self.progress = div(progress_html(0.0))
         self.table = div("")
-        self.downloads = [Download(f"Download .{f}", lambda f=f: self._named_download(f)) for f in ("toml", "pyslvs")]
+        self.downloads = [Download(f"Download .{f}", lambda f=f: self._download(f)) for f in ("toml", "pyslvs")]
         self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
                                 Row(w["top"], w["ties"]), visible=False)
         self.panel = Row(
@@ -381,7 +380,8 @@ class SynthesisView:
             self.say(str(exc))
 
     def _download(self, fmt: str):
-        """The chosen candidate as ``.toml`` or ``.pyslvs`` text (nothing kept on the server)."""
+        """(file name, text) of the chosen candidate as ``.toml`` or ``.pyslvs``, made in
+        memory (nothing kept on the server); None, with the message shown, if it fails."""
         try:
             m = self._chosen().mechanism
             if fmt == "toml":
@@ -393,11 +393,4 @@ class SynthesisView:
         except LinkageError as exc:
             self.say(str(exc))
             return None
-        return io.BytesIO(text.encode("utf-8"))
-
-    def _named_download(self, fmt: str):
-        """(file name, text) of the chosen candidate for the download button, or None."""
-        out = self._download(fmt)
-        if out is None:
-            return None
-        return f"{self._chosen().mechanism.name or 'candidate'}.{fmt}", out.getvalue().decode("utf-8")
+        return f"{m.name or 'candidate'}.{fmt}", text
