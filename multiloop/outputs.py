@@ -276,6 +276,11 @@ class Outputs:
         self._files.append((p, bytes(data), what))
         return p
 
+    def add_files(self, directory, files, what: str = "output") -> None:
+        """Stage every ``name: data`` of ``files`` as ``directory/name``."""
+        for name, data in files.items():
+            self.add(Path(directory) / name, data, what)
+
     def add_figure(self, path, fig, what: str = "--plot", close: bool = True, **savefig) -> Path:
         """Render a matplotlib figure in memory in the format of ``path``'s suffix and stage it.
 
