@@ -32,8 +32,8 @@ def _check_options(req: Mapping) -> None:
     for flag, (key, lo, hi) in INT_RANGES.items():
         value = req[key]
         if value is not None and not lo <= value <= hi:
-            raise InputError(explain(flag, expected=f"an integer from {lo} to {hi}",
-                                     got=str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"))
+            got = str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"
+            raise InputError(explain(flag, expected=f"an integer from {lo} to {hi}", got=got))
     if req["query"] is not None:
         parse_query(req["query"])
     if req["table"] and req["links"] is None:
