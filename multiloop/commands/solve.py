@@ -12,6 +12,7 @@ Files are written only after the whole solve and all figures succeeded.
 from __future__ import annotations
 
 import sys
+
 from multiloop.outputs import dumps_json, Outputs, quiet_warnings
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
