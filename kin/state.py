@@ -33,7 +33,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from .result import BatchStatus, inputs_json, json_ready
 from .rigid import move_point
 
-__all__ = ["KinematicState", "doc_csv", "doc_text"]
+__all__ = ["KinematicState", "doc_csv", "doc_text", "failure_text"]
 
 
 @dataclass(frozen=True)
@@ -214,3 +214,13 @@ def doc_text(doc: dict) -> str:
     for n in doc["notes"]:
         lines.append(f"note: {n}")
     return "\n".join(lines)
+
+
+def failure_text(state: KinematicState, doc: dict) -> str:
+    """One line on the failed positions of ``state`` (at least one), whose document is
+    ``doc``: how many, and the first with its input (user units) and reason."""
+    bad = np.flatnonzero(~state.ok)
+    x0 = doc["input"][int(bad[0])]
+    unit = "/".join(sorted({d["unit"] for d in doc["drivers"]}))
+    shown = f"{x0}" if isinstance(x0, list) else f"{x0:g}"
+    return f"{bad.size} of {state.n_positions} positions failed; first at input {shown} {unit}: {state.status[bad[0]]}"

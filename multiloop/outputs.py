@@ -268,6 +268,11 @@ class Outputs:
         """Validate a file target now (before the work); returns it."""
         return check_target(path, what, formats, pending=[d for d, _ in self._dirs])
 
+    def figure_target(self, path, what: str = "--plot") -> Path | None:
+        """Validate a figure target now, in a format matplotlib writes (no suffix: PNG);
+        None when ``path`` is None (no figure asked for)."""
+        return None if path is None else self.target(path, what, formats=("",) + figure_formats())
+
     def add(self, path, data, what: str = "output") -> Path:
         """Stage ``data`` (bytes, or text written as UTF-8) for ``path``."""
         p = self.target(path, what)
@@ -275,6 +280,11 @@ class Outputs:
             data = data.encode("utf-8")
         self._files.append((p, bytes(data), what))
         return p
+
+    def add_files(self, directory, files, what: str = "output") -> None:
+        """Stage every ``name: data`` of ``files`` as ``directory/name``."""
+        for name, data in files.items():
+            self.add(Path(directory) / name, data, what)
 
     def add_figure(self, path, fig, what: str = "--plot", close: bool = True, **savefig) -> Path:
         """Render a matplotlib figure in memory in the format of ``path``'s suffix and stage it.

@@ -7,12 +7,15 @@
 * :func:`plot_analogues` — the analogues against the input: ω = dθ/dφ and
   ε = d²θ/dφ² of every moving link, and the speed |v| and acceleration |a| of the
   tracer points (or of the joints when there is none);
-* :func:`animate` — one cycle as a GIF (matplotlib's ``PillowWriter``).
+* :func:`animate` — one cycle as a GIF (matplotlib's ``PillowWriter``);
+* :func:`iter_solve_figures` — the two figures of ``multiloop solve --plot``.
 
 All functions take a :class:`~kin.state.KinematicState` and return the figure
 (or write the file), so they can be used from the API and from the CLI.
 """
 from __future__ import annotations
+
+from pathlib import Path
 
 import matplotlib
 
@@ -28,7 +31,7 @@ from .geometry import extent, is_full_turn, link_outlines, path_pieces, slider_g
 from .labels import place_labels  # noqa: E402
 from .style import no_mathtext  # noqa: E402
 
-__all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis"]
+__all__ = ["plot_mechanism", "plot_analogues", "animate", "input_axis", "iter_solve_figures"]
 
 _COLORS = plt.rcParams["axes.prop_cycle"].by_key()["color"]
 
@@ -192,6 +195,16 @@ def plot_analogues(state: KinematicState):
     no_mathtext(fig)
     fig.tight_layout()
     return fig
+
+
+def iter_solve_figures(state: KinematicState, path):
+    """``(path, figure)`` pairs, each figure made when asked for: the mechanism at its
+    first regular position (not a degenerate one) with its paths as ``path``, and the
+    analogues as ``<stem>_analogues<suffix>`` (``.png`` when ``path`` has no suffix)."""
+    p = Path(path)
+    shown = np.flatnonzero(state.ok)
+    yield p, plot_mechanism(state, int(shown[0]) if shown.size else 0)
+    yield p.with_name(p.stem + "_analogues" + (p.suffix or ".png")), plot_analogues(state)
 
 
 def animate(state: KinematicState, path, fps: int = 20, max_frames: int = 120) -> None:

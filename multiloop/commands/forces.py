@@ -25,7 +25,7 @@ from multiloop.kin.forces import forces, has_loads, table_period
 from multiloop.kin.result import json_ready
 from multiloop.kin.sweep import cycle_inputs, driver_forces
 from multiloop.inputs import load_mechanism_or_engine
-from multiloop.outputs import Outputs, dumps_json, figure_formats, quiet_warnings
+from multiloop.outputs import Outputs, dumps_json, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 
 
@@ -42,8 +42,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     outs = Outputs("multiloop forces")
-    if args.plot is not None:
-        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    outs.figure_target(args.plot)
     m = load_mechanism_or_engine(args.file)
     if not m.drivers:
         raise InputError(explain("[[driver]]", expected="at least one driver", got="none",

@@ -15,7 +15,7 @@ import argparse
 from multiloop.kin.spatial.platform import load_platform
 from multiloop.kin.spatial.report import platform_report
 from multiloop.inputs import resolve
-from multiloop.outputs import emit, figure_formats, Outputs, quiet_warnings
+from multiloop.outputs import emit, Outputs, quiet_warnings
 
 __all__ = ["add_arguments", "run"]
 
@@ -32,8 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     outs = Outputs("multiloop platform")
-    if args.plot is not None:
-        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    outs.figure_target(args.plot)
     platform = load_platform(resolve(args.file, ("platforms",)))
     rep = platform_report(platform, args.modes)
     if args.plot is not None:

@@ -12,11 +12,8 @@ Files are written only after the whole solve and all figures succeeded.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
-import numpy as np
-
-from multiloop.outputs import dumps_json, figure_formats, Outputs, quiet_warnings
+from multiloop.outputs import dumps_json, Outputs, quiet_warnings
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
 __all__ = ["add_arguments", "run"]
@@ -53,13 +50,12 @@ def run(args) -> int:
     import warnings
 
     from multiloop.kin.solve import compile_plan, solve
-    from multiloop.kin.state import doc_csv, doc_text
+    from multiloop.kin.state import doc_csv, doc_text, failure_text
     from multiloop.kin.sweep import input_range, si_inputs
 
     m = load(args.file)
     outs = Outputs("multiloop solve")
-    if args.plot is not None:
-        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    outs.figure_target(args.plot)
     if args.animate is not None:
         outs.target(args.animate, "--animate", formats=("gif",))
     for flag, path in (("--svg", args.svg), ("--dxf", args.dxf)):
@@ -75,12 +71,10 @@ def run(args) -> int:
     doc = state.as_dict(plan.assur.formula, x_cli, derivatives=args.derivatives)   # the rates only when asked
     # render every file in memory first: nothing is written half-way
     if args.plot is not None:
-        from multiloop.kin.figures.mechanism import plot_analogues, plot_mechanism
-        p = Path(args.plot)
+        from multiloop.kin.figures.mechanism import iter_solve_figures
         with quiet_warnings("multiloop solve"):
-            shown = np.flatnonzero(state.ok)    # the first regular pose, not a degenerate one
-            outs.add_figure(p, plot_mechanism(state, int(shown[0]) if shown.size else 0))
-            outs.add_figure(p.with_name(p.stem + "_analogues" + (p.suffix or ".png")), plot_analogues(state))
+            for path, fig in iter_solve_figures(state, args.plot):
+                outs.add_figure(path, fig)
     if args.animate is not None:
         from multiloop.kin.figures.mechanism import animate
         outs.add_rendered(args.animate, lambda tmp: animate(state, tmp), "--animate")
@@ -99,11 +93,5 @@ def run(args) -> int:
     outs.commit()
     print(text)
     if not state.success:
-        bad = np.flatnonzero(~state.ok)
-        x0 = doc["input"][int(bad[0])]
-        unit = "/".join(sorted({d["unit"] for d in doc["drivers"]}))
-        print(f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
-              f"{x0:g} {unit}: {state.status[bad[0]]}" if not isinstance(x0, list) else
-              f"multiloop solve: {bad.size} of {state.n_positions} positions failed; first at input "
-              f"{x0} {unit}: {state.status[bad[0]]}", file=sys.stderr)
+        print(f"multiloop solve: {failure_text(state, doc)}", file=sys.stderr)
     return 0

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import sys
 
-from multiloop.outputs import Outputs, dumps_json, figure_formats, quiet_warnings
+from multiloop.outputs import Outputs, dumps_json, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.formats import dumps_mechanism
@@ -123,8 +123,7 @@ def run(args) -> int:
     m = load(args.start)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
-    if args.plot is not None:
-        outs.target(args.plot, "--plot", formats=("",) + figure_formats())
+    outs.figure_target(args.plot)
     with progress_bar(sys.stderr.isatty() and not args.json) as cb:     # the library checks the task
         res = synthesise(m, path=args.path, point=args.point, shape_only=args.shape_only, function=args.function,
                          output=args.output, motion=args.motion, link=args.link, seed=args.seed,

@@ -1,0 +1,98 @@
+"""The request of ``multiloop atlas`` checked, and its build sequence: chains, then the
+mechanisms (inversions) and their coupler curves.
+
+:func:`atlas_request` checks every option before the atlas file is opened (a rejected
+run creates no file) and returns the :class:`~.synthesis.SynthesisOptions` of the
+chains to build; :func:`build_atlas` runs the builds the options ask for.
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from multiloop.topo.errors import InputError, explain
+
+from .atlas import Atlas, BuildResult, parse_query
+from .synthesis import SynthesisOptions
+
+__all__ = ["INT_RANGES", "atlas_request", "build_atlas"]
+
+#: the integer options, their names in the request and their ranges (SQLite and C ints
+#: stop at 2**63 and 2**31)
+INT_RANGES = {"--dof": ("dof", 1, 2 ** 31 - 1),
+              "--max-multiplicity": ("max_multiplicity", 1, 2 ** 31 - 1),
+              "--max-link-degree": ("max_link_degree", 2, 2 ** 31 - 1),
+              "--workers": ("workers", 1, 1024), "--limit": ("limit", 0, 2 ** 63 - 1),
+              "--curves": ("curves", 1, 10 ** 6),
+              "--html-limit": ("html_limit", 1, 2 ** 63 - 1)}
+
+
+def _check_options(req: Mapping) -> None:
+    """Every integer option within its range, the query well formed."""
+    for flag, (key, lo, hi) in INT_RANGES.items():
+        value = req[key]
+        if value is not None and not lo <= value <= hi:
+            got = str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"
+            raise InputError(explain(flag, expected=f"an integer from {lo} to {hi}", got=got))
+    if req["query"] is not None:
+        parse_query(req["query"])
+    if req["table"] and req["links"] is None:
+        raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+    if req["curves"] is not None and not (req["mechanisms"] and req["links"] is not None and req["dof"] == 1):
+        raise InputError(explain("--curves", expected="--links N --dof 1 --mechanisms",
+                                 got="--curves without them", hint="the curves belong to the stored mechanisms"))
+
+
+def atlas_request(req: Mapping) -> SynthesisOptions | None:
+    """Check the options of ``multiloop atlas`` (``req``: its values by name, ``links``,
+    ``dof``, ``db``, ``query``, ``scheduler``, …) before any file is created; returns the
+    chains to build (None without ``links``: a query of an existing atlas).
+
+    Raises
+    ------
+    InputError
+        An option out of range, a malformed query, ``--table`` or ``--curves`` without
+        what they need, a missing atlas, no Dask or an unreachable scheduler.
+    """
+    _check_options(req)
+    db, scheduler = req["db"], req["scheduler"]
+    if req["links"] is None and not Path(db).exists():
+        raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
+                                 got=repr(db)))
+    if scheduler is not None:
+        from .distributed import require_dask
+        require_dask()
+    if req["links"] is None:
+        return None
+    opts = SynthesisOptions(req["links"], req["dof"], simple_joints=req["simple_joints"],
+                            max_multiplicity=req["max_multiplicity"],
+                            max_link_degree=req["max_link_degree"], planar=req["planar"],
+                            no_fractionated=req["no_fractionated"])
+    if scheduler is not None and not Path(db).exists():
+        from .distributed import connect_scheduler   # fail before a file is created
+        connect_scheduler(scheduler).close()
+    return opts
+
+
+def build_atlas(atlas: Atlas, opts: SynthesisOptions | None, *, loops: bool | None = None,
+                workers: int | None = None, scheduler=None, progress: bool = True,
+                mechanisms: bool = False, curves: int | None = None):
+    """Build the chains of ``opts`` (``loops``: None for [La] up to 10 links), with
+    ``mechanisms`` the inversions of a 1-DOF atlas and with ``curves`` that many
+    realisations of each closed-form mechanism; returns ``(built, inversions, curves)``,
+    None for each build not asked for (:class:`BuildResult`,
+    :class:`~.inversions.MechanismCounts`, :class:`~.curve_atlas.CurveBuild`)."""
+    built: BuildResult | None = None
+    inv = made = None
+    if opts is not None:
+        built = atlas.build(opts, loops=loops if loops is not None else opts.n <= 10, workers=workers,
+                            scheduler=scheduler, progress=progress)
+    if mechanisms and opts is not None and opts.F == 1:
+        from .inversions import build_mechanisms
+        inv = build_mechanisms(atlas, opts, progress=progress)
+        if curves is not None:
+            from .curve_atlas import build_curves
+            from .distributed import default_workers
+            made = build_curves(atlas, opts, curves, progress=progress,
+                                workers=workers or default_workers(), scheduler=scheduler)
+    return built, inv, made
