@@ -293,6 +293,14 @@ def test_grashof_classes(L, fixed, cls):
 
 
 # ---------------------------------------------------------------- CLI
+def test_cli_plot_without_a_suffix_is_a_png(tmp_path, capsys):
+    """``--plot NAME`` without a suffix writes a PNG, as every command's --plot (it raised
+    inside matplotlib, exit 1, before)."""
+    out = tmp_path / "overview"
+    assert main(["check", str(CAT / "four_bar.toml"), "--plot", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_cli_json_keys(capsys):
     assert main(["check", str(CAT / "four_bar.toml"), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)

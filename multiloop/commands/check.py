@@ -56,7 +56,7 @@ def run(args) -> int:
         with quiet_warnings("multiloop check"):
             if args.plot:
                 p = Path(args.plot)
-                outs.add_figure(p, overview_figure(m, rep), "--plot", **({} if p.suffix else {"format": "png"}))
+                outs.add_figure(p, overview_figure(m, rep), "--plot")     # no suffix: PNG
             if args.html:
                 d = Path(args.html)
                 figs = report_figures(m, rep)
