@@ -19,7 +19,7 @@ from pathlib import Path
 __all__ = ["available", "run_benchmarks"]
 
 #: scripts that accept --quick
-QUICK = ("analyse", "atlas", "designs")
+QUICK = ("analyse", "atlas", "designs", "web")
 
 
 def available(bench_dir: Path) -> list[str]:
