@@ -102,6 +102,19 @@ def test_the_slider_frames_are_the_solver_positions(name):
     assert drawn == {lk for lk in m.link_names if lk != m.frame}
 
 
+def test_a_limited_motion_has_its_frames_whatever_the_machine_speed():
+    """The excavator's three cylinders (limited motions): P_FRAMES frames each, half on
+    each side of the reference, the same in a second sweep (they were cut to a time
+    budget before, and varied from run to run)."""
+    from multiloop.web.scene import P_FRAMES, sweep_driver
+    m = load_mechanism("excavator")
+    for k in range(len(m.drivers)):
+        sw, again = sweep_driver(m, k), sweep_driver(m, k)
+        assert not sw.full_rotation and len(sw.x) == P_FRAMES and sw.reference_index == P_FRAMES // 2
+        np.testing.assert_array_equal(sw.x, again.x)
+        np.testing.assert_array_equal(sw.nodes, again.nodes)
+
+
 def test_serve_rejects_a_bad_file_before_serving(tmp_path):
     (tmp_path / "bad.toml").write_text("x = [")
     r = subprocess.run(MULTILOOP + ["serve", "bad.toml", "--port", "0"], capture_output=True, text=True,

@@ -9,7 +9,6 @@ sweep, so a redraw costs no solving.
 """
 from __future__ import annotations
 
-import time
 import warnings
 from dataclasses import dataclass
 
@@ -130,21 +129,18 @@ def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
         return solve(m, X, plan=plan_of(m))
 
 
-def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24, cancel=None) -> tuple[float, float]:
+def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24, cancel=None) -> float:
     """How far driver ``k`` moves from the reference in direction ``sign`` (≤ span):
     a coarse path solved in growing prefixes that stop at the first failure (a failed
-    Newton position costs many retries, so the failures are not all paid).  Also
-    returns the seconds per assembled position, which sizes the fine sweep."""
+    Newton position costs many retries, so the failures are not all paid)."""
     grid = sign * np.linspace(0.0, span, probe + 1)
-    end, t0, solved = 4, time.perf_counter(), 0
+    end = 4
     while True:
         ok = _solve(m, k, grid[:end], cancel).ok
         if not ok.all():
-            bad = int(np.argmin(ok))
-            return float(grid[max(bad - 1, 0)]), (time.perf_counter() - t0) / max(solved + bad, 1)
-        solved += end
+            return float(grid[max(int(np.argmin(ok)) - 1, 0)])
         if end >= grid.size:
-            return float(grid[-1]), (time.perf_counter() - t0) / solved
+            return float(grid[-1])
         end = min(end + 4, grid.size)
 
 
@@ -157,11 +153,12 @@ def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
     return [angle_values(st, specs) for st in states], names
 
 
-def sweep_driver(m: Mechanism, k: int, seconds: float = 2.0, cancel=None) -> Sweep:
-    """The motion of driver ``k`` (others at the reference) as slider frames; a limited
-    motion gets at most :data:`P_FRAMES` frames, fewer when a position costs so much
-    (Newton groups) that the sweep would take longer than about ``seconds``.  ``cancel()``
-    is called before every solve (it stops the sweep by raising)."""
+def sweep_driver(m: Mechanism, k: int, cancel=None) -> Sweep:
+    """The motion of driver ``k`` (others at the reference) as slider frames: a full turn
+    in :data:`R_FRAMES` frames, or a limited motion in :data:`P_FRAMES` frames, half on
+    each side of the reference up to its reach.  The frames depend on the mechanism
+    alone (not on how fast the machine solves).  ``cancel()`` is called before every
+    solve (it stops the sweep by raising)."""
     from multiloop.kin.check.sweep import mechanism_size   # the size of check's P grid
 
     joint = m.drivers[k].joint
@@ -175,8 +172,8 @@ def sweep_driver(m: Mechanism, k: int, seconds: float = 2.0, cancel=None) -> Swe
         span = 2 * np.pi
     else:
         span = mechanism_size(m)
-    (hi, t1), (lo, t2) = _reach(m, k, +1, span, cancel=cancel), _reach(m, k, -1, span, cancel=cancel)
-    half = int(np.clip(seconds / (2 * max(t1, t2, 1e-9)), 20, P_FRAMES // 2))
+    hi, lo = _reach(m, k, +1, span, cancel=cancel), _reach(m, k, -1, span, cancel=cancel)
+    half = P_FRAMES // 2
     fwd, bwd = np.linspace(0.0, hi, half + 1), np.linspace(0.0, lo, half + 1)
     sf, sb = _solve(m, k, fwd, cancel), _solve(m, k, bwd, cancel)
     (af, ab), names = _angles(m, [sf, sb])
