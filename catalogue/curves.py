@@ -96,11 +96,18 @@ def normalise(path, m: int = CURVE_POINTS, closed: bool = True) -> tuple[np.ndar
     z = R[:, 0] + 1j * R[:, 1]
     if not closed:
         z = np.concatenate([z, z[-2:0:-1]])
-    c = complex(z.mean())
-    r = float(np.sqrt(np.mean(np.abs(z - c) ** 2)))
-    if r <= 0:
+    zn, c, r = _centred(z[None])
+    if r[0] <= 0:
         raise ValueError("a curve of zero size")
-    return (z - c) / r, c, r
+    return zn[0], complex(c[0]), float(r[0])
+
+
+def _centred(z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows of complex samples ``z`` (K, m) centred and scaled to unit RMS radius, with
+    their centres and radii (K,) (a row of zero size is only centred)."""
+    c = z.mean(axis=1)
+    r = np.sqrt(np.mean(np.abs(z - c[:, None]) ** 2, axis=1))
+    return (z - c[:, None]) / np.where(r > 0, r, 1.0)[:, None], c, r
 
 
 def descriptor(path, closed: bool | None = None, harmonics: int = DESCRIPTOR_HARMONICS,
@@ -127,10 +134,7 @@ def normalise_closed(curves, m: int = CURVE_POINTS) -> tuple[np.ndarray, np.ndar
     the centres (K,) and the radii (K,)."""
     P = np.asarray(curves, float)
     R = _arc_resample(np.concatenate([P, P[:, :1]], axis=1), m, False)
-    z = R[..., 0] + 1j * R[..., 1]
-    c = z.mean(axis=1)
-    r = np.sqrt(np.mean(np.abs(z - c[:, None]) ** 2, axis=1))
-    return (z - c[:, None]) / np.where(r > 0, r, 1.0)[:, None], c, r
+    return _centred(R[..., 0] + 1j * R[..., 1])
 
 
 def aligned_distances(a: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
