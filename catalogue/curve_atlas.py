@@ -183,16 +183,22 @@ def _usearch():
     return Index
 
 
-def _hnsw(Index):
-    return Index(ndim=2 * DESCRIPTOR_HARMONICS, metric="l2sq", dtype="f32", connectivity=32,
-                 expansion_add=128, expansion_search=256)
+def _hnsw(Index, ids: np.ndarray, vectors: np.ndarray):
+    """The HNSW graph of ``vectors`` keyed by the curve row ``ids``."""
+    ix = Index(ndim=2 * DESCRIPTOR_HARMONICS, metric="l2sq", dtype="f32", connectivity=32,
+               expansion_add=128, expansion_search=256)
+    ix.add(ids.astype(np.uint64), vectors)
+    return ix
+
+
+#: the curves of the mechanisms with ``n`` links (the query's parameter)
+_OF_N = ("FROM curves c JOIN realisations r ON r.id = c.realisation "
+         "JOIN mechanisms m ON m.id = r.mechanism WHERE m.n = ?")
 
 
 def _rows(atlas: Atlas, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Row ids and descriptors of the curves of ``n``-link mechanisms."""
-    rows = atlas.con.execute(
-        "SELECT c.id, c.descriptor FROM curves c JOIN realisations r ON r.id = c.realisation "
-        "JOIN mechanisms m ON m.id = r.mechanism WHERE m.n = ? ORDER BY c.id", (int(n),)).fetchall()
+    rows = atlas.con.execute(f"SELECT c.id, c.descriptor {_OF_N} ORDER BY c.id", (int(n),)).fetchall()
     width = 2 * DESCRIPTOR_HARMONICS
     ids = np.array([r[0] for r in rows], dtype=np.int64)
     vectors = (np.frombuffer(b"".join(r[1] for r in rows), dtype=np.float32).reshape(-1, width)
@@ -201,8 +207,7 @@ def _rows(atlas: Atlas, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _count(atlas: Atlas, n: int) -> int:
-    return atlas.con.execute("SELECT count(*) FROM curves c JOIN realisations r ON r.id = c.realisation "
-                             "JOIN mechanisms m ON m.id = r.mechanism WHERE m.n = ?", (int(n),)).fetchone()[0]
+    return atlas.con.execute(f"SELECT count(*) {_OF_N}", (int(n),)).fetchone()[0]
 
 
 def _stored_index(atlas: Atlas, n: int, count: int):
@@ -226,8 +231,7 @@ def save_index(atlas: Atlas, n: int) -> int:
     ids, vectors = _rows(atlas, n)
     if Index is None or not len(ids):
         return 0
-    ix = _hnsw(Index)
-    ix.add(ids.astype(np.uint64), vectors)
+    ix = _hnsw(Index, ids, vectors)
     with atlas._tx() as con:
         con.execute("INSERT OR REPLACE INTO curve_indexes (n, curves, data) VALUES (?, ?, ?)",
                     (int(n), len(ids), bytes(ix.save())))
@@ -275,9 +279,7 @@ class CurveIndex:
                 self._parts.append((None, ids, vectors))
                 kinds.add("exact")
             else:
-                ix = _hnsw(Index)
-                ix.add(ids.astype(np.uint64), vectors)
-                self._parts.append((ix, None, None))
+                self._parts.append((_hnsw(Index, ids, vectors), None, None))
                 kinds.add("usearch-hnsw")
         self.kind = "+".join(sorted(kinds)) or "exact"
         self._links = ns
