@@ -39,7 +39,6 @@ def run(args) -> int:
 
     if not 0 <= args.port <= 65535:
         raise InputError(explain("--port", expected="0 … 65535", got=str(args.port)))
-    port = args.port or _free_port(args.host)
     files = {str(f): load_mechanism(f) for f in args.files}
     if args.atlas:
         from multiloop.catalogue.atlas import Atlas
@@ -48,14 +47,8 @@ def run(args) -> int:
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"multiloop serve: warning: binding {args.host}: the page is reachable from the network "
               "and has no login; anyone who reaches it can run computations on this machine", file=sys.stderr)
-    serve(files, port=port, host=args.host, open_browser=args.open, atlases=args.atlas,
+    serve(files, port=args.port, host=args.host, open_browser=args.open, atlases=args.atlas,
           threshold=args.min_transmission,
           ready=lambda url: print(f"multiloop serve: {url} (Ctrl-C stops)", flush=True))
     return 0
 
-
-def _free_port(host: str) -> int:
-    import socket
-    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as s:
-        s.bind((host, 0))
-        return s.getsockname()[1]

@@ -389,8 +389,9 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
           atlases=(), threshold: float = 40.0, ready=None) -> None:
     """Serve the workbench until interrupted (Bokeh's server, every asset served by it).
 
-    ``files`` maps names to mechanisms read before serving; ``ready(url)`` is called
-    once the server listens (the command prints the address).
+    ``files`` maps names to mechanisms read before serving; ``port`` 0 lets the system
+    pick a free one; ``ready(url)`` is called once the server listens, with the port it
+    got (the command prints the address).
     """
     os.environ["BOKEH_RESOURCES"] = "server"      # BokehJS from this server, no CDN
     warm_up_then = _start_warm_up(files, threshold)     # before Bokeh's import: they overlap
