@@ -75,16 +75,14 @@ class Download:
 
     def __init__(self, label: str, make, width: int = 150):
         self.make = make
-        self.count = 0
-        self.button = Button(label=label, width=width, tags=[0, "", ""])
+        self.button = Button(label=label, width=width, tags=[0, "", ""])     # [clicks, name, text]
         self.button.js_on_change("tags", CustomJS(code=DOWNLOAD_JS))
         self.button.on_click(lambda: self.click())
 
     def click(self) -> None:
         out = self.make()
-        if out is not None:
-            self.count += 1
-            self.button.tags = [self.count, out[0], out[1]]
+        if out is not None:           # a new count: the same file twice is still a change
+            self.button.tags = [self.button.tags[0] + 1, out[0], out[1]]
 
 
 def progress_html(fraction: float) -> str:
