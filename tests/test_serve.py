@@ -115,6 +115,25 @@ def test_a_limited_motion_has_its_frames_whatever_the_machine_speed():
         np.testing.assert_array_equal(sw.nodes, again.nodes)
 
 
+@pytest.mark.parametrize("name, k", [("dyad_prp", 0), ("excavator", 2), ("excavator_bucket", 0),
+                                     ("wheel_loader_zbar", 0), ("wheel_loader_zbar", 1)])
+def test_a_limited_motion_spans_the_limits_that_check_finds(name, k):
+    """The slider goes from limit to limit of the check's certified walk (end frames a
+    millionth inside), every frame assembled; a reference at one limit (the wheel
+    loader's lift cylinder) puts every frame on the other side.  Read off a coarse grid,
+    the wheel loader's second cylinder had no motion at all and dyad_prp stopped 15°
+    short of both limits."""
+    from multiloop.kin.check import driver_angles
+    from multiloop.web.scene import LIMIT_INSET, sweep_driver
+    m = load_mechanism(name)
+    sw, limits = sweep_driver(m, k), driver_angles(m, k).limits
+    ends = np.radians(sw.x[[0, -1]]) if sw.rotary else sw.x[[0, -1]]
+    hi, lo = max(max(limits), 0.0), min(min(limits), 0.0)
+    assert sw.ok.all()
+    np.testing.assert_allclose(ends, [lo, hi], rtol=2 * LIMIT_INSET, atol=1e-12)
+    assert (sw.reference_index == 0) == (lo == 0.0)
+
+
 def test_serve_rejects_a_bad_file_before_serving(tmp_path):
     (tmp_path / "bad.toml").write_text("x = [")
     r = subprocess.run(MULTILOOP + ["serve", "bad.toml", "--port", "0"], capture_output=True, text=True,

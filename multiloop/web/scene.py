@@ -23,6 +23,7 @@ PALETTE = ("#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#76b7b2", "#edc948", "#b
            "#ff9da7", "#9c755f", "#bab0ac")
 R_FRAMES = 361          # frames of a full turn (1°)
 P_FRAMES = 201          # frames over a limited range (each side ~100)
+LIMIT_INSET = 1e-6      # relative inset of a limited motion's end frames from its limits
 
 
 @dataclass(frozen=True)
@@ -129,21 +130,6 @@ def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
         return solve(m, X, plan=plan_of(m))
 
 
-def _reach(m: Mechanism, k: int, sign: int, span: float, probe: int = 24, cancel=None) -> float:
-    """How far driver ``k`` moves from the reference in direction ``sign`` (≤ span):
-    a coarse path solved in growing prefixes that stop at the first failure (a failed
-    Newton position costs many retries, so the failures are not all paid)."""
-    grid = sign * np.linspace(0.0, span, probe + 1)
-    end = 4
-    while True:
-        ok = _solve(m, k, grid[:end], cancel).ok
-        if not ok.all():
-            return float(grid[max(int(np.argmin(ok)) - 1, 0)])
-        if end >= grid.size:
-            return float(grid[-1])
-        end = min(end + 4, grid.size)
-
-
 def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
     from multiloop.kin.check.transmission import angle_specs, angle_values
     from multiloop.topo.assur import decompose
@@ -155,11 +141,13 @@ def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
 
 def sweep_driver(m: Mechanism, k: int, cancel=None) -> Sweep:
     """The motion of driver ``k`` (others at the reference) as slider frames: a full turn
-    in :data:`R_FRAMES` frames, or a limited motion in :data:`P_FRAMES` frames, half on
-    each side of the reference up to its reach.  The frames depend on the mechanism
-    alone (not on how fast the machine solves).  ``cancel()`` is called before every
-    solve (it stops the sweep by raising)."""
-    from multiloop.kin.check.sweep import mechanism_size   # the size of check's P grid
+    in :data:`R_FRAMES` frames, or a limited motion in :data:`P_FRAMES` frames from limit
+    to limit, half on each side of the reference (all of them on one side when the
+    reference is at the other limit).  The limits are those of :func:`kin.check.check`
+    (its certified walk, :func:`kin.check.driver_angles`), not read off a grid; the
+    frames depend on the mechanism alone.  ``cancel()`` is called before every solve (it
+    stops the sweep by raising)."""
+    from multiloop.kin.check import driver_angles
 
     joint = m.drivers[k].joint
     rotary = m.joint(joint).kind is JointKind.R
@@ -169,16 +157,25 @@ def sweep_driver(m: Mechanism, k: int, cancel=None) -> Sweep:
         if st.ok.all():
             (a,), names = _angles(m, [st])
             return Sweep(k, joint, True, True, np.degrees(x), _nodes(st), np.asarray(st.ok, bool), a, names)
-        span = 2 * np.pi
+    if cancel is not None:
+        cancel()
+    motion = driver_angles(m, k)
+    if motion.full_rotation:          # a full turn through a singular position: one turn, its failures marked
+        hi, lo = 2 * np.pi, 0.0
     else:
-        span = mechanism_size(m)
-    hi, lo = _reach(m, k, +1, span, cancel=cancel), _reach(m, k, -1, span, cancel=cancel)
-    half = P_FRAMES // 2
-    fwd, bwd = np.linspace(0.0, hi, half + 1), np.linspace(0.0, lo, half + 1)
+        # the end frames a millionth of the way inside: at an assembly limit two branches
+        # of a group meet, and the solver reports the positions within ~1e-7 of it as
+        # singular (the excavators' cylinders)
+        hi = max((v for v in motion.limits if v > 0), default=0.0) * (1 - LIMIT_INSET)
+        lo = min((v for v in motion.limits if v < 0), default=0.0) * (1 - LIMIT_INSET)
+    both = hi > 0 and lo < 0
+    n_fwd = P_FRAMES // 2 if both else (P_FRAMES - 1 if hi > 0 else 0)
+    n_bwd = P_FRAMES // 2 if both else (P_FRAMES - 1 if lo < 0 else 0)
+    fwd, bwd = np.linspace(0.0, hi, n_fwd + 1), np.linspace(0.0, lo, n_bwd + 1)
     sf, sb = _solve(m, k, fwd, cancel), _solve(m, k, bwd, cancel)
     (af, ab), names = _angles(m, [sf, sb])
     x = np.concatenate([bwd[:0:-1], fwd])
     nodes = np.concatenate([_nodes(sb)[:0:-1], _nodes(sf)])
     ok = np.concatenate([np.asarray(sb.ok, bool)[:0:-1], np.asarray(sf.ok, bool)])
-    return Sweep(k, joint, rotary, False, np.degrees(x) if rotary else x, nodes, ok,
+    return Sweep(k, joint, rotary, motion.full_rotation, np.degrees(x) if rotary else x, nodes, ok,
                  np.concatenate([ab[:0:-1], af]), names)
