@@ -16,6 +16,11 @@ python3 -m pip install --disable-pip-version-check -q -e ".[test,dask,notebook,w
 # one: the first run of each command (and every run where PYTHONDONTWRITEBYTECODE is set)
 # then reads bytecode instead of compiling its modules
 python3 -m compileall -q multiloop topo kin catalogue >/dev/null
+# the atlas's compiled counter: nauty's genbg (sources from the pynauty sdist on PyPI)
+# built with catalogue/synthesis/c/chaincount.c into the user cache; without a C compiler
+# the counts run on the Python route (the same rows, slower)
+python3 -m multiloop.catalogue.synthesis.counter_build \
+  || echo "install.sh: could not build the atlas counter (counts run on the Python route)" >&2
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"

@@ -9,6 +9,10 @@ Schema (``PRAGMA user_version = 1``)
 ``tasks``
     the independent tasks of each build (``build_id``, ``key`` UNIQUE together),
     ``status`` (``pending``/``done``), ``n_chains``, ``seconds``.
+``tallies``
+    the rows of a count (:meth:`Atlas.count_table`: the chains of each task tallied by
+    ``LA`` and ``MJA``, JSON lists, without storing the chains); its build's options
+    key starts with ``count;``.
 ``chains``
     one row per chain, ``canonical`` UNIQUE (nauty canonical form of the coloured
     incidence graph, the string of :func:`topo.isomorphism.canonical_form`); ``n``,
@@ -41,6 +45,7 @@ from typing import Iterator, Sequence
 from multiloop.topo.errors import InputError, OutputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
+from .synthesis.counting import count_signature, count_tasks
 
 __all__ = ["Atlas", "BuildResult", "QUERY_COLUMNS", "parse_query", "build_atlas"]
 
@@ -69,7 +74,14 @@ CREATE TABLE IF NOT EXISTS chains (
     joints TEXT NOT NULL
 );
 CREATE INDEX IF NOT EXISTS chains_nF ON chains (n, F);
+CREATE TABLE IF NOT EXISTS tallies (
+    build_id INTEGER NOT NULL REFERENCES builds(id),
+    task TEXT NOT NULL, LA TEXT NOT NULL, MJA TEXT NOT NULL, chains INTEGER NOT NULL,
+    PRIMARY KEY (build_id, task, LA, MJA)
+);
 """
+#: the options key of a count (rows tallied, chains not stored) starts with this
+_COUNT = "count;"
 
 #: columns a query may name (and their SQL type class)
 QUERY_COLUMNS = {
@@ -336,23 +348,31 @@ class Atlas:
             pass
 
     # ------------------------------------------------------------------ build
-    def _build_id(self, opts: SynthesisOptions, loops: bool) -> int:
-        cur = self.con.execute("SELECT id FROM builds WHERE options = ?", (opts.key(),))
+    def _build_id(self, opts: SynthesisOptions, loops: bool, count: bool = False) -> int:
+        key = _count_key(opts) if count else opts.key()
+        cur = self.con.execute("SELECT id FROM builds WHERE options = ?", (key,))
         row = cur.fetchone()
         if row:
             return row[0]
+        tasks = count_tasks(opts) if count else plan_tasks(opts)
         with self._tx() as con:
             bid = con.execute("INSERT INTO builds (options, n, F, loops) VALUES (?, ?, ?, ?)",
-                              (opts.key(), opts.n, opts.F, int(loops))).lastrowid
+                              (key, opts.n, opts.F, int(loops))).lastrowid
             con.executemany("INSERT INTO tasks (build_id, key, m, res, mod) VALUES (?, ?, ?, ?, ?)",
-                            [(bid, t.key, t.m, t.res, t.mod) for t in plan_tasks(opts)])
+                            [(bid, t.key, t.m, t.res, t.mod) for t in tasks])
         return bid
 
-    def pending_tasks(self, opts: SynthesisOptions, loops: bool = True):
-        bid = self._build_id(opts, loops)
+    def pending_tasks(self, opts: SynthesisOptions, loops: bool = True, count: bool = False):
+        """The build's id and its tasks not yet stored (of a count with ``count``)."""
+        bid = self._build_id(opts, loops, count)
         keys = {r[0] for r in self.con.execute(
             "SELECT key FROM tasks WHERE build_id = ? AND status = 'pending'", (bid,))}
-        return bid, [t for t in plan_tasks(opts) if t.key in keys]
+        return bid, [t for t in (count_tasks(opts) if count else plan_tasks(opts)) if t.key in keys]
+
+    def _task_done(self, con, bid: int, task, found: int, seconds: float) -> None:
+        con.execute("UPDATE tasks SET status = 'done', n_chains = ?, seconds = ? "
+                    "WHERE build_id = ? AND key = ?", (found, seconds, bid, task.key))
+        con.execute("UPDATE builds SET seconds = seconds + ? WHERE id = ?", (seconds, bid))
 
     def store_task(self, bid: int, task, records: Sequence[ChainRecord], seconds: float = 0.0) -> None:
         """Insert one task's chains and mark it done, in one transaction."""
@@ -362,9 +382,17 @@ class Atlas:
                 "INSERT OR IGNORE INTO chains (canonical, n, F, p, K, V, n_joints, j_max, i_max, LA,"
                 " MJA, code, code_star, planar, fractionated, loops, L0, joints)"
                 " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", rows)
-            con.execute("UPDATE tasks SET status = 'done', n_chains = ?, seconds = ? "
-                        "WHERE build_id = ? AND key = ?", (len(records), seconds, bid, task.key))
-            con.execute("UPDATE builds SET seconds = seconds + ? WHERE id = ?", (seconds, bid))
+            self._task_done(con, bid, task, len(records), seconds)
+
+    def store_tally(self, bid: int, task, counts, seconds: float = 0.0) -> None:
+        """Insert one task's row counts (``{(LA, MJA): chains}``) and mark it done, in one
+        transaction."""
+        rows = [(bid, task.key, json.dumps(list(la)), json.dumps(list(mja)), c)
+                for (la, mja), c in sorted(counts.items())]
+        with self._tx() as con:
+            con.executemany("INSERT OR REPLACE INTO tallies (build_id, task, LA, MJA, chains)"
+                            " VALUES (?, ?, ?, ?, ?)", rows)
+            self._task_done(con, bid, task, sum(counts.values()), seconds)
 
     def build(self, opts: SynthesisOptions, loops: bool = True, workers: int | None = 1,
               scheduler=None, progress: bool = True, max_tasks: int | None = None) -> BuildResult:
@@ -387,30 +415,61 @@ class Atlas:
         """
         from .distributed import map_tasks
 
+        def run(pending):
+            return map_tasks(pending, opts, loops, workers=workers, scheduler=scheduler)
+        return self._run_build(opts, loops, False, run, self.store_task, progress, max_tasks)
+
+    def count_table(self, opts: SynthesisOptions, workers: int | None = 1, scheduler=None,
+                    progress: bool = True, max_tasks: int | None = None) -> BuildResult:
+        """Count (or resume counting) the chains of ``opts`` by row of the number-synthesis
+        table without storing them (:mod:`.synthesis.counting`); the parameters as
+        :meth:`build`.  The result's ``count`` is the total so far."""
+        from .distributed import map_count_tasks
+
+        def run(pending):
+            return map_count_tasks(pending, opts, workers=workers, scheduler=scheduler)
+        return self._run_build(opts, False, True, run, self.store_tally, progress, max_tasks)
+
+    def _run_build(self, opts, loops, count, run, store, progress, max_tasks) -> BuildResult:
         t0 = time.perf_counter()
-        bid, pending = self.pending_tasks(opts, loops)
+        bid, pending = self.pending_tasks(opts, loops, count)
         total = self.con.execute("SELECT count(*) FROM tasks WHERE build_id = ?", (bid,)).fetchone()[0]
+        done = total - len(pending)
         if max_tasks is not None:
             pending = pending[:max_tasks]
-        run = 0
         bar = _progress(progress)
         with bar:
-            tid = bar.add_task(f"n={opts.n} F={opts.F}", total=total,
-                               completed=total - len(self.pending_tasks(opts, loops)[1]))
+            tid = bar.add_task(f"n={opts.n} F={opts.F}", total=total, completed=done)
             started = time.perf_counter()
-            for task, records in map_tasks(pending, opts, loops, workers=workers, scheduler=scheduler):
+            for task, found in run(pending):
                 now = time.perf_counter()
-                self.store_task(bid, task, records, now - started)
+                store(bid, task, found, now - started)
                 started = now
-                run += 1
                 bar.advance(tid)
         left = self.con.execute("SELECT count(*) FROM tasks WHERE build_id = ? AND status = 'pending'",
                                 (bid,)).fetchone()[0]
-        count = self.count(opts)
+        found = sum(self.table_counts(opts).values()) if count else self.count(opts)
         if left == 0:
             with self._tx() as con:
-                con.execute("UPDATE builds SET status = 'done', count = ? WHERE id = ?", (count, bid))
-        return BuildResult(opts, count, run, total, time.perf_counter() - t0)
+                con.execute("UPDATE builds SET status = 'done', count = ? WHERE id = ?", (found, bid))
+        return BuildResult(opts, found, total - done - left, total, time.perf_counter() - t0)
+
+    def table_counts(self, opts: SynthesisOptions):
+        """The chains counted so far by :meth:`count_table`, by row: ``{(LA, MJA): chains}``."""
+        from collections import Counter
+
+        out: Counter = Counter()
+        cur = self.con.execute("SELECT t.LA, t.MJA, sum(t.chains) FROM tallies t JOIN builds b"
+                               " ON b.id = t.build_id WHERE b.options = ? GROUP BY t.LA, t.MJA",
+                               (_count_key(opts),))
+        for la, mja, c in cur:
+            out[(tuple(json.loads(la)), tuple(json.loads(mja)))] = c
+        return out
+
+    def is_counted(self, opts: SynthesisOptions) -> bool:
+        """True when :meth:`count_table` of ``opts`` has run every task."""
+        row = self.con.execute("SELECT status FROM builds WHERE options = ?", (_count_key(opts),)).fetchone()
+        return bool(row) and row[0] == "done"
 
     def is_complete(self, opts: SynthesisOptions) -> bool:
         row = self.con.execute("SELECT status FROM builds WHERE options = ?", (opts.key(),)).fetchone()
@@ -434,6 +493,10 @@ class Atlas:
                 clauses.append("planar = 1")
             if opts.no_fractionated:
                 clauses.append("fractionated = 0")
+            for column, counts in (("LA", opts.la), ("MJA", opts.mja)):
+                if counts is not None:
+                    clauses.append(f"{column} = ?")
+                    params.append(json.dumps(list(_stripped(counts))))
         if query:
             sql, qp = parse_query(query)
             clauses.append(f"({sql})")
@@ -470,6 +533,19 @@ class Atlas:
         return self.con.execute("SELECT count(*) - count(DISTINCT canonical) FROM chains").fetchone()[0]
 
 
+def _count_key(opts: SynthesisOptions) -> str:
+    """The options key of a count: ``count;<generator signature>;<options>``."""
+    return f"{_COUNT}{count_signature(opts)};{opts.key()}"
+
+
+def _stripped(counts: tuple[int, ...]) -> tuple[int, ...]:
+    """An assortment as stored: without trailing zeros."""
+    end = len(counts)
+    while end and not counts[end - 1]:
+        end -= 1
+    return counts[:end]
+
+
 def _row(r: ChainRecord) -> tuple:
     p = sum(len(j) - 1 for j in r.joints)
     i_max = len(r.LA) + 1        # [LA] runs n2 … n_imax (every atlas link is on >= 2 joints)
@@ -498,10 +574,12 @@ def _progress(enabled: bool):
     if not enabled:
         return _NoBar()
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import (
+        BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn,
+    )
 
     return Progress(TextColumn("[bold]atlas {task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TextColumn("tasks"), TimeElapsedColumn(),
+                    TextColumn("tasks"), TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn(),
                     console=Console(stderr=True), transient=not sys.stderr.isatty())
 
 

@@ -15,7 +15,11 @@ from multiloop.topo.errors import InputError, explain
 from .atlas import Atlas, BuildResult, parse_query
 from .synthesis import SynthesisOptions
 
-__all__ = ["INT_RANGES", "atlas_request", "build_atlas"]
+__all__ = ["INT_RANGES", "STORED_UP_TO", "atlas_request", "build_atlas", "counts_only", "parse_assortment"]
+
+#: with ``--table``, chains of more links are counted by row, not stored (14 links:
+#: tens of millions of chains)
+STORED_UP_TO = 12
 
 #: the integer options, their names in the request and their ranges (SQLite and C ints
 #: stop at 2**63 and 2**31)
@@ -43,6 +47,24 @@ def _check_options(req: Mapping) -> None:
                                  got="--curves without them", hint="the curves belong to the stored mechanisms"))
 
 
+def parse_assortment(text: str | None, flag: str) -> tuple[int, ...] | None:
+    """``"8-1-1"`` (or ``"8,1,1"``, ``"[8, 1, 1]"``) as counts; None for None."""
+    if text is None:
+        return None
+    body = text.strip().strip("[]").replace(",", "-").replace(" ", "")
+    words = body.split("-") if body else []
+    if len(text) > 200 or not all(w.isdigit() and len(w) <= 3 for w in words):
+        raise InputError(explain(flag, expected="counts joined by '-' (e.g. 8-1-1; 0 for none)",
+                                 got=repr(text[:40])))
+    return tuple(int(w) for w in words)
+
+
+def counts_only(opts: SynthesisOptions | None, table: bool) -> bool:
+    """True when the request is counted by row without storing chains: ``--table`` beyond
+    :data:`STORED_UP_TO` links."""
+    return opts is not None and table and opts.n > STORED_UP_TO
+
+
 def atlas_request(req: Mapping) -> SynthesisOptions | None:
     """Check the options of ``multiloop atlas`` (``req``: its values by name, ``links``,
     ``dof``, ``db``, ``query``, ``scheduler``, …) before any file is created; returns the
@@ -67,7 +89,12 @@ def atlas_request(req: Mapping) -> SynthesisOptions | None:
     opts = SynthesisOptions(req["links"], req["dof"], simple_joints=req["simple_joints"],
                             max_multiplicity=req["max_multiplicity"],
                             max_link_degree=req["max_link_degree"], planar=req["planar"],
-                            no_fractionated=req["no_fractionated"])
+                            no_fractionated=req["no_fractionated"],
+                            la=parse_assortment(req.get("la"), "--la"), mja=parse_assortment(req.get("mja"), "--mja"))
+    if counts_only(opts, req["table"]) and (opts.planar or opts.no_fractionated):
+        raise InputError(explain("--table", expected=f"no --planar or --no-fractionated beyond {STORED_UP_TO} links",
+                                 got=f"{opts.n} links with a per-chain filter",
+                                 hint="the rows are counted inside the generator, chain records are not built"))
     if scheduler is not None and not Path(db).exists():
         from .distributed import connect_scheduler   # fail before a file is created
         connect_scheduler(scheduler).close()
@@ -76,14 +103,17 @@ def atlas_request(req: Mapping) -> SynthesisOptions | None:
 
 def build_atlas(atlas: Atlas, opts: SynthesisOptions | None, *, loops: bool | None = None,
                 workers: int | None = None, scheduler=None, progress: bool = True,
-                mechanisms: bool = False, curves: int | None = None):
-    """Build the chains of ``opts`` (``loops``: None for [La] up to 10 links), with
+                mechanisms: bool = False, curves: int | None = None, table: bool = False):
+    """Build the chains of ``opts`` (``loops``: None for [La] up to 10 links; with
+    ``table`` beyond :data:`STORED_UP_TO` links count them by row instead), with
     ``mechanisms`` the inversions of a 1-DOF atlas and with ``curves`` that many
     realisations of each closed-form mechanism; returns ``(built, inversions, curves)``,
     None for each build not asked for (:class:`BuildResult`,
     :class:`~.inversions.MechanismCounts`, :class:`~.curve_atlas.CurveBuild`)."""
     built: BuildResult | None = None
     inv = made = None
+    if counts_only(opts, table):
+        return atlas.count_table(opts, workers=workers, scheduler=scheduler, progress=progress), None, None
     if opts is not None:
         built = atlas.build(opts, loops=loops if loops is not None else opts.n <= 10, workers=workers,
                             scheduler=scheduler, progress=progress)

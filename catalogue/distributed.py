@@ -33,7 +33,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
 
-__all__ = ["map_calls", "map_tasks", "default_workers", "type_synthesis", "die_with_parent", "connect_scheduler", "require_dask",
+__all__ = ["map_calls", "map_tasks", "map_count_tasks", "default_workers", "type_synthesis", "die_with_parent", "connect_scheduler", "require_dask",
            "SCHEDULER_TIMEOUT"]
 
 #: seconds to wait for a Dask scheduler before giving up
@@ -125,6 +125,23 @@ def map_tasks(tasks: Sequence[Task], opts: SynthesisOptions, loops: bool = True,
         # largest tasks first (fewest joints are the big genbg runs at n >= 12)
         tasks = sorted(tasks, key=lambda t: (abs(t.m - (opts.p * 3) // 4), t.res))
     yield from map_calls(_run, [(t, opts, loops) for t in tasks], workers, scheduler)
+
+
+def _count(task: Task, opts: SynthesisOptions):
+    from .synthesis.counting import count_rows
+    return task, count_rows(task, opts)
+
+
+def map_count_tasks(tasks: Sequence[Task], opts: SynthesisOptions, workers: int | None = None,
+                    scheduler=None) -> Iterator[tuple[Task, dict]]:
+    """Count the chains of ``tasks`` by row (:func:`~.synthesis.counting.count_rows`) and
+    yield ``(task, counts)`` as each finishes; ``workers`` and ``scheduler`` as
+    :func:`map_tasks`."""
+    workers = default_workers() if workers is None else max(1, int(workers))
+    # residue by residue across the joint counts: the tasks done so far are a fair sample
+    # of the whole, so the progress bar's estimate of the time left holds from the start
+    tasks = sorted(tasks, key=lambda t: (t.res, t.m))
+    yield from map_calls(_count, [(t, opts) for t in tasks], workers, scheduler)
 
 
 def require_dask() -> None:

@@ -8,7 +8,7 @@ and the build statistics; :func:`listing_text` prints the same document.
 from __future__ import annotations
 
 from .atlas import Atlas, BuildResult
-from .synthesis import SynthesisOptions, record_choices, universal_table
+from .synthesis import SynthesisOptions, record_choices, table_rows, universal_table
 
 __all__ = ["atlas_listing", "listing_text"]
 
@@ -18,17 +18,25 @@ LIST_ALL = 50
 
 def atlas_listing(atlas: Atlas, opts: SynthesisOptions | None, query: str | None = None,
                   limit: int | None = None, table: bool = False, mechanisms: bool = False,
-                  built: BuildResult | None = None, inversions=None) -> dict:
+                  built: BuildResult | None = None, inversions=None, counted: bool = False) -> dict:
     """The JSON document of a query: ``count``, ``chains``, and with the options
     ``table`` (rows of :func:`universal_table`), ``mechanisms`` (frames and drivers per
     chain and their totals; with ``inversions``, a stored
     :class:`~.inversions.MechanismCounts`, also the counts by highest Assur class and
-    of the mechanisms solved in closed form) and ``build`` (tasks and seconds of the build)."""
+    of the mechanisms solved in closed form) and ``build`` (tasks and seconds of the build).
+    ``counted``: the table and the count come from :meth:`Atlas.count_table` (no chains
+    are stored; ``complete`` says whether every task has run)."""
     out: dict = {}
-    if table:
+    if counted:
+        counts = atlas.table_counts(opts)
+        out["table"] = [r.as_dict() for r in table_rows(opts, counts)]
+        out["count"] = sum(counts.values())
+        out["complete"] = atlas.is_counted(opts)
+    elif table:
         out["table"] = [r.as_dict() for r in universal_table(opts, atlas.chains(opts))]
-    out["count"] = atlas.count(opts, query)
-    chains = list(atlas.chains(opts, query, limit=limit))
+    if not counted:
+        out["count"] = atlas.count(opts, query)
+    chains = [] if counted else list(atlas.chains(opts, query, limit=limit))
     items = [r.as_dict() for r in chains]
     if mechanisms:
         for d, c in zip(items, map(record_choices, chains)):

@@ -107,3 +107,31 @@ def four_bar_curve_atlas(db):
         build_mechanisms(atlas, opts)
         build_curves(atlas, opts, 6)
     return db
+
+
+def child_pids(pid: int) -> set[int]:
+    """The processes whose parent is ``pid`` (``ps``)."""
+    import subprocess
+    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
+    return {int(x) for x in out.split()}
+
+
+def alive(pid: int) -> bool:
+    """True while ``pid`` runs (a zombie is dead)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(") ")[1][0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def tasks_done(db) -> int:
+    """Tasks an atlas build has stored so far (0 while the file is being created)."""
+    from multiloop.catalogue.atlas import Atlas
+    if not db.exists():
+        return 0
+    try:
+        with Atlas(db) as a:
+            return a.con.execute("SELECT count(*) FROM tasks WHERE status='done'").fetchone()[0]
+    except Exception:  # noqa: BLE001 - the file may be mid-creation
+        return 0

@@ -15,6 +15,7 @@ from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
 from multiloop.cli import main
 from multiloop.topo.errors import InputError
 from multiloop.topo.numbers import structural_report
+from tests.common import alive, child_pids, tasks_done
 
 pytestmark = pytest.mark.skipif(not nauty_available(),
                                 reason="nauty's geng/genbg not installed (apt-get install nauty)")
@@ -76,14 +77,9 @@ def test_resume_after_kill(tmp_path):
     done = 0
     while time.time() < deadline and proc.poll() is None:   # wait for the first stored task
         time.sleep(0.1)
-        if db.exists():
-            try:
-                with Atlas(db) as a:
-                    done = a.con.execute("SELECT count(*) FROM tasks WHERE status='done'").fetchone()[0]
-            except Exception:  # noqa: BLE001 - the file may be mid-creation
-                done = 0
-            if done >= 1:
-                break
+        done = tasks_done(db)
+        if done >= 1:
+            break
     if proc.poll() is None:
         os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
@@ -141,19 +137,6 @@ def test_cli_json_query_and_table(tmp_path, capsys):
     assert main(["atlas", "--db", str(tmp_path / "missing.sqlite")]) == 2
 
 
-def _children(pid: int) -> set[int]:
-    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
-    return {int(x) for x in out.split()}
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().split(") ")[1][0] != "Z"   # a zombie is dead
-    except FileNotFoundError:
-        return False
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_killed_build_leaves_no_orphan_workers(tmp_path, sig):
@@ -167,15 +150,15 @@ def test_killed_build_leaves_no_orphan_workers(tmp_path, sig):
     workers: set[int] = set()
     while time.time() < deadline and proc.poll() is None and len(workers) < 2:
         time.sleep(0.05)
-        workers = _children(proc.pid)
+        workers = child_pids(proc.pid)
     if proc.poll() is not None:
         pytest.skip("the build finished before its workers could be seen")
     os.kill(proc.pid, sig)
     proc.wait()
     deadline = time.time() + 10
-    while time.time() < deadline and any(_alive(w) for w in workers):
+    while time.time() < deadline and any(alive(w) for w in workers):
         time.sleep(0.1)
-    assert not [w for w in workers if _alive(w)]
+    assert not [w for w in workers if alive(w)]
     assert main(["atlas", "--links", "10", "--dof", "1", "--db", str(db), "--no-loops",
                  "--no-progress", "--workers", "1"]) == 0
     with Atlas(db) as atlas:

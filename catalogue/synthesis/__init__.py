@@ -58,7 +58,9 @@ References
 Modules: :mod:`.options` (what to enumerate, the tasks), :mod:`.nauty` (generators
 and graph6 decoding), :mod:`.degenerate` (the batch degeneracy filter),
 :mod:`.records` (a chain's numbers), :mod:`.enumeration` (tasks, both routes),
-:mod:`.tables` (number synthesis), :mod:`.mechanisms` (inversions).
+:mod:`.tables` (number synthesis), :mod:`.mechanisms` (inversions), :mod:`.assortments`
+([LA], [MJA] of a batch), :mod:`.counting` (number synthesis by counting, for tables
+too large to store), :mod:`.counter_build` (the compiled counter).
 """
 from __future__ import annotations
 
@@ -70,11 +72,11 @@ from .nauty import (  # noqa: F401 (private helpers used by the tests and benchm
 )
 from .options import LITERATURE_SJ_F1, SynthesisOptions, Task, n_pairs, plan_tasks
 from .records import ChainRecord, canonical_string, chain_record
-from .tables import AssortmentRow, number_synthesis, universal_table
+from .tables import AssortmentRow, number_synthesis, table_rows, universal_table
 
 __all__ = [
     "SynthesisOptions", "Task", "ChainRecord", "AssortmentRow", "MechanismChoices", "n_pairs",
     "nauty_available", "plan_tasks", "run_task", "count_task", "LITERATURE_SJ_F1", "iter_chains",
-    "brute_force_chains", "number_synthesis", "universal_table", "chain_record",
+    "brute_force_chains", "number_synthesis", "universal_table", "table_rows", "chain_record",
     "canonical_string", "mechanism_choices", "record_choices", "joint_masks_degenerate",
 ]

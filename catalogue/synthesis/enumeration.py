@@ -11,6 +11,7 @@ import numpy as np
 
 from multiloop.topo.errors import InputError, explain
 
+from .assortments import in_row
 from .degenerate import _degenerate_by_definition, joint_masks_degenerate
 from .nauty import _decode_bipartite, _decode_simple, _generator_command, nauty_available
 from .options import SynthesisOptions, Task, plan_tasks
@@ -50,7 +51,8 @@ def _filter_batch(lines: list[bytes], task: Task, opts: SynthesisOptions, p: int
     else:
         masks = _decode_bipartite(lines, opts.n, task.m)
     keep = ~joint_masks_degenerate(masks, opts.n)
-    return masks[keep]
+    masks = masks[keep]
+    return masks[in_row(masks, opts)]
 
 
 def run_task(task: Task, opts: SynthesisOptions, loops: bool = True) -> list[ChainRecord]:

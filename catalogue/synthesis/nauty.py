@@ -44,6 +44,15 @@ def _decode_bipartite(lines: Sequence[bytes], n: int, m: int) -> np.ndarray:
     return sel @ (np.int64(1) << np.arange(n, dtype=np.int64))
 
 
+def _decode_joints_first(lines: Sequence[bytes], n: int, m: int) -> np.ndarray:
+    """Joint masks (B, m) of genbg output with the classes swapped (joints 0…m−1, links
+    m…m+n−1)."""
+    bits = _graph6_bits(lines, n + m)
+    idx = np.array([[_pos(a, m + i) for i in range(n)] for a in range(m)])
+    sel = bits[:, idx].astype(np.int64)                    # (B, m, n)
+    return sel @ (np.int64(1) << np.arange(n, dtype=np.int64))
+
+
 def _decode_simple(lines: Sequence[bytes], n: int, p: int) -> np.ndarray:
     """Joint (edge) masks (B, p) of geng output."""
     bits = _graph6_bits(lines, n)
@@ -58,12 +67,38 @@ def _decode_simple(lines: Sequence[bytes], n: int, p: int) -> np.ndarray:
 # -------------------------------------------------------------------- generation
 def _generator_command(task: Task, opts: SynthesisOptions) -> list[str]:
     p = opts.p
+    lo, hi = opts.link_degrees()
     if task.m == p:   # simple joints: triangle-free graphs, min degree 2
-        cmd = [_tool("geng"), "-cq", "-d2", "-t", f"-D{opts.i_cap}", str(opts.n), f"{p}:{p}"]
+        cmd = [_tool("geng"), "-cq", f"-d{lo}", "-t", f"-D{hi}", str(opts.n), f"{p}:{p}"]
     else:
-        e = p + task.m
-        cmd = [_tool("genbg"), "-cq", "-d2:2", f"-D{opts.i_cap}:{opts.j_cap + 1}", "-Z1",
-               str(opts.n), str(task.m), f"{e}:{e}"]
+        cmd = [_tool("genbg"), "-q", *genbg_bounds(task, opts)]
     if task.mod > 1:
         cmd.append(f"{task.res}/{task.mod}")
     return cmd
+
+
+def genbg_bounds(task: Task, opts: SynthesisOptions) -> list[str]:
+    """genbg's arguments for the links × joints graphs of ``task`` (without the residue):
+    the degree bounds of both classes (the options' caps and restricted row), two joints
+    on at most one common link (``-Z1``), the two class sizes and the incidence count."""
+    lo, hi = opts.link_degrees()
+    jlo, jhi = opts.joint_sizes(task.m)
+    e = opts.p + task.m
+    split = [] if task.level is None else [f"-X{task.level - _default_split_level(task.m)}"]
+    return ["-c", f"-d{lo}:{jlo}", f"-D{hi}:{jhi}", "-Z1", *split, str(opts.n), str(task.m), f"{e}:{e}"]
+
+
+def genbg_swapped(task: Task, opts: SynthesisOptions) -> list[str]:
+    """genbg's arguments for the same graphs with the classes swapped: joints first, the
+    links added one at a time last (``-Z1`` then says two links share at most one joint,
+    which non-degeneracy implies as well: two links on two common joints are rigid)."""
+    lo, hi = opts.link_degrees()
+    jlo, jhi = opts.joint_sizes(task.m)
+    e = opts.p + task.m
+    return ["-c", f"-d{jlo}:{lo}", f"-D{jhi}:{hi}", "-Z1", str(task.m), str(opts.n), f"{e}:{e}"]
+
+
+def _default_split_level(m: int) -> int:
+    """The level (joints placed) at which genbg splits ``res/mod`` by default; ``-X``
+    moves it by the difference."""
+    return m - 2 if m >= 6 else m - 1 if m >= 3 else m

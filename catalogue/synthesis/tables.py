@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Iterator, Sequence
+from typing import Iterable, Iterator, Mapping, Sequence
 
 from .options import SynthesisOptions
 from .records import ChainRecord
 
-__all__ = ["AssortmentRow", "number_synthesis", "universal_table"]
+__all__ = ["AssortmentRow", "number_synthesis", "universal_table", "table_rows"]
 
 
 # ------------------------------------------------------------- number synthesis
@@ -114,8 +114,17 @@ def universal_table(opts: SynthesisOptions, records: Iterable[ChainRecord]) -> l
     for r in records:
         key = (_strip(r.LA), _strip(r.MJA))
         counts[key] = counts.get(key, 0) + 1
+    return table_rows(opts, counts)
+
+
+def table_rows(opts: SynthesisOptions, counts: Mapping[tuple, int]) -> list[AssortmentRow]:
+    """:func:`number_synthesis` rows with their chains from ``counts``
+    (``{(LA, MJA): chains}``, assortments without trailing zeros); a row the counts have
+    outside the existence domain is added with ``in_domain = False``.  With a restricted
+    row in ``opts`` only that row is listed."""
+    counts = dict(counts)
     rows = [AssortmentRow(r.LA, r.MJA, r.V, r.K, r.n_joints, counts.pop((r.LA, r.MJA), 0))
-            for r in number_synthesis(opts)]
+            for r in number_synthesis(opts) if _in_restriction(opts, r.LA, r.MJA)]
     # chains outside the existence domain (found for F >= 3: cut joints of high
     # multiplicity) are listed too, flagged in_domain = False
     K = opts.K
@@ -123,3 +132,8 @@ def universal_table(opts: SynthesisOptions, records: Iterable[ChainRecord]) -> l
         V = sum((j - 1) * v for j, v in zip(range(2, 2 + len(MJA)), MJA))
         rows.append(AssortmentRow(LA, MJA, V, K, opts.p - V, c, in_domain=False))
     return rows
+
+
+def _in_restriction(opts: SynthesisOptions, LA: tuple[int, ...], MJA: tuple[int, ...]) -> bool:
+    return ((opts.la is None or _strip(opts.la) == LA)
+            and (opts.mja is None or _strip(opts.mja) == MJA))

@@ -8,6 +8,8 @@ Examples::
     multiloop atlas --db atlas.sqlite --query "V=2 AND K=4" --json
     multiloop atlas --links 8 --dof 1 --html gallery/
     multiloop atlas --links 12 --dof 1 --scheduler tcp://127.0.0.1:8786
+    multiloop atlas --links 14 --dof 1 --table --no-loops       # counted by row, not stored
+    multiloop atlas --links 14 --dof 1 --table --la 6-6-2 --mja 2    # one row recounted
 """
 from __future__ import annotations
 
@@ -31,6 +33,8 @@ def add_arguments(p) -> None:
     p.add_argument("--planar", action="store_true", help="planar chains only")
     p.add_argument("--max-multiplicity", type=int, metavar="J", help="largest joint multiplicity j")
     p.add_argument("--max-link-degree", type=int, metavar="I", help="largest number of joints on a link")
+    p.add_argument("--la", metavar="N2-N3-...", help="only chains of this link assortment [LA] (restricts the enumeration)")
+    p.add_argument("--mja", metavar="V2-V3-...", help="only chains of this multiple-joint assortment [MJA] (0: simple joints)")
     p.add_argument("--workers", type=int, help="local processes (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786)")
     loops = p.add_mutually_exclusive_group()
@@ -53,7 +57,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     from multiloop.catalogue.atlas import Atlas
-    from multiloop.catalogue.atlas_build import atlas_request, build_atlas
+    from multiloop.catalogue.atlas_build import atlas_request, build_atlas, counts_only
     from multiloop.catalogue.listing import atlas_listing, listing_text
 
     opts = atlas_request(vars(args))
@@ -64,10 +68,12 @@ def run(args) -> int:
     with Atlas(args.db) as atlas:
         built, inv, curves = build_atlas(atlas, opts, loops=args.loops, workers=args.workers,
                                          scheduler=args.scheduler, progress=not args.no_progress,
-                                         mechanisms=args.mechanisms and args.query is None, curves=args.curves)
+                                         mechanisms=args.mechanisms and args.query is None, curves=args.curves,
+                                         table=args.table)
         if curves is not None:
             print(curves.to_text(), file=sys.stderr)
-        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv)
+        doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv,
+                            counted=counts_only(opts, args.table))
         print(dumps_json(doc) if args.json else listing_text(doc, opts, args.query, args.limit))
         if args.html is not None:
             from multiloop.catalogue.html import gallery_files
