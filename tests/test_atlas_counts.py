@@ -176,3 +176,21 @@ def test_bad_rows_and_filters_exit_2_before_a_file_is_made(tmp_path, capsys):
         err = capsys.readouterr().err
         assert "expected" in err and "Traceback" not in err
     assert not db.exists()
+
+
+def test_local_processes_and_dask_cluster_count_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    opts = SynthesisOptions(10, 1)
+    tables = []
+    with Atlas(tmp_path / "serial.sqlite") as a:
+        a.count_table(opts, progress=False, workers=1)
+        tables.append(a.table_counts(opts))
+    with Atlas(tmp_path / "pool.sqlite") as a:
+        a.count_table(opts, progress=False, workers=2)
+        tables.append(a.table_counts(opts))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        with Atlas(tmp_path / "dask.sqlite") as a:
+            a.count_table(opts, progress=False, scheduler=client)
+            tables.append(a.table_counts(opts))
+    assert tables[0] == tables[1] == tables[2] and sum(tables[0].values()) == 2645

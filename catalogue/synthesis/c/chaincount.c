@@ -108,13 +108,29 @@ static void tables_for(int n1) {
 }
 
 static void add_level(int k, unsigned J, int n1) {   /* Q_{k+1} from Q_k and joint J */
-    const signed char *q = qtab[k];
-    signed char *out = qtab[k + 1];
-    for (unsigned s = 0; s < (1u << n1); s++) {
-        int t = popc[s & J];
-        out[s] = (signed char)(q[s] + (t > 1 ? 2 * (t - 1) : 0));
+    int low = n1 < LOW ? n1 : LOW, width = 1 << low;
+    unsigned jlo = J & ((1u << low) - 1), jhi = J >> low;
+    signed char tlo[1 << LOW];
+    for (int lo = 0; lo < width; lo++) tlo[lo] = (signed char)popc[lo & jlo];
+    for (unsigned hi = 0; hi < (1u << (n1 - low)); hi++) {
+        signed char th = (signed char)popc[hi & jhi];
+        const signed char *q = qtab[k] + ((size_t)hi << low);
+        signed char *out = qtab[k + 1] + ((size_t)hi << low);
+        for (int lo = 0; lo < width; lo++) {
+            signed char t = (signed char)(th + tlo[lo]);
+            out[lo] = (signed char)(q[lo] + (t > 1 ? 2 * (t - 1) : 0));
+        }
     }
     levmask[k] = J;
+}
+
+static int block_hits(const signed char *row, const signed char *tlo, signed char th, int width) {
+    int hit = 0;
+    for (int lo = 0; lo < width; lo++) {
+        signed char t = (signed char)(th + tlo[lo]);
+        hit |= (t >= 2) & (row[lo] + 2 * t >= 0);
+    }
+    return hit;
 }
 
 static int degenerate_with_last(const unsigned *mask, int n1, int n2) {
@@ -129,15 +145,18 @@ static int degenerate_with_last(const unsigned *mask, int n1, int n2) {
     unsigned jlo = J & ((1u << low) - 1), jhi = J >> low;
     signed char tlo[1 << LOW];
     for (int lo = 0; lo < width; lo++) tlo[lo] = (signed char)popc[lo & jlo];
-    for (unsigned hi = 0; hi < (1u << (n1 - low)); hi++) {
-        signed char th = (signed char)popc[hi & jhi];
-        const signed char *row = q + ((size_t)hi << low);
-        int hit = 0;
-        for (int lo = 0; lo < width; lo++) {
-            signed char t = (signed char)(th + tlo[lo]);
-            hit |= (t >= 2) & (row[lo] + 2 * t >= 0);
-        }
-        if (hit) return 1;
+    /* the blocks whose high links include all of J's first (a degenerate subset holds
+     * at least two of J's links, mostly all of them), then the others */
+    unsigned nhi = 1u << (n1 - low), free_hi = (nhi - 1) & ~jhi;
+    for (int pass = 0; pass < 2; pass++) {
+        unsigned sub = 0;
+        do {
+            unsigned hi = pass ? sub : (sub | jhi);
+            sub = (sub - (pass ? (nhi - 1) : free_hi)) & (pass ? (nhi - 1) : free_hi);
+            if (pass && (hi & jhi) == jhi) continue;       /* scanned in the first pass */
+            if (popc[hi & jhi] + popc[jlo] < 2) continue;   /* fewer than two of J's links */
+            if (block_hits(q + ((size_t)hi << low), tlo, (signed char)popc[hi & jhi], width)) return 1;
+        } while (sub);
     }
     return 0;
 }

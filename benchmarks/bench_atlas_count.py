@@ -1,0 +1,119 @@
+"""Benchmark of number synthesis by counting (``multiloop atlas --table`` beyond 12 links)
+against nauty's genbg piped into a compiled filter, and the plan of the 14-link count.
+
+Run::
+
+    python benchmarks/bench_atlas_count.py                  # n = 10, 11 (F = 2) and 12
+    python benchmarks/bench_atlas_count.py --sample14 24    # + 24 random 14-link tasks: the estimate
+
+Yardstick: plain ``genbg -d2:2 -Z1`` per joint count with the same degree bounds, piped
+into ``benchmarks/c/chainfilter.c`` (``cc -O3 -march=native``), which tests every link
+subset of every generated graph in Gray-code order; it counts, it does not tally rows.
+Ours: the compiled counter (genbg with ``c/chaincount.c``: degenerate partial chains cut
+with their subtree, rows tallied inside), task by task as ``Atlas.count_table`` runs
+them, one process.  Both counts must agree.  CPU seconds of the child processes (the
+machine is shared: CPU, not wall time, is the measure per core).
+
+``--sample14 K`` times K of the 704 tasks of the 14-link count, drawn at random (seed 1),
+and estimates the whole count's CPU time and chains (mean × 704, with the standard
+error), and the wall time on 16 and 64 cores (CPU / cores, at least the longest task).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from multiloop.catalogue.synthesis import SynthesisOptions, plan_tasks  # noqa: E402
+from multiloop.catalogue.synthesis.counter_build import find_counter  # noqa: E402
+from multiloop.catalogue.synthesis.counting import count_rows, count_tasks  # noqa: E402
+from multiloop.catalogue.synthesis.nauty import _tool, genbg_bounds  # noqa: E402
+
+FILTER_SRC = ROOT / "benchmarks" / "c" / "chainfilter.c"
+
+
+def children_cpu() -> float:
+    t = os.times()
+    return t.children_user + t.children_system
+
+
+def yardstick(opts: SynthesisOptions, exe: Path) -> tuple[float, int]:
+    """CPU seconds and count of plain genbg | chainfilter, one run per joint count."""
+    c0, total = children_cpu(), 0
+    for task in plan_tasks(opts, split=1):
+        gen = subprocess.Popen([_tool("genbg"), "-q", *genbg_bounds(task, opts)],
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        out = subprocess.run([str(exe), str(opts.n), str(task.m)], stdin=gen.stdout, capture_output=True,
+                             text=True, check=True).stdout
+        gen.stdout.close()
+        gen.wait()
+        total += int(out)
+    return children_cpu() - c0, total
+
+
+def ours(opts: SynthesisOptions) -> tuple[float, int]:
+    """CPU seconds and count of the compiled counter over the count's tasks."""
+    c0 = children_cpu()
+    total = sum(sum(count_rows(t, opts, "compiled").values()) for t in count_tasks(opts))
+    return children_cpu() - c0, total
+
+
+def sample14(k: int) -> None:
+    opts = SynthesisOptions(14, 1)
+    tasks = count_tasks(opts)
+    picked = random.Random(1).sample(tasks, k)
+    cpu, chains = [], []
+    for i, task in enumerate(picked, 1):
+        c0 = children_cpu()
+        found = sum(count_rows(task, opts, "compiled").values())
+        cpu.append(children_cpu() - c0)
+        chains.append(found)
+        print(f"  {i:>3}/{k} {task.key:<22} {cpu[-1]:8.1f} s CPU {found:>9} chains", flush=True)
+    N = len(tasks)
+    tot, se = statistics.fmean(cpu) * N, statistics.stdev(cpu) / k ** 0.5 * N
+    ch, chse = statistics.fmean(chains) * N, statistics.stdev(chains) / k ** 0.5 * N
+    print(f"14 links, 1 DOF: {N} tasks; estimate {tot / 3600:.1f} ± {se / 3600:.1f} CPU hours, "
+          f"{ch / 1e6:.1f} ± {chse / 1e6:.1f} million chains ({ch / tot:.0f} chains/s/core)")
+    for cores in (2, 16, 64):
+        print(f"  on {cores:>2} cores: about {max(tot / cores, max(cpu)) / 3600:.2f} h "
+              f"(the longest sampled task {max(cpu):.0f} s)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sample14", type=int, metavar="K", help="time K random tasks of the 14-link count")
+    ap.add_argument("--no-12", action="store_true", help="skip the 12-link case")
+    args = ap.parse_args(argv)
+    if find_counter() is None:
+        print("the compiled counter is not built: python3 -m multiloop.catalogue.synthesis.counter_build")
+        return 2
+    print(f"genbg {_tool('genbg')}, counter {find_counter().name}, python {sys.version.split()[0]}")
+    cases = [SynthesisOptions(10, 1), SynthesisOptions(11, 2)] + ([] if args.no_12 else [SynthesisOptions(12, 1)])
+    print(f"{'case':<12}{'chains':>9}{'genbg|filter CPU s':>20}{'counter CPU s':>15}{'ratio':>8}{'chains/s/core':>15}")
+    with tempfile.TemporaryDirectory() as d:
+        exe = Path(d) / "chainfilter"
+        subprocess.run(["cc", "-O3", "-march=native", "-o", str(exe), str(FILTER_SRC)], check=True)
+        for opts in cases:
+            ys, ycount = yardstick(opts, exe)
+            us, count = ours(opts)
+            assert ycount == count, (opts, ycount, count)
+            print(f"n={opts.n} F={opts.F:<5}{count:>9}{ys:>20.1f}{us:>15.1f}{us / ys:>7.2f}x{count / us:>15.0f}",
+                  flush=True)
+    if args.sample14:
+        sample14(args.sample14)
+    print(f"load average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())} "
+          f"on {os.cpu_count()} cores, {time.strftime('%H:%M UTC', time.gmtime())}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
