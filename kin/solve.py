@@ -462,18 +462,20 @@ def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, 
     """Notes for the crossings that the path between consecutive output rows passes."""
     notes = []
     for c, k in crossings:
-        if period is not None:
+        if period is not None:         # the chart's crossing c recurs at c + w·period
             w = np.floor((xs - c) / period)
             hit = np.flatnonzero(np.diff(w) != 0)
+            at = c + period * np.maximum(w[:-1], w[1:])
         else:
             lo, hi = np.minimum(xs[:-1], xs[1:]), np.maximum(xs[:-1], xs[1:])
             hit = np.flatnonzero((lo < c) & (c < hi))
+            at = np.full(len(xs) - 1, c)
         flipped = c in flips.get(k, ())
         for n in hit:                  # xs[0] is the reference: xs[n] → xs[n+1] is row n−1 → row n
             if len(notes) >= 20:
                 return notes + ["… more crossings not listed"]
             where = "the reference" if n == 0 else f"row {n - 1}"
-            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_x(sp, 0, c)} "
+            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_x(sp, 0, at[n])} "
                          f"(between {where} and row {n}); the motion keeps the mode of the reference"
                          f"{' (the sign of the assembly branch changes there)' if flipped else ''}")
     return notes

@@ -98,6 +98,14 @@ def test_parallelogram_keeps_the_mode_of_the_reference():
     assert "between row 11 and row 12" in full.notes[0] or "row 12" in full.notes[0]
 
 
+def test_crossing_notes_give_the_input_of_each_turn():
+    """A crossing met on the second turn is named by its input there (480°, not the
+    first turn's 120°): the chart's crossing recurs once a period."""
+    st = _solve(_load("parallelogram"), np.arange(0.0, 721.0, 90.0))
+    met = sorted(float(n.split("meet at input ")[1].split("°")[0]) for n in st.notes if "meet at input" in n)
+    assert met == [120.0, 300.0, 480.0, 660.0]
+
+
 def test_crank_equal_to_rod_continues_smoothly_through_the_bifurcation():
     m = _load("crank_equals_rod")                # bifurcation at input 45°
     deg = np.array([44.5, 44.55, 44.6, 44.99, 45.01, 46.0, 90.0])
