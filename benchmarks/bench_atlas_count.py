@@ -5,6 +5,7 @@ Run::
 
     python benchmarks/bench_atlas_count.py                  # n = 10, 11 (F = 2) and 12
     python benchmarks/bench_atlas_count.py --sample14 24    # + 24 random 14-link tasks: the estimate
+    python benchmarks/bench_atlas_count.py --routes 12      # every 12-link row by two routes
 
 Yardstick: plain ``genbg -d2:2 -Z1`` per joint count with the same degree bounds, piped
 into ``benchmarks/c/chainfilter.c`` (``cc -O3 -march=native``), which tests every link
@@ -13,6 +14,10 @@ Ours: the compiled counter (genbg with ``c/chaincount.c``: degenerate partial ch
 with their subtree, rows tallied inside), task by task as ``Atlas.count_table`` runs
 them, one process.  Both counts must agree.  CPU seconds of the child processes (the
 machine is shared: CPU, not wall time, is the measure per core).
+
+``--routes N`` counts every row of the N-link 1-DOF table by the compiled counter and by
+the Python route (plain genbg, no pruning, through the NumPy filter and tally) and
+prints both totals and any row where they differ (the run fails if one does).
 
 ``--sample14 K`` times K of the 704 tasks of the 14-link count, drawn at random (seed 1),
 and estimates the whole count's CPU time and chains (mean × 704, with the standard
@@ -88,10 +93,35 @@ def sample14(k: int) -> None:
               f"(the longest sampled task {max(cpu):.0f} s)")
 
 
+def routes(n: int) -> bool:
+    """Every row of the n-link 1-DOF table by the compiled and the Python route."""
+    opts = SynthesisOptions(n, 1)
+    tables = {}
+    for route in ("compiled", "python"):
+        c0, t0 = children_cpu(), time.process_time()
+        table: dict = {}
+        for task in count_tasks(opts):
+            for row, k in count_rows(task, opts, route).items():
+                table[row] = table.get(row, 0) + k
+        tables[route] = table
+        print(f"n={n} F=1 {route:<9} {sum(table.values()):>10} chains in {len(table)} rows, "
+              f"{children_cpu() - c0 + time.process_time() - t0:.0f} s CPU", flush=True)
+    differ = sorted(set(tables["compiled"].items()) ^ set(tables["python"].items()))
+    for row in differ:
+        print(f"  differs: {row}")
+    by_v: dict = {}
+    for (la, mja), k in tables["compiled"].items():
+        v = sum((j - 1) * c for j, c in enumerate(mja, 2))
+        by_v[v] = by_v.get(v, 0) + k
+    print("  by V: " + ", ".join(f"{v}: {k}" for v, k in sorted(by_v.items())))
+    return not differ
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sample14", type=int, metavar="K", help="time K random tasks of the 14-link count")
     ap.add_argument("--no-12", action="store_true", help="skip the 12-link case")
+    ap.add_argument("--routes", type=int, metavar="N", help="every row of the N-link table by two routes")
     args = ap.parse_args(argv)
     if find_counter() is None:
         print("the compiled counter is not built: python3 -m multiloop.catalogue.synthesis.counter_build")
@@ -110,6 +140,8 @@ def main(argv=None) -> int:
                   flush=True)
     if args.sample14:
         sample14(args.sample14)
+    if args.routes and not routes(args.routes):
+        return 1
     print(f"load average at the end: {' '.join(f'{x:.1f}' for x in os.getloadavg())} "
           f"on {os.cpu_count()} cores, {time.strftime('%H:%M UTC', time.gmtime())}")
     return 0
