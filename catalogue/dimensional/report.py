@@ -22,7 +22,7 @@ __all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text",
 
 def _row(name: str, required, value, violation: float) -> dict:
     v = float(violation) if np.isfinite(violation) else float("inf")
-    return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": v}
+    return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": max(v, 0.0)}
 
 
 def turns_fully(problem: Problem, z: np.ndarray) -> bool:
