@@ -324,7 +324,8 @@ def test_cancel_stops_the_synthesis_worker():
     from multiloop.web.synthesis_view import run_candidates
     m = load_mechanism("four_bar")
     target = np.column_stack([0.05 + 0.03 * np.cos(np.linspace(0, 5, 20)), 0.07 + 0.02 * np.sin(np.linspace(0, 5, 20))])
-    job = Job(lambda j: run_candidates(j, m, target, 1, dict(seed=0, budget=60.0, tol=1e-12)), "test")
+    job = Job(lambda j: run_candidates(j, m, target, 1, dict(seed=0, budget=60.0, evaluations=10 ** 6, tol=1e-12)),
+              "test")
     t = time.perf_counter()
     while job.fraction == 0 and time.perf_counter() - t < 30:
         time.sleep(0.05)
