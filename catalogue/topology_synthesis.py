@@ -13,6 +13,10 @@ A design is returned only when :func:`kin.check.check` reaches every target inpu
 on one continuous branch (``positions``).  Designs are ordered by RMS error, fewer
 links first when their errors agree within ``tol``.
 
+The run's limits are a :class:`.dimensional.budget.Budget`: its evaluations (the
+designs every polish scores) or its seconds are shared out as the polishes' own limits,
+so under an evaluation budget the same seed gives the same designs on any machine.
+
 This is the retrieve-then-optimise scheme of Nobari et al. 2024 (LInK) with an
 exact, isomorph-free topology space (:mod:`.inversions`) instead of learned
 embeddings.
@@ -38,6 +42,9 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
                      polyline_distance, similarity_to)
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
+from .dimensional.budget import LIMITS, Budget, Meter
+from .dimensional.synthesise import one_blas_thread
+from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
 from .tracers import best_tracers
@@ -48,6 +55,11 @@ __all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "
 POLISH_POINTS = 40
 #: ... and to the finalists' second polish (the whole curve between the screen's points)
 REFINE_POINTS = 120
+#: evaluations of a run when neither limit is given (a four-bar target polished on the
+#: test atlas: about 1 700 evaluations/s on 2 busy cores, so about a minute)
+DEFAULT_EVALUATIONS = 100_000
+#: the least evaluations worth a polish (a few Jacobians); in seconds, 0.05
+MIN_POLISH = Budget(100, 0.05)
 #: share of the budget for the screen (every retrieved start polished briefly) ...
 SCREEN_SHARE = 0.5
 #: ... and kept for the final checks (the finalists' second polish has the rest)
@@ -80,31 +92,38 @@ class Design:
     retrieved: float
     seconds: float
     deviation_max: float = float("nan")
+    evaluations: int = 0
 
     def as_dict(self, file: str | None = None) -> dict:
         return {"error_max": self.error_max, "error_rms": self.error_rms, "links": self.links,
                 "structure": self.structure, "file": file, "chamfer": self.chamfer,
-                "deviation_max": self.deviation_max,
-                "retrieval_distance": self.retrieved, "seconds": round(self.seconds, 3)}
+                "deviation_max": self.deviation_max, "retrieval_distance": self.retrieved,
+                "evaluations": self.evaluations, "seconds": round(self.seconds, 3)}
 
 
 @dataclass(frozen=True)
 class TopologySynthesis:
     """Outcome of :func:`synthesise`: the designs (best first), whether the target was
-    read as closed, the candidates polished and the time."""
+    read as closed, the candidates polished, the time, the evaluations spent, the limits
+    and which one stopped the run (one of :data:`.dimensional.budget.STOPS`; in
+    :meth:`as_list`, every row's ``stopped``)."""
 
     designs: tuple[Design, ...]
     closed: bool
     polished: int
     seconds: float
+    evaluations: int = 0
+    limits: Budget = Budget()
+    stopped: str = "converged"
 
     def as_list(self, files=None) -> list[dict]:
         files = list(files) if files is not None else [None] * len(self.designs)
-        return [d.as_dict(f) for d, f in zip(self.designs, files)]
+        return [{**d.as_dict(f), "stopped": self.stopped} for d, f in zip(self.designs, files)]
 
     def to_text(self, files=None) -> str:
         lines = [f"{len(self.designs)} designs ({'closed' if self.closed else 'open'} target, "
-                 f"{self.polished} polished, {self.seconds:.1f} s)"]
+                 f"{self.polished} polished, {self.evaluations} evaluations in {self.seconds:.1f} s; "
+                 f"limits: {limits_text(self.limits.as_dict())}; stopped: {self.stopped})"]
         for d in self.as_list(files):
             lines.append(f"  {d['links']} links  rms {d['error_rms']:.3g}  max {d['error_max']:.3g}  "
                          f"chamfer {d['chamfer']:.3g}  {d['structure']}" + (f"  -> {d['file']}" if d["file"] else ""))
@@ -237,14 +256,14 @@ def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.nd
     return P[np.all(np.isfinite(P), axis=1)]
 
 
-def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float,
+def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, limits: Budget,
            seed: int, points: int = POLISH_POINTS, tick=None, method: str = "local",
            tol: float = 1e-12) -> SynthesisResult | None:
     """The dimensional synthesiser on ``start`` (by default its local polish,
-    ``method="local"``: no global search) on at most ``points`` target points, for
-    ``budget`` s; ``tick()`` is called at its progress reports."""
+    ``method="local"``: no global search) on at most ``points`` target points, within
+    ``limits``; ``tick()`` is called at its progress reports."""
     try:
-        res = dimensional_synthesise(start, path=_subset(target, points), point=point, budget=budget,
+        res = dimensional_synthesise(start, path=_subset(target, points), point=point, **limits.keywords(),
                                      seed=seed, tol=tol, full_rotation=closed, method=method,
                                      progress=None if tick is None else (lambda f, b: tick()))
     except LinkageError:
@@ -253,7 +272,7 @@ def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, budge
 
 
 def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, seconds: float,
-            target: np.ndarray) -> Design | None:
+            target: np.ndarray, evaluations: int = 0) -> Design | None:
     """A :class:`Design` of a polished result, when :func:`kin.check.check` reaches every
     target input on one branch; with LInK's chamfer score and the dense deviation."""
     m = res.mechanism
@@ -265,15 +284,19 @@ def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, se
     size = float(np.max(np.ptp(target, axis=0)))
     gaps = polyline_distance(target, curve)
     return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
-                  chamfer_score(target, curve, closed=closed), float(retrieved), seconds, float(gaps.max() / size))
+                  chamfer_score(target, curve, closed=closed), float(retrieved), seconds, float(gaps.max() / size),
+                  int(evaluations))
 
 
-def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budget: float, seed: int,
-            retrieved: float, full_target: np.ndarray) -> Design | None:
-    """A given start through the whole dimensional synthesiser (global search, then polish)."""
+def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,
+            retrieved: float, full_target: np.ndarray) -> tuple[Design | None, SynthesisResult | None]:
+    """A given start through the whole dimensional synthesiser (global search, then
+    polish): its design (None when it fails the check) and the synthesiser's result."""
     t0 = time.perf_counter()
-    res = _local(start, target, closed, point, budget, seed, method="de", tol=1e-9)
-    return None if res is None else _design(res, closed, point, retrieved, time.perf_counter() - t0, full_target)
+    res = _local(start, target, closed, point, limits, seed, method="de", tol=1e-9)
+    if res is None:
+        return None, None
+    return _design(res, closed, point, retrieved, time.perf_counter() - t0, full_target, res.evaluations), res
 
 
 def _order(items: list, tol: float, key=lambda d: (d.error_rms, d.links)) -> list:
@@ -307,8 +330,8 @@ def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[floa
 
 
 def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "atlas.sqlite", top: int = 3,
-               budget: float = 60.0, point: str = "P", tol: float = 1e-4, per_topology: int = 2,
-               topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
+               evaluations: int | None = None, budget: float | None = None, point: str = "P", tol: float = 1e-4,
+               per_topology: int = 2, topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
                progress=None) -> TopologySynthesis:
     """Path synthesis that chooses the topology from the atlas (module docstring).
 
@@ -326,8 +349,11 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         The atlas file with stored curves (``multiloop atlas … --mechanisms --curves K``).
     top : int
         Designs returned.
-    budget : float
-        Seconds in all, shared by the polished candidates.
+    evaluations, budget : optional
+        The run's limits (:class:`.dimensional.budget.Budget`), shared out to the
+        polishes: designs evaluated in all (reproducible) and a wall-time cap in seconds.
+        Neither: :data:`DEFAULT_EVALUATIONS` (with a ``start``, the dimensional
+        synthesiser's default).
     point : str
         Name of the tracer point of the designs.
     tol : float
@@ -337,8 +363,9 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     finalists : int
         Screened designs polished again (at least ``top``).
     progress : callable(fraction), optional
-        Called with the share of the budget spent, before every polish and during it;
-        an exception it raises (a cancel) ends the run.
+        Called with the share of the budget spent (of the evaluations, else of the
+        seconds), before every polish and during it; an exception it raises (a cancel)
+        ends the run.
 
     Returns
     -------
@@ -348,69 +375,99 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     target = _target(path)
     closed = is_closed(target)
     if start is not None:
-        d = _polish(start, target, closed, point, budget, seed, float("nan"), target)
-        return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0)
-    if budget is None or not budget > 0:
-        raise InputError(explain("budget (--budget)", expected="a positive number of seconds", got=repr(budget)))
+        limits = Budget.of(evaluations, budget)
+        d, res = _polish(start, target, closed, point, limits, seed, float("nan"), target)
+        return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0,
+                                 0 if res is None else res.evaluations, limits, "converged" if res is None else res.stopped)
+    limits = Budget.of(evaluations, budget, default=DEFAULT_EVALUATIONS)
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
         raise InputError(explain("top (--top)", expected="a positive number of designs", got=repr(top)))
     if not Path(atlas).is_file():
         raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                  hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
-    with Atlas(atlas, readonly=True) as a:
-        chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), per_topology, topologies)
-        starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
-    tick = None if progress is None else (lambda: progress(min((time.perf_counter() - t0) / budget, 1.0)))
-    polished = _screen_and_refine(starts, target, closed, point, seed, t0, budget, tol, max(top, finalists), tick)
-    designs = []
-    for res, dist, seconds in polished:
-        if tick is not None:
-            tick()
-        d = _design(res, closed, point, dist, seconds, target)
-        if d is not None:
-            designs.append(d)
-            if len(designs) == top:
-                break
-    return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0)
+    run = Meter.start(limits, None if limits.seconds is None else t0 + limits.seconds)
+    tick = None if progress is None else (lambda: progress(run.fraction()))
+    with one_blas_thread():                 # (one BLAS thread: the same sums on any machine, and faster)
+        with Atlas(atlas, readonly=True) as a:
+            chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), per_topology, topologies)
+            starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
+        polished, stopped = _screen_and_refine(starts, target, closed, point, seed, run, tol, max(top, finalists),
+                                               tick)
+        designs = []
+        for res, dist, seconds, n in polished:
+            if tick is not None:
+                tick()
+            d = _design(res, closed, point, dist, seconds, target, n)
+            if d is not None:
+                designs.append(d)
+                if len(designs) == top:
+                    break
+    return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0, run.used, limits, stopped)
 
 
-def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, t0: float,
-                       budget: float, tol: float, finalists: int, tick=None) -> list[tuple[SynthesisResult, float, float]]:
-    """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
-    points for an equal share of what is left of :data:`SCREEN_SHARE` of the budget (the
-    first at least :data:`MIN_SHARE` of it); the best ``finalists`` (in
-    :func:`_order`) polished again on :data:`REFINE_POINTS`, sharing the time left but
-    :data:`ASSESS_SHARE` of the budget (kept for the checks).  Returns
-    ``(result, retrieval distance, seconds)``, best first.  ``tick()`` (progress) is
-    called before every polish and at the polish's own reports."""
+def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
+                       tol: float, finalists: int, tick=None) -> tuple[list[tuple], str]:
+    """The screen (:func:`_screen`), then the best ``finalists`` (in :func:`_order`)
+    polished again on :data:`REFINE_POINTS`, sharing what is left of the run's
+    evaluations and of its seconds but :data:`ASSESS_SHARE` (kept for the checks).
+    Returns ``(result, retrieval distance, seconds, evaluations)``, best first, and why
+    the run stopped (one of :data:`.dimensional.budget.STOPS`).  ``tick()`` (progress)
+    is called before every polish and at the polish's own reports."""
     key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
     tick = tick or (lambda: None)
-    screen_end = t0 + SCREEN_SHARE * budget
+    screened, stops = _screen(starts, target, closed, point, seed, run, tick)
+    ranked = _order(screened, tol, key)
+    best, rest = ranked[:finalists], ranked[finalists:]
+    refine = run.until(1.0, 1.0 - ASSESS_SHARE)
+    refined = []
+    for k, (res, dist, secs, n) in enumerate(best):
+        share = refine.portion(len(best) - k, smallest=MIN_POLISH)
+        t = time.perf_counter()
+        tick()
+        again = None if share is None else _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS,
+                                                  tick)
+        stops.append(refine.binding() if share is None else again.stopped if again is not None else "converged")
+        if again is not None:
+            refine.spend(again.evaluations)
+        used = time.perf_counter() - t
+        refined.append((res if again is None else again, dist, secs + used,
+                        n + (0 if again is None else again.evaluations)))       # (errors at more points)
+    return _order(refined, tol, key) + rest, _run_stopped(stops)
+
+
+def _screen(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
+            tick) -> tuple[list[tuple], list[str]]:
+    """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
+    points with an equal share of what is left of :data:`SCREEN_SHARE` of the run's
+    limits (the first at least :data:`MIN_SHARE` of them), until a share is below
+    :data:`MIN_POLISH` or a design is exact with the fewest links.  Returns
+    ``(result, retrieval distance, seconds, evaluations)`` and the polishes' stops."""
+    screen = run.until(SCREEN_SHARE)
     fewest = min((m.n_links for _, m in starts), default=0)
-    screened = []
+    screened, stops = [], []
     for k, (dist, m) in enumerate(starts):
         t = time.perf_counter()
-        each = (screen_end - t) / (len(starts) - k)       # (what one start overran, the next ones lose)
-        if k == 0:
-            each = max(each, MIN_SHARE * budget)           # the nearest start is always polished
-        elif each < 0.05:
+        # (what one start overran, the next ones lose; the nearest start is always polished)
+        each = screen.portion(len(starts) - k, run.scaled(MIN_SHARE)) if k == 0 else \
+            screen.portion(len(starts) - k, smallest=MIN_POLISH)
+        if each is None:
+            stops.append(screen.binding())
             break
         tick()
         res = _local(m, target, closed, point, each, seed, tick=tick)
         if res is not None:
-            screened.append((res, dist, time.perf_counter() - t))
+            screen.spend(res.evaluations)
+            screened.append((res, dist, time.perf_counter() - t, res.evaluations))
+            stops.append(res.stopped)
             if res.error_max <= EXACT and m.n_links == fewest:
+                stops.append("exact")
                 break                                      # exact with the fewest links: nothing to beat
-    ranked = _order(screened, tol, key)
-    best, rest = ranked[:finalists], ranked[finalists:]
-    left = t0 + (1.0 - ASSESS_SHARE) * budget - time.perf_counter()
-    refined = []
-    for k, (res, dist, secs) in enumerate(best):
-        share = left / (len(best) - k)
-        t = time.perf_counter()
-        tick()
-        again = _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS, tick) if share > 0.05 else None
-        used = time.perf_counter() - t
-        left -= used
-        refined.append((res if again is None else again, dist, secs + used))     # (errors at more points)
-    return _order(refined, tol, key) + rest
+    return screened, stops
+
+
+def _run_stopped(stops: list[str]) -> str:
+    """Why a run without a start stopped: ``"tolerance"`` when the screen ended on an
+    exact design, else the first limit that cut a polish, else ``"converged"``."""
+    if "exact" in stops:
+        return "tolerance"
+    return next((s for s in stops if s in LIMITS), "converged")

@@ -204,7 +204,7 @@ def test_synthesis_without_start_writes_checked_designs(curve_atlas, tmp_path, c
     np.savetxt(csv, target, delimiter=",")
     out = tmp_path / "o.toml"
     assert main(["synthesise", "--path", str(csv), "--out", str(out), "--db", str(curve_atlas), "--links", "4,6",
-                 "--budget", "10", "--top", "2", "--json"]) == 0
+                 "--evaluations", "8000", "--top", "2", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc and {"error_max", "error_rms", "links", "structure", "file"} <= set(doc[0])
     assert doc[0]["error_max"] < 1e-3 and doc[0]["links"] == 4

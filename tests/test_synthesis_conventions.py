@@ -55,7 +55,7 @@ def test_polish_returns_a_perturbed_exact_solution(name, link, timed):
 def test_synthesise_started_on_the_exact_design_returns_it():
     m, pt = _with_point(load_named("four_bar"), "coupler")
     T = solve(m, np.radians(np.arange(0.0, 360.0, 20.0))).point_positions[:, 0]
-    r = synthesise(m, path=T, point=pt, budget=2.0, tol=1e-12)
+    r = synthesise(m, path=T, point=pt, evaluations=6000, tol=1e-12)
     assert r.error_rms < 1e-10
 
 
@@ -100,7 +100,7 @@ def test_step_timing_has_a_free_offset_and_sense():
     assert pr.batch(z[None, :])[0] < 1e-12
     z[pr.names.index("timing.sense")] = -0.5                              # the clockwise reading
     assert pr.batch(z[None, :])[0] > 1e-3
-    r = synthesise(m, path=steps, point="P", timing="step", budget=2.0, seed=1)
+    r = synthesise(m, path=steps, point="P", timing="step", evaluations=6000, seed=1)
     assert r.error_max < 1e-6
 
 
@@ -108,18 +108,18 @@ def test_direction_picks_the_walk_and_is_reported():
     m = load_named("four_bar")
     T = solve(m, np.radians(np.arange(0.0, 300.0, 50.0))).point_positions[:, 0]
     for d, sign in (("ccw", 1.0), ("cw", -1.0)):
-        r = synthesise(m, path=T, point="P", direction=d, budget=1.0, seed=0)
+        r = synthesise(m, path=T, point="P", direction=d, evaluations=3000, seed=0)
         row = next(c for c in r.constraints if c["name"] == "direction")
         steps = np.diff(r.inputs)
         assert row["met"] == bool(np.all(sign * steps >= 0)) and row["value"] in ("ccw", "cw", "both")
-    r = synthesise(m, path=T, point="P", direction="ccw", budget=1.0)
+    r = synthesise(m, path=T, point="P", direction="ccw", evaluations=3000)
     assert r.error_max < 1e-6 and np.all(np.diff(r.inputs) > 0)     # the target is traced ccw
 
 
 def test_grashof_crank_rocker_and_mode_reference_are_met_and_reported():
     m = load_named("four_bar")
     T = solve(m, np.radians(np.arange(0.0, 360.0, 40.0))).point_positions[:, 0]
-    r = synthesise(m, path=T, point="P", grashof="crank-rocker", mode="reference", budget=1.5)
+    r = synthesise(m, path=T, point="P", grashof="crank-rocker", mode="reference", evaluations=4500)
     rows = {c["name"]: c for c in r.constraints}
     assert rows["grashof"]["met"] and rows["mode"]["met"] and rows["mode"]["value"] == 0
     j = {x.name: np.array(x.at) for x in r.mechanism.joints}
@@ -128,27 +128,62 @@ def test_grashof_crank_rocker_and_mode_reference_are_met_and_reported():
     assert L[0] + L[3] <= L[1] + L[2] + 1e-12
     assert np.isclose(np.linalg.norm(j["A"] - j["O2"]), L[0])
     with pytest.raises(InputError, match="four-bar"):
-        synthesise(load_named("watt_1"), path=T, point="P", grashof="double-crank", budget=0.5)
+        synthesise(load_named("watt_1"), path=T, point="P", grashof="double-crank", evaluations=1500)
 
 
 def test_bounds_are_kept_and_reported_violations_are_measured(tmp_path, capsys):
+    """The bounds hold, and the transmission row is the design's own minimum transmission
+    angle (two routes: the report's, on the driver grid; ``check``'s, over the continuous
+    motion of the written file), met exactly when it reaches 89.5°.  Whether the search
+    meets 89.5° is its trade of the targets against the penalty: a four-bar can keep it
+    all turn (the next test), by a crank too small to trace the target."""
+    from multiloop.kin.check import check
+    from multiloop.topo.io import load
     m = load_named("four_bar")
     T = solve(m, np.radians(np.arange(0.0, 360.0, 40.0))).point_positions[:, 0]
     f = tmp_path / "t.csv"
     np.savetxt(f, T, delimiter=",")
     out = tmp_path / "o.toml"
-    rc = main(["synthesise", str(named_path("four_bar")), "--path", str(f), "--out", str(out), "--budget", "1",
-               "--bounds", "O2.x=-0.01:0.01", "O4.y=-0.02:0.0", "--min-transmission", "89.5", "--json"])
-    assert rc == 0
+    args = ["synthesise", str(named_path("four_bar")), "--path", str(f), "--out", str(out), "--evaluations", "3000",
+            "--bounds", "O2.x=-0.01:0.01", "O4.y=-0.02:0.0", "--min-transmission", "89.5"]
+    assert main(args + ["--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert -0.01 <= doc["design"]["O2.x"] <= 0.01 and -0.02 <= doc["design"]["O4.y"] <= 0.0
     mt = next(c for c in doc["constraints"] if c["name"] == "min_transmission")
-    assert mt["met"] == (mt["value"] >= 89.5)                        # a four-bar cannot keep 89.5° all turn
-    assert not mt["met"] and np.isclose(mt["violation"], 89.5 - mt["value"])
-    assert doc["constraints_met"] is False
-    rc = main(["synthesise", str(named_path("four_bar")), "--path", str(f), "--out", str(out), "--budget", "1",
-               "--min-transmission", "89.5"])
-    assert rc == 0 and "constraint min_transmission (89.5): NOT met, violated by" in capsys.readouterr().out
+    mu = {a.joint: a.extreme for a in check(load(out), min_transmission=0.0).drivers[0].angles}["B"]
+    lowest = min(mu.min, 180.0 - mu.max)                             # folded to [0°, 90°]
+    assert lowest - 1e-6 <= mt["value"] <= lowest + 0.5              # the grid's samples of the same motion
+    assert mt["met"] == (mt["value"] >= 89.5)
+    assert np.isclose(mt["violation"], max(0.0, 89.5 - mt["value"]))
+    assert doc["constraints_met"] == all(c["met"] for c in doc["constraints"])
+    # the text report of the same run (same seed and evaluations: the same design) prints that row
+    assert main(args) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("constraint min_transmission"))
+    state = "met" if mt["met"] else f"NOT met, violated by {mt['violation']:.3g}"
+    assert line == f"constraint min_transmission (89.5): {state}; value {mt['value']:.4g}"
+
+
+def test_a_small_crank_keeps_the_transmission_angle_within_half_a_degree_of_90():
+    """Frame d, crank a, coupler = rocker = sqrt((d² + a²) / 2): cos μ = 2ad cos θ / (d² + a²),
+    so a crank of 0.4 % of the frame keeps μ within asin(0.008) = 0.458° of 90° all turn.
+    Three routes: the closed form, ``check`` and the synthesis report's constraint row."""
+    import math
+
+    from multiloop.catalogue.dimensional.report import constraint_report
+    from multiloop.kin.check import check
+    from tests.test_check import four_bar
+    d, a = 0.1, 0.0004
+    b = math.sqrt((d * d + a * a) / 2)
+    m, pt = _with_point(four_bar(a, b, b, d, math.radians(90.0)), "coupler")
+    closed = 90.0 - math.degrees(math.asin(2 * a * d / (d * d + a * a)))
+    assert 89.5 < closed < 89.55
+    dc = check(m, min_transmission=89.5).drivers[0]
+    mu = {x.joint: x.extreme for x in dc.angles}["B"]
+    assert dc.full_rotation and mu.min == pytest.approx(closed, abs=1e-9) and mu.max == pytest.approx(180 - closed)
+    T = solve(m, np.radians(np.arange(0.0, 360.0, 40.0))).point_positions[:, 0]
+    pr = _problem(m, pt, T, min_transmission=89.5)
+    row = next(r for r in constraint_report(pr, pr.x0, pr.match(pr.x0), True) if r["name"] == "min_transmission")
+    assert row["met"] and closed - 1e-9 <= row["value"] < closed + 0.01 and row["violation"] == 0.0
 
 
 # ---------------------------------------------------------------------------------
@@ -168,7 +203,7 @@ BAD = {"empty": (b"", "empty file"), "header": (b"x,y\n", "header line only"),
 def test_bad_target_tables_exit_2(tmp_path, capsys, case):
     body, words = BAD[case]
     out = tmp_path / "o.toml"
-    rc = main(["synthesise", "four_bar", "--path", str(_csv(tmp_path, body)), "--out", str(out), "--budget", "1"])
+    rc = main(["synthesise", "four_bar", "--path", str(_csv(tmp_path, body)), "--out", str(out), "--evaluations", "3000"])
     err = capsys.readouterr().err
     assert rc == 2 and words in err and "Traceback" not in err and not out.exists()
 
@@ -182,7 +217,7 @@ def test_bad_target_tables_exit_2(tmp_path, capsys, case):
 def test_bad_options_exit_2(tmp_path, capsys, args, words):
     f = _csv(tmp_path, b"0,0\n0.01,0.02\n0.03,0.01\n0.02,-0.01\n")
     out = tmp_path / "o.toml"
-    rc = main(["synthesise", "four_bar", "--path", str(f), "--out", str(out), "--budget", "0.5"] + args)
+    rc = main(["synthesise", "four_bar", "--path", str(f), "--out", str(out), "--evaluations", "1500"] + args)
     err = capsys.readouterr().err
     if words is None:                   # valid options (the control)
         assert rc == 0 and out.exists()
@@ -197,17 +232,14 @@ def test_direction_with_absolute_timing_exit_2(tmp_path, capsys):
     assert rc == 2 and "third column fixes the direction" in capsys.readouterr().err
 
 
-def test_long_targets_are_resampled_within_memory_and_time(tmp_path):
+def test_long_targets_are_resampled_within_memory(tmp_path):
     """3 000 and 10 000 rows once needed 404 GiB / 3.2 GB: now at most MAX_ROWS are used, with a note."""
     import resource
-    import time
     from multiloop.catalogue.dimensional.targets import MAX_ROWS
     m = load_named("four_bar")
     T = solve(m, np.linspace(0.1, 6.0, 10000)).point_positions[:, 0]
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    t = time.perf_counter()
-    r = synthesise(m, path=T, point="P", budget=1.0)
-    assert time.perf_counter() - t < 6.0
+    r = synthesise(m, path=T, point="P", evaluations=3000)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 600_000      # kB
     assert len(r.target) == MAX_ROWS and any("10000 rows were resampled" in n for n in r.notes)
     assert r.error_max < 1e-6
@@ -216,10 +248,10 @@ def test_long_targets_are_resampled_within_memory_and_time(tmp_path):
 def test_description_is_replaced_not_appended(tmp_path):
     m = load_named("four_bar")
     T = solve(m, np.radians(np.arange(0.0, 360.0, 40.0))).point_positions[:, 0]
-    r = synthesise(m, path=T, point="P", budget=0.5)
+    r = synthesise(m, path=T, point="P", evaluations=1500)
     d = r.mechanism.description
     assert m.description and m.description not in d and "synthesised" in d and f"{len(T)} targets" in d
-    r2 = synthesise(r.mechanism, path=T, point="P", budget=0.5)
+    r2 = synthesise(r.mechanism, path=T, point="P", evaluations=1500)
     assert r2.mechanism.description.count("synthesised") == 1
 
 

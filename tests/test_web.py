@@ -85,6 +85,16 @@ KEY_TIMER_JS = """() => {
     tick();
   }, true); }""" % DEEP_JS
 
+#: the synthesis tab's target figure is drawn: the start's traced path is in it (the server
+#: has handled the choice of the start) and its view has painted everything it holds
+TARGET_READY_JS = """() => { const fig = Bokeh.documents[0].get_model_by_name('ml-target');
+  if (fig == null || fig.renderers[0].data_source.data.xs.length == 0) { return false; }
+  const view = Bokeh.index.find_one(fig);
+  return view != null && view.has_finished(); }"""
+
+#: the strokes drawn on the target figure, in the page
+STROKES_JS = "() => Bokeh.documents[0].get_model_by_name('ml-strokes').data.xs.length"
+
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
                                  reason="chromium not installed (install.sh installs it)")]
@@ -267,21 +277,27 @@ def test_cancel_check_stops_a_running_check(page):
 
 
 def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory):
+    """Every step waits on the page's state, never on a fixed time: the stroke is drawn
+    once the target figure shows the chosen start, and Run is pressed once the page holds
+    the stroke (under load, a stroke drawn 500 ms after the choice was lost: "expected a
+    drawn stroke")."""
     page.get_by_text("Synthesis", exact=True).click()
-    page.locator(".ml-start select").select_option("four_bar")
-    page.wait_for_timeout(500)
+    page.locator(".ml-start select").select_option("four_bar", timeout=120000)
+    page.wait_for_function(TARGET_READY_JS, timeout=120000)
     page.locator(".ml-budget input").fill("3")            # budget (s)
     page.locator(".ml-budget input").press("Enter")
-    box = page.locator(".bk-Canvas").last.bounding_box() if page.locator(".bk-Canvas").count() else None
-    box = box or page.locator("canvas").last.bounding_box()
+    canvas = page.locator(".bk-Canvas").last
+    sync_api.expect(canvas).to_be_visible(timeout=120000)
+    box = canvas.bounding_box()
     cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
     page.mouse.move(cx + r, cy)
     page.mouse.down()
     for t in np.linspace(0, 1.6 * math.pi, 40):
         page.mouse.move(cx + r * math.cos(t) * 1.4, cy + r * math.sin(t))
     page.mouse.up()
+    page.wait_for_function(f"() => ({STROKES_JS})() == 1", timeout=120000)
     page.get_by_role("button", name="Run").click()
-    page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=60000)
+    page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=300000)
     assert page.locator("#ml-candidates tr[data-candidate]").count() == 1
     _shot(page, "web_synthesis.png", tmp_path_factory)
     with page.expect_download() as dl:
@@ -324,7 +340,8 @@ def test_cancel_stops_the_synthesis_worker():
     from multiloop.web.synthesis_view import run_candidates
     m = load_mechanism("four_bar")
     target = np.column_stack([0.05 + 0.03 * np.cos(np.linspace(0, 5, 20)), 0.07 + 0.02 * np.sin(np.linspace(0, 5, 20))])
-    job = Job(lambda j: run_candidates(j, m, target, 1, dict(seed=0, budget=60.0, tol=1e-12)), "test")
+    job = Job(lambda j: run_candidates(j, m, target, 1, dict(seed=0, budget=60.0, evaluations=10 ** 6, tol=1e-12)),
+              "test")
     t = time.perf_counter()
     while job.fraction == 0 and time.perf_counter() - t < 30:
         time.sleep(0.05)

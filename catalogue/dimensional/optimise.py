@@ -11,7 +11,10 @@ in one call of :meth:`~.objective.Problem.batch`:
 * ``"cmaes"``: the ``cma`` package's CMA-ES (Hansen & Ostermeier 2001), one
   ``ask``/``tell`` per generation.
 
-Both stop at the time budget or when the best objective reaches the tolerance.
+Both stop when the run's :class:`~.budget.Meter` says so (its evaluations or its
+seconds are spent) or when the best objective reaches the tolerance.  Under an
+evaluation budget every decision (the probes' schedule, the stop) reads the count of
+evaluations, not the clock, so a seed gives the same search on any machine.
 The polish is :func:`scipy.optimize.least_squares` (trust-region reflective) on
 the design plus one driver value per target, with the forward-difference
 Jacobian computed as one batched call (all perturbed designs together).  When the
@@ -22,11 +25,11 @@ search does instead of polishing a design out of them.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .budget import Budget, Meter
 from .objective import Problem
 
 __all__ = ["SearchResult", "global_search", "polish", "METHODS"]
@@ -51,26 +54,30 @@ class SearchResult:
 
 
 class _Counter:
-    """The objective in unit-box coordinates; counts evaluations, keeps the best."""
+    """The objective in unit-box coordinates; counts evaluations on the search's
+    :class:`~.budget.Meter` (designs beyond its limit are not evaluated: ``inf``), keeps
+    the best."""
 
-    def __init__(self, problem: Problem, budget: float, tol: float, progress=None, probe=None):
-        self.p, self.budget, self.tol, self.progress, self.probe = problem, budget, tol, progress, probe
+    def __init__(self, problem: Problem, meter: Meter, tol: float, progress=None, probe=None):
+        self.p, self.meter, self.tol, self.progress, self.probe = problem, meter, tol, progress, probe
         self.probed_t, self.done, self.probe_time = 0.0, False, 0.0
         self.lo, self.span = problem.lower, problem.upper - problem.lower
         self.n = 0
         self.best_f, self.best_z = np.inf, problem.x0.copy()
         self.elite_f, self.elite_u = np.empty(0), np.empty((0, len(problem.x0)))
         self.probed: set = set()
-        self.t0 = time.perf_counter()
         self.history: list[tuple[float, float, int]] = []
 
     def __call__(self, U: np.ndarray) -> np.ndarray:
         Z = self.lo + np.atleast_2d(U) * self.span
-        f = self.p.batch(Z)
-        self.n += Z.shape[0]
-        k = int(np.argmin(f))
-        if f[k] < self.best_f:
-            self.best_f, self.best_z = float(f[k]), Z[k].copy()
+        k = self.meter.take(Z.shape[0])
+        f = np.full(Z.shape[0], np.inf)
+        if k:
+            f[:k] = self.p.batch(Z[:k])
+            self.n += k
+        i = int(np.argmin(f))
+        if f[i] < self.best_f:
+            self.best_f, self.best_z = float(f[i]), Z[i].copy()
         self._keep(np.atleast_2d(U), f)
         return f
 
@@ -90,57 +97,58 @@ class _Counter:
         self.elite_f, self.elite_u = F[keep], A[keep]
 
     def elapsed(self) -> float:
-        return time.perf_counter() - self.t0
+        return self.meter.elapsed()
 
     def generation(self) -> bool:
-        """Record one generation; True when the search should stop."""
-        t = self.elapsed()
-        self.history.append((t, self.best_f, self.n))
+        """Record one generation; True when the search should stop.  Progress and the
+        probes' schedule read the meter's clock: evaluations under an evaluation budget."""
+        t, span = self.meter.clock(), self.meter.span()
+        self.history.append((self.elapsed(), self.best_f, self.n))
         if self.progress is not None:
-            self.progress(min(t / self.budget, 1.0), self.best_f)
-        if self.probe is not None and t - self.probed_t >= 0.05 * self.budget and self.probe_time <= 0.4 * t:
+            self.progress(self.meter.fraction(), self.best_f)
+        if self.probe is not None and t - self.probed_t >= 0.05 * span and self.probe_time <= 0.4 * t:
             # the grid objective cannot reach the tolerance (sampling); ask the polish about
-            # the best few distinct designs not yet polished, spending at most 40 % of the time
+            # the best few distinct designs not yet polished, spending at most 40 % of the search
             self.probed_t = t
             for u in self.elite_u:
                 key = u.round(6).tobytes()
-                if key in self.probed or self.done or self.probe_time > 0.4 * self.elapsed():
+                if key in self.probed or self.done or self.probe_time > 0.4 * self.meter.clock():
                     continue
                 self.probed.add(key)
-                t1 = self.elapsed()
+                t1 = self.meter.clock()
                 self.done = bool(self.probe(self.lo + u * self.span))
-                self.probe_time += self.elapsed() - t1
-        return self.done or self.best_f <= self.tol or t >= self.budget
+                self.probe_time += self.meter.clock() - t1
+        return self.done or self.best_f <= self.tol or self.meter.stop() is not None
 
 
-def global_search(problem: Problem, *, method: str = "de", seed: int = 0, budget: float = 10.0,
+def global_search(problem: Problem, *, method: str = "de", seed: int = 0, meter: Meter | None = None,
                   tol: float = 1e-4, popsize: int = 8, progress=None, probe=None) -> SearchResult:
-    """Minimise ``problem.batch`` over its bounds within ``budget`` seconds.
+    """Minimise ``problem.batch`` over its bounds until ``meter`` stops it.
 
-    ``popsize`` multiplies the number of variables (as in SciPy's DE); CMA-ES uses
-    the same population.  The start design is always in the first population.
-    ``probe(z) -> bool`` is called (at most every 5 % of the budget, spending at most
-    40 % of the time) on each of the :data:`ELITE` best designs seen so far that differ
+    ``meter`` is the search's :class:`~.budget.Meter` (default: a run of
+    :data:`~.budget.DEFAULT_EVALUATIONS` evaluations).  ``popsize`` multiplies the number
+    of variables (as in SciPy's DE); CMA-ES uses the same population.  The start design is
+    always in the first population.  ``probe(z) -> bool`` is called (at most every 5 % of
+    the meter's span, spending at most 40 % of what the search has spent, both in the
+    meter's unit) on each of the :data:`ELITE` best designs seen so far that differ
     pairwise by more than 0.05 in some unit-box coordinate and were not probed before
     (an early polish of the best few); it stops the search when it returns True
-    (e.g. the polished design meets the tolerance).
+    (e.g. the polished design meets the tolerance).  The probe charges its evaluations
+    to the same meter.  ``stopped`` is one of :data:`~.budget.STOPS`.
     """
-    c = _Counter(problem, budget, tol, progress, probe)
+    c = _Counter(problem, meter if meter is not None else Meter.start(Budget.of()), tol, progress, probe)
     u0 = (problem.x0 - c.lo) / np.where(c.span > 0, c.span, 1.0)
     c(u0[None, :])
     if probe is not None:                   # the start itself may be one polish away
         c.probed.add(u0.round(6).tobytes())
         c.done = bool(probe(problem.x0.copy()))
-        c.probe_time = c.elapsed()
-    stopped = "tolerance"
-    if method == "local":
-        stopped = "tolerance" if c.best_f <= tol or c.done else "local"
-    elif c.best_f > tol and not c.done:
+        c.probe_time = c.meter.clock()
+    if method != "local" and c.best_f > tol and not c.done:
         if method == "de":
             _de(c, u0, seed, popsize)
         else:
             _cmaes(c, u0, seed, popsize)
-        stopped = "tolerance" if c.best_f <= tol or c.done else "budget" if c.elapsed() >= budget else "converged"
+    stopped = "tolerance" if c.best_f <= tol or c.done else (c.meter.stop() or "converged")
     return SearchResult(c.best_z, c.best_f, c.n, c.elapsed(), tuple(c.history), stopped)
 
 
@@ -157,7 +165,7 @@ def _cmaes(c: _Counter, u0: np.ndarray, seed: int, popsize: int) -> None:
     import cma
     n = len(u0)
     restart = 0
-    while c.elapsed() < c.budget and c.best_f > c.tol:
+    while c.meter.stop() is None and c.best_f > c.tol:
         x0 = u0 if restart == 0 else np.random.default_rng(seed + restart).random(n)
         opts = {"bounds": [0.0, 1.0], "seed": int(seed) * 1000 + restart + 1, "verbose": -9,
                 "popsize": max(8, popsize * n // 2 ** min(restart, 3))}
@@ -202,7 +210,7 @@ def _jacobian(problem: Problem, split, u: np.ndarray, hi: np.ndarray, nz: int, f
 
 
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
-           deadline: float | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+           meter: Meter | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and, with free timing, the driver
     values ``phi`` (one per target).
 
@@ -216,9 +224,10 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     differenced together).  The trust region
     runs unbounded first and, only when it leaves the box, again within the box from
     the best point inside it; only points inside the box are kept.  Stops at
-    ``max_nfev`` residual evaluations or at ``deadline`` (a ``time.perf_counter()``
-    value, checked before every residual and Jacobian evaluation) with the best
-    point seen.  Returns the refined ``(z, phi)`` and the number of designs evaluated.
+    ``max_nfev`` residual evaluations, or when ``meter`` (a :class:`~.budget.Meter`,
+    charged with every design evaluated) cannot afford the next residual or Jacobian
+    or is past its deadline (checked before each), with the best point seen.  Returns
+    the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
     nz = len(z)
@@ -239,26 +248,24 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         Z = W[:, :nz]
         return Z, (W[:, nz:] if free else problem.timing_for(Z))
 
-    def late():
-        if deadline is not None and time.perf_counter() > deadline:
+    def charge(rows):
+        if meter is not None and (meter.late() or meter.take(rows, whole=True) < rows):
             raise _Deadline
+        count[0] += rows
 
     def fun(u):
-        late()
-        count[0] += 1
+        charge(1)
         r = _residuals(problem, *split(u))[0]
         r = np.where(np.isfinite(r), r, 1.0)
         n = float(r @ r)
         inside = bool(np.all((u >= lo) & (u <= hi)))
-        if inside and n < best[0] and (deadline is None or time.perf_counter() <= deadline):
+        if inside and n < best[0] and (meter is None or not meter.late()):
             best[0], best[1] = n, u.copy()      # (past the deadline a slow path leaves NaN)
         return r
 
     def jac(u):
-        late()
-        J, rows = _jacobian(problem, split, u, hi, nz, free)
-        count[0] += rows
-        return J
+        charge(1 + nz + int(free))                  # the rows of _jacobian
+        return _jacobian(problem, split, u, hi, nz, free)[0]
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
     # trust-region subproblem is solved iteratively)

@@ -17,12 +17,12 @@ from multiloop.topo.errors import InputError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text", "progress_bar"]
+__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
     v = float(violation) if np.isfinite(violation) else float("inf")
-    return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": v}
+    return {"name": name, "required": required, "value": value, "met": bool(v <= 0.0), "violation": max(v, 0.0)}
 
 
 def turns_fully(problem: Problem, z: np.ndarray) -> bool:
@@ -117,13 +117,20 @@ def synthesis_text(doc: dict) -> str:
              f"error (relative to the target size): max {doc['error_max']:.3g}, RMS {doc['error_rms']:.3g}"]
     if doc.get("angle_error_max_deg") is not None:
         lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
-    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s "
-                 f"({doc['method']}, seed {doc['seed']}, stopped: {doc['stopped']})")
+    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s ({doc['method']}, seed {doc['seed']}; "
+                 f"limits: {limits_text(doc['limits'])}; stopped: {doc['stopped']})")
     for c in doc["constraints"]:
         state = "met" if c["met"] else f"NOT met, violated by {c['violation']:.3g}"
         lines.append(f"constraint {c['name']} ({c['required']}): {state}; value {_fmt(c['value'])}")
     lines += [f"note: {n}" for n in doc["notes"]]
     return "\n".join(lines)
+
+
+def limits_text(limits: dict) -> str:
+    """``{"evaluations": N, "seconds": S}`` (either None) as ``"N evaluations, S s"``."""
+    parts = ([f"{limits['evaluations']} evaluations"] if limits.get("evaluations") is not None else []) + \
+        ([f"{limits['seconds']:g} s"] if limits.get("seconds") is not None else [])
+    return ", ".join(parts) or "none"
 
 
 def _fmt(v) -> str:

@@ -11,6 +11,7 @@ import numpy as np
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
+from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish
@@ -29,6 +30,9 @@ class SynthesisResult:
     output range for function generation); ``angle_error_max`` (deg) is the pose
     angle error of motion generation.  ``inputs`` are the driver values (rad or m
     from the reference) at which the targets are met, in driver order.
+    ``evaluations`` counts the designs the search and the polish scored, ``limits``
+    the run's :class:`~.budget.Budget`, and ``stopped`` which one ended it (one of
+    :data:`~.budget.STOPS`).
     """
 
     mechanism: Mechanism
@@ -48,6 +52,7 @@ class SynthesisResult:
     history: tuple = field(default_factory=tuple, repr=False)
     notes: tuple[str, ...] = ()
     constraints: tuple = ()
+    limits: Budget = Budget()
 
     def inputs_cli(self) -> np.ndarray:
         """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
@@ -61,7 +66,7 @@ class SynthesisResult:
                 "error_rms": self.error_rms, "angle_error_max_deg": self.angle_error_max,
                 "evaluations": self.evaluations, "seconds": round(self.seconds, 4),
                 "evaluations_per_second": self.evaluations / self.seconds if self.seconds > 0 else None,
-                "method": self.method, "seed": self.seed, "stopped": self.stopped,
+                "method": self.method, "seed": self.seed, "stopped": self.stopped, "limits": self.limits.as_dict(),
                 "inputs": [float(x) for x in self.inputs_cli()],
                 "achieved": np.asarray(self.achieved).tolist(), "target": np.asarray(self.target).tolist(),
                 "design": dict(self.design), "constraints": [dict(c) for c in self.constraints],
@@ -133,12 +138,10 @@ def motion_target(m: Mechanism, motion, link: str) -> MotionTarget:
     return MotionTarget(np.column_stack([a[:, :2], np.radians(a[:, 2])]), link, src)
 
 
-def _check_start(m: Mechanism, budget: float, method: str, seed) -> None:
+def _check_start(m: Mechanism, method: str, seed) -> None:
     from multiloop.kin.solve import solve
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2 ** 32:
         raise InputError(explain("seed (--seed)", expected="an integer in [0, 2**32)", got=repr(seed)))
-    if not budget or not np.isfinite(budget) or budget <= 0:
-        raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(map(repr, METHODS)), got=repr(method)))
     if not m.has_geometry or len(m.drivers) != 1:
@@ -230,7 +233,8 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
 
 def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_only: bool = False,
                function=None, output: str | None = None, motion=None, link: str | None = None,
-               seed: int = 0, budget: float = 10.0, method: str = "de", tol: float = 1e-6,
+               seed: int = 0, evaluations: int | None = None, budget: float | None = None, method: str = "de",
+               tol: float = 1e-6,
                bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
                length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
                timing: str = "reference", grashof: str = "any", mode: str = "any", direction: str = "any",
@@ -251,10 +255,17 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
         slide); the first row is the reference configuration.
     motion, link : optional
         Poses (x, y, angle deg) of a frame attached to ``link``, met in order.
-    seed, budget, method, tol, popsize, grid
-        Reproducible seed, time budget (s), ``"de"``, ``"cmaes"`` or ``"local"`` (no
-        global search: the start is only polished), early stop on
-        the relative RMS error, population per variable, driver samples per turn.
+    seed : int
+        The random seed, in [0, 2**32).
+    evaluations, budget : optional
+        The run's limits (:class:`~.budget.Budget`): candidate designs evaluated (the
+        search, its probes and the polish; the same seed gives the same design on any
+        machine) and a wall-time cap in seconds.  Neither:
+        :data:`~.budget.DEFAULT_EVALUATIONS` evaluations.
+    method, tol, popsize, grid
+        ``"de"``, ``"cmaes"`` or ``"local"`` (no global search: the start is only
+        polished), early stop on the relative RMS error, population per variable,
+        driver samples per turn.
     bounds : dict, optional
         ``{"J.x": (low, high), ...}`` by design-variable name (default: the box
         around the start and the target widened by its size).
@@ -283,42 +294,55 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     Raises
     ------
     InputError
-        Too few targets, NaN, unknown point/joint/link, budget <= 0, unknown method.
+        Too few targets, NaN, unknown point/joint/link, a limit out of range (evaluations
+        not a whole number in [1, 10**12], budget <= 0), unknown method.
     AssemblyError, SingularityError
         The start does not assemble in its reference configuration.
     """
     _import_optimisers(method)          # one-off module imports (seconds) are not synthesis time
+    limits = Budget.of(evaluations, budget)
     with one_blas_thread():
-        return _synthesise(start, path, point, shape_only, function, output, motion, link, seed, budget, method,
+        return _synthesise(start, path, point, shape_only, function, output, motion, link, seed, limits, method,
                            tol, bounds, full_rotation, min_transmission, length_bounds, max_ratio, timing, grashof,
                            mode, direction, popsize, grid, progress)
 
 
-def _synthesise(m, path, point, shape_only, function, output, motion, link, seed, budget, method, tol, bounds,
-                full_rotation, min_transmission, length_bounds, max_ratio, timing, grashof, mode, direction,
+def _synthesise(m, path, point, shape_only, function, output, motion, link, seed, limits: Budget, method, tol,
+                bounds, full_rotation, min_transmission, length_bounds, max_ratio, timing, grashof, mode, direction,
                 popsize, grid, progress) -> SynthesisResult:
-    """:func:`synthesise`'s work (its arguments, checked here)."""
+    """:func:`synthesise`'s work (its arguments, checked here).  The search has 60 % of
+    what the run has left after set-up (its probes included), the final polish the rest."""
     t0 = time.perf_counter()
-    _check_start(m, budget, method, seed)
+    _check_start(m, method, seed)
     cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio, grashof=grashof, mode=mode,
                        direction=direction)
     task, target = _target(m, path, point, shape_only, function, output, motion, link, timing)
     target, sampled = _checked(task, target, direction)
-    problem = _problem(m, task, target, bounds, cons, grid, t0 + budget)
-    ev = problem.ev
+    problem = _problem(m, task, target, bounds, cons, grid, None if limits.seconds is None else t0 + limits.seconds)
     start_note = _closed_form(problem)
-    end = ev.deadline = _search_deadline(problem, t0, budget)
+    work = Meter.start(limits, _search_deadline(problem, t0, limits.seconds))
+    problem.ev.deadline = work.deadline
     polished: list = []
-    probe = _prober(problem, polished, end, tol)
-    left = end - time.perf_counter()
-    res = global_search(problem, method=method, seed=seed, budget=0.6 * left, tol=tol, popsize=popsize,
-                        progress=progress, probe=None if method == "local" else probe)
-    best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", deadline=end)
-    return _result(problem, res, best, [sampled, start_note], task, target, method, seed, t0)
+    search = work.share(0.6)
+    res = global_search(problem, method=method, seed=seed, meter=search, tol=tol, popsize=popsize,
+                        progress=progress, probe=None if method == "local" else _prober(problem, polished, search, tol))
+    best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", meter=work)
+    return _result(problem, replace(res, stopped=_stopped(res.stopped, method, best, tol, work)), best,
+                   [sampled, start_note], task, target, method, seed, t0, limits)
+
+
+def _stopped(searched: str, method: str, best, tol: float, work: Meter) -> str:
+    """Why the run stopped: the global search's reason, or for the local method (whose
+    search is the final polish) the tolerance met, a limit reached, or convergence."""
+    if method != "local" or searched == "tolerance":
+        return searched
+    if np.sqrt(np.mean(best[0][0] ** 2)) <= tol:
+        return "tolerance"
+    return work.stop() or "converged"
 
 
 def _result(problem: Problem, res, best, notes0: list, task: str, target, method: str, seed: int,
-            t0: float) -> SynthesisResult:
+            t0: float, limits: Budget) -> SynthesisResult:
     """The :class:`SynthesisResult` of the chosen design ``best`` (see :func:`_best`)."""
     (rel, ang, ok), z, phi, n2, notes = best
     notes = [n for n in notes0 if n] + notes
@@ -330,10 +354,11 @@ def _result(problem: Problem, res, best, notes0: list, task: str, target, method
     return SynthesisResult(out, task, float(np.max(rel)), float(np.sqrt(np.mean(rel ** 2))), res.evaluations + n2,
                            time.perf_counter() - t0, method, seed, phi, achieved, wanted,
                            dict(zip(problem.names, map(float, z))), res.stopped,
-                           None if ang is None else float(np.max(ang)), res.history, tuple(notes), report)
+                           None if ang is None else float(np.max(ang)), res.history, tuple(notes), report, limits)
 
 
-def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: int, deadline: float) -> Problem:
+def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: int,
+             deadline: float | None) -> Problem:
     """The design space, the evaluator (with its hard ``deadline``) and the problem,
     with its start values for a motion frame, a shape-only similarity and a step
     timing's offset."""
@@ -351,15 +376,16 @@ def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: i
     return problem
 
 
-def _prober(problem: Problem, polished: list, end: float, tol: float):
-    """The global search's probe: polish design ``z`` (until ``end``), keep the result
-    in ``polished``, and say whether it meets the tolerance and every constraint."""
+def _prober(problem: Problem, polished: list, meter: Meter, tol: float):
+    """The global search's probe: polish design ``z`` (charged to the search's
+    ``meter``), keep the result in ``polished``, and say whether it meets the tolerance
+    and every constraint."""
     def probe(z):
-        if time.perf_counter() > end:
+        if meter.stop() is not None:
             return False
         with _unbounded(problem.ev):
             phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=100, deadline=end)
+        z2, phi2, n = polish(problem, z, phi, max_nfev=100, meter=meter)
         a = _assess(problem, z2, phi2)
         polished.append((a, z2, phi2, n))
         return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0
@@ -385,11 +411,13 @@ def _import_optimisers(method: str) -> None:
         import cma  # noqa: F401
 
 
-def _search_deadline(problem: Problem, t0: float, budget: float) -> float:
-    """When the search and the polish must stop: the budget less a reserve for the
-    final assessment (about six single-design evaluations, timed here; at most a
-    quarter of the budget).  It matters on the slow path, where one design costs
-    one :func:`kin.solve.solve` call."""
+def _search_deadline(problem: Problem, t0: float, budget: float | None) -> float | None:
+    """When the search and the polish must stop under a cap of ``budget`` seconds (None:
+    no cap, no deadline): the cap less a reserve for the final assessment (about six
+    single-design evaluations, timed here; at most a quarter of the budget).  It matters
+    on the slow path, where one design costs one :func:`kin.solve.solve` call."""
+    if budget is None:
+        return None
     t = time.perf_counter()
     with _unbounded(problem.ev):
         problem.batch(problem.x0[None, :])
@@ -423,12 +451,12 @@ def _closed_form(problem: Problem) -> str | None:
     return None
 
 
-def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, deadline: float | None = None):
+def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, meter: Meter | None = None):
     """The best of the global design, its polish and the probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not.
 
-    The time left is split: the global design is polished for half of it, then the
-    best candidate so far (often a probe's polished design) for the rest.  When the
+    What ``meter`` has left is split: the global design is polished with half of it,
+    then the best candidate so far (often a probe's polished design) with the rest.  When the
     search stopped at the tolerance (``skip``), only the best candidate is polished, a
     little (100 evaluations: near a solution the steps converge quickly)."""
     with _unbounded(problem.ev):
@@ -444,12 +472,11 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, d
                               float(np.sqrt(np.mean(c[0][0] ** 2))))
         return keys[id(c[1])]
     for half in ((False,) if skip else (True, False)):
-        now = time.perf_counter()
-        if deadline is not None and now >= deadline:
+        if meter is not None and meter.stop() is not None:
             break
-        stop = None if deadline is None else (now + 0.5 * (deadline - now) if half else deadline)
+        part = None if meter is None else meter.share(0.5) if half else meter
         _, zs, phis, _ = cands[0] if half else min(cands, key=key)
-        z2, phi2, n = polish(problem, zs, phis, max_nfev=100 if skip else 1500, deadline=stop)
+        z2, phi2, n = polish(problem, zs, phis, max_nfev=100 if skip else 1500, meter=part)
         cands.append((_assess(problem, z2, phi2), z2, phi2, n))
         if half and not cands[-1][0][2]:
             notes.append("the local polish left the continuous branch")

@@ -1,5 +1,5 @@
 """``multiloop synthesise [START.toml] (--path T.csv --point NAME | --function F.csv --output JOINT |
---motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--budget S] [--method de|cmaes|local]
+--motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--evaluations N] [--budget S] [--method de|cmaes|local]
 [--timing reference|absolute|step] [--bounds NAME=LOW:HIGH ...] [--grashof crank-rocker|double-crank|any]
 [--mode reference|any] [--direction ccw|cw|any] [--json] [--plot P]``: dimensional synthesis.
 
@@ -20,8 +20,9 @@ Without ``START`` (``--path`` only), the atlas chooses the topology
 ``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``.
 
 ``OUT.toml`` is a normal mechanism file (the start's topology and names, the new
-dimensions, ``source`` citing the target).  The report gives the error (max and RMS
-distance to the targets relative to the target's size), the evaluations and the time;
+dimensions, ``source`` citing the target).  ``--evaluations`` (reproducible) and ``--budget``
+(seconds, a cap) limit the run.  The report gives the error (max and RMS distance to the
+targets relative to the target's size), the evaluations, the time, what stopped the run;
 ``--json`` prints it as JSON.  ``--plot`` draws the target against the achieved
 curve and the mechanism.  Nothing is written unless the whole run succeeds.
 """
@@ -33,7 +34,9 @@ from multiloop.outputs import Outputs, dumps_json, quiet_warnings
 from multiloop.topo.errors import InputError, explain
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 from multiloop.topo.formats import dumps_mechanism
+from multiloop.catalogue.dimensional.budget import Budget
 from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
+from multiloop.catalogue.dimensional.optimise import METHODS
 from multiloop.catalogue.dimensional.report import parse_bounds, progress_bar, synthesis_text
 from multiloop.catalogue.dimensional.targets import TIMINGS
 
@@ -54,9 +57,10 @@ def add_arguments(p) -> None:
     p.add_argument("--link", metavar="NAME", help="link of --motion")
     p.add_argument("--out", metavar="OUT.toml", required=True, help="the synthesised mechanism")
     p.add_argument("--seed", type=int, default=0, help="random seed (reproducible runs)")
-    p.add_argument("--budget", type=float, default=None, metavar="S",
-                   help="time budget in seconds (default 10; without START 60)")
-    p.add_argument("--method", choices=("de", "cmaes", "local"), default="de",
+    p.add_argument("--evaluations", default=None, metavar="N",
+                   help="stop after N designs evaluated: reproducible (default 20000; without START 100000)")
+    p.add_argument("--budget", type=float, default=None, metavar="S", help="a wall-time cap in seconds")
+    p.add_argument("--method", choices=METHODS, default="de",
                    help="global search (default de); local: polish the start only")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
@@ -85,23 +89,22 @@ def add_arguments(p) -> None:
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
 
-def run_without_start(args) -> int:
+def run_without_start(args, limits: dict) -> int:
     """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
     from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
 
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
                                  got="no START"))
-    budget = 60.0 if args.budget is None else args.budget      # (the library checks both)
     links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
-    res = topo_synthesise(args.path, links=links, atlas=args.db, top=args.top, budget=budget,
+    res = topo_synthesise(args.path, links=links, atlas=args.db, top=args.top, **limits,
                           point=args.point or "P", tol=1e-4 if args.tol is None else args.tol, seed=args.seed)
     if not res.designs:
         raise InputError(explain("--path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
-                                 hint="a larger --budget, more --links, or more curves in the atlas"))
+                                 hint="more --evaluations, more --links, or more curves in the atlas"))
     files = design_files(args.out, len(res.designs))
     for d, f in zip(res.designs, files):
         outs.add(f, dumps_mechanism(d.mechanism, f), "--out")
@@ -114,10 +117,9 @@ def run_without_start(args) -> int:
 def run(args) -> int:
     from multiloop.catalogue.dimensional import synthesise
 
+    limits = Budget.of(args.evaluations, args.budget, default=None, names=("--evaluations", "--budget")).keywords()
     if args.start is None:
-        return run_without_start(args)
-    if args.budget is None:
-        args.budget = 10.0
+        return run_without_start(args, limits)
     if args.tol is None:
         args.tol = 1e-6
     m = load(args.start)
@@ -127,7 +129,7 @@ def run(args) -> int:
     with progress_bar(sys.stderr.isatty() and not args.json) as cb:     # the library checks the task
         res = synthesise(m, path=args.path, point=args.point, shape_only=args.shape_only, function=args.function,
                          output=args.output, motion=args.motion, link=args.link, seed=args.seed,
-                         budget=args.budget, method=args.method, tol=args.tol, full_rotation=args.full_rotation,
+                         **limits, method=args.method, tol=args.tol, full_rotation=args.full_rotation,
                          min_transmission=args.min_transmission, max_ratio=args.max_ratio,
                          length_bounds=args.length_bounds, progress=cb, timing=args.timing,
                          grashof=args.grashof, mode=args.mode, direction=args.direction,
