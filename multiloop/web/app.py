@@ -8,17 +8,21 @@ blocks the page.
 """
 from __future__ import annotations
 
-import html
 import os
 import sys
 from importlib import resources
 
 import numpy as np
 
+from .markup import html
+
 __all__ = ["Workbench", "serve", "catalogue_names", "ADDRESS"]
 
 #: the only address served unless another host is asked for
 ADDRESS = "127.0.0.1"
+
+#: the message line with no message
+EMPTY_MESSAGE = html('<div id="ml-message"></div>')
 
 
 def catalogue_names() -> list[str]:
@@ -128,7 +132,7 @@ class Workbench:
         self.threshold = threshold
         self.mechanism, self.mechanism_name = None, ""
         self.job = None
-        self.message = div('<div id="ml-message"></div>')
+        self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
@@ -149,7 +153,7 @@ class Workbench:
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
             tabs.append(("Atlas", div("…")))
-        header = Row(div("<b>multiloop workbench</b>", width=200), self.pick, self.upload)
+        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.upload)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
@@ -178,11 +182,11 @@ class Workbench:
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
         """One line at the top of the page (the message of a bad file or option)."""
-        self.message.text = (f'<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
-                             f"{html.escape(text)}</div>")
+        self.message.text = html('<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
+                                 "{text}</div>", text=text)
 
     def clear(self) -> None:
-        self.message.text = '<div id="ml-message"></div>'
+        self.message.text = EMPTY_MESSAGE
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:

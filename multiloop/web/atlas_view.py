@@ -3,8 +3,6 @@ gallery's cards (:func:`multiloop.catalogue.html.chain_card`), filtered by the q
 language of ``multiloop atlas --query``."""
 from __future__ import annotations
 
-import html
-
 from bokeh.models import Button, Column, NumericInput, Row, Select, TextInput
 
 from multiloop.catalogue.atlas import Atlas
@@ -13,6 +11,7 @@ from multiloop.catalogue.synthesis import SynthesisOptions
 from multiloop.topo.errors import LinkageError
 
 from .glue import div
+from .markup import Html, html
 
 __all__ = ["AtlasView"]
 
@@ -50,7 +49,7 @@ class AtlasView:
     def show(self) -> None:
         a = self.atlases.get(self.file.value)
         if a is None or not self.pair.value:
-            self.cards.text = "<p>no chains stored</p>"
+            self.cards.text = html("<p>no chains stored</p>")
             return
         n, F = (int(v) for v in self.pair.value.split(","))
         q = self.query.value.strip() or None
@@ -61,9 +60,11 @@ class AtlasView:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.cards.text = (f"<style>{CSS}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
-                           f"{'' if q is None else ' matching ' + html.escape(q)}; {len(cards)} shown</p>"
-                           f"<div class='grid'>{''.join(cards)}</div>")
+        # the gallery's style and cards come from catalogue.html, which escapes what it shows
+        self.cards.text = html("<style>{css}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
+                               "{matching}; {shown} shown</p><div class='grid'>{cards}</div>",
+                               css=Html(CSS), total=total, n=n, F=F, matching="" if q is None else f" matching {q}",
+                               shown=len(cards), cards=Html("".join(cards)))
 
     def close(self) -> None:
         for a in self.atlases.values():

@@ -15,6 +15,8 @@ from bokeh.models import Button, CustomJS, Div, Slider, Toggle
 
 from multiloop.topo.errors import InputError, explain
 
+from .markup import Html, html, join
+
 __all__ = ["Player", "Download", "progress_html", "div", "upload_bytes", "on_upload"]
 
 #: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
@@ -85,17 +87,18 @@ class Download:
             self.button.tags = [self.button.tags[0] + 1, out[0], out[1]]
 
 
-def progress_html(fraction: float) -> str:
+def progress_html(fraction: float) -> Html:
     """A progress bar (``<progress id="ml-progress">``) at ``fraction`` of 1."""
     v = int(round(1000 * min(max(fraction, 0.0), 1.0)))
-    return f'<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>'
+    return html('<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>', v=v)
 
 
 def div(text: str = "", **kw) -> Div:
-    """A Div of page HTML (stretching to the width unless a width is given)."""
+    """A Div showing ``text``: HTML when it is an :class:`~.markup.Html` fragment, else
+    the text itself (stretching to the width unless a width is given)."""
     if "width" not in kw:
         kw.setdefault("sizing_mode", "stretch_width")
-    return Div(text=text, **kw)
+    return Div(text=join([text]), **kw)
 
 
 def upload_bytes(value) -> bytes:

@@ -9,7 +9,6 @@ the browser tests read.
 """
 from __future__ import annotations
 
-import html
 import json
 
 import numpy as np
@@ -17,6 +16,7 @@ from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Ran
 from bokeh.plotting import figure
 
 from .glue import Player, div
+from .markup import Html, html
 from .scene import Scene, Sweep
 
 __all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
@@ -56,12 +56,12 @@ if (el) {
 """
 
 
-def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
+def readout_html(sw: Sweep, i: int, names, mech: str) -> Html:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
-    return (f'<span id="ml-positions" data-mechanism="{html.escape(mech)}" data-index="{i}" data-input="{float(sw.x[i])!r}" '
-            f"data-positions='{html.escape(json.dumps(pos), quote=False)}'>{sw.joint} = "
-            f"{sw.x[i]:.3f} {sw.unit}</span>")
+    return html('<span id="ml-positions" data-mechanism="{mech}" data-index="{i}" data-input="{x}" '
+                'data-positions="{pos}">{joint} = {v:.3f} {unit}</span>', mech=mech, i=i,
+                x=repr(float(sw.x[i])), pos=json.dumps(pos), joint=sw.joint, v=float(sw.x[i]), unit=sw.unit)
 
 
 def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
@@ -85,7 +85,7 @@ class MechanismView:
         self.marks = ColumnDataSource(dict(x=[], y=[], label=[]))
         self.sweep = ColumnDataSource(dict(nx=[], ny=[], input=[]))
         # fixed size: a new text then repaints the readout alone, not the whole layout
-        self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout", width=560, height=22)
+        self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
         self.driver = Select(title="driver", options=[], width=160, visible=False)
@@ -122,7 +122,7 @@ class MechanismView:
         frames (driver 0 first)."""
         self.scene, self.sweeps, self.name = scene, sweeps, name
         if not sweeps:
-            self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
+            self.readout.text = html('<span id="ml-positions" data-mechanism="{name}"></span>', name=name)
             self.marks.data = dict(x=[], y=[], label=[])
             self.paths.data = dict(xs=[], ys=[])
             self.sweep.data = dict(nx=[], ny=[], input=[])
@@ -166,8 +166,9 @@ class MechanismView:
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
-        self.status.text = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
-                            f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
+        self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
+                                kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
+                                lo=float(sw.x.min()), hi=float(sw.x.max()), unit=sw.unit, n=len(sw.x))
         self.draw_frame(i)
 
     def _fit(self, nodes: np.ndarray) -> None:

@@ -10,7 +10,6 @@ downloads as ``.toml`` or ``.pyslvs`` (:mod:`multiloop.topo.pyslvs`).
 """
 from __future__ import annotations
 
-import html
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +21,7 @@ from multiloop.topo.errors import InputError, LinkageError, explain
 
 from .glue import Download, div, on_upload, progress_html
 from .jobs import Job
+from .markup import Html, html, join
 
 __all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
 
@@ -108,6 +108,13 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
     return out
 
 
+def status_html(text: str, state: str | None = None) -> Html:
+    """The status line of the synthesis (``#ml-synthesis-status``, ``data-state`` once a run began)."""
+    if state is None:
+        return html('<p id="ml-synthesis-status">{text}</p>', text=text)
+    return html('<p id="ml-synthesis-status" data-state="{state}">{text}</p>', state=state, text=text)
+
+
 def _float_or_none(text: str, what: str):
     text = (text or "").strip()
     if not text:
@@ -182,7 +189,7 @@ class SynthesisView:
         w["clear"].on_click(lambda: self._clear())
         w["open"].on_click(lambda: self._open())
         w["pick"].on_change("value", lambda attr, old, new: self._draw_candidates())
-        self.status = div('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
+        self.status = div(status_html("draw a target path or upload a CSV"))
         self.progress = div(progress_html(0.0))
         self.table = div("")
         self.downloads = [Download(f"Download .{f}", lambda f=f: self._download(f)) for f in ("toml", "pyslvs")]
@@ -239,7 +246,7 @@ class SynthesisView:
         self.target = a
         self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
         self.strokes.data = dict(xs=[], ys=[])
-        self.status.text = f'<p id="ml-synthesis-status">target: {html.escape(name)}, {len(a)} rows</p>'
+        self.status.text = status_html(f"target: {name}, {len(a)} rows")
 
     def _clear(self) -> None:
         self.target = None
@@ -288,7 +295,7 @@ class SynthesisView:
         else:
             self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
         self.w["run"].disabled, self.w["cancel"].disabled = True, False
-        self.status.text = '<p id="ml-synthesis-status" data-state="running">running…</p>'
+        self.status.text = status_html("running…", "running")
 
     def _atlas_options(self, options: dict) -> dict:
         """The keywords of the synthesis without a start (as ``multiloop synthesise``
@@ -310,8 +317,7 @@ class SynthesisView:
         if getattr(job, "detach", False) and job.running:
             self.job = None
             self.w["run"].disabled, self.w["cancel"].disabled = False, True
-            self.status.text = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
-                                "the atlas search stops at its next polish</p>")
+            self.status.text = status_html("cancelled: the atlas search stops at its next polish", "cancelled")
 
     def poll(self) -> None:
         """Called by the session's periodic callback: progress, then the candidates."""
@@ -325,15 +331,13 @@ class SynthesisView:
             self._list()
         if job.running:
             best = "" if not np.isfinite(job.best) else f", best objective {job.best:.3g}"
-            self.status.text = (f'<p id="ml-synthesis-status" data-state="running">running '
-                                f'{100 * job.fraction:.0f} %{best}</p>')
+            self.status.text = status_html(f"running {100 * job.fraction:.0f} %{best}", "running")
             return
         self.job = None
         self.w["run"].disabled, self.w["cancel"].disabled = False, True
         if job.state == "failed":
             self.say(job.error)
-        self.status.text = (f'<p id="ml-synthesis-status" data-state="{job.state}">{job.state}: '
-                            f'{len(self.results)} candidate(s)</p>')
+        self.status.text = status_html(f"{job.state}: {len(self.results)} candidate(s)", job.state)
 
 
     def _list(self) -> None:
@@ -345,12 +349,13 @@ class SynthesisView:
                 formula = r.structure if isinstance(r, AtlasDesign) else decompose(m).formula
             except LinkageError as exc:
                 formula = str(exc)
-            rows.append(f'<tr data-candidate="{i}"><td>{i}</td><td>{r.error_max:.3g}</td><td>{r.error_rms:.3g}</td>'
-                        f"<td>{len(m.links)}</td><td>{html.escape(formula)}</td><td>{r.seed}</td>"
-                        f"<td>{html.escape(r.stopped)}</td></tr>")
-        self.table.text = ('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
-                           "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>"
-                           + "".join(rows) + "</table>")
+            rows.append(html('<tr data-candidate="{i}"><td>{i}</td><td>{emax:.3g}</td><td>{erms:.3g}</td>'
+                             "<td>{links}</td><td>{formula}</td><td>{seed}</td><td>{stopped}</td></tr>",
+                             i=i, emax=r.error_max, erms=r.error_rms, links=len(m.links), formula=formula,
+                             seed=r.seed, stopped=r.stopped))
+        self.table.text = html('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
+                               "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>",
+                               rows=join(rows))
         self.w["pick"].options = [str(i) for i in range(1, len(self.results) + 1)]
         if self.results:
             best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms)
