@@ -93,6 +93,17 @@ joint = "A"
 """
 
 
+def six_bar_chain_atlas(db):
+    """An atlas at ``db`` with the chains of six links and one degree of freedom (the
+    atlas the web pages browse)."""
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+
+    with Atlas(db) as a:
+        a.build(SynthesisOptions(6, 1), progress=False)
+    return db
+
+
 def four_bar_curve_atlas(db):
     """An atlas at ``db`` with the four-bar's mechanisms and 6 curve realisations each
     (small and quick: the tests of the curve index and of synthesis without a start)."""

@@ -15,6 +15,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -42,6 +43,12 @@ DEEP_JS = """(sel) => { const out = []; const walk = (root) => {
   root.querySelectorAll(sel).forEach(e => out.push(e));
   root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
   walk(document); return out; }"""
+
+#: set a property of a model of the page, found by its name or its CSS class, as a
+#: script in the page (or a message written by hand) could: ([key, attribute, value])
+FORGE_JS = """([key, attr, value]) => { const doc = Bokeh.documents[0];
+  const m = doc.get_model_by_name(key) || [...doc.all_models].find(m => (m.css_classes || []).includes(key));
+  m[attr] = value; return m.type; }"""
 
 #: the player's frame slider (a Bokeh Slider, model name ml-frame) in the browser
 SLIDER_JS = "Bokeh.documents[0].get_model_by_name('ml-frame')"
@@ -106,26 +113,43 @@ def _shot(page, name: str, tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def atlas_db(tmp_path_factory):
-    from multiloop.catalogue.atlas import Atlas
-    from multiloop.catalogue.synthesis import SynthesisOptions
-    db = tmp_path_factory.mktemp("atlas") / "a.sqlite"
-    with Atlas(db) as a:
-        a.build(SynthesisOptions(6, 1), progress=False)
-    return db
+    from tests.common import six_bar_chain_atlas
+    return six_bar_chain_atlas(tmp_path_factory.mktemp("atlas") / "a.sqlite")
+
+
+def start_serve(*args: str):
+    """``multiloop serve ARGS`` on a free port: (the address it printed, with its token;
+    the process, its stderr in ``proc.err``, a file: a pipe nobody reads could fill)."""
+    port = _free_port()
+    err = tempfile.TemporaryFile("w+")
+    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), *args],
+                            stdout=subprocess.PIPE, stderr=err, text=True)
+    proc.err = err
+    line = proc.stdout.readline()
+    url = re.search(rf"http://127\.0\.0\.1:{port}/\S*", line)
+    assert url, line + stderr_of(proc)
+    return url.group(0), proc
+
+
+def stderr_of(proc) -> str:
+    proc.err.seek(0)
+    return proc.err.read()
+
+
+def stop(proc) -> None:
+    proc.terminate()
+    proc.wait(timeout=20)
+    proc.stdout.close()
+    proc.err.close()
 
 
 @pytest.fixture(scope="module")
 def server(atlas_db):
-    """``multiloop serve`` on a free port; yields (url, seconds until the page was usable)."""
-    port = _free_port()
+    """``multiloop serve`` on a free port; yields (url, the time it started, the process)."""
     t0 = time.perf_counter()
-    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(atlas_db)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = proc.stdout.readline()
-    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
-    yield f"http://127.0.0.1:{port}/", t0, proc
-    proc.terminate()
-    proc.wait(timeout=20)
+    url, proc = start_serve("--atlas", str(atlas_db))
+    yield url, t0, proc
+    stop(proc)
 
 
 @pytest.fixture(scope="module")

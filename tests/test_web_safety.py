@@ -112,3 +112,100 @@ def test_the_readout_keeps_a_hostile_name_text(name):
     assert attrs["data-mechanism"] == name and text == f"{name} = 1.000 deg"
     import json
     assert list(json.loads(attrs["data-positions"])) == [name, "B"]
+
+
+# ---------------------------------------------------------------------- menus
+_OPENED: list[tuple[str, list]] = []
+
+
+def _audit(event, args):
+    if event == "open" and _OPENED and isinstance(args[0], (str, bytes, os.PathLike)):
+        path = os.fsdecode(args[0])
+        for root, seen in _OPENED:
+            if path.startswith(root):
+                seen.append(path)
+
+
+@pytest.fixture
+def secret(tmp_path, monkeypatch):
+    """A design the page was not given (tmp_path/secret.toml, named SECRET), the working
+    directory beside it; yields (its path, the files under tmp_path the process opens)."""
+    import sys
+
+    from multiloop.inputs import resolve
+    if not getattr(sys, "_multiloop_audit", False):
+        sys.addaudithook(_audit)
+        sys._multiloop_audit = True
+    path = tmp_path / "secret.toml"
+    path.write_text(resolve("four_bar").read_text().replace('name = "four_bar"', 'name = "SECRET"'))
+    monkeypatch.chdir(tmp_path)
+    seen: list = []
+    _OPENED.append((str(tmp_path), seen))
+    yield path, seen
+    _OPENED.clear()
+
+
+def _widgets(wb, atlas):
+    """Every menu of a workbench served with the atlas ``atlas``, by name: (Select, its choices)."""
+    wb.tabs.active = 2
+    wb.tabs.active = 3
+    sv, av = wb.synthesis, wb.atlas
+    sv.w["start"].value = "four_bar"
+    menus = {"mechanism": wb.menu, "driver": wb.view.drivers, "atlas view": av.files, "n, F": av.pairs}
+    menus.update({f"synthesis {k}": m for k, m in sv.menus.items()})
+    return menus
+
+
+@pytest.fixture(scope="module")
+def small_atlas(tmp_path_factory):
+    from tests.common import six_bar_chain_atlas
+    return six_bar_chain_atlas(tmp_path_factory.mktemp("atlas") / "a.sqlite")
+
+
+def test_every_menu_refuses_a_value_it_was_not_given_and_opens_nothing(secret, small_atlas):
+    """Bokeh does not check a menu's value against its options: a script in the page set
+    the mechanism menu, the start menu or the atlas box to a path and the server opened
+    it.  Each menu now holds the server's list; a forged value is one line, the menu
+    goes back, no file outside the list is opened and the page goes on."""
+    import html
+
+    from multiloop import inputs
+    from multiloop.web.app import Workbench
+    path, opened = secret
+    asked = []
+    resolve = inputs.resolve
+    inputs.resolve = lambda arg, *a: asked.append(str(arg)) or resolve(arg, *a)
+    try:
+        wb = Workbench({}, [str(small_atlas)], 40.0)
+        menus = _widgets(wb, small_atlas)
+        for label, menu in menus.items():
+            before = (menu.select.value, menu.value, wb.mechanism, wb.mechanism_name)
+            for forged in (str(path), "secret.toml", "secret", "../" * 8 + "etc/passwd", "four_bar/../secret"):
+                menu.select.value = forged
+                message = html.unescape(wb.message.text)
+                assert f"{menu.what}: expected one of its entries, got " in message and "\n" not in message, label
+                assert (menu.select.value, menu.value, wb.mechanism, wb.mechanism_name) == before, label
+                wb.clear()
+        assert opened == [] and not [a for a in asked if "secret" in a or "passwd" in a], (opened, asked)
+        assert "SECRET" not in wb.structure.text and wb.mechanism.name != "SECRET"
+        wb.pick.value = "crank_slider"                              # the page goes on
+        assert wb.mechanism_name == "crank_slider" and wb.message.text == '<div id="ml-message"></div>'
+        assert set(menus) == {"mechanism", "driver", "atlas view", "n, F", "synthesis start", "synthesis point",
+                              "synthesis method", "synthesis atlas", "synthesis pick"}
+    finally:
+        inputs.resolve = resolve
+        wb.close()
+
+
+def test_a_file_given_to_serve_or_an_upload_is_a_choice_a_path_is_not(secret):
+    from multiloop.inputs import load_mechanism
+    from multiloop.web.app import load_choice
+    from multiloop.topo.errors import InputError
+    path, opened = secret
+    files = {"given.toml": load_mechanism("watt_1")}
+    assert load_choice(files, "given.toml") is files["given.toml"]
+    assert load_choice(files, "four_bar").name == "four_bar"
+    for name in (str(path), "secret.toml", "given.toml/../secret.toml"):
+        with pytest.raises(InputError, match="mechanism menu: expected one of its entries"):
+            load_choice(files, name)
+    assert opened == []

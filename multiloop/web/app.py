@@ -16,18 +16,46 @@ import numpy as np
 
 from .markup import html
 
-__all__ = ["Workbench", "serve", "catalogue_names", "ADDRESS"]
+__all__ = ["Workbench", "serve", "catalogue_names", "load_choice", "ADDRESS"]
 
 #: the only address served unless another host is asked for
 ADDRESS = "127.0.0.1"
+
+#: the hint of the message for a mechanism that is not one of the menu's
+MENU_HINT = "choose a catalogue mechanism, a file given to serve, or upload one"
 
 #: the message line with no message
 EMPTY_MESSAGE = html('<div id="ml-message"></div>')
 
 
+def _catalogue_folder():
+    return resources.files("multiloop.catalogue") / "mechanisms"
+
+
 def catalogue_names() -> list[str]:
-    folder = resources.files("multiloop.catalogue") / "mechanisms"
-    return sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".toml"))
+    return sorted(e.name[:-5] for e in _catalogue_folder().iterdir() if e.name.endswith(".toml"))
+
+
+def load_choice(files: dict, name: str):
+    """The mechanism of a menu entry ``name``: a FILE given to ``serve`` (read at start)
+    or a catalogue name (read from the catalogue's folder); never a path of the page's.
+
+    Raises
+    ------
+    InputError
+        ``name`` is neither.
+    """
+    from pathlib import Path
+
+    from multiloop.inputs import load_mechanism
+    from multiloop.topo.errors import InputError
+
+    from .menus import refusal
+    if name in files:
+        return files[name]
+    if name in catalogue_names():
+        return load_mechanism(Path(str(_catalogue_folder() / f"{name}.toml")))
+    raise InputError(refusal("mechanism menu", name, MENU_HINT))
 
 
 #: results shared read-only by every session of this server, per named mechanism
@@ -122,11 +150,12 @@ class Workbench:
     def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
         render then carries the drawing and its player alone)."""
-        from bokeh.models import Column, FileInput, Row, Select, TabPanel, Tabs
+        from bokeh.models import Column, FileInput, Row, TabPanel, Tabs
 
         from .check_view import CheckView
         from .glue import div, on_upload
         from .mechanism_view import MechanismView
+        from .menus import Menu
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
@@ -134,15 +163,17 @@ class Workbench:
         self.job = None
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
-        self.view = MechanismView(cursors=[self.check.cursor])
+        self.view = MechanismView(self.say, cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
         first = _first_choice(self.files)
-        self.pick = Select(title="mechanism", options=choices, value=first, width=240, css_classes=["ml-pick"])
+        self.menu = Menu("mechanism menu", self.say, choices, first, MENU_HINT, title="mechanism", width=240,
+                         css_classes=["ml-pick"])
+        self.pick = self.menu.select
         self.upload = FileInput(title="open a .toml, .json or .pyslvs file", accept=".toml,.json,.pyslvs",
                                 multiple=False)
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
-        self.pick.on_change("value", lambda attr, old, new: None if new == self.mechanism_name else self.open_name(new))
+        self.menu.on_choice(self.open_name)
         on_upload(self.upload, self.open_upload, self.say)
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
@@ -190,14 +221,14 @@ class Workbench:
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:
-        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue name."""
-        from multiloop.inputs import load_mechanism
+        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue
+        name (anything else is refused with the message)."""
         from multiloop.topo.errors import LinkageError
         if name in self.designs:
             self.open_design(self.designs[name], name)
             return
         try:
-            m = self.files[name] if name in self.files else load_mechanism(name)
+            m = load_choice(self.files, name)
         except LinkageError as exc:
             self.say(str(exc))
             self._follow()
@@ -208,10 +239,10 @@ class Workbench:
         """The menu names the mechanism shown (a new entry for an uploaded or synthesised
         design), without opening it again."""
         name = self.mechanism_name
-        if name and name not in self.pick.options:
-            self.pick.options = [name] + list(self.pick.options)
-        if name:
-            self.pick.value = name
+        if name and name not in self.menu.choices:
+            self.menu.set([name, *self.menu.choices], name)
+        elif name:
+            self.menu.set(value=name)
 
     def open_upload(self, name: str, data: bytes) -> None:
         from multiloop.inputs import load_upload
@@ -229,8 +260,7 @@ class Workbench:
                 from multiloop.topo.errors import InputError, explain
                 raise InputError(explain("start mechanism", expected="an open mechanism", got="none"))
             return self.mechanism
-        from multiloop.inputs import load_mechanism
-        return self.files[name] if name in self.files else load_mechanism(name)
+        return load_choice(self.files, name)
 
     def open_design(self, m, name: str | None = None, key: str | None = None) -> None:
         """Show ``m``: the reference drawing and the structure now, motion and check later
@@ -321,11 +351,9 @@ def _start_warm_up(files: dict, threshold: float):
     returns its events (ready, first page shown)."""
     import threading
 
-    from multiloop.inputs import load_mechanism
-
     from .prepare import start
     name = _first_choice(files)
-    m = files[name] if name in files else load_mechanism(name)
+    m = load_choice(files, name)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     child = start(m, threshold) if cores > 1 else None       # on one core it would only take turns
     _WARMING[name] = threading.Event()

@@ -12,11 +12,12 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row, Select
+from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row
 from bokeh.plotting import figure
 
 from .glue import Player, div
 from .markup import Html, html
+from .menus import Menu
 from .scene import Scene, Sweep
 
 __all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
@@ -74,9 +75,11 @@ def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
 
 
 class MechanismView:
-    """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it."""
+    """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it.
+    ``say`` shows the page's one-line message; ``cursors`` are the input cursors of the
+    plots against the input."""
 
-    def __init__(self, cursors=()):
+    def __init__(self, say, cursors=()):
         self.scene: Scene | None = None
         self.sweeps: list[Sweep] = []
         self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
@@ -88,13 +91,13 @@ class MechanismView:
         self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
-        self.driver = Select(title="driver", options=[], width=160, visible=False)
+        self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
+        self.driver = self.drivers.select
         self.player = Player(interval=40, width=380)
         self.player.slider.js_on_change("value", CustomJS(
             args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
                       cursors=self.cursors), code=REDRAW_JS))
-        self.driver.on_change("value", lambda attr, old, new: self.use_driver(
-            self.driver.options.index(new) if new in self.driver.options else 0))
+        self.drivers.on_choice(lambda label: self.use_driver(self.drivers.choices.index(label)))
         self.status = div("")
         self.panel = Column(Row(self.driver, self.player.play, self.player.slider), self.status,
                             self.readout, self.fig)
@@ -142,10 +145,9 @@ class MechanismView:
             marker=marker + ["x"] * n_pts,
             links=[", ".join(j.links) for j in m.joints] + [f"tracer point on {p.link}" for p in m.points])
         labels = [f"{sw.joint} ({sw.unit})" for sw in sweeps]
-        self.driver.options = labels
+        self.drivers.set(labels, labels[0] if labels else "")
         self.driver.visible = len(labels) > 1
         if labels:
-            self.driver.value = labels[0]
             self.use_driver(0)
         else:
             self._draw_nodes(scene.reference)

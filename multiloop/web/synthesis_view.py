@@ -14,14 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FileInput, FreehandDrawTool,
-                          NumericInput, Row, Select, TextInput)
+                          NumericInput, Row, TextInput)
 from bokeh.plotting import figure
 
+from multiloop.catalogue.dimensional.optimise import METHODS
 from multiloop.topo.errors import InputError, LinkageError, explain
 
 from .glue import Download, div, on_upload, progress_html
 from .jobs import Job
 from .markup import Html, html, join
+from .menus import Menu, refusal
 
 __all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
 
@@ -128,6 +130,9 @@ def _float_or_none(text: str, what: str):
     return v
 
 
+#: the hint of the message when no atlas was given to serve, or another was asked for
+ATLAS_HINT = "the atlases given to 'multiloop serve --atlas DB' (built by 'multiloop atlas')"
+
 #: the link counts offered to the synthesis without a start (``--links``)
 LINK_CHOICES = ("4", "6", "8")
 
@@ -136,10 +141,7 @@ def _widgets() -> dict:
     def number(title, value, mode="float", width=100, **kw):
         return NumericInput(title=title, value=value, mode=mode, width=width, **kw)
     return dict(
-        start=Select(title="start mechanism", options=[], width=200, css_classes=["ml-start"]),
-        point=Select(title="tracer point (--point)", options=[], width=160),
         csv=FileInput(title="target CSV", accept=".csv,.txt", multiple=False),
-        method=Select(title="method", options=["de", "cmaes", "local"], value="de", width=90),
         seed=number("seed", 0, "int", 90),
         budget=number("budget (s)", 4.0, low=0.1, css_classes=["ml-budget"]),
         tol=number("tol", 1e-6),
@@ -153,12 +155,23 @@ def _widgets() -> dict:
         run=Button(label="Run", button_type="primary", width=90),
         cancel=Button(label="Cancel", button_type="warning", width=90, disabled=True),
         clear=Button(label="Clear target", width=110),
-        atlas=TextInput(title="atlas (--db)", value="atlas.sqlite", width=260, css_classes=["ml-atlas"]),
         links=CheckboxGroup(labels=list(LINK_CHOICES), active=list(range(len(LINK_CHOICES))), inline=True),
         top=number("designs (--top)", 3, "int", 110, low=1, high=10),
         ties=number("ties (--tol)", 1e-4, low=0.0),
-        pick=Select(title="candidate", options=[], width=120),
         open=Button(label="Open in mechanism view", width=190),
+    )
+
+
+def _menus(say, starts: list[str], atlases) -> dict:
+    """The panel's menus: each holds only the choices the server gives it."""
+    return dict(
+        start=Menu("start menu", say, [*starts[:1], NO_START, *starts[1:]], title="start mechanism", width=200,
+                   css_classes=["ml-start"]),
+        point=Menu("tracer point menu", say, title="tracer point (--point)", width=160),
+        method=Menu("method menu", say, METHODS, "de", title="method", width=90),
+        atlas=Menu("atlas menu", say, [str(a) for a in atlases], hint=ATLAS_HINT, title="atlas (--db)",
+                   width=260, css_classes=["ml-atlas"]),
+        pick=Menu("candidate menu", say, title="candidate", width=120),
     )
 
 
@@ -166,14 +179,13 @@ class SynthesisView:
     """The synthesis panel of one session.  ``load_start(name)`` gives a start mechanism
     (a catalogue name, or the open one), ``open_design(m)`` shows a candidate, ``say``
     shows a one-line message.  The start :data:`NO_START` lets the atlas choose the
-    topology; its atlas file is the first of ``atlases`` (``multiloop serve --atlas``),
-    else ``atlas.sqlite``."""
+    topology; its atlas is one of ``atlases`` (``multiloop serve --atlas``), the first
+    at first."""
 
     def __init__(self, starts: list[str], load_start, open_design, say, atlases=()):
         self.load_start, self.open_design, self.say = load_start, open_design, say
-        self.w = w = _widgets()
-        w["start"].options = list(starts[:1]) + [NO_START] + list(starts[1:])
-        w["atlas"].value = str((list(atlases) or ["atlas.sqlite"])[0])
+        self.menus = _menus(say, starts, atlases)
+        self.w = w = _widgets() | {k: menu.select for k, menu in self.menus.items()}
         self.target = None
         self.job: Job | None = None
         self.results: list = []
@@ -182,13 +194,13 @@ class SynthesisView:
         self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
-        w["start"].on_change("value", lambda attr, old, new: self._start_changed())
+        self.menus["start"].on_choice(lambda name: self._start_changed())
         on_upload(w["csv"], self._upload, say)
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
         w["clear"].on_click(lambda: self._clear())
         w["open"].on_click(lambda: self._open())
-        w["pick"].on_change("value", lambda attr, old, new: self._draw_candidates())
+        self.menus["pick"].on_choice(lambda i: self._draw_candidates())
         self.status = div(status_html("draw a target path or upload a CSV"))
         self.progress = div(progress_html(0.0))
         self.table = div("")
@@ -215,21 +227,20 @@ class SynthesisView:
         return f
 
     def _start_changed(self) -> None:
-        none = self.w["start"].value == NO_START
+        none = self.menus["start"].value == NO_START
         self.atlas_box.visible = none
         for k in ("method", "candidates"):
             self.w[k].disabled = none
         if none:                    # the designs' tracer point is named by the run
-            self.w["point"].options, self.w["point"].value = ["P"], "P"
+            self.menus["point"].set(["P"], "P")
             self.start_src.data = dict(xs=[], ys=[])
             return
         try:
-            m = self.load_start(self.w["start"].value)
+            m = self.load_start(self.menus["start"].value)
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.w["point"].options = [p.name for p in m.points]
-        self.w["point"].value = m.points[0].name if m.points else ""
+        self.menus["point"].set([p.name for p in m.points])
         if len(m.drivers) == 1 and m.points:
             P = traced(m)
             self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
@@ -266,7 +277,8 @@ class SynthesisView:
         lo, hi = (_float_or_none(w["length_low"].value, "length ≥"), _float_or_none(w["length_high"].value, "length ≤"))
         if (lo is None) != (hi is None):
             raise InputError(explain("length bounds", expected="both LOW and HIGH, or neither", got="one of them"))
-        return dict(point=w["point"].value or None, shape_only=w["shape_only"].active, method=w["method"].value,
+        return dict(point=self.menus["point"].value or None, shape_only=w["shape_only"].active,
+                    method=self.menus["method"].value,
                     seed=w["seed"].value or 0, budget=w["budget"].value, tol=w["tol"].value,
                     full_rotation=w["full_rotation"].active,
                     min_transmission=_float_or_none(w["min_transmission"].value, "min transmission"),
@@ -281,9 +293,9 @@ class SynthesisView:
             target, options = self._target(), self._options()
             if not options["budget"] or options["budget"] <= 0:
                 raise InputError(explain("budget", expected="a positive number of seconds", got=str(options["budget"])))
-            none = self.w["start"].value == NO_START
+            none = self.menus["start"].value == NO_START
             atlas = self._atlas_options(options) if none else None
-            start = None if none else self.load_start(self.w["start"].value)
+            start = None if none else self.load_start(self.menus["start"].value)
         except LinkageError as exc:
             self.say(str(exc))
             return
@@ -302,8 +314,12 @@ class SynthesisView:
         without START: ``--db``, ``--links``, ``--top``, ``--tol``, ``--budget``, ``--seed``)."""
         from multiloop.catalogue.topology_synthesis import parse_links
         w = self.w
+        if not self.menus["atlas"].value:
+            raise InputError(explain("atlas", expected="an atlas given to serve", got="none", hint=ATLAS_HINT))
+        if not set(w["links"].active) <= set(range(len(LINK_CHOICES))):
+            raise InputError(refusal("links (--links)", w["links"].active, "tick the boxes 4, 6, 8"))
         links = ",".join(LINK_CHOICES[i] for i in sorted(w["links"].active))
-        return dict(atlas=(w["atlas"].value or "").strip(), links=parse_links(links),
+        return dict(atlas=self.menus["atlas"].value, links=parse_links(links),
                     top=int(w["top"].value or 0), budget=float(options["budget"]), point="P",
                     tol=float(w["ties"].value or 0.0), seed=int(options["seed"] or 0))
 
@@ -356,21 +372,19 @@ class SynthesisView:
         self.table.text = html('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
                                "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>",
                                rows=join(rows))
-        self.w["pick"].options = [str(i) for i in range(1, len(self.results) + 1)]
-        if self.results:
-            best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms)
-            self.w["pick"].value = str(best + 1)
+        best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms, default=-1)
+        self.menus["pick"].set([str(i) for i in range(1, len(self.results) + 1)], str(best + 1))
         self._draw_candidates()
 
     def _chosen(self):
-        v = self.w["pick"].value
+        v = self.menus["pick"].value
         if not v or int(v) > len(self.results):
             raise InputError(explain("candidate", expected="a finished synthesis run", got="none"))
         return self.results[int(v) - 1]
 
     def _draw_candidates(self) -> None:
         xs, ys, colours = [], [], []
-        pick = self.w["pick"].value
+        pick = self.menus["pick"].value
         for i, r in enumerate(self.results, 1):
             a = np.asarray(r.achieved, float)
             xs.append(a[:, 0].tolist())
