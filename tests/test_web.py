@@ -12,10 +12,8 @@ import math
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -34,6 +32,7 @@ else:
 
 from multiloop.inputs import load_mechanism  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
+from tests.common import start_serve, stop  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or ("/usr/bin/chromium" if os.environ.get("CI") else None)
 MULTILOOP = [sys.executable, "-m", "multiloop"]
@@ -97,12 +96,6 @@ pytestmark = [pytest.mark.browser,
                                  reason="chromium not installed (install.sh installs it)")]
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _shot(page, name: str, tmp_path_factory) -> Path:
     folder = Path(os.environ.get("MULTILOOP_SCREENSHOTS") or tmp_path_factory.mktemp("shots"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -115,32 +108,6 @@ def _shot(page, name: str, tmp_path_factory) -> Path:
 def atlas_db(tmp_path_factory):
     from tests.common import six_bar_chain_atlas
     return six_bar_chain_atlas(tmp_path_factory.mktemp("atlas") / "a.sqlite")
-
-
-def start_serve(*args: str):
-    """``multiloop serve ARGS`` on a free port: (the address it printed, with its token;
-    the process, its stderr in ``proc.err``, a file: a pipe nobody reads could fill)."""
-    port = _free_port()
-    err = tempfile.TemporaryFile("w+")
-    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), *args],
-                            stdout=subprocess.PIPE, stderr=err, text=True)
-    proc.err = err
-    line = proc.stdout.readline()
-    url = re.search(rf"http://127\.0\.0\.1:{port}/\S*", line)
-    assert url, line + stderr_of(proc)
-    return url.group(0), proc
-
-
-def stderr_of(proc) -> str:
-    proc.err.seek(0)
-    return proc.err.read()
-
-
-def stop(proc) -> None:
-    proc.terminate()
-    proc.wait(timeout=20)
-    proc.stdout.close()
-    proc.err.close()
 
 
 @pytest.fixture(scope="module")

@@ -209,3 +209,177 @@ def test_a_file_given_to_serve_or_an_upload_is_a_choice_a_path_is_not(secret):
         with pytest.raises(InputError, match="mechanism menu: expected one of its entries"):
             load_choice(files, name)
     assert opened == []
+
+
+# ---------------------------------------------------------------------- access
+def _request(url: str, path: str = "/", host: str | None = None, headers: dict | None = None):
+    """A GET of ``path`` (with its query) to the server of ``url``: (status, headers)."""
+    import http.client
+    from urllib.parse import urlsplit
+    u = urlsplit(url)
+    conn = http.client.HTTPConnection(u.hostname, u.port, timeout=60)
+    try:
+        conn.putrequest("GET", path, skip_host=True, skip_accept_encoding=True)
+        conn.putheader("Host", host or u.netloc)
+        for k, v in (headers or {}).items():
+            conn.putheader(k, v)
+        conn.endheaders()
+        r = conn.getresponse()
+        return r.status, r.headers
+    finally:
+        conn.close()
+
+
+def _websocket(url: str, host: str | None = None, origin: str | None = None, cookie: str | None = None) -> int:
+    """The status of a websocket handshake with Bokeh's own subprotocol and a session
+    token made up by the client (as a page of another site could)."""
+    import base64
+
+    from bokeh.util.token import generate_jwt_token, generate_session_id
+    token = generate_jwt_token(generate_session_id(), signed=False)
+    headers = {"Upgrade": "websocket", "Connection": "Upgrade", "Sec-WebSocket-Version": "13",
+               "Sec-WebSocket-Key": base64.b64encode(os.urandom(16)).decode(),
+               "Sec-WebSocket-Protocol": f"bokeh, {token}"}
+    if origin is not None:
+        headers["Origin"] = origin
+    if cookie is not None:
+        headers["Cookie"] = cookie
+    return _request(url, "/ws", host, headers)[0]
+
+
+@pytest.fixture(scope="module")
+def served():
+    from tests.common import start_serve, stop
+    url, proc = start_serve()
+    yield url, proc
+    stop(proc)
+
+
+def test_serve_prints_the_address_with_a_fresh_token(served):
+    url, _ = served
+    from urllib.parse import parse_qs, urlsplit
+    token = parse_qs(urlsplit(url).query)["token"][0]
+    assert re.fullmatch(r"[A-Za-z0-9_-]{43}", token), url
+
+
+def test_requests_without_the_token_or_from_another_host_are_refused(served):
+    """Before: any Host, any Origin, no token; every plain GET built a Bokeh session and a
+    websocket whose Host and Origin named another site was answered 101."""
+    from urllib.parse import urlsplit
+    url, _ = served
+    u = urlsplit(url)
+    port, token = u.port, u.query.removeprefix("token=")
+    evil = f"evil.example:{port}"
+    refused = {
+        "no token": _request(url, "/")[0],
+        "a wrong token": _request(url, "/?token=" + "x" * 43)[0],
+        "a foreign Host": _request(url, "/?" + u.query, host=evil)[0],
+        "a foreign Origin": _request(url, "/?" + u.query, headers={"Origin": "http://evil.example"})[0],
+        "a script without the cookie": _request(url, "/static/js/bokeh.min.js")[0],
+        "websocket, foreign Host and Origin": _websocket(url, evil, f"http://{evil}"),
+        "websocket, this Host, foreign Origin": _websocket(url, None, "http://evil.example",
+                                                           f"multiloop-token-{port}={token}"),
+        "websocket, no Origin": _websocket(url, None, None, f"multiloop-token-{port}={token}"),
+        "websocket, no token": _websocket(url, None, f"http://{u.netloc}"),
+    }
+    assert refused == dict.fromkeys(refused, 403)
+    status, headers = _request(url, "/?" + u.query)
+    assert status == 200
+    assert headers["Content-Security-Policy"] == "frame-ancestors 'none'" and headers["X-Frame-Options"] == "DENY"
+    cookie = headers["Set-Cookie"]
+    assert cookie.startswith(f"multiloop-token-{port}={token};") and "HttpOnly" in cookie and "SameSite=Strict" in cookie
+    for host in (f"localhost:{port}", f"[::1]:{port}", f"LOCALHOST:{port}"):
+        assert _request(url, "/?" + u.query, host=host)[0] == 200, host
+    mine = {"Cookie": f"multiloop-token-{port}={token}"}
+    assert _request(url, "/static/js/bokeh.min.js", headers=mine)[0] == 200
+    assert _request(url, "/", headers=mine)[0] == 200
+    assert _websocket(url, None, f"http://{u.netloc}", mine["Cookie"]) == 101        # the page's own
+
+
+def _server_in_a_thread(page, token):
+    """app._make_server in a thread of its own: (BaseServer, Access, stop())."""
+    import asyncio
+    import threading
+
+    from multiloop.web.app import _make_server
+    box, started = {}, threading.Event()
+
+    def run():
+        asyncio.set_event_loop(asyncio.new_event_loop())
+        from tornado.ioloop import IOLoop
+        box["server"], box["access"] = _make_server(page, 0, "127.0.0.1", token)
+        box["server"].start()
+        box["loop"] = IOLoop.current()
+        started.set()
+        box["loop"].start()
+
+    threading.Thread(target=run, daemon=True).start()
+    assert started.wait(60)
+
+    def stop():
+        box["loop"].add_callback(lambda: (box["server"].stop(), box["loop"].stop()))
+    return box["server"], box["access"], stop
+
+
+def test_no_bokeh_session_is_made_for_a_request_without_the_token():
+    """100 GETs with a foreign Origin made 100 sessions (memory 63 -> 200 MB)."""
+    pages = []
+    server, access, stop = _server_in_a_thread(lambda doc: pages.append(doc), "t0ken-of-the-test")
+    try:
+        url = access.url("127.0.0.1")
+        base = url.split("?")[0]
+        for _ in range(100):
+            assert _request(base, "/", headers={"Origin": "http://evil.example"})[0] == 403
+        assert pages == [] and server.get_sessions("/") == []
+        assert _request(url, "/?token=t0ken-of-the-test")[0] == 200
+        assert len(pages) == 1 and len(server.get_sessions("/")) == 1
+    finally:
+        stop()
+
+
+def _serve(*args, cwd=None):
+    import subprocess
+    import sys
+    return subprocess.Popen([sys.executable, "-m", "multiloop", "serve", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=cwd)
+
+
+def test_token_options(tmp_path):
+    from tests.common import free_port
+    port = free_port()
+    p = _serve("--port", str(port), "--token", "my-own_token-1", cwd=tmp_path)
+    try:
+        assert p.stdout.readline().startswith(f"multiloop serve: http://127.0.0.1:{port}/?token=my-own_token-1 ")
+        assert _request(f"http://127.0.0.1:{port}/", "/?token=my-own_token-1")[0] == 200
+    finally:
+        p.terminate()
+        p.communicate(timeout=20)
+    port = free_port()
+    p = _serve("--port", str(port), "--no-token", cwd=tmp_path)
+    try:
+        assert "warning: --no-token" in p.stderr.readline()
+        assert p.stdout.readline().startswith(f"multiloop serve: http://127.0.0.1:{port}/ ")
+        url = f"http://127.0.0.1:{port}/"
+        assert _request(url)[0] == 200
+        assert _request(url, host=f"evil.example:{port}")[0] == 403        # the host check stays
+    finally:
+        p.terminate()
+        p.communicate(timeout=20)
+    for bad in ("short", "has space in it", "semi;colon=x"):
+        r = _serve("--port", "0", "--token", bad, cwd=tmp_path)
+        out, err = r.communicate(timeout=120)
+        assert r.returncode == 2 and "multiloop serve: error: --token: expected 8 or more characters" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_port_in_use_is_named_with_a_hint(tmp_path):
+    """Before: 'error: a file: Address already in use', no port, no hint."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        r = _serve("--port", str(port), cwd=tmp_path)
+        out, err = r.communicate(timeout=120)
+    assert r.returncode == 2 and out == ""
+    assert err.strip() == f"multiloop serve: error: port {port} is in use; hint: --port 0 picks a free one"

@@ -179,7 +179,7 @@ def test_a_bad_links_choice_is_one_line(tiny_atlas):
 @pytest.fixture(scope="module")
 def served(tiny_atlas):
     """``multiloop serve --atlas TINY`` on a free port (tests/test_web.py's way)."""
-    from tests.test_web import start_serve, stop
+    from tests.common import start_serve, stop
     url, proc = start_serve("--atlas", str(tiny_atlas))
     yield url
     stop(proc)

@@ -390,47 +390,67 @@ def _page_maker(files: dict, atlases, threshold: float, warm, shown):
     return page
 
 
-def _make_server(page, port: int, host: str):
-    """Bokeh's server for ``page`` on ``host:port``, every script from this server
-    (no CDN) and only the BokehJS bundles the page uses (not MathJax's, nor the data
-    table's nor WebGL's: 2.3 MB of script that a first load would run for nothing)."""
+def _make_server(page, port: int, host: str, token: str | None):
+    """Bokeh's server for ``page`` on ``host:port`` and its :class:`~.access.Access`
+    (``token``: None asks for none), every script from this server (no CDN) and only
+    the BokehJS bundles the page uses (not MathJax's, nor the data table's nor WebGL's:
+    2.3 MB of script that a first load would run for nothing).  A request the access
+    rules refuse gets 403 before Bokeh sees it."""
     from bokeh.application import Application
     from bokeh.application.handlers.function import FunctionHandler
     from bokeh.server.server import BaseServer
     from bokeh.server.tornado import BokehTornado
-    from bokeh.server.util import bind_sockets, create_hosts_allowlist
+    from bokeh.server.util import bind_sockets
     from tornado.httpserver import HTTPServer
     from tornado.ioloop import IOLoop
+
+    from .access import Access, Refused, netloc
 
     class Tornado(BokehTornado):
         def resources(self, absolute_url=None):
             res = super().resources(absolute_url)
             return res.clone(components=[c for c in res.components if c in ("bokeh", "bokeh-widgets")])
 
+        def find_handler(self, request, **kwargs):
+            reason = access.refusal(request)
+            if reason is not None:
+                return self.get_handler_delegate(request, Refused, {"reason": reason})
+            return super().find_handler(request, **kwargs)
+
     sockets, port = bind_sockets(host, port)
-    origins = create_hosts_allowlist([f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"], port)
-    app = Tornado({"/": Application(FunctionHandler(page))}, extra_websocket_origins=origins,
-                  absolute_url=f"http://{host}:{port}", check_unused_sessions_milliseconds=1000,
-                  unused_session_lifetime_milliseconds=15000)
+    access = Access.of(host, port, token)
+    app = Tornado({"/": Application(FunctionHandler(page))}, extra_websocket_origins=sorted(access.hosts),
+                  absolute_url=f"http://{netloc(host, port)}", check_unused_sessions_milliseconds=1000,
+                  unused_session_lifetime_milliseconds=15000, exclude_headers=["Cookie"],
+                  exclude_cookies=[access.cookie])
+    app.add_transform(access.transform())
     http = HTTPServer(app)
     http.add_sockets(sockets)
-    return BaseServer(IOLoop.current(), app, http), port
+    return BaseServer(IOLoop.current(), app, http), access
 
 
 def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: bool = False,
-          atlases=(), threshold: float = 40.0, ready=None) -> None:
+          atlases=(), threshold: float = 40.0, ready=None, token: str | None = None,
+          require_token: bool = True) -> None:
     """Serve the workbench until interrupted (Bokeh's server, every asset served by it).
 
     ``files`` maps names to mechanisms read before serving; ``port`` 0 lets the system
-    pick a free one; ``ready(url)`` is called once the server listens, with the port it
-    got (the command prints the address).
+    pick a free one; ``token`` is the page's token (None: a fresh random one), asked of
+    every request unless ``require_token`` is false (:mod:`.access`); ``ready(url)`` is
+    called once the server listens, with the page's address (its port and token).
+
+    Raises
+    ------
+    OSError
+        The port cannot be bound (``errno.EADDRINUSE``: it is in use).
     """
+    from .access import new_token
     os.environ["BOKEH_RESOURCES"] = "server"      # BokehJS from this server, no CDN
     warm_up_then = _start_warm_up(files, threshold)     # before Bokeh's import: they overlap
     import bokeh.server.server  # noqa: F401 - imported first, then the warm-up's thread starts
     page = _page_maker(files, atlases, threshold, *warm_up_then())
-    server, port = _make_server(page, port, host)
-    url = f"http://{host}:{port}/"
+    server, access = _make_server(page, port, host, (token or new_token()) if require_token else None)
+    url = access.url(host)
     if ready is not None:
         ready(url)
     if open_browser:
