@@ -43,10 +43,11 @@ DEEP_JS = """(sel) => { const out = []; const walk = (root) => {
   root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
   walk(document); return out; }"""
 
-#: set a property of a model of the page, found by its name or its CSS class, as a
-#: script in the page (or a message written by hand) could: ([key, attribute, value])
+#: set a property of a model of the page, found by its name, its CSS class or its title,
+#: as a script in the page (or a message written by hand) could: ([key, attribute, value])
 FORGE_JS = """([key, attr, value]) => { const doc = Bokeh.documents[0];
-  const m = doc.get_model_by_name(key) || [...doc.all_models].find(m => (m.css_classes || []).includes(key));
+  const m = doc.get_model_by_name(key) || [...doc.all_models].find(m =>
+    (m.css_classes || []).includes(key) || (m.title === key && attr in m));
   m[attr] = value; return m.type; }"""
 
 #: the player's frame slider (a Bokeh Slider, model name ml-frame) in the browser
@@ -144,6 +145,14 @@ def _wait_frames(page, timeout=60000):
     page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=timeout)
 
 
+def upload(page, css: str, path) -> None:
+    """Choose the file ``path`` with the upload button of CSS class ``css`` (it opens a
+    file chooser of its own)."""
+    with page.expect_file_chooser() as chooser:
+        page.locator(f".{css} button").click()
+    chooser.value.set_files(str(path))
+
+
 def _readout(page) -> dict:
     el = page.locator("#ml-positions")
     return {"index": int(el.get_attribute("data-index")), "input": float(el.get_attribute("data-input")),
@@ -225,7 +234,7 @@ def test_malformed_upload_shows_the_cli_message_and_the_page_goes_on(page, tmp_p
     cli = subprocess.run(MULTILOOP + ["analyse", "bad.toml"], capture_output=True, text=True, cwd=tmp_path)
     assert cli.returncode == 2
     message = cli.stderr.strip().removeprefix("multiloop analyse: error: ")
-    page.locator("input[type=file]").first.set_input_files(str(bad))
+    upload(page, "ml-open", bad)
     page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=20000)
     assert page.locator("#ml-message").text_content().strip() == message
     _pick(page, "watt_1")                       # the server still serves this page

@@ -383,3 +383,55 @@ def test_a_port_in_use_is_named_with_a_hint(tmp_path):
         out, err = r.communicate(timeout=120)
     assert r.returncode == 2 and out == ""
     assert err.strip() == f"multiloop serve: error: port {port} is in use; hint: --port 0 picks a free one"
+
+
+# ---------------------------------------------------------------------- uploads, closed tabs
+def test_the_browser_s_notice_of_a_large_file_is_the_command_line_s_message():
+    """The page sends only the name and size of a file over the cap (the command line's
+    readers' cap, imported): the message is the one of an upload read on the server."""
+    import html
+
+    from multiloop.inputs import MAX_UPLOAD, load_upload
+    from multiloop.topo.errors import InputError
+    from multiloop.topo.io import MAX_INPUT_BYTES
+    from multiloop.web.app import Workbench
+    assert MAX_UPLOAD == MAX_INPUT_BYTES == 8 << 20
+    with pytest.raises(InputError, match=r"^file 'big.toml': expected at most 8 MiB, got 8388609 bytes; hint"):
+        load_upload("big.toml", bytes(MAX_UPLOAD + 1))
+    wb = Workbench({}, (), 40.0)
+    shown = wb.mechanism
+    wb.opener.target.tags = [1, "big.toml", 50 << 20]
+    assert html.unescape(wb.message.text).endswith(
+        ">file 'big.toml': expected at most 8 MiB, got 52428800 bytes; hint: upload a mechanism file, not a data set</div>")
+    assert wb.mechanism is shown
+    wb.opener.target.tags = [2, "x", "not a size"]                  # written by hand: one line too
+    assert "upload: expected a file's name and size" in html.unescape(wb.message.text)
+    wb.close()
+
+
+class _Session:
+    def __init__(self, sid):
+        self.id, self.connection_count = sid, 0
+
+
+def test_a_tab_that_loses_its_connection_has_its_jobs_stopped_once():
+    """A session made by the page's request has no connection yet: nothing happens until
+    its websocket came and went; a reconnect and a second loss stop again."""
+    from multiloop.web.tabs import TabWatch
+    watch, lost = TabWatch(), []
+    a, b = _Session("a"), _Session("b")
+    watch.add("a", lambda: lost.append("a"))
+    watch.add("b", lambda: lost.append("b"))
+    watch.check([a, b])
+    a.connection_count = 1
+    watch.check([a, b])
+    a.connection_count = 0
+    watch.check([a, b])
+    watch.check([a, b])
+    assert lost == ["a"]
+    a.connection_count = 1
+    watch.check([a, b])
+    a.connection_count = 0
+    watch.discard("b")
+    watch.check([a])
+    assert lost == ["a", "a"] and set(watch.pages) == {"a"}

@@ -216,7 +216,7 @@ def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_pat
             field = page.locator(".ml-atlas select")
             sync_api = web.sync_api
             sync_api.expect(field).to_have_value(str(tiny_atlas))
-            page.locator("input[type=file][accept*='.csv']").set_input_files(str(csv))
+            web.upload(page, "ml-csv", csv)
             sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=20000)
             page.locator(".ml-budget input").fill("3")
             page.locator(".ml-budget input").press("Enter")

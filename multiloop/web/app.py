@@ -150,10 +150,10 @@ class Workbench:
     def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
         render then carries the drawing and its player alone)."""
-        from bokeh.models import Column, FileInput, Row, TabPanel, Tabs
+        from bokeh.models import Column, Row, TabPanel, Tabs
 
         from .check_view import CheckView
-        from .glue import div, on_upload
+        from .glue import Upload, div
         from .mechanism_view import MechanismView
         from .menus import Menu
 
@@ -169,12 +169,12 @@ class Workbench:
         self.menu = Menu("mechanism menu", self.say, choices, first, MENU_HINT, title="mechanism", width=240,
                          css_classes=["ml-pick"])
         self.pick = self.menu.select
-        self.upload = FileInput(title="open a .toml, .json or .pyslvs file", accept=".toml,.json,.pyslvs",
-                                multiple=False)
+        self.opener = Upload("open a .toml, .json or .pyslvs file…", ".toml,.json,.pyslvs", self.open_upload,
+                             self.say, "ml-open")
+        self.upload = self.opener.target
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
         self.menu.on_choice(self.open_name)
-        on_upload(self.upload, self.open_upload, self.say)
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
@@ -184,7 +184,7 @@ class Workbench:
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
             tabs.append(("Atlas", div("…")))
-        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.upload)
+        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
@@ -335,11 +335,15 @@ class Workbench:
         if self.check.panel not in self.mechanism_tab.children:
             self.mechanism_tab.children = [*self.mechanism_tab.children, self.check.panel]
 
-    def close(self) -> None:
+    def stop_jobs(self) -> None:
+        """Cancel the running motion / check and synthesis (the tab is gone)."""
         if self.job is not None:
             self.job.cancel()
         if self.synthesis is not None:
             self.synthesis.cancel()
+
+    def close(self) -> None:
+        self.stop_jobs()
         if self.atlas is not None:
             self.atlas.close()
 
@@ -366,23 +370,25 @@ def _start_warm_up(files: dict, threshold: float):
     return then
 
 
-def _page_maker(files: dict, atlases, threshold: float, warm, shown):
+def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     """The server's page function: the session's :class:`Workbench` once the warm-up is
-    ``warm``; the check panel follows once the browser shows the drawing (``shown``)."""
+    ``warm``; the check panel follows once the browser shows the drawing (``shown``).
+    Its jobs stop once the tab's connection is lost (``watch``, a :class:`~.tabs.TabWatch`)."""
     from bokeh.events import DocumentReady
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         wb = Workbench(files, atlases, threshold, later=True)
-        cb = doc.add_periodic_callback(wb.poll, 150)
+        doc.add_periodic_callback(wb.poll, 150)
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()
             shown.set()
         doc.on_event(DocumentReady, rest)
+        watch.add(doc.session_context.id, wb.stop_jobs)
 
-        def closed(_ctx):
-            doc.remove_periodic_callback(cb)
+        def closed(ctx):                # the session's callbacks are removed by Bokeh itself
+            watch.discard(ctx.id)
             wb.close()
         doc.on_session_destroyed(closed)
         doc.title = "multiloop"
@@ -445,11 +451,14 @@ def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: b
         The port cannot be bound (``errno.EADDRINUSE``: it is in use).
     """
     from .access import new_token
+    from .tabs import TabWatch
     os.environ["BOKEH_RESOURCES"] = "server"      # BokehJS from this server, no CDN
     warm_up_then = _start_warm_up(files, threshold)     # before Bokeh's import: they overlap
     import bokeh.server.server  # noqa: F401 - imported first, then the warm-up's thread starts
-    page = _page_maker(files, atlases, threshold, *warm_up_then())
+    watch = TabWatch()
+    page = _page_maker(files, atlases, threshold, watch, *warm_up_then())
     server, access = _make_server(page, port, host, (token or new_token()) if require_token else None)
+    watch.start(server)
     url = access.url(host)
     if ready is not None:
         ready(url)

@@ -13,14 +13,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FileInput, FreehandDrawTool,
+from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FreehandDrawTool,
                           NumericInput, Row, TextInput)
 from bokeh.plotting import figure
 
 from multiloop.catalogue.dimensional.optimise import METHODS
 from multiloop.topo.errors import InputError, LinkageError, explain
 
-from .glue import Download, div, on_upload, progress_html
+from .glue import Download, Upload, div, progress_html
 from .jobs import Job
 from .markup import Html, html, join
 from .menus import Menu, refusal
@@ -141,7 +141,6 @@ def _widgets() -> dict:
     def number(title, value, mode="float", width=100, **kw):
         return NumericInput(title=title, value=value, mode=mode, width=width, **kw)
     return dict(
-        csv=FileInput(title="target CSV", accept=".csv,.txt", multiple=False),
         seed=number("seed", 0, "int", 90),
         budget=number("budget (s)", 4.0, low=0.1, css_classes=["ml-budget"]),
         tol=number("tol", 1e-6),
@@ -195,7 +194,7 @@ class SynthesisView:
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
         self.menus["start"].on_choice(lambda name: self._start_changed())
-        on_upload(w["csv"], self._upload, say)
+        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv")
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
         w["clear"].on_click(lambda: self._clear())
@@ -208,7 +207,7 @@ class SynthesisView:
         self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
                                 Row(w["top"], w["ties"]), visible=False)
         self.panel = Row(
-            Column(w["start"], self.atlas_box, w["point"], w["csv"], Row(w["method"], w["seed"], w["budget"]),
+            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target), Row(w["method"], w["seed"], w["budget"]),
                    Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
                    Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
                    Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
