@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import os
 import re
+import time
 from pathlib import Path
 
 import pytest
@@ -435,3 +436,25 @@ def test_a_tab_that_loses_its_connection_has_its_jobs_stopped_once():
     watch.discard("b")
     watch.check([a])
     assert lost == ["a", "a"] and set(watch.pages) == {"a"}
+
+
+def test_open_opens_the_address_with_the_token(tmp_path):
+    import subprocess
+    import sys
+    opener, seen = tmp_path / "opener.sh", tmp_path / "opened.txt"
+    opener.write_text(f'#!/bin/sh\necho "$1" > {seen}\n')
+    opener.chmod(0o755)
+    p = subprocess.Popen([sys.executable, "-m", "multiloop", "serve", "--port", "0", "--open"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                         env=dict(os.environ, BROWSER=str(opener)))
+    try:
+        url = re.search(r"http://\S+", p.stdout.readline()).group(0)
+        for _ in range(600):                        # until the browser was called (600 looks)
+            if seen.exists() and seen.read_text().strip():
+                break
+            assert p.poll() is None
+            time.sleep(0.1)
+        assert "?token=" in url and seen.read_text().strip() == url
+    finally:
+        p.terminate()
+        p.communicate(timeout=20)
