@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 from bokeh.events import Tap
-from bokeh.models import Button, Column, ColumnDataSource, Range1d, Row, Span
+from bokeh.models import Button, Column, ColumnDataSource, PlainText, Range1d, Row, Span
 from bokeh.plotting import figure
 
 from .glue import div
@@ -99,7 +99,8 @@ class CheckView:
             return []
         ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]
         self.events.data = dict(x=[x for x, _ in ev], label=[lb for _, lb in ev])
-        self.fig.xaxis.axis_label = f"{sw.joint} ({sw.unit})"
+        # plain text: a name between $$ would otherwise be read as TeX
+        self.fig.xaxis.axis_label = PlainText(text=f"{sw.joint} ({sw.unit})")
         lo, hi = float(sw.x.min()), float(sw.x.max())
         self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         A = np.where(np.isfinite(sw.angles), sw.angles, np.nan)
