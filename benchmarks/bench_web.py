@@ -2,9 +2,9 @@
 
 Run:  python benchmarks/bench_web.py [--runs N] [--quick] [--settle S] [--other MULTILOOP] [--mechanism NAME]
 
-Each run starts ``multiloop serve`` on a free port, opens the page in Debian's chromium
-(driven by Playwright; its own browser download is not used) and waits until the
-drawing can be moved (the readout ``#ml-positions[data-index]`` is in the page).  It
+Each run starts ``multiloop serve`` on a free port, opens the address it prints (with
+its token) in Debian's chromium (driven by Playwright; its own browser download is not
+used) and waits until the drawing can be moved (the readout ``#ml-positions[data-index]`` is in the page).  It
 prints, in seconds from the start of ``serve``: the address printed, the page's HTML
 received, the page's scripts run (``domInteractive``) and the page usable, plus the
 bytes of script the page loaded.  The browser is started ``--settle`` seconds before
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import shutil
 import socket
 import subprocess
@@ -48,9 +49,12 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
     srv = subprocess.Popen([exe, "serve", "--port", str(port), *([mechanism] if mechanism else [])],
                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
-        srv.stdout.readline()
+        line = srv.stdout.readline()
         address = time.perf_counter() - t0
-        page.goto(f"http://127.0.0.1:{port}/", wait_until="commit")
+        url = re.search(r"http://\S+", line)       # with the page's token (a release before it had none)
+        if url is None:
+            raise SystemExit(f"bench_web: {exe} serve printed no address: {line!r}")
+        page.goto(url.group(0), wait_until="commit")
         html = time.perf_counter() - t0
         page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=60000)
         usable = time.perf_counter() - t0

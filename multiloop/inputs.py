@@ -20,13 +20,14 @@ from pathlib import Path
 
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.formats import FORMATS, loads_mechanism, read_mechanism
+from multiloop.topo.io import MAX_INPUT_BYTES
 from multiloop.topo.model import Mechanism
 
 __all__ = ["resolve", "load_mechanism", "load_mechanism_or_engine", "load_upload", "upload_text",
-           "MAX_UPLOAD"]
+           "check_upload_size", "MAX_UPLOAD"]
 
-#: largest upload accepted (bytes): the largest bundled mechanism is a few kB
-MAX_UPLOAD = 1 << 20
+#: largest upload accepted (bytes): the cap of the command line's file readers
+MAX_UPLOAD = MAX_INPUT_BYTES
 
 
 def resolve(arg: str | Path, folders: tuple[str, ...] = ("mechanisms", "engines")) -> Path:
@@ -79,6 +80,23 @@ def load_mechanism_or_engine(path: str | Path) -> Mechanism:
     return load_mechanism(p)
 
 
+def _bytes(n: int) -> str:
+    return f"{n >> 20} MiB" if n >= 1 << 20 and n % (1 << 20) == 0 else f"{n} bytes"
+
+
+def check_upload_size(name: str, size: int, max_bytes: int = MAX_UPLOAD) -> None:
+    """Refuse an upload ``name`` of ``size`` bytes larger than ``max_bytes``.
+
+    Raises
+    ------
+    InputError
+        ``size`` exceeds ``max_bytes``.
+    """
+    if size > max_bytes:
+        raise InputError(explain(f"file '{name}'", expected=f"at most {_bytes(max_bytes)}",
+                                 got=f"{size} bytes", hint="upload a mechanism file, not a data set"))
+
+
 def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> str:
     """The UTF-8 text of an uploaded file ``name`` (no disk), at most ``max_bytes``.
 
@@ -87,9 +105,7 @@ def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> str:
     InputError
         Too large, or not UTF-8 (the messages of the file readers).
     """
-    if len(data) > max_bytes:
-        raise InputError(explain(f"file '{name}'", expected=f"at most {max_bytes} bytes",
-                                 got=f"{len(data)} bytes", hint="upload a mechanism file, not a data set"))
+    check_upload_size(name, len(data), max_bytes)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -1,7 +1,13 @@
-"""Shared test helpers: random chains (hypothesis strategies) and relabelling."""
+"""Shared test helpers: random chains (hypothesis strategies) and relabelling; small
+atlases; ``multiloop serve`` in a subprocess."""
 from __future__ import annotations
 
 import random
+import re
+import socket
+import subprocess
+import sys
+import tempfile
 
 from hypothesis import strategies as st
 
@@ -93,6 +99,17 @@ joint = "A"
 """
 
 
+def six_bar_chain_atlas(db):
+    """An atlas at ``db`` with the chains of six links and one degree of freedom (the
+    atlas the web pages browse)."""
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+
+    with Atlas(db) as a:
+        a.build(SynthesisOptions(6, 1), progress=False)
+    return db
+
+
 def four_bar_curve_atlas(db):
     """An atlas at ``db`` with the four-bar's mechanisms and 6 curve realisations each
     (small and quick: the tests of the curve index and of synthesis without a start)."""
@@ -135,3 +152,35 @@ def tasks_done(db) -> int:
             return a.con.execute("SELECT count(*) FROM tasks WHERE status='done'").fetchone()[0]
     except Exception:  # noqa: BLE001 - the file may be mid-creation
         return 0
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_serve(*args: str):
+    """``multiloop serve ARGS`` on a free port: (the address it printed, with its token;
+    the process, its stderr in ``proc.err``, a file: a pipe nobody reads could fill)."""
+    port = free_port()
+    err = tempfile.TemporaryFile("w+")
+    proc = subprocess.Popen([sys.executable, "-m", "multiloop", "serve", "--port", str(port), *args],
+                            stdout=subprocess.PIPE, stderr=err, text=True)
+    proc.err = err
+    line = proc.stdout.readline()
+    url = re.search(rf"http://127\.0\.0\.1:{port}/\S*", line)
+    assert url, line + stderr_of(proc)
+    return url.group(0), proc
+
+
+def stderr_of(proc) -> str:
+    proc.err.seek(0)
+    return proc.err.read()
+
+
+def stop(proc) -> None:
+    proc.terminate()
+    proc.wait(timeout=20)
+    proc.stdout.close()
+    proc.err.close()

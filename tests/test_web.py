@@ -12,7 +12,6 @@ import math
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import threading
@@ -33,6 +32,7 @@ else:
 
 from multiloop.inputs import load_mechanism  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
+from tests.common import start_serve, stop  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or ("/usr/bin/chromium" if os.environ.get("CI") else None)
 MULTILOOP = [sys.executable, "-m", "multiloop"]
@@ -42,6 +42,13 @@ DEEP_JS = """(sel) => { const out = []; const walk = (root) => {
   root.querySelectorAll(sel).forEach(e => out.push(e));
   root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
   walk(document); return out; }"""
+
+#: set a property of a model of the page, found by its name, its CSS class or its title,
+#: as a script in the page (or a message written by hand) could: ([key, attribute, value])
+FORGE_JS = """([key, attr, value]) => { const doc = Bokeh.documents[0];
+  const m = doc.get_model_by_name(key) || [...doc.all_models].find(m =>
+    (m.css_classes || []).includes(key) || (m.title === key && attr in m));
+  m[attr] = value; return m.type; }"""
 
 #: the player's frame slider (a Bokeh Slider, model name ml-frame) in the browser
 SLIDER_JS = "Bokeh.documents[0].get_model_by_name('ml-frame')"
@@ -100,12 +107,6 @@ pytestmark = [pytest.mark.browser,
                                  reason="chromium not installed (install.sh installs it)")]
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def _shot(page, name: str, tmp_path_factory) -> Path:
     folder = Path(os.environ.get("MULTILOOP_SCREENSHOTS") or tmp_path_factory.mktemp("shots"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -116,26 +117,17 @@ def _shot(page, name: str, tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def atlas_db(tmp_path_factory):
-    from multiloop.catalogue.atlas import Atlas
-    from multiloop.catalogue.synthesis import SynthesisOptions
-    db = tmp_path_factory.mktemp("atlas") / "a.sqlite"
-    with Atlas(db) as a:
-        a.build(SynthesisOptions(6, 1), progress=False)
-    return db
+    from tests.common import six_bar_chain_atlas
+    return six_bar_chain_atlas(tmp_path_factory.mktemp("atlas") / "a.sqlite")
 
 
 @pytest.fixture(scope="module")
 def server(atlas_db):
-    """``multiloop serve`` on a free port; yields (url, seconds until the page was usable)."""
-    port = _free_port()
+    """``multiloop serve`` on a free port; yields (url, the time it started, the process)."""
     t0 = time.perf_counter()
-    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(atlas_db)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = proc.stdout.readline()
-    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
-    yield f"http://127.0.0.1:{port}/", t0, proc
-    proc.terminate()
-    proc.wait(timeout=20)
+    url, proc = start_serve("--atlas", str(atlas_db))
+    yield url, t0, proc
+    stop(proc)
 
 
 @pytest.fixture(scope="module")
@@ -161,6 +153,14 @@ def _page(browser, url, requests_seen):
 
 def _wait_frames(page, timeout=60000):
     page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=timeout)
+
+
+def upload(page, css: str, path) -> None:
+    """Choose the file ``path`` with the upload button of CSS class ``css`` (it opens a
+    file chooser of its own)."""
+    with page.expect_file_chooser() as chooser:
+        page.locator(f".{css} button").click()
+    chooser.value.set_files(str(path))
 
 
 def _readout(page) -> dict:
@@ -244,7 +244,7 @@ def test_malformed_upload_shows_the_cli_message_and_the_page_goes_on(page, tmp_p
     cli = subprocess.run(MULTILOOP + ["analyse", "bad.toml"], capture_output=True, text=True, cwd=tmp_path)
     assert cli.returncode == 2
     message = cli.stderr.strip().removeprefix("multiloop analyse: error: ")
-    page.locator("input[type=file]").first.set_input_files(str(bad))
+    upload(page, "ml-open", bad)
     page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=20000)
     assert page.locator("#ml-message").text_content().strip() == message
     _pick(page, "watt_1")                       # the server still serves this page

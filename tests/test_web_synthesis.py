@@ -55,6 +55,12 @@ def _finish(sv, timeout: float = 300.0) -> None:
         time.sleep(0.1)
 
 
+def _message(wb) -> str:
+    """The text of the page's message line."""
+    import html
+    return html.unescape(wb.message.text)
+
+
 def _synthesis(wb):
     """The workbench's Synthesis view (the tab is built when first shown)."""
     wb.tabs.active = 2
@@ -62,29 +68,43 @@ def _synthesis(wb):
 
 
 def _no_start(wb, atlas, budget=3.0, top=2):
+    """The Synthesis tab of ``wb`` (served with the atlas ``atlas``) set for a run without a start."""
     sv = _synthesis(wb)
     sv.w["start"].value = NO_START
     sv.w["atlas"].value = str(atlas)
+    assert sv.menus["atlas"].value == str(atlas)
     sv.w["links"].active = [0]                  # 4 links
     sv.w["budget"].value, sv.w["top"].value = budget, top
     sv.target = _ellipse()
     return sv
 
 
-def test_the_atlas_field_defaults_to_the_served_atlas(tiny_atlas):
-    assert _synthesis(Workbench(atlases=[str(tiny_atlas)])).w["atlas"].value == str(tiny_atlas)
-    sv = _synthesis(Workbench())
-    assert sv.w["atlas"].value == "atlas.sqlite"
+def test_the_atlas_menu_holds_the_served_atlases_only(tiny_atlas, tmp_path):
+    """The atlas box was a text field: any path typed (or set by a script) was opened.
+    It is a menu of the atlases given to serve; without one, a run says so."""
+    other = tmp_path / "other.sqlite"
+    wb = Workbench(atlases=[str(tiny_atlas), str(other)])
+    sv = _synthesis(wb)
+    assert sv.w["atlas"].value == str(tiny_atlas) and sv.w["atlas"].options == [str(tiny_atlas), str(other)]
+    sv.w["atlas"].value = str(tmp_path / "elsewhere.sqlite")          # a value the page was not given
+    assert sv.w["atlas"].value == sv.menus["atlas"].value == str(tiny_atlas)
+    assert "atlas menu: expected one of its entries" in wb.message.text
+    wb = Workbench()
+    sv = _synthesis(wb)
+    assert sv.w["atlas"].value == "" and sv.w["atlas"].options == []
     assert sv.w["start"].value != NO_START and sv.w["start"].options[:2] == ["(open mechanism)", NO_START]
     assert not sv.atlas_box.visible
     sv.w["start"].value = NO_START
     assert sv.atlas_box.visible and sv.w["point"].value == "P"
+    sv.target = _ellipse()
+    sv.run()
+    assert sv.job is None and "atlas: expected an atlas given to serve, got none" in _message(wb)
 
 
 def test_no_start_lists_designs_that_solve_pass_check_and_open_and_download(tiny_atlas, evaluations):
     from multiloop.inputs import load_upload
 
-    wb = Workbench()
+    wb = Workbench(atlases=[str(tiny_atlas)])
     sv = _no_start(wb, tiny_atlas)
     sv.run()
     assert sv.job is not None and sv.w["cancel"].disabled is False
@@ -123,7 +143,7 @@ def test_a_missing_or_empty_atlas_is_one_line_in_the_page(tmp_path, what):
         Atlas(db).close()
     elif what == "not sqlite":
         db.write_text("x,y\n1,2\n")
-    wb = Workbench()
+    wb = Workbench(atlases=[str(db)])
     sv = _no_start(wb, db)
     sv.run()
     _finish(sv, 30.0)
@@ -153,7 +173,7 @@ def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atla
         began.set()
         return original(*args, **kw)
     monkeypatch.setattr(ts, "_local", polish)
-    wb = Workbench()
+    wb = Workbench(atlases=[str(tiny_atlas)])
     sv = _no_start(wb, tiny_atlas)
     sv.run()
     job = sv.job
@@ -170,27 +190,23 @@ def test_cancel_stops_the_page_at_once_and_the_work_at_the_next_polish(tiny_atla
 
 
 def test_a_bad_links_choice_is_one_line(tiny_atlas):
-    wb = Workbench()
+    wb = Workbench(atlases=[str(tiny_atlas)])
     sv = _no_start(wb, tiny_atlas)
     sv.w["links"].active = []
     sv.run()
     assert sv.job is None and "--links: expected even numbers" in wb.message.text
+    sv.w["links"].active = [0, 7]                   # no box 7: set by a script, not a click
+    sv.run()
+    assert sv.job is None and "links (--links): expected one of its entries, got '[0, 7]'" in _message(wb)
 
 
 @pytest.fixture(scope="module")
 def served(tiny_atlas):
     """``multiloop serve --atlas TINY`` on a free port (tests/test_web.py's way)."""
-    import subprocess
-
-    from tests.test_web import MULTILOOP, _free_port
-    port = _free_port()
-    proc = subprocess.Popen(MULTILOOP + ["serve", "--port", str(port), "--atlas", str(tiny_atlas)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    line = proc.stdout.readline()
-    assert f"http://127.0.0.1:{port}/" in line, line + proc.stderr.read()
-    yield f"http://127.0.0.1:{port}/"
-    proc.terminate()
-    proc.wait(timeout=20)
+    from tests.common import start_serve, stop
+    url, proc = start_serve("--atlas", str(tiny_atlas))
+    yield url
+    stop(proc)
 
 
 def _on_synthesis_tab(page, locator):
@@ -221,10 +237,10 @@ def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_pat
         try:
             page = web._page(browser, served, [])
             _on_synthesis_tab(page, page.locator(".ml-start select")).select_option(NO_START)
-            field = page.locator(".ml-atlas input")
+            field = page.locator(".ml-atlas select")
             sync_api = web.sync_api
             sync_api.expect(field).to_have_value(str(tiny_atlas))
-            page.locator("input[type=file][accept*='.csv']").set_input_files(str(csv))
+            web.upload(page, "ml-csv", csv)
             sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=20000)
             page.locator(".ml-budget input").fill("3")
             page.locator(".ml-budget input").press("Enter")
@@ -240,12 +256,11 @@ def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_pat
             assert m.n_links == 4 and solve(m, np.linspace(0.0, 1.0, 5)).ok.all()
             page.get_by_role("button", name="Open in mechanism view").click()
             web._wait_frames(page)
-            page.wait_for_timeout(1000)
-            _on_synthesis_tab(page, field).fill(str(tmp_path / "missing.sqlite"))
-            field.press("Enter")
-            _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
-            sync_api.expect(page.locator("#ml-message")).to_contain_text("--db: expected an atlas file",
+            # an atlas the page was not given, set as a script in the page could: refused
+            page.evaluate(web.FORGE_JS, ["ml-atlas", "value", str(tmp_path / "missing.sqlite")])
+            sync_api.expect(page.locator("#ml-message")).to_contain_text("atlas menu: expected one of its entries",
                                                                          timeout=20000)
+            sync_api.expect(_on_synthesis_tab(page, field)).to_have_value(str(tiny_atlas))
             web._pick(page, "crank_slider")                       # the page goes on
             sync_api.expect(page.locator("#ml-message")).not_to_have_attribute("data-error", "1")
         finally:

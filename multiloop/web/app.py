@@ -8,22 +8,54 @@ blocks the page.
 """
 from __future__ import annotations
 
-import html
 import os
 import sys
 from importlib import resources
 
 import numpy as np
 
-__all__ = ["Workbench", "serve", "catalogue_names", "ADDRESS"]
+from .markup import html
+
+__all__ = ["Workbench", "serve", "catalogue_names", "load_choice", "ADDRESS"]
 
 #: the only address served unless another host is asked for
 ADDRESS = "127.0.0.1"
 
+#: the hint of the message for a mechanism that is not one of the menu's
+MENU_HINT = "choose a catalogue mechanism, a file given to serve, or upload one"
+
+#: the message line with no message
+EMPTY_MESSAGE = html('<div id="ml-message"></div>')
+
+
+def _catalogue_folder():
+    return resources.files("multiloop.catalogue") / "mechanisms"
+
 
 def catalogue_names() -> list[str]:
-    folder = resources.files("multiloop.catalogue") / "mechanisms"
-    return sorted(e.name[:-5] for e in folder.iterdir() if e.name.endswith(".toml"))
+    return sorted(e.name[:-5] for e in _catalogue_folder().iterdir() if e.name.endswith(".toml"))
+
+
+def load_choice(files: dict, name: str):
+    """The mechanism of a menu entry ``name``: a FILE given to ``serve`` (read at start)
+    or a catalogue name (read from the catalogue's folder); never a path of the page's.
+
+    Raises
+    ------
+    InputError
+        ``name`` is neither.
+    """
+    from pathlib import Path
+
+    from multiloop.inputs import load_mechanism
+    from multiloop.topo.errors import InputError
+
+    from .menus import refusal
+    if name in files:
+        return files[name]
+    if name in catalogue_names():
+        return load_mechanism(Path(str(_catalogue_folder() / f"{name}.toml")))
+    raise InputError(refusal("mechanism menu", name, MENU_HINT))
 
 
 #: results shared read-only by every session of this server, per named mechanism
@@ -118,28 +150,31 @@ class Workbench:
     def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
         render then carries the drawing and its player alone)."""
-        from bokeh.models import Column, FileInput, Row, Select, TabPanel, Tabs
+        from bokeh.models import Column, Row, TabPanel, Tabs
 
         from .check_view import CheckView
-        from .glue import div, on_upload
+        from .glue import Upload, div
         from .mechanism_view import MechanismView
+        from .menus import Menu
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
         self.mechanism, self.mechanism_name = None, ""
         self.job = None
-        self.message = div('<div id="ml-message"></div>')
+        self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
-        self.view = MechanismView(cursors=[self.check.cursor])
+        self.view = MechanismView(self.say, cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
         first = _first_choice(self.files)
-        self.pick = Select(title="mechanism", options=choices, value=first, width=240, css_classes=["ml-pick"])
-        self.upload = FileInput(title="open a .toml, .json or .pyslvs file", accept=".toml,.json,.pyslvs",
-                                multiple=False)
+        self.menu = Menu("mechanism menu", self.say, choices, first, MENU_HINT, title="mechanism", width=240,
+                         css_classes=["ml-pick"])
+        self.pick = self.menu.select
+        self.opener = Upload("open a .toml, .json or .pyslvs file…", ".toml,.json,.pyslvs", self.open_upload,
+                             self.say, "ml-open")
+        self.upload = self.opener.target
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
-        self.pick.on_change("value", lambda attr, old, new: None if new == self.mechanism_name else self.open_name(new))
-        on_upload(self.upload, self.open_upload, self.say)
+        self.menu.on_choice(self.open_name)
         self.synthesis, self.atlas = None, None
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
@@ -149,7 +184,7 @@ class Workbench:
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
             tabs.append(("Atlas", div("…")))
-        header = Row(div("<b>multiloop workbench</b>", width=200), self.pick, self.upload)
+        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
@@ -178,22 +213,22 @@ class Workbench:
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
         """One line at the top of the page (the message of a bad file or option)."""
-        self.message.text = (f'<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
-                             f"{html.escape(text)}</div>")
+        self.message.text = html('<div id="ml-message" data-error="1" style="color:#b00020;font-weight:bold">'
+                                 "{text}</div>", text=text)
 
     def clear(self) -> None:
-        self.message.text = '<div id="ml-message"></div>'
+        self.message.text = EMPTY_MESSAGE
 
     # ------------------------------------------------------------------ opening
     def open_name(self, name: str) -> None:
-        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue name."""
-        from multiloop.inputs import load_mechanism
+        """Open the menu's entry ``name``: a FILE, a design opened before, or a catalogue
+        name (anything else is refused with the message)."""
         from multiloop.topo.errors import LinkageError
         if name in self.designs:
             self.open_design(self.designs[name], name)
             return
         try:
-            m = self.files[name] if name in self.files else load_mechanism(name)
+            m = load_choice(self.files, name)
         except LinkageError as exc:
             self.say(str(exc))
             self._follow()
@@ -204,10 +239,10 @@ class Workbench:
         """The menu names the mechanism shown (a new entry for an uploaded or synthesised
         design), without opening it again."""
         name = self.mechanism_name
-        if name and name not in self.pick.options:
-            self.pick.options = [name] + list(self.pick.options)
-        if name:
-            self.pick.value = name
+        if name and name not in self.menu.choices:
+            self.menu.set([name, *self.menu.choices], name)
+        elif name:
+            self.menu.set(value=name)
 
     def open_upload(self, name: str, data: bytes) -> None:
         from multiloop.inputs import load_upload
@@ -225,8 +260,7 @@ class Workbench:
                 from multiloop.topo.errors import InputError, explain
                 raise InputError(explain("start mechanism", expected="an open mechanism", got="none"))
             return self.mechanism
-        from multiloop.inputs import load_mechanism
-        return self.files[name] if name in self.files else load_mechanism(name)
+        return load_choice(self.files, name)
 
     def open_design(self, m, name: str | None = None, key: str | None = None) -> None:
         """Show ``m``: the reference drawing and the structure now, motion and check later
@@ -301,11 +335,15 @@ class Workbench:
         if self.check.panel not in self.mechanism_tab.children:
             self.mechanism_tab.children = [*self.mechanism_tab.children, self.check.panel]
 
-    def close(self) -> None:
+    def stop_jobs(self) -> None:
+        """Cancel the running motion / check and synthesis (the tab is gone)."""
         if self.job is not None:
             self.job.cancel()
         if self.synthesis is not None:
             self.synthesis.cancel()
+
+    def close(self) -> None:
+        self.stop_jobs()
         if self.atlas is not None:
             self.atlas.close()
 
@@ -317,11 +355,9 @@ def _start_warm_up(files: dict, threshold: float):
     returns its events (ready, first page shown)."""
     import threading
 
-    from multiloop.inputs import load_mechanism
-
     from .prepare import start
     name = _first_choice(files)
-    m = files[name] if name in files else load_mechanism(name)
+    m = load_choice(files, name)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     child = start(m, threshold) if cores > 1 else None       # on one core it would only take turns
     _WARMING[name] = threading.Event()
@@ -334,23 +370,25 @@ def _start_warm_up(files: dict, threshold: float):
     return then
 
 
-def _page_maker(files: dict, atlases, threshold: float, warm, shown):
+def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     """The server's page function: the session's :class:`Workbench` once the warm-up is
-    ``warm``; the check panel follows once the browser shows the drawing (``shown``)."""
+    ``warm``; the check panel follows once the browser shows the drawing (``shown``).
+    Its jobs stop once the tab's connection is lost (``watch``, a :class:`~.tabs.TabWatch`)."""
     from bokeh.events import DocumentReady
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         wb = Workbench(files, atlases, threshold, later=True)
-        cb = doc.add_periodic_callback(wb.poll, 150)
+        doc.add_periodic_callback(wb.poll, 150)
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()
             shown.set()
         doc.on_event(DocumentReady, rest)
+        watch.add(doc.session_context.id, wb.stop_jobs)
 
-        def closed(_ctx):
-            doc.remove_periodic_callback(cb)
+        def closed(ctx):                # the session's callbacks are removed by Bokeh itself
+            watch.discard(ctx.id)
             wb.close()
         doc.on_session_destroyed(closed)
         doc.title = "multiloop"
@@ -358,47 +396,70 @@ def _page_maker(files: dict, atlases, threshold: float, warm, shown):
     return page
 
 
-def _make_server(page, port: int, host: str):
-    """Bokeh's server for ``page`` on ``host:port``, every script from this server
-    (no CDN) and only the BokehJS bundles the page uses (not MathJax's, nor the data
-    table's nor WebGL's: 2.3 MB of script that a first load would run for nothing)."""
+def _make_server(page, port: int, host: str, token: str | None):
+    """Bokeh's server for ``page`` on ``host:port`` and its :class:`~.access.Access`
+    (``token``: None asks for none), every script from this server (no CDN) and only
+    the BokehJS bundles the page uses (not MathJax's, nor the data table's nor WebGL's:
+    2.3 MB of script that a first load would run for nothing).  A request the access
+    rules refuse gets 403 before Bokeh sees it."""
     from bokeh.application import Application
     from bokeh.application.handlers.function import FunctionHandler
     from bokeh.server.server import BaseServer
     from bokeh.server.tornado import BokehTornado
-    from bokeh.server.util import bind_sockets, create_hosts_allowlist
+    from bokeh.server.util import bind_sockets
     from tornado.httpserver import HTTPServer
     from tornado.ioloop import IOLoop
+
+    from .access import Access, Refused, netloc
 
     class Tornado(BokehTornado):
         def resources(self, absolute_url=None):
             res = super().resources(absolute_url)
             return res.clone(components=[c for c in res.components if c in ("bokeh", "bokeh-widgets")])
 
+        def find_handler(self, request, **kwargs):
+            reason = access.refusal(request)
+            if reason is not None:
+                return self.get_handler_delegate(request, Refused, {"reason": reason})
+            return super().find_handler(request, **kwargs)
+
     sockets, port = bind_sockets(host, port)
-    origins = create_hosts_allowlist([f"{host}:{port}", f"localhost:{port}", f"127.0.0.1:{port}"], port)
-    app = Tornado({"/": Application(FunctionHandler(page))}, extra_websocket_origins=origins,
-                  absolute_url=f"http://{host}:{port}", check_unused_sessions_milliseconds=1000,
-                  unused_session_lifetime_milliseconds=15000)
+    access = Access.of(host, port, token)
+    app = Tornado({"/": Application(FunctionHandler(page))}, extra_websocket_origins=sorted(access.hosts),
+                  absolute_url=f"http://{netloc(host, port)}", check_unused_sessions_milliseconds=1000,
+                  unused_session_lifetime_milliseconds=15000, exclude_headers=["Cookie"],
+                  exclude_cookies=[access.cookie])
+    app.add_transform(access.transform())
     http = HTTPServer(app)
     http.add_sockets(sockets)
-    return BaseServer(IOLoop.current(), app, http), port
+    return BaseServer(IOLoop.current(), app, http), access
 
 
 def serve(files: dict, *, port: int = 5006, host: str = ADDRESS, open_browser: bool = False,
-          atlases=(), threshold: float = 40.0, ready=None) -> None:
+          atlases=(), threshold: float = 40.0, ready=None, token: str | None = None,
+          require_token: bool = True) -> None:
     """Serve the workbench until interrupted (Bokeh's server, every asset served by it).
 
     ``files`` maps names to mechanisms read before serving; ``port`` 0 lets the system
-    pick a free one; ``ready(url)`` is called once the server listens, with the port it
-    got (the command prints the address).
+    pick a free one; ``token`` is the page's token (None: a fresh random one), asked of
+    every request unless ``require_token`` is false (:mod:`.access`); ``ready(url)`` is
+    called once the server listens, with the page's address (its port and token).
+
+    Raises
+    ------
+    OSError
+        The port cannot be bound (``errno.EADDRINUSE``: it is in use).
     """
+    from .access import new_token
+    from .tabs import TabWatch
     os.environ["BOKEH_RESOURCES"] = "server"      # BokehJS from this server, no CDN
     warm_up_then = _start_warm_up(files, threshold)     # before Bokeh's import: they overlap
     import bokeh.server.server  # noqa: F401 - imported first, then the warm-up's thread starts
-    page = _page_maker(files, atlases, threshold, *warm_up_then())
-    server, port = _make_server(page, port, host)
-    url = f"http://{host}:{port}/"
+    watch = TabWatch()
+    page = _page_maker(files, atlases, threshold, watch, *warm_up_then())
+    server, access = _make_server(page, port, host, (token or new_token()) if require_token else None)
+    watch.start(server)
+    url = access.url(host)
     if ready is not None:
         ready(url)
     if open_browser:

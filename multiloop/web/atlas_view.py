@@ -3,9 +3,7 @@ gallery's cards (:func:`multiloop.catalogue.html.chain_card`), filtered by the q
 language of ``multiloop atlas --query``."""
 from __future__ import annotations
 
-import html
-
-from bokeh.models import Button, Column, NumericInput, Row, Select, TextInput
+from bokeh.models import Button, Column, NumericInput, Row, TextInput
 
 from multiloop.catalogue.atlas import Atlas
 from multiloop.catalogue.html import CSS, chain_card
@@ -13,6 +11,8 @@ from multiloop.catalogue.synthesis import SynthesisOptions
 from multiloop.topo.errors import LinkageError
 
 from .glue import div
+from .markup import Html, html
+from .menus import Menu
 
 __all__ = ["AtlasView"]
 
@@ -24,35 +24,34 @@ class AtlasView:
         self.say = say
         self.atlases = {p: Atlas(p, readonly=True) for p in paths}
         paths = list(self.atlases)
-        self.file = Select(title="atlas", options=paths, value=paths[0] if paths else "", width=260)
-        self.pair = Select(title="n, F", options=[], width=120)
+        self.files = Menu("atlas menu", say, paths, title="atlas", width=260)
+        self.pairs = Menu("n, F menu", say, title="n, F", width=120)
+        self.file, self.pair = self.files.select, self.pairs.select
         self.query = TextInput(title="query (as atlas --query)", placeholder="V>=1 and planar", width=280)
         self.limit = NumericInput(title="at most", value=60, low=1, high=2000, mode="int", width=90)
         self.button = Button(label="Show", button_type="primary", width=80, align="end")
         self.cards = div("")
-        self.file.on_change("value", lambda attr, old, new: self._pairs())
+        self.files.on_choice(lambda path: self._pairs())
         self.button.on_click(lambda: self.show())
-        self.pair.on_change("value", lambda attr, old, new: self.show())
+        self.pairs.on_choice(lambda pair: self.show())
         self.query.on_change("value", lambda attr, old, new: self.show())
         self.panel = Column(Row(self.file, self.pair, self.query, self.limit, self.button), self.cards)
         self._pairs()
 
     def _pairs(self) -> None:
-        a = self.atlases.get(self.file.value)
+        a = self.atlases.get(self.files.value)
         if a is None:
             return
         pairs = sorted({(r[0], r[1]) for r in a.con.execute("SELECT DISTINCT n, F FROM chains")})
-        self.pair.options = [f"{n}, {F}" for n, F in pairs]
-        if self.pair.options and self.pair.value not in self.pair.options:
-            self.pair.value = self.pair.options[0]
+        self.pairs.set([f"{n}, {F}" for n, F in pairs])
         self.show()
 
     def show(self) -> None:
-        a = self.atlases.get(self.file.value)
-        if a is None or not self.pair.value:
-            self.cards.text = "<p>no chains stored</p>"
+        a = self.atlases.get(self.files.value)
+        if a is None or not self.pairs.value:
+            self.cards.text = html("<p>no chains stored</p>")
             return
-        n, F = (int(v) for v in self.pair.value.split(","))
+        n, F = (int(v) for v in self.pairs.value.split(","))
         q = self.query.value.strip() or None
         try:
             opts = SynthesisOptions(n, F)
@@ -61,9 +60,11 @@ class AtlasView:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.cards.text = (f"<style>{CSS}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
-                           f"{'' if q is None else ' matching ' + html.escape(q)}; {len(cards)} shown</p>"
-                           f"<div class='grid'>{''.join(cards)}</div>")
+        # the gallery's style and cards come from catalogue.html, which escapes what it shows
+        self.cards.text = html("<style>{css}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
+                               "{matching}; {shown} shown</p><div class='grid'>{cards}</div>",
+                               css=Html(CSS), total=total, n=n, F=F, matching="" if q is None else f" matching {q}",
+                               shown=len(cards), cards=Html("".join(cards)))
 
     def close(self) -> None:
         for a in self.atlases.values():

@@ -7,15 +7,15 @@ on the drawing; a click (tap) on the plot moves the mechanism to that input.
 """
 from __future__ import annotations
 
-import html
 import json
 
 import numpy as np
 from bokeh.events import Tap
-from bokeh.models import Button, Column, ColumnDataSource, Range1d, Row, Span
+from bokeh.models import Button, Column, ColumnDataSource, PlainText, Range1d, Row, Span
 from bokeh.plotting import figure
 
 from .glue import div
+from .markup import html, join
 from .scene import PALETTE, Sweep
 
 __all__ = ["CheckView", "events_of"]
@@ -75,8 +75,8 @@ class CheckView:
     def busy(self, text: str, running: bool = False) -> None:
         """A status line instead of a report; ``running``: a job computes it (Cancel enabled)."""
         self.stop.disabled = not running
-        self.verdict.text = f'<p id="ml-check-status">{html.escape(text)}</p>'
-        self.json.text = self.table.text = ""
+        self.verdict.text = html('<p id="ml-check-status">{text}</p>', text=text)
+        self.json.text = self.table.text = html("")
         self.events.data = dict(x=[], label=[])
         self.curves.data = dict(xs=[], ys=[], name=[], colour=[])
 
@@ -89,25 +89,26 @@ class CheckView:
             self.busy("no check: the mechanism has no drivers")
             return []
         ok = "ok" if doc["ok"] else "faults found"
-        items = "".join(f"<li>{html.escape(v)}</li>" for v in doc["verdict"]) or "<li>no fault found</li>"
-        self.verdict.text = (f'<h3 id="ml-check-status" data-ok="{str(doc["ok"]).lower()}">Verdict: {ok}</h3>'
-                             f"<ul>{items}</ul>")
-        self.json.text = (f'<details><summary>check --json</summary><pre id="ml-check-json" '
-                          f'data-mechanism="{html.escape(doc["mechanism"])}">'
-                          f"{html.escape(json.dumps(doc, indent=1, allow_nan=False))}</pre></details>")
+        items = join(html("<li>{v}</li>", v=v) for v in doc["verdict"]) or html("<li>no fault found</li>")
+        self.verdict.text = html('<h3 id="ml-check-status" data-ok="{flag}">Verdict: {ok}</h3><ul>{items}</ul>',
+                                 flag=str(doc["ok"]).lower(), ok=ok, items=items)
+        self.json.text = html('<details><summary>check --json</summary><pre id="ml-check-json" '
+                              'data-mechanism="{name}">{text}</pre></details>', name=doc["mechanism"],
+                              text=json.dumps(doc, indent=1, allow_nan=False))
         if sw is None:
             return []
         ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]
         self.events.data = dict(x=[x for x, _ in ev], label=[lb for _, lb in ev])
-        self.fig.xaxis.axis_label = f"{sw.joint} ({sw.unit})"
+        # plain text: a name between $$ would otherwise be read as TeX
+        self.fig.xaxis.axis_label = PlainText(text=f"{sw.joint} ({sw.unit})")
         lo, hi = float(sw.x.min()), float(sw.x.max())
         self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         A = np.where(np.isfinite(sw.angles), sw.angles, np.nan)
         self.curves.data = dict(xs=[sw.x.tolist()] * A.shape[1], ys=[A[:, c].tolist() for c in range(A.shape[1])],
                                 name=list(sw.angle_names),
                                 colour=[PALETTE[c % len(PALETTE)] for c in range(A.shape[1])])
-        rows = "".join(f"<tr><td>{x:.4g}</td><td>{html.escape(lb)}</td></tr>" for x, lb in sorted(ev))
-        self.table.text = (f'<table id="ml-check-events"><tr><th>{html.escape(sw.joint)} ({sw.unit})</th>'
-                           f"<th>event</th></tr>{rows}</table>"
-                           f"<p>flagged below {threshold:g}° (or above {180 - threshold:g}°)</p>")
+        rows = join(html("<tr><td>{x:.4g}</td><td>{label}</td></tr>", x=x, label=lb) for x, lb in sorted(ev))
+        self.table.text = html('<table id="ml-check-events"><tr><th>{joint} ({unit})</th><th>event</th></tr>'
+                               "{rows}</table><p>flagged below {lo:g}° (or above {hi:g}°)</p>",
+                               joint=sw.joint, unit=sw.unit, rows=rows, lo=threshold, hi=180 - threshold)
         return ev

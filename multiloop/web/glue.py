@@ -1,6 +1,7 @@
-"""The three widgets the page needs that Bokeh does not have, each a Bokeh model plus a
+"""The four widgets the page needs that Bokeh does not have, each a Bokeh model plus a
 few lines of BokehJS glue: a player (a frame slider and a play toggle), a download
-button for text made on the server, and a progress bar.
+button for text made on the server, an upload button that checks a file's size in the
+browser before sending it, and a progress bar.
 
 Everything else on the page is a stock Bokeh model (``bokeh.models``).  Bokeh alone,
 without a widget layer on top, is what makes the page load fast: a server that imports
@@ -11,11 +12,14 @@ from __future__ import annotations
 
 import base64
 
-from bokeh.models import Button, CustomJS, Div, Slider, Toggle
+from bokeh.models import Button, CustomJS, Div, FileInput, Slider, Toggle
 
+from multiloop.inputs import MAX_UPLOAD, check_upload_size
 from multiloop.topo.errors import InputError, explain
 
-__all__ = ["Player", "Download", "progress_html", "div", "upload_bytes", "on_upload"]
+from .markup import Html, html, join
+
+__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload"]
 
 #: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
 #: from the end back to the start (one timer per slider, stopped with the toggle)
@@ -40,6 +44,38 @@ a.href = URL.createObjectURL(new Blob([text], {type: 'text/plain'}));
 a.download = name;
 document.body.appendChild(a); a.click(); a.remove();
 setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+"""
+
+
+#: the upload button's glue: a file chooser of its own (an <input type=file> made once per
+#: button, class ``css``); a file of at most ``limit`` bytes is read and sent as Bokeh's
+#: FileInput sends it (base64 in ``target``'s value, its name in ``filename``); a larger
+#: one is not read, and only [count, name, size] go to the server (``target.tags``)
+UPLOAD_JS = """
+const key = '__mlUpload' + cb_obj.id;
+let input = window[key];
+if (!input || !input.isConnected) {
+  input = window[key] = document.createElement('input');
+  Object.assign(input, {type: 'file', accept: accept, className: css});
+  input.style.display = 'none';
+  document.body.appendChild(input);
+  input.addEventListener('change', () => {
+    const file = input.files[0];
+    input.value = '';                       // the same file chosen again is a change
+    if (!file) { return; }
+    if (file.size > limit) {
+      target.tags = [(target.tags[0] || 0) + 1, file.name, file.size];
+      return;
+    }
+    const reader = new FileReader();
+    reader.onload = () => {
+      const url = String(reader.result);
+      target.setv({filename: file.name, value: url.slice(url.indexOf(',') + 1)});
+    };
+    reader.readAsDataURL(file);
+  });
+}
+input.click();
 """
 
 
@@ -85,17 +121,45 @@ class Download:
             self.button.tags = [self.button.tags[0] + 1, out[0], out[1]]
 
 
-def progress_html(fraction: float) -> str:
+class Upload:
+    """A button (``button``, CSS class ``css``) that uploads one file: ``fn(name, bytes)``
+    gets a file of at most ``limit`` bytes (the command line's cap), read by the browser
+    and sent through a hidden FileInput (``target``, which :func:`on_upload` reads); a
+    larger file is refused by the browser before it is read, and ``fail(message)``
+    shows the message: it never reaches the socket (whose messages Bokeh caps at 20 MB;
+    past that the page lost its session and its results)."""
+
+    def __init__(self, label: str, accept: str, fn, fail, css: str, limit: int = MAX_UPLOAD):
+        self.target = FileInput(accept=accept, multiple=False, visible=False, tags=[0, "", 0])
+        self.button = Button(label=label, css_classes=[css])
+        self.button.js_on_click(CustomJS(args=dict(target=self.target, accept=accept, limit=int(limit),
+                                                   css=f"{css}-file"), code=UPLOAD_JS))
+        self.limit = limit
+        on_upload(self.target, fn, fail)
+        self.target.on_change("tags", lambda attr, old, new: self._refused(new, fail))
+
+    def _refused(self, tags, fail) -> None:
+        """The browser's notice of a file larger than the cap: (count, name, size)."""
+        try:
+            check_upload_size(str(tags[1]), int(tags[2]), self.limit)
+        except InputError as exc:
+            fail(str(exc))
+        except (IndexError, TypeError, ValueError):
+            fail(explain("upload", expected="a file's name and size from the page", got="another value"))
+
+
+def progress_html(fraction: float) -> Html:
     """A progress bar (``<progress id="ml-progress">``) at ``fraction`` of 1."""
     v = int(round(1000 * min(max(fraction, 0.0), 1.0)))
-    return f'<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>'
+    return html('<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>', v=v)
 
 
 def div(text: str = "", **kw) -> Div:
-    """A Div of page HTML (stretching to the width unless a width is given)."""
+    """A Div showing ``text``: HTML when it is an :class:`~.markup.Html` fragment, else
+    the text itself (stretching to the width unless a width is given)."""
     if "width" not in kw:
         kw.setdefault("sizing_mode", "stretch_width")
-    return Div(text=text, **kw)
+    return Div(text=join([text]), **kw)
 
 
 def upload_bytes(value) -> bytes:

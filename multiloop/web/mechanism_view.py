@@ -9,14 +9,15 @@ the browser tests read.
 """
 from __future__ import annotations
 
-import html
 import json
 
 import numpy as np
-from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row, Select
+from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row
 from bokeh.plotting import figure
 
 from .glue import Player, div
+from .markup import Html, html
+from .menus import Menu
 from .scene import Scene, Sweep
 
 __all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
@@ -56,12 +57,12 @@ if (el) {
 """
 
 
-def readout_html(sw: Sweep, i: int, names, mech: str) -> str:
+def readout_html(sw: Sweep, i: int, names, mech: str) -> Html:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
-    return (f'<span id="ml-positions" data-mechanism="{html.escape(mech)}" data-index="{i}" data-input="{float(sw.x[i])!r}" '
-            f"data-positions='{html.escape(json.dumps(pos), quote=False)}'>{sw.joint} = "
-            f"{sw.x[i]:.3f} {sw.unit}</span>")
+    return html('<span id="ml-positions" data-mechanism="{mech}" data-index="{i}" data-input="{x}" '
+                'data-positions="{pos}">{joint} = {v:.3f} {unit}</span>', mech=mech, i=i,
+                x=repr(float(sw.x[i])), pos=json.dumps(pos), joint=sw.joint, v=float(sw.x[i]), unit=sw.unit)
 
 
 def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
@@ -74,9 +75,11 @@ def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
 
 
 class MechanismView:
-    """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it."""
+    """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it.
+    ``say`` shows the page's one-line message; ``cursors`` are the input cursors of the
+    plots against the input."""
 
-    def __init__(self, cursors=()):
+    def __init__(self, say, cursors=()):
         self.scene: Scene | None = None
         self.sweeps: list[Sweep] = []
         self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
@@ -85,16 +88,16 @@ class MechanismView:
         self.marks = ColumnDataSource(dict(x=[], y=[], label=[]))
         self.sweep = ColumnDataSource(dict(nx=[], ny=[], input=[]))
         # fixed size: a new text then repaints the readout alone, not the whole layout
-        self.readout = Div(text='<span id="ml-positions"></span>', name="ml-readout", width=560, height=22)
+        self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
         self.fig = self._figure()
-        self.driver = Select(title="driver", options=[], width=160, visible=False)
+        self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
+        self.driver = self.drivers.select
         self.player = Player(interval=40, width=380)
         self.player.slider.js_on_change("value", CustomJS(
             args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
                       cursors=self.cursors), code=REDRAW_JS))
-        self.driver.on_change("value", lambda attr, old, new: self.use_driver(
-            self.driver.options.index(new) if new in self.driver.options else 0))
+        self.drivers.on_choice(lambda label: self.use_driver(self.drivers.choices.index(label)))
         self.status = div("")
         self.panel = Column(Row(self.driver, self.player.play, self.player.slider), self.status,
                             self.readout, self.fig)
@@ -122,7 +125,7 @@ class MechanismView:
         frames (driver 0 first)."""
         self.scene, self.sweeps, self.name = scene, sweeps, name
         if not sweeps:
-            self.readout.text = f'<span id="ml-positions" data-mechanism="{html.escape(name)}"></span>'
+            self.readout.text = html('<span id="ml-positions" data-mechanism="{name}"></span>', name=name)
             self.marks.data = dict(x=[], y=[], label=[])
             self.paths.data = dict(xs=[], ys=[])
             self.sweep.data = dict(nx=[], ny=[], input=[])
@@ -142,10 +145,9 @@ class MechanismView:
             marker=marker + ["x"] * n_pts,
             links=[", ".join(j.links) for j in m.joints] + [f"tracer point on {p.link}" for p in m.points])
         labels = [f"{sw.joint} ({sw.unit})" for sw in sweeps]
-        self.driver.options = labels
+        self.drivers.set(labels, labels[0] if labels else "")
         self.driver.visible = len(labels) > 1
         if labels:
-            self.driver.value = labels[0]
             self.use_driver(0)
         else:
             self._draw_nodes(scene.reference)
@@ -166,8 +168,9 @@ class MechanismView:
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
-        self.status.text = (f"{'full rotation' if sw.full_rotation else 'limited motion'} of {html.escape(sw.joint)}:"
-                            f" {sw.x.min():.4g} … {sw.x.max():.4g} {sw.unit}, {len(sw.x)} frames")
+        self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
+                                kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
+                                lo=float(sw.x.min()), hi=float(sw.x.max()), unit=sw.unit, n=len(sw.x))
         self.draw_frame(i)
 
     def _fit(self, nodes: np.ndarray) -> None:

@@ -2,12 +2,12 @@
 the structure formula and the Assur groups of :func:`topo.assur.decompose`, as HTML tables."""
 from __future__ import annotations
 
-import html
+from .markup import Html, html, join
 
 __all__ = ["structure_html"]
 
 
-def structure_html(m) -> str:
+def structure_html(m) -> Html:
     """The structural report and the Assur plan of ``m`` as HTML tables."""
     from multiloop.topo.assur import decompose
     from multiloop.topo.errors import LinkageError
@@ -16,17 +16,17 @@ def structure_html(m) -> str:
     rep = structural_report(m).as_dict()
     keep = ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc", "SL", "La", "L0", "code", "code_star",
             "planar", "degenerate", "fractionated", "actual_F", "redundant", "canonical")
-    rows = "".join(f"<tr><td>{k}</td><td>{html.escape(str(rep.get(k)))}</td></tr>" for k in keep if k in rep)
-    out = f'<h3>Structural report</h3><table id="ml-structure">{rows}</table>'
+    rows = join(html("<tr><td>{k}</td><td>{v}</td></tr>", k=k, v=rep.get(k)) for k in keep if k in rep)
+    out = html('<h3>Structural report</h3><table id="ml-structure">{rows}</table>', rows=rows)
     if not m.drivers:
         return out
     try:
         plan = decompose(m).as_dict()
     except LinkageError as exc:
-        return out + f"<p>{html.escape(str(exc))}</p>"
-    grows = "".join(f"<tr><td>{html.escape(g['label'])}</td><td>{html.escape(str(g['kind']))}</td>"
-                    f"<td>{html.escape(', '.join(g['links']))}</td><td>{html.escape(', '.join(g['joints']))}</td></tr>"
-                    for g in plan["groups"])
-    return out + (f'<h3>Structure formula</h3><p id="ml-formula">{html.escape(plan["formula"])}</p>'
-                  f'<table id="ml-groups"><tr><th>group</th><th>kind</th><th>links</th><th>joints</th></tr>'
-                  f"{grows}</table>")
+        return html("{out}<p>{text}</p>", out=out, text=str(exc))
+    grows = join(html("<tr><td>{label}</td><td>{kind}</td><td>{links}</td><td>{joints}</td></tr>",
+                      label=g["label"], kind=g["kind"], links=", ".join(g["links"]), joints=", ".join(g["joints"]))
+                 for g in plan["groups"])
+    return html('{out}<h3>Structure formula</h3><p id="ml-formula">{formula}</p><table id="ml-groups"><tr>'
+                "<th>group</th><th>kind</th><th>links</th><th>joints</th></tr>{grows}</table>",
+                out=out, formula=plan["formula"], grows=grows)

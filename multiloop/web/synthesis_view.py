@@ -10,18 +10,20 @@ downloads as ``.toml`` or ``.pyslvs`` (:mod:`multiloop.topo.pyslvs`).
 """
 from __future__ import annotations
 
-import html
 from dataclasses import dataclass
 
 import numpy as np
-from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FileInput, FreehandDrawTool,
-                          NumericInput, Row, Select, TextInput)
+from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FreehandDrawTool,
+                          NumericInput, Row, TextInput)
 from bokeh.plotting import figure
 
+from multiloop.catalogue.dimensional.optimise import METHODS
 from multiloop.topo.errors import InputError, LinkageError, explain
 
-from .glue import Download, div, on_upload, progress_html
+from .glue import Download, Upload, div, progress_html
 from .jobs import Job
+from .markup import Html, html, join
+from .menus import Menu, refusal
 
 __all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
 
@@ -108,6 +110,13 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
     return out
 
 
+def status_html(text: str, state: str | None = None) -> Html:
+    """The status line of the synthesis (``#ml-synthesis-status``, ``data-state`` once a run began)."""
+    if state is None:
+        return html('<p id="ml-synthesis-status">{text}</p>', text=text)
+    return html('<p id="ml-synthesis-status" data-state="{state}">{text}</p>', state=state, text=text)
+
+
 def _float_or_none(text: str, what: str):
     text = (text or "").strip()
     if not text:
@@ -121,6 +130,9 @@ def _float_or_none(text: str, what: str):
     return v
 
 
+#: the hint of the message when no atlas was given to serve, or another was asked for
+ATLAS_HINT = "the atlases given to 'multiloop serve --atlas DB' (built by 'multiloop atlas')"
+
 #: the link counts offered to the synthesis without a start (``--links``)
 LINK_CHOICES = ("4", "6", "8")
 
@@ -129,10 +141,6 @@ def _widgets() -> dict:
     def number(title, value, mode="float", width=100, **kw):
         return NumericInput(title=title, value=value, mode=mode, width=width, **kw)
     return dict(
-        start=Select(title="start mechanism", options=[], width=200, css_classes=["ml-start"]),
-        point=Select(title="tracer point (--point)", options=[], width=160),
-        csv=FileInput(title="target CSV", accept=".csv,.txt", multiple=False),
-        method=Select(title="method", options=["de", "cmaes", "local"], value="de", width=90),
         seed=number("seed", 0, "int", 90),
         budget=number("budget (s)", 4.0, low=0.1, css_classes=["ml-budget"]),
         tol=number("tol", 1e-6),
@@ -146,12 +154,23 @@ def _widgets() -> dict:
         run=Button(label="Run", button_type="primary", width=90),
         cancel=Button(label="Cancel", button_type="warning", width=90, disabled=True),
         clear=Button(label="Clear target", width=110),
-        atlas=TextInput(title="atlas (--db)", value="atlas.sqlite", width=260, css_classes=["ml-atlas"]),
         links=CheckboxGroup(labels=list(LINK_CHOICES), active=list(range(len(LINK_CHOICES))), inline=True),
         top=number("designs (--top)", 3, "int", 110, low=1, high=10),
         ties=number("ties (--tol)", 1e-4, low=0.0),
-        pick=Select(title="candidate", options=[], width=120),
         open=Button(label="Open in mechanism view", width=190),
+    )
+
+
+def _menus(say, starts: list[str], atlases) -> dict:
+    """The panel's menus: each holds only the choices the server gives it."""
+    return dict(
+        start=Menu("start menu", say, [*starts[:1], NO_START, *starts[1:]], title="start mechanism", width=200,
+                   css_classes=["ml-start"]),
+        point=Menu("tracer point menu", say, title="tracer point (--point)", width=160),
+        method=Menu("method menu", say, METHODS, "de", title="method", width=90),
+        atlas=Menu("atlas menu", say, [str(a) for a in atlases], hint=ATLAS_HINT, title="atlas (--db)",
+                   width=260, css_classes=["ml-atlas"]),
+        pick=Menu("candidate menu", say, title="candidate", width=120),
     )
 
 
@@ -159,14 +178,13 @@ class SynthesisView:
     """The synthesis panel of one session.  ``load_start(name)`` gives a start mechanism
     (a catalogue name, or the open one), ``open_design(m)`` shows a candidate, ``say``
     shows a one-line message.  The start :data:`NO_START` lets the atlas choose the
-    topology; its atlas file is the first of ``atlases`` (``multiloop serve --atlas``),
-    else ``atlas.sqlite``."""
+    topology; its atlas is one of ``atlases`` (``multiloop serve --atlas``), the first
+    at first."""
 
     def __init__(self, starts: list[str], load_start, open_design, say, atlases=()):
         self.load_start, self.open_design, self.say = load_start, open_design, say
-        self.w = w = _widgets()
-        w["start"].options = list(starts[:1]) + [NO_START] + list(starts[1:])
-        w["atlas"].value = str((list(atlases) or ["atlas.sqlite"])[0])
+        self.menus = _menus(say, starts, atlases)
+        self.w = w = _widgets() | {k: menu.select for k, menu in self.menus.items()}
         self.target = None
         self.job: Job | None = None
         self.results: list = []
@@ -175,21 +193,21 @@ class SynthesisView:
         self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
-        w["start"].on_change("value", lambda attr, old, new: self._start_changed())
-        on_upload(w["csv"], self._upload, say)
+        self.menus["start"].on_choice(lambda name: self._start_changed())
+        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv")
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
         w["clear"].on_click(lambda: self._clear())
         w["open"].on_click(lambda: self._open())
-        w["pick"].on_change("value", lambda attr, old, new: self._draw_candidates())
-        self.status = div('<p id="ml-synthesis-status">draw a target path or upload a CSV</p>')
+        self.menus["pick"].on_choice(lambda i: self._draw_candidates())
+        self.status = div(status_html("draw a target path or upload a CSV"))
         self.progress = div(progress_html(0.0))
         self.table = div("")
         self.downloads = [Download(f"Download .{f}", lambda f=f: self._download(f)) for f in ("toml", "pyslvs")]
         self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
                                 Row(w["top"], w["ties"]), visible=False)
         self.panel = Row(
-            Column(w["start"], self.atlas_box, w["point"], w["csv"], Row(w["method"], w["seed"], w["budget"]),
+            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target), Row(w["method"], w["seed"], w["budget"]),
                    Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
                    Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
                    Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
@@ -208,21 +226,20 @@ class SynthesisView:
         return f
 
     def _start_changed(self) -> None:
-        none = self.w["start"].value == NO_START
+        none = self.menus["start"].value == NO_START
         self.atlas_box.visible = none
         for k in ("method", "candidates"):
             self.w[k].disabled = none
         if none:                    # the designs' tracer point is named by the run
-            self.w["point"].options, self.w["point"].value = ["P"], "P"
+            self.menus["point"].set(["P"], "P")
             self.start_src.data = dict(xs=[], ys=[])
             return
         try:
-            m = self.load_start(self.w["start"].value)
+            m = self.load_start(self.menus["start"].value)
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.w["point"].options = [p.name for p in m.points]
-        self.w["point"].value = m.points[0].name if m.points else ""
+        self.menus["point"].set([p.name for p in m.points])
         if len(m.drivers) == 1 and m.points:
             P = traced(m)
             self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
@@ -239,7 +256,7 @@ class SynthesisView:
         self.target = a
         self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
         self.strokes.data = dict(xs=[], ys=[])
-        self.status.text = f'<p id="ml-synthesis-status">target: {html.escape(name)}, {len(a)} rows</p>'
+        self.status.text = status_html(f"target: {name}, {len(a)} rows")
 
     def _clear(self) -> None:
         self.target = None
@@ -259,7 +276,8 @@ class SynthesisView:
         lo, hi = (_float_or_none(w["length_low"].value, "length ≥"), _float_or_none(w["length_high"].value, "length ≤"))
         if (lo is None) != (hi is None):
             raise InputError(explain("length bounds", expected="both LOW and HIGH, or neither", got="one of them"))
-        return dict(point=w["point"].value or None, shape_only=w["shape_only"].active, method=w["method"].value,
+        return dict(point=self.menus["point"].value or None, shape_only=w["shape_only"].active,
+                    method=self.menus["method"].value,
                     seed=w["seed"].value or 0, budget=w["budget"].value, tol=w["tol"].value,
                     full_rotation=w["full_rotation"].active,
                     min_transmission=_float_or_none(w["min_transmission"].value, "min transmission"),
@@ -274,9 +292,9 @@ class SynthesisView:
             target, options = self._target(), self._options()
             if not options["budget"] or options["budget"] <= 0:
                 raise InputError(explain("budget", expected="a positive number of seconds", got=str(options["budget"])))
-            none = self.w["start"].value == NO_START
+            none = self.menus["start"].value == NO_START
             atlas = self._atlas_options(options) if none else None
-            start = None if none else self.load_start(self.w["start"].value)
+            start = None if none else self.load_start(self.menus["start"].value)
         except LinkageError as exc:
             self.say(str(exc))
             return
@@ -288,15 +306,19 @@ class SynthesisView:
         else:
             self.job = Job(lambda job: run_candidates(job, start, target, n, dict(options)), "synthesis")
         self.w["run"].disabled, self.w["cancel"].disabled = True, False
-        self.status.text = '<p id="ml-synthesis-status" data-state="running">running…</p>'
+        self.status.text = status_html("running…", "running")
 
     def _atlas_options(self, options: dict) -> dict:
         """The keywords of the synthesis without a start (as ``multiloop synthesise``
         without START: ``--db``, ``--links``, ``--top``, ``--tol``, ``--budget``, ``--seed``)."""
         from multiloop.catalogue.topology_synthesis import parse_links
         w = self.w
+        if not self.menus["atlas"].value:
+            raise InputError(explain("atlas", expected="an atlas given to serve", got="none", hint=ATLAS_HINT))
+        if not set(w["links"].active) <= set(range(len(LINK_CHOICES))):
+            raise InputError(refusal("links (--links)", w["links"].active, "tick the boxes 4, 6, 8"))
         links = ",".join(LINK_CHOICES[i] for i in sorted(w["links"].active))
-        return dict(atlas=(w["atlas"].value or "").strip(), links=parse_links(links),
+        return dict(atlas=self.menus["atlas"].value, links=parse_links(links),
                     top=int(w["top"].value or 0), budget=float(options["budget"]), point="P",
                     tol=float(w["ties"].value or 0.0), seed=int(options["seed"] or 0))
 
@@ -310,8 +332,7 @@ class SynthesisView:
         if getattr(job, "detach", False) and job.running:
             self.job = None
             self.w["run"].disabled, self.w["cancel"].disabled = False, True
-            self.status.text = ('<p id="ml-synthesis-status" data-state="cancelled">cancelled: '
-                                "the atlas search stops at its next polish</p>")
+            self.status.text = status_html("cancelled: the atlas search stops at its next polish", "cancelled")
 
     def poll(self) -> None:
         """Called by the session's periodic callback: progress, then the candidates."""
@@ -325,15 +346,13 @@ class SynthesisView:
             self._list()
         if job.running:
             best = "" if not np.isfinite(job.best) else f", best objective {job.best:.3g}"
-            self.status.text = (f'<p id="ml-synthesis-status" data-state="running">running '
-                                f'{100 * job.fraction:.0f} %{best}</p>')
+            self.status.text = status_html(f"running {100 * job.fraction:.0f} %{best}", "running")
             return
         self.job = None
         self.w["run"].disabled, self.w["cancel"].disabled = False, True
         if job.state == "failed":
             self.say(job.error)
-        self.status.text = (f'<p id="ml-synthesis-status" data-state="{job.state}">{job.state}: '
-                            f'{len(self.results)} candidate(s)</p>')
+        self.status.text = status_html(f"{job.state}: {len(self.results)} candidate(s)", job.state)
 
 
     def _list(self) -> None:
@@ -345,27 +364,26 @@ class SynthesisView:
                 formula = r.structure if isinstance(r, AtlasDesign) else decompose(m).formula
             except LinkageError as exc:
                 formula = str(exc)
-            rows.append(f'<tr data-candidate="{i}"><td>{i}</td><td>{r.error_max:.3g}</td><td>{r.error_rms:.3g}</td>'
-                        f"<td>{len(m.links)}</td><td>{html.escape(formula)}</td><td>{r.seed}</td>"
-                        f"<td>{html.escape(r.stopped)}</td></tr>")
-        self.table.text = ('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
-                           "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>"
-                           + "".join(rows) + "</table>")
-        self.w["pick"].options = [str(i) for i in range(1, len(self.results) + 1)]
-        if self.results:
-            best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms)
-            self.w["pick"].value = str(best + 1)
+            rows.append(html('<tr data-candidate="{i}"><td>{i}</td><td>{emax:.3g}</td><td>{erms:.3g}</td>'
+                             "<td>{links}</td><td>{formula}</td><td>{seed}</td><td>{stopped}</td></tr>",
+                             i=i, emax=r.error_max, erms=r.error_rms, links=len(m.links), formula=formula,
+                             seed=r.seed, stopped=r.stopped))
+        self.table.text = html('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
+                               "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>",
+                               rows=join(rows))
+        best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms, default=-1)
+        self.menus["pick"].set([str(i) for i in range(1, len(self.results) + 1)], str(best + 1))
         self._draw_candidates()
 
     def _chosen(self):
-        v = self.w["pick"].value
+        v = self.menus["pick"].value
         if not v or int(v) > len(self.results):
             raise InputError(explain("candidate", expected="a finished synthesis run", got="none"))
         return self.results[int(v) - 1]
 
     def _draw_candidates(self) -> None:
         xs, ys, colours = [], [], []
-        pick = self.w["pick"].value
+        pick = self.menus["pick"].value
         for i, r in enumerate(self.results, 1):
             a = np.asarray(r.achieved, float)
             xs.append(a[:, 0].tolist())
