@@ -290,6 +290,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
     flips = {g: [] for g in groups}
     handled: dict = {g: [] for g in groups}
     crossings = []
+    tail = s[:0]                             # samples set aside past a limit (_set_aside)
     for rounds in range(1, max_rounds + 1):
         signs = {g: sign_factor(flips[g], s) for g in groups}
         probes = evaluate(_at(P, s_nodes, s), signs)
@@ -298,10 +299,12 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         refine = np.zeros(len(s) - 1, bool)
         zoom = np.zeros(len(s) - 1, bool)     # a limit's bracket: split in LIMIT_ZOOM
         ready = {}                           # group -> (intervals at the floor, their limit flags)
+        stop = len(s)                        # the first interval with a limit
         for g in groups:
             lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
             if not refine_limits and probes[g].gap is None and probes[g].margin is None:
                 continue                     # a tracked group: its own tracker reports failures
+            stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
             lim_floor = lim & (width <= floor)
             at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
             ready[g] = (at_floor, lim[at_floor])
@@ -309,6 +312,8 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
             refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
             zoom |= lim & (width > floor)
+        if stop + 2 < len(s):
+            tail, s, refine, zoom, event, ready = _set_aside(stop, s, tail, refine, zoom, event, ready)
         # the last group's crossings change no other probe (nor its own reach margin): the
         # walk refines past them and resolves them all in one round
         last = event is not None and event[1] == groups[-1] and not event[2]
@@ -325,6 +330,9 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             s = np.sort(np.concatenate([s, mid, sub]))
             continue
         if event is None:
+            if tail.size:                    # the limit is gone: walk on
+                s, tail = np.concatenate([s, tail]), tail[:0]
+                continue
             return Walk(s, _frozen(flips), tuple(crossings), None, rounds)
         g = event[1]
         done = len(handled[g])
@@ -338,6 +346,17 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             if block is not None:
                 return Walk(s, _frozen(flips), tuple(crossings), block, rounds)
     raise RuntimeError("continuation did not settle")  # pragma: no cover
+
+
+def _set_aside(stop: int, s, tail, refine, zoom, event, ready):
+    """The samples past interval ``stop`` (a limit) set aside: nothing beyond a limit is
+    refined, and a probe there costs (a tracked group re-runs the whole path each round).
+    They come back if the refinement finds no limit there after all."""
+    keep = stop + 1
+    ready = {g: (at[at < keep], lim[at < keep]) for g, (at, lim) in ready.items()}
+    if event is not None and event[0] >= keep:
+        event = None
+    return np.concatenate([s[stop + 2:], tail]), s[: stop + 2], refine[:keep], zoom[:keep], event, ready
 
 
 def _frozen(flips: dict) -> dict:

@@ -576,8 +576,9 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     w = walk(evaluate, P, groups, refine_limits=kernels)   # method="newton": its tracker decides
     s_nodes = path_parameter(P)
     s = w.s
-    if only_all(sp, needed) and last.get("n") == len(s) and w.block is None:
-        run = last["run"]                  # the walk's last round is the answer
+    if only_all(sp, needed) and last.get("n") == len(s) and w.block is None \
+            and not np.any(last["run"].code == Status.MODE_LOST):
+        run = last["run"]                  # the walk's last round is the answer (no probe stopped early)
     else:
         Xs = np.stack([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])], axis=1) * scale
         signs = {k: sign_factor(f, s) for k, f in w.flips.items() if f}

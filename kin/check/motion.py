@@ -149,7 +149,7 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
-    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel)
+    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)
 
 
 def _bounded(seg: Segment, rng, sign: int) -> Segment:
@@ -173,10 +173,11 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
-    # millisecond per position: its mechanism gets a coarser P grid and fewer samples per
-    # zoom iteration (same 1e-10 tolerance, more iterations)
+    # millisecond per position: its mechanism gets a coarser P grid, fewer samples per
+    # zoom iteration (same 1e-10 tolerance, more iterations), the solver's own 2° path
+    # steps between the grid's values, and its brackets refined one at a time (Side.each)
     heavy = any(not has_closed_form(kd) for kd in kinds)
-    samples, stride = (8, 1) if heavy else (32, 1)
+    samples, stride = (8, 4) if heavy else (32, 1)
     chunk = 8 if heavy else None
     # the certified walk searches ± the size, or to the ends of the range when it is wider
     extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])

@@ -1,0 +1,127 @@
+"""Regression tests of the second round of field defects (issue 34): two hangs, a
+segfault, and inputs that ended in exit 1.  Every bound is a count (Newton corrections,
+calls), never a time."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from multiloop.cli import main
+from multiloop.kin.result import Status
+from multiloop.kin.solve import solve
+from multiloop.topo.io import load, loads
+
+ROOT = Path(__file__).resolve().parents[1]
+FOUR_BAR = ROOT / "catalogue/mechanisms/four_bar.toml"
+
+
+def _four_bar(old: str, new: str) -> str:
+    text = FOUR_BAR.read_text()
+    assert old in text
+    return text.replace(old, new, 1)
+
+
+class _Spent(Exception):
+    """Raised by the counting guard: the work went past its bound."""
+
+
+@pytest.fixture
+def newton_calls(monkeypatch):
+    """Count the Newton solves of :mod:`kin.groups.newton` and stop a run that makes more
+    than ``limit`` of them (the old code ran them without end)."""
+    import multiloop.kin.groups.newton as nw
+    real = nw.newton
+    seen = {"n": 0, "limit": 8_000}
+
+    def counted(*a, **k):
+        seen["n"] += 1
+        if seen["n"] > seen["limit"]:
+            raise _Spent(f"more than {seen['limit']} Newton solves")
+        return real(*a, **k)
+    monkeypatch.setattr(nw, "newton", counted)
+    return seen
+
+
+# --- 1. a driver on a floating joint ----------------------------------------------------
+FLOATING = _four_bar('joint = "O2"', 'joint = "B"')      # the coupler-rocker pin drives
+
+
+def _b_limits(m) -> list[float]:
+    """The inputs (rad) where the four-bar driven at B stops: the triangle A-B-O4 with
+    |A O4| = |O2 O4| ± |O2 A| (crank and frame in line), signed from the reference."""
+    at = {j.name: np.array(j.at) for j in m.joints}
+    c, r = np.linalg.norm(at["A"] - at["B"]), np.linalg.norm(at["O4"] - at["B"])
+    frame, crank = np.linalg.norm(at["O4"] - at["O2"]), np.linalg.norm(at["A"] - at["O2"])
+    u, v = at["A"] - at["B"], at["O4"] - at["B"]
+    theta0 = math.atan2(u[0] * v[1] - u[1] * v[0], u @ v)            # rocker from coupler at B
+    out = []
+    for d in (frame - crank, frame + crank):
+        beta = math.acos((c * c + r * r - d * d) / (2 * c * r))
+        out.append(math.copysign(beta, theta0) - theta0)
+    return sorted(out)
+
+
+def test_a_floating_driver_solves_to_its_limits_by_a_bounded_count(newton_calls):
+    m = loads(FLOATING, "toml")
+    x = np.radians(np.arange(0.0, 360.0, 30.0))
+    st = solve(m, x)
+    lo, hi = _b_limits(m)
+    inside = (x >= lo) & (x <= hi) | (x - 2 * np.pi >= lo)
+    assert np.array_equal(st.ok, inside), st.status
+    assert set(st.codes[~inside]) <= {Status.LIMIT, Status.OTHER_CIRCUIT}
+    assert f"limit at {np.degrees(hi):.6g}°" in st.status[2]
+    assert newton_calls["n"] < 5000
+
+
+@pytest.mark.parametrize("argv", [["solve", "FILE"], ["check", "FILE", "--json"]])
+def test_solve_and_check_of_a_floating_driver_give_a_result(tmp_path, capsys, newton_calls, argv):
+    f = tmp_path / "floating.toml"
+    f.write_text(FLOATING)
+    assert main([str(f) if a == "FILE" else a for a in argv]) == 0
+    out = capsys.readouterr().out
+    if argv[0] == "check":
+        got = json.loads(out)["drivers"]["B"]["range"]
+        np.testing.assert_allclose(got, np.degrees(_b_limits(load(f))), rtol=0, atol=1e-6)
+
+
+def test_a_track_stops_when_its_count_of_corrections_is_spent():
+    """The continuation's work is a count: a budget of corrections, then a message."""
+    from multiloop.kin.groups.newton import ConstraintSystem, track
+    from multiloop.kin.solve import compile_plan
+    m = loads(FLOATING, "toml")
+    st = compile_plan(m).steps[-1]
+    x = np.radians(np.linspace(0.0, 90.0, 46))[:, None]
+    Z = np.zeros((len(x), m.n_links, 3))
+    Z[:, :, :2] = compile_plan(m).origins
+    u = list(st.unknown)
+    assert isinstance(st.system, ConstraintSystem)
+    full = track(st.system, Z, x, u)
+    assert full.ok[:15].all() and not full.ok[25:].any()
+    short = track(st.system, Z, x, u, max_steps=12)
+    assert short.ok[:10].all() and not short.ok[12:].any()
+    assert "the continuation stopped: its 12 Newton corrections for 46 positions are spent" in short.reason[-1]
+    np.testing.assert_array_equal(short.Z[:10], full.Z[:10])
+
+
+def test_a_track_resumed_from_a_memo_gives_the_same_result():
+    from multiloop.kin.groups.newton import track
+    from multiloop.kin.solve import compile_plan
+    m = loads(FLOATING, "toml")
+    sp = compile_plan(m)
+    st = sp.steps[-1]
+    x = np.radians(np.linspace(0.0, 60.0, 31))[:, None]
+    Z = np.zeros((len(x), m.n_links, 3))
+    Z[:, :, :2] = sp.origins
+    u = list(st.unknown)
+    first = track(st.system, Z[:20], x[:20], u)
+    again = track(st.system, Z, x, u, resume=first)
+    alone = track(st.system, Z, x, u)
+    for a, b in ((again, alone),):
+        np.testing.assert_array_equal(a.Z, b.Z)
+        np.testing.assert_array_equal(a.ok, b.ok)
+        np.testing.assert_array_equal(a.code, b.code)
+        assert a.n_iter == b.n_iter
