@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.topo.assur import decompose
-from multiloop.topo.errors import InputError, LinkageError, explain
+from multiloop.topo.errors import InputError, LinkageError, ParameterError, explain
 from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.check import check
 from multiloop.kin.solve import solve
@@ -38,6 +38,7 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
                      polyline_distance, similarity_to)
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
+from .dimensional.synthesise import check_budget, check_tol
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
 from .tracers import best_tracers
@@ -278,13 +279,20 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, budg
 
 def _order(items: list, tol: float, key=lambda d: (d.error_rms, d.links)) -> list:
     """By RMS error, in bands: a band holds the items within ``tol`` of its best error,
-    and inside a band fewer links come first (``key(item) = (rms, links)``)."""
-    rest = sorted(items, key=lambda d: key(d)[0])
+    and inside a band fewer links come first (``key(item) = (rms, links)``).  A NaN
+    error counts as infinite (last); every band holds at least its best item, so the
+    loop ends for any ``tol``."""
+    def rms(d) -> float:
+        e = float(key(d)[0])
+        return e if e == e else np.inf
+    rest = sorted(items, key=rms)
     out: list = []
     while rest:
-        band = [d for d in rest if key(d)[0] <= key(rest[0])[0] + tol]
-        out += sorted(band, key=lambda d: (key(d)[1], key(d)[0]))
-        rest = rest[len(band):]
+        k = 1
+        while k < len(rest) and rms(rest[k]) <= rms(rest[0]) + tol:
+            k += 1
+        out += sorted(rest[:k], key=lambda d: (key(d)[1], rms(d)))
+        rest = rest[k:]
     return out
 
 
@@ -343,17 +351,22 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     Returns
     -------
     TopologySynthesis
+
+    Raises
+    ------
+    ParameterError
+        ``budget`` not a positive number of seconds, ``tol`` not a finite number >= 0,
+        ``top`` not a positive integer.
     """
     t0 = time.perf_counter()
     target = _target(path)
     closed = is_closed(target)
+    budget, tol = check_budget(budget), check_tol(tol)
     if start is not None:
         d = _polish(start, target, closed, point, budget, seed, float("nan"), target)
         return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0)
-    if budget is None or not budget > 0:
-        raise InputError(explain("budget (--budget)", expected="a positive number of seconds", got=repr(budget)))
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
-        raise InputError(explain("top (--top)", expected="a positive number of designs", got=repr(top)))
+        raise ParameterError(explain("top", expected="a positive number of designs", got=repr(top)), "top")
     if not Path(atlas).is_file():
         raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                  hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))

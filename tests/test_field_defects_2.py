@@ -125,3 +125,49 @@ def test_a_track_resumed_from_a_memo_gives_the_same_result():
         np.testing.assert_array_equal(a.ok, b.ok)
         np.testing.assert_array_equal(a.code, b.code)
         assert a.n_iter == b.n_iter
+
+
+# --- 2. synthesise --tol --------------------------------------------------------------
+@pytest.mark.parametrize("tol", ["-1", "nan", "inf"])
+@pytest.mark.parametrize("start", [[], ["four_bar"]])
+def test_synthesise_refuses_a_tolerance_that_is_not_a_finite_number_at_least_0(tmp_path, capsys, tol, start):
+    target = tmp_path / "t.csv"
+    target.write_text("0,0\n1,0\n1,1\n0,1\n")
+    out = tmp_path / "o.toml"
+    argv = ["synthesise", *start, "--path", str(target), "--out", str(out), "--db", str(tmp_path / "none.sqlite"),
+            "--budget", "2", f"--tol={tol}"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "error: --tol: expected a finite number >= 0" in err and f"got {float(tol)!r}" in err, err
+    assert not out.exists()
+
+
+def test_the_tie_bands_of_topology_synthesis_always_progress():
+    """``_order`` with a negative tolerance or NaN errors ends, after a bounded count of
+    key calls (it looped without end), NaN last."""
+    from types import SimpleNamespace
+    from multiloop.catalogue.topology_synthesis import _order
+    calls = {"n": 0}
+
+    def key(d):
+        calls["n"] += 1
+        if calls["n"] > 10_000:
+            raise _Spent("more than 10 000 key calls")
+        return d.error_rms, d.links
+    items = [SimpleNamespace(error_rms=e, links=n) for e, n in
+             [(0.3, 6), (float("nan"), 4), (0.1, 8), (0.1, 4), (0.2, 6)]]
+    for tol in (-1.0, float("nan")):            # no ties: by error, NaN last
+        got = [d.error_rms for d in _order(items, tol, key)]
+        assert got[:4] == [0.1, 0.1, 0.2, 0.3] and math.isnan(got[4])
+    got = [(d.error_rms, d.links) for d in _order(items, 0.0, key)]
+    assert got[:4] == [(0.1, 4), (0.1, 8), (0.2, 6), (0.3, 6)] and math.isnan(got[4][0])
+    wide = [(d.error_rms, d.links) for d in _order(items, 1.0, key)]
+    assert wide[:4] == [(0.1, 4), (0.2, 6), (0.3, 6), (0.1, 8)]
+
+
+def test_a_library_error_names_the_parameter_and_the_command_its_flag(tmp_path):
+    from multiloop.catalogue.topology_synthesis import synthesise
+    from multiloop.topo.errors import ParameterError
+    with pytest.raises(ParameterError, match=r"^tol: expected a finite number >= 0") as e:
+        synthesise([[0, 0], [1, 0], [1, 1], [0, 1]], tol=float("nan"), atlas=tmp_path / "none.sqlite")
+    assert e.value.parameter == "tol" and "--tol" not in str(e.value)

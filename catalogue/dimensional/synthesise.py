@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .evaluator import Evaluator, design_space
@@ -133,12 +133,44 @@ def motion_target(m: Mechanism, motion, link: str) -> MotionTarget:
     return MotionTarget(np.column_stack([a[:, :2], np.radians(a[:, 2])]), link, src)
 
 
-def _check_start(m: Mechanism, budget: float, method: str, seed) -> None:
+def check_tol(tol) -> float:
+    """``tol``, a tolerance on a relative error, as a float: a finite number >= 0.
+
+    Raises
+    ------
+    ParameterError
+        ``tol`` is not a number, NaN, infinite or negative.
+    """
+    try:
+        value = float(tol)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if isinstance(tol, bool) or not (np.isfinite(value) and value >= 0.0):
+        raise ParameterError(explain("tol", expected="a finite number >= 0 (a relative RMS error)", got=repr(tol),
+                                     hint="1e-6 stops at a relative RMS error of one millionth"), "tol")
+    return value
+
+
+#: longest time budget accepted (s): a day
+MAX_BUDGET = 86_400.0
+
+
+def check_budget(budget) -> float:
+    """``budget`` (seconds) as a float: a number in (0, :data:`MAX_BUDGET`], else a
+    :class:`ParameterError`."""
+    if isinstance(budget, bool) or not isinstance(budget, (int, float, np.integer, np.floating)) \
+            or not 0 < budget <= MAX_BUDGET:
+        raise ParameterError(explain("budget", expected=f"a positive number of seconds, at most {MAX_BUDGET:g} "
+                                     "(a day)", got=repr(budget)), "budget")
+    return float(budget)
+
+
+def _check_start(m: Mechanism, budget: float, method: str, seed, tol) -> None:
     from multiloop.kin.solve import solve
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2 ** 32:
-        raise InputError(explain("seed (--seed)", expected="an integer in [0, 2**32)", got=repr(seed)))
-    if not budget or not np.isfinite(budget) or budget <= 0:
-        raise InputError(explain("budget", expected="a positive number of seconds", got=repr(budget)))
+        raise ParameterError(explain("seed", expected="an integer in [0, 2**32)", got=repr(seed)), "seed")
+    check_budget(budget)
+    check_tol(tol)
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(map(repr, METHODS)), got=repr(method)))
     if not m.has_geometry or len(m.drivers) != 1:
@@ -284,6 +316,8 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     ------
     InputError
         Too few targets, NaN, unknown point/joint/link, budget <= 0, unknown method.
+    ParameterError
+        ``budget`` not a positive number of seconds, ``tol`` not a finite number >= 0, a bad ``seed``.
     AssemblyError, SingularityError
         The start does not assemble in its reference configuration.
     """
@@ -299,7 +333,7 @@ def _synthesise(m, path, point, shape_only, function, output, motion, link, seed
                 popsize, grid, progress) -> SynthesisResult:
     """:func:`synthesise`'s work (its arguments, checked here)."""
     t0 = time.perf_counter()
-    _check_start(m, budget, method, seed)
+    _check_start(m, budget, method, seed, tol)
     cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio, grashof=grashof, mode=mode,
                        direction=direction)
     task, target = _target(m, path, point, shape_only, function, output, motion, link, timing)
