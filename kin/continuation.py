@@ -276,13 +276,17 @@ def _crossing(evaluate, P, s_nodes, flips, handled, crossings, pr, s, i, g, delt
 
 def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
          delta: float = DELTA, kappa: float = KAPPA, max_rounds: int = 400,
-         refine_limits: bool = True) -> Walk:
+         refine_limits: bool = True, zoom_tracked: bool = True) -> Walk:
     """Follow the polyline of inputs ``P`` (K, d) from ``P[0]`` (where every group
     has its reference sign) with certified steps; see the module docstring.
 
     ``groups`` are the keys of :class:`Probe` returned by ``evaluate``, in solving
     order.  ``P`` must already be sampled finely enough (steps ≤ :data:`MAX_STEP`).
     Returns the sign flips, the crossings met and the first limit (``block``).
+    ``refine_limits=False``: a tracked group (no reach margin) makes no event, its own
+    tracker reports its failures; ``zoom_tracked=False``: a tracked group's limit is
+    the interval between its last assembled sample and the next (no zoom: every round
+    follows the whole path again), which is all a path's rows need.
     """
     P = np.asarray(P, float)
     s_nodes = path_parameter(P)
@@ -302,16 +306,17 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         stop = len(s)                        # the first interval with a limit
         for g in groups:
             lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
-            if not refine_limits and probes[g].gap is None and probes[g].margin is None:
+            tracked = probes[g].gap is None and probes[g].margin is None
+            if not refine_limits and tracked:
                 continue                     # a tracked group: its own tracker reports failures
             stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
-            lim_floor = lim & (width <= floor)
+            lim_floor = lim & ((width <= floor) | (tracked and not zoom_tracked))
             at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
             ready[g] = (at_floor, lim[at_floor])
             if at_floor.size and (event is None or at_floor[0] < event[0]):
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
             refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
-            zoom |= lim & (width > floor)
+            zoom |= lim & (width > floor) & ~lim_floor
         if stop + 2 < len(s):
             tail, s, refine, zoom, event, ready = _set_aside(stop, s, tail, refine, zoom, event, ready)
         # the last group's crossings change no other probe (nor its own reach margin): the
@@ -339,8 +344,9 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         for i, is_limit in _ready_events(event, ready, last):   # in order, up to a limit
             if any(a <= s[i] < b for a, b in handled[g][done:]):
                 continue                     # inside a run resolved this round
-            if is_limit:
-                a, b = _limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+            if is_limit:                     # (a tracked group has no margin to zoom on)
+                a, b = (_limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+                        if probes[g].margin is not None else (s[i], s[i + 1]))
                 return Walk(s[: i + 2], _frozen(flips), tuple(crossings), (a, b, g), rounds)
             block = _crossing(evaluate, P, s_nodes, flips, handled, crossings, probes[g], s, i, g, delta)
             if block is not None:

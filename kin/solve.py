@@ -573,7 +573,9 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
         last["n"] = Xs.shape[0]
         return _with_curvatures(sp, last["run"], kernels, scale)
-    w = walk(evaluate, P, groups, refine_limits=kernels)   # method="newton": its tracker decides
+    # method="newton": its tracker decides; a Newton group's limit is not zoomed (rows need
+    # only the samples on either side of it; a one-driver motion's chart has it exactly)
+    w = walk(evaluate, P, groups, refine_limits=kernels, zoom_tracked=False)
     s_nodes = path_parameter(P)
     s = w.s
     if only_all(sp, needed) and last.get("n") == len(s) and w.block is None \
@@ -588,17 +590,18 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     sn = s_nodes[idx[1:]]
     notes = []
     if w.block is not None:
-        s_b, _, k = w.block
-        xb = np.array([np.interp(s_b, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
-        where = ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(xb))
+        s_b, s_f, k = w.block
+        place = f"at {_fmt_path(sp, P, s_nodes, scale, s_b)}"
+        if s_f - s_b > 1e-9:                 # a Newton group's limit: between two samples
+            place = f"between {place[3:]} and {_fmt_path(sp, P, s_nodes, scale, s_f)}"
         past = np.flatnonzero(sn > s_b)
         for n in past:
             run.code[n] = Status.LIMIT
-            run.reason[int(n)] = f"{sp.steps[k].label}: unreachable: limit at {where} (out of reach beyond it)"
+            run.reason[int(n)] = f"{sp.steps[k].label}: unreachable: limit {place} (out of reach beyond it)"
         run.G.invalidate(range(sp.mechanism.n_links), sn > s_b)
         if past.size:
-            notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} at "
-                         f"{where}; rows {int(past[0])}… lie beyond it")
+            notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} {place}; "
+                         f"rows {int(past[0])}… lie beyond it")
     for c, k in w.crossings:
         near = np.flatnonzero(np.abs(sn - c) <= 10 * _AT_CROSSING)
         for n in near:
@@ -612,6 +615,12 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
                          f"{'the reference' if n == 0 else f'row {n - 1}'} and row {n}; the motion keeps "
                          f"the mode of the reference")
     return run, notes
+
+
+def _fmt_path(sp: SolvePlan, P: np.ndarray, s_nodes: np.ndarray, scale: np.ndarray, s: float) -> str:
+    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text."""
+    x = np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
+    return ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(x))
 
 
 def only_all(sp: SolvePlan, needed) -> bool:

@@ -121,8 +121,7 @@ def _segment(side: Side, chunk: int | None = None, stop: float | None = None) ->
         return Segment(_guarded(side, st), side.grid.size, st, None, None, singular)
     if f is None:                         # chunk ended on an isolated singular sample
         f = st.n_positions - 1
-    probe = side if chunk is None else replace(side, samples=1)
-    lo, hi = probe.bisect([side.grid[f - 1]], [side.grid[f]],
+    lo, hi = side.bisect([side.grid[f - 1]], [side.grid[f]],
                           lambda s, r: np.where(s.ok[r], 1.0, -1.0))
     st_ok = side.solve(side.grid[:f], derivatives=True)
     return Segment(_guarded(side, st_ok), f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])),
