@@ -715,14 +715,15 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
     """Inputs outside a driver's ``range`` are failed positions (status ``out of range``);
     the path through them was solved as usual, so the motion on either side is unchanged.
-    A value within 1e-12 of the size (P) or 1e-12 rad (R) of an end is inside."""
+    A value within 1e-12 of the size (P) or 1e-12 rad (R) of an end, or within a few units
+    in the last place of it (an end read in degrees and converted twice), is inside."""
     m = sp.mechanism
     for k, d in enumerate(m.drivers):
         if d.range is None:
             continue
         rotary = m.joint(d.joint).kind is JointKind.R
-        tol = 1e-12 * (1.0 if rotary else sp.size)
-        out = (X[:, k] < d.range[0] - tol) | (X[:, k] > d.range[1] + tol)
+        tol = 1e-12 * (1.0 if rotary else sp.size) + 4 * np.spacing(np.abs(np.asarray(d.range, float)))
+        out = (X[:, k] < d.range[0] - tol[0]) | (X[:, k] > d.range[1] + tol[1])
         if not out.any():
             continue
         lo, hi = np.degrees(d.range) if rotary else d.range

@@ -171,3 +171,49 @@ def test_a_library_error_names_the_parameter_and_the_command_its_flag(tmp_path):
     with pytest.raises(ParameterError, match=r"^tol: expected a finite number >= 0") as e:
         synthesise([[0, 0], [1, 0], [1, 1], [0, 1]], tol=float("nan"), atlas=tmp_path / "none.sqlite")
     assert e.value.parameter == "tol" and "--tol" not in str(e.value)
+
+
+# --- 5. huge finite driver ranges --------------------------------------------------------
+@pytest.mark.parametrize("ends", ["-1e308, 1e308", f"-{2 ** 70}, {2 ** 70}", "-1e18, 1e18", "-1e200, 1e200"])
+@pytest.mark.parametrize("cmd", ["check", "solve"])
+def test_a_driver_range_beyond_the_input_bound_exits_2_naming_it(tmp_path, capsys, ends, cmd):
+    from multiloop.topo.model import MAX_ANGLE_DEG
+    f = tmp_path / "wide.toml"
+    f.write_text(_four_bar('joint = "O2"', f'joint = "O2"\nrange = [{ends}]'))
+    assert main([cmd, str(f)]) == 2
+    err = capsys.readouterr().err
+    assert f"{f}: [[driver]] on joint 'O2' range: expected ends of magnitude at most {MAX_ANGLE_DEG:g} deg" in err, err
+
+
+def test_a_slide_range_beyond_the_input_bound_exits_2_naming_it(tmp_path, capsys):
+    from multiloop.topo.model import MAX_SLIDE_SIZES
+    text = (ROOT / "catalogue/mechanisms/excavator.toml").read_text()
+    f = tmp_path / "wide.toml"
+    f.write_text(text.replace("range = [-0.6, 0.7]", "range = [-1e18, 0.7]"))
+    assert main(["check", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "[[driver]] on joint 'boom_cyl_slide' range: expected ends of magnitude at most" in err
+    assert f"({MAX_SLIDE_SIZES:g} × the mechanism's size)" in err
+
+
+def test_check_of_a_rotary_range_of_many_turns_samples_one_turn(tmp_path, capsys):
+    """A range within the bound but of millions of turns: the motion repeats each turn,
+    the range's ends bind (the old grid had 4e9 samples: exit 1)."""
+    f = tmp_path / "turns.toml"
+    f.write_text(_four_bar('joint = "O2"', 'joint = "O2"\nrange = [-1e9, 1e9]'))
+    assert main(["check", str(f), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)["drivers"]["O2"]
+    np.testing.assert_allclose(d["usable_range"], [-1e9, 1e9], rtol=1e-15)
+    assert d["binds"] == {"low": "range", "high": "range"}
+    assert len(d["dead_centres"]["rocker"]) == 4       # one turn each way
+
+
+# --- 7. a range's own ends are inside it ------------------------------------------------
+def test_the_ends_of_a_range_are_inside_it(tmp_path, capsys):
+    """753537757.363939 deg goes to radians, back to degrees (the default sweep) and to
+    radians again one unit in the last place higher than the range's end."""
+    f = tmp_path / "ends.toml"
+    f.write_text(_four_bar('joint = "O2"', 'joint = "O2"\nrange = [-753537757.363939, 753537757.363939]'))
+    assert main(["solve", str(f), "--steps", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "out of range" not in out, out

@@ -137,7 +137,9 @@ def _guarded(side: Side, st) -> Side:
 def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch,
           cancel=None) -> Side:
     """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
-    ``range`` on that side at the same spacing (a range end at the reference: that value)."""
+    ``range`` on that side at the same spacing (a range end at the reference: that value).
+    An R range wider than the turn is sampled over the turn: the motion repeats beyond it,
+    and a turn without a limit runs to the range's end (:func:`_bounded`)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     if rotary:
         h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
@@ -146,6 +148,8 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
         h = mechanism_size(m) / n
     rng = m.drivers[k].range
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
+    if rotary:
+        span = min(span, n * h)
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
     return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)

@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from multiloop.topo.errors import InputError, SingularityWarning, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import MAX_ANGLE_DEG, MAX_SLIDE_SIZES, JointKind, Mechanism
 
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
@@ -354,11 +354,6 @@ def _sing_mask(sol: _Solved, n: int) -> np.ndarray:
     return np.any([mk for mk, _ in sol.singular], axis=0) if sol.singular else np.zeros(n, bool)
 
 
-#: largest |R input| accepted (deg): beyond it a float has no sub-microdegree resolution
-MAX_ANGLE_DEG = 1e9
-#: largest |P input| accepted, in units of the mechanism's size (the solver's lead-in
-#: walks it in steps of 1 % of the size)
-MAX_SLIDE_SIZES = 100.0
 
 
 def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
