@@ -217,3 +217,41 @@ def test_the_ends_of_a_range_are_inside_it(tmp_path, capsys):
     assert main(["solve", str(f), "--steps", "3"]) == 0
     out = capsys.readouterr().out
     assert "out of range" not in out, out
+
+
+# --- 6. degenerate targets ---------------------------------------------------------------
+def _circle(r: float, n: int = 20) -> str:
+    t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    return "".join(f"{r * math.cos(a)!r},{r * math.sin(a)!r}\n" for a in t)
+
+
+DEGENERATE = {
+    "same": ("x,y\n" + "1,1\n" * 10, "same.csv lines 2–11: expected path points that are not all the same",
+             "got every point at (1, 1)"),
+    "tiny": (_circle(1e-300), "tiny.csv lines 1–20: expected path points that are not all the same",
+             "got a target of size 2e-300 m"),
+    "field": ("x,y\n" + "1" * 140_000 + ",2\n1,2\n3,4\n5,6\n", "field.csv line 2: expected numbers separated by ','",
+              "field larger than field limit"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DEGENERATE))
+@pytest.mark.parametrize("start", [[], ["four_bar"]])
+def test_degenerate_targets_exit_2_naming_the_file_and_line(tmp_path, capsys, case, start):
+    text, where, got = DEGENERATE[case]
+    f = tmp_path / f"{case}.csv"
+    f.write_text(text)
+    out = tmp_path / "o.toml"
+    assert main(["synthesise", *start, "--path", str(f), "--out", str(out), "--db", str(tmp_path / "none.sqlite"),
+                 "--budget", "1"]) == 2
+    err = capsys.readouterr().err
+    assert where in err and got in err and "internal error" not in err, err
+    assert not out.exists()
+
+
+def test_a_csv_target_obeys_the_input_cap(tmp_path, capsys):
+    from multiloop.topo.io import MAX_INPUT_BYTES
+    f = tmp_path / "big.csv"
+    f.write_bytes(b"x,y\n" + b"a" * (MAX_INPUT_BYTES + 1))
+    assert main(["synthesise", "four_bar", "--path", str(f), "--out", str(tmp_path / "o.toml")]) == 2
+    assert f"file '{f}': expected at most {MAX_INPUT_BYTES >> 20} MiB" in capsys.readouterr().err

@@ -180,11 +180,9 @@ def _check_start(m: Mechanism, budget: float, method: str, seed, tol) -> None:
 
 
 def _checked(task: str, target, direction: str):
-    """Refuse a target of zero size and a direction the timing already fixes; resample
-    more than :data:`~.targets.MAX_ROWS` rows.  Returns the target and a note or None."""
-    if task != "function" and not target.size > 1e-12 * max(1e-300, float(np.max(np.abs(target.target_points())))):
-        raise InputError(explain(f"{task} target ({target.source})", expected="points that are not all the same",
-                                 got=f"a target of size {target.size:.3g}", hint="the error is relative to the size"))
+    """Refuse a direction the timing already fixes (the target's size is checked as it
+    is read, :func:`~.targets.check_rows`); resample more than :data:`~.targets.MAX_ROWS`
+    rows.  Returns the target and a note or None."""
     if isinstance(target, PathTarget) and target.timing is not None and target.timing_mode != "step" \
             and direction != "any":
         raise InputError(explain(f"direction {direction!r} (--direction)", expected="'any' with --timing "
