@@ -53,7 +53,7 @@ from .rigid import transport
 from .state import KinematicState
 
 __all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
-           "motion_events"]
+           "motion_events", "check_finite_inputs"]
 
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = SINGULAR       # relative determinant below which a position is singular
@@ -129,7 +129,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
                 if isinstance(s, AssurGroup) and s.kind in (GroupKind.PRP, GroupKind.RPP) else \
                 "move a joint so that the group is not at a dead centre / toggle position"
             raise SingularityError(explain(
-                label, expected="a regular group in the reference configuration",
+                f"mechanism '{m.name or ''}': {label}", expected="a regular group in the reference configuration",
                 got=f"a singular one (relative determinant {rel:.1e})", hint=hint))
         st = StepPlan(s, sysm, unknown, "newton", label)
         closed = closed_form_step(m, st, size)
@@ -161,9 +161,18 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
     if x.ndim != 2 or x.shape[1] != nd:
         raise InputError(explain("inputs", expected=f"shape (N,) for one driver or (N, {nd}) for {nd} drivers",
                                  got=f"shape {np.shape(inputs)}"))
-    if not np.all(np.isfinite(x)):
-        raise InputError(explain("inputs", expected="finite numbers", got="NaN or infinity"))
+    check_finite_inputs(m, x)
     return x, single
+
+
+def check_finite_inputs(m: Mechanism, x: np.ndarray, what: str = "inputs") -> None:
+    """Refuse driver inputs ``x`` (..., n_drivers) with a NaN or an infinity, naming the
+    first one's index and its driver."""
+    bad = np.argwhere(~np.isfinite(x))
+    if bad.size:
+        i = tuple(int(v) for v in bad[0])
+        raise InputError(explain(f"{what}[{', '.join(map(str, i))}] (driver {m.drivers[i[-1]].joint!r})",
+                                 expected="finite numbers", got=repr(float(x[i]))))
 
 
 #: largest number of samples of a path (lead-in and fill-ins included) before it is refused

@@ -12,7 +12,8 @@ import argparse
 import importlib
 import sys
 
-from multiloop.topo.errors import LinkageError, ParameterError, cap_message
+from multiloop.topo.errors import (AssemblyError, DecompositionError, LinkageError, MobilityError, ParameterError,
+                                   SingularityError, TopologyError, cap_message)
 
 COMMANDS = {
     "analyse": "structural report of a chain or mechanism (Pozhbelko & Kuts 2020 numbers)",
@@ -70,11 +71,19 @@ def _flags(p: argparse.ArgumentParser) -> dict[str, str]:
     return {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings}
 
 
+#: errors about the mechanism a command read: their message names the file
+_OF_THE_MECHANISM = (TopologyError, MobilityError, DecompositionError, AssemblyError, SingularityError)
+
+
 def _message(exc: LinkageError, args) -> str:
-    """The error's message; a library parameter it starts with becomes the option's flag."""
+    """The error's message; a library parameter it starts with becomes the option's flag,
+    and a fault of the mechanism names the file it came from."""
     text = str(exc)
     if isinstance(exc, ParameterError) and exc.parameter in args._flags and text.startswith(exc.parameter):
         text = args._flags[exc.parameter] + text[len(exc.parameter):]
+    source = getattr(args, "file", None) or getattr(args, "input", None) or getattr(args, "start", None)
+    if isinstance(exc, _OF_THE_MECHANISM) and isinstance(source, str) and source not in text:
+        text = f"{source}: {text}"
     return cap_message(text)
 
 

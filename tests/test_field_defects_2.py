@@ -255,3 +255,24 @@ def test_a_csv_target_obeys_the_input_cap(tmp_path, capsys):
     f.write_bytes(b"x,y\n" + b"a" * (MAX_INPUT_BYTES + 1))
     assert main(["synthesise", "four_bar", "--path", str(f), "--out", str(tmp_path / "o.toml")]) == 2
     assert f"file '{f}': expected at most {MAX_INPUT_BYTES >> 20} MiB" in capsys.readouterr().err
+
+
+# --- 7. messages that name their file or key ---------------------------------------------
+def test_non_finite_inputs_name_their_index_and_driver():
+    from multiloop.kin.forces import reduce_inputs
+    from multiloop.topo.errors import InputError
+    m = load(FOUR_BAR)
+    with pytest.raises(InputError, match=r"^inputs\[2, 0\] \(driver 'O2'\): expected finite numbers, got nan$"):
+        solve(m, [0.0, 1.0, float("nan")])
+    with pytest.raises(InputError, match=r"^driver inputs\[0, 0\] \(driver 'O2'\): expected finite numbers, got inf"):
+        reduce_inputs(m, [float("inf")])
+
+
+def test_a_singular_reference_names_the_file_and_the_mechanism(tmp_path, capsys):
+    f = tmp_path / "toggle.toml"          # B on the line A-O4: coupler and rocker in line
+    f.write_text(_four_bar("at = [0.133881, 0.072471]", "at = [0.18, -0.034641]"))
+    for cmd in ("solve", "check"):
+        assert main([cmd, str(f)]) == 2
+        err = capsys.readouterr().err
+        assert f"error: {f}: mechanism 'four_bar': group 1 II1(2,3) (RRR; links coupler, rocker): expected a " \
+               "regular group in the reference configuration" in err, err
