@@ -40,6 +40,7 @@ from typing import Iterator, Sequence
 
 from multiloop.topo.errors import InputError, OutputError, explain
 
+from . import stored_rows as sr
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
 
 __all__ = ["Atlas", "BuildResult", "QUERY_COLUMNS", "parse_query", "build_atlas"]
@@ -162,6 +163,11 @@ def parse_query(text: str) -> tuple[str, list]:
     >>> parse_query("La = '4-4-5-5-5'")[1]
     ['[4, 4, 5, 5, 5]']
     """
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as exc:          # a byte of the command line that is not UTF-8
+        raise InputError(explain("--query", expected="UTF-8 text", got=f"an undecodable byte at {exc.start}",
+                                 hint="write the query in UTF-8")) from None
     toks = _tokens(text)
     _check_size(toks)
     if not toks:
@@ -277,6 +283,7 @@ class Atlas:
             return
         try:
             self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
+            self.con.text_factory = sr.decoded_text
             self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
             self.con.execute("PRAGMA synchronous=NORMAL")
             self.con.executescript(_SCHEMA)
@@ -296,6 +303,7 @@ class Atlas:
         try:
             self.con = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro&immutable=1", uri=True,
                                        check_same_thread=False)
+            self.con.text_factory = sr.decoded_text
             self.con.execute("SELECT count(*) FROM chains").fetchone()
         except sqlite3.DatabaseError as exc:
             raise InputError(explain("atlas", expected="an atlas file (SQLite) with a chains table",
@@ -307,8 +315,16 @@ class Atlas:
     def __enter__(self) -> "Atlas":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, kind, exc, tb) -> None:
+        """Close; a read that failed on the file's contents (SQLite's ``DatabaseError``: a
+        malformed page, a table of another schema; JSON that does not parse; text that is
+        not UTF-8) names the atlas (the readers of :mod:`.stored_rows` name the table and
+        the row as well)."""
         self.close()
+        if isinstance(exc, (sqlite3.DatabaseError, json.JSONDecodeError, UnicodeError)) \
+                and not isinstance(exc, sqlite3.IntegrityError):
+            raise InputError(explain(f"atlas {self.path!r}", expected="an intact atlas",
+                                     got=f"{type(exc).__name__}: {exc}", hint=sr.REBUILD)) from None
 
     @contextmanager
     def _tx(self):
@@ -448,18 +464,27 @@ class Atlas:
                limit: int | None = None) -> Iterator[ChainRecord]:
         """Stored chains (ordered by n, F, V, LA, canonical)."""
         where, params = self._where(opts, query)
-        sql = (f"SELECT n, F, K, V, j_max, LA, MJA, code, code_star, planar, fractionated, loops, L0,"
+        sql = (f"SELECT id, n, F, K, V, j_max, LA, MJA, code, code_star, planar, fractionated, loops, L0,"
                f" joints, canonical FROM chains WHERE {where} ORDER BY n, F, V, LA, canonical")
         if limit is not None:
             sql += " LIMIT ?"
             params = params + [int(limit)]
         for row in self.con.execute(sql, params):
-            n, F, K, V, jmax, LA, MJA, code, code_star, planar, frac, La, L0, joints, canon = row
-            yield ChainRecord(n=n, F=F, joints=tuple(tuple(j) for j in json.loads(joints)),
-                              canonical=canon, LA=tuple(json.loads(LA)), MJA=tuple(json.loads(MJA)),
-                              V=V, K=K, j_max=jmax, code=code, code_star=code_star,
-                              fractionated=bool(frac), planar=None if planar is None else bool(planar),
-                              La=None if La is None else tuple(json.loads(La)), L0=L0)
+            yield self._chain(row)
+
+    def _chain(self, row) -> ChainRecord:
+        """A stored chain row (``id`` first) as a record, every value checked (:mod:`.stored_rows`)."""
+        rid, n, F, K, V, jmax, LA, MJA, code, code_star, planar, frac, La, L0, joints, canon = row
+        at = (self.path, "chains", rid)
+        n = sr.integer(*at, "n", n, 1, 10_000)
+        return ChainRecord(n=n, F=sr.integer(*at, "F", F, -10_000, 10_000),
+                           joints=tuple(tuple(j) for j in sr.int_lists(*at, "joints", joints, below=n)),
+                           canonical=sr.text(*at, "canonical", canon), LA=tuple(sr.int_list(*at, "LA", LA)),
+                           MJA=tuple(sr.int_list(*at, "MJA", MJA)), V=sr.integer(*at, "V", V),
+                           K=sr.integer(*at, "K", K), j_max=sr.integer(*at, "j_max", jmax),
+                           code=sr.text(*at, "code", code), code_star=sr.text(*at, "code_star", code_star),
+                           fractionated=bool(frac), planar=None if planar is None else bool(planar),
+                           La=None if La is None else tuple(sr.int_list(*at, "loops", La)), L0=L0)
 
     def builds(self) -> list[dict]:
         cur = self.con.execute("SELECT options, n, F, status, count, seconds FROM builds ORDER BY n, F")

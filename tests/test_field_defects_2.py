@@ -276,3 +276,148 @@ def test_a_singular_reference_names_the_file_and_the_mechanism(tmp_path, capsys)
         err = capsys.readouterr().err
         assert f"error: {f}: mechanism 'four_bar': group 1 II1(2,3) (RRR; links coupler, rocker): expected a " \
                "regular group in the reference configuration" in err, err
+
+
+# --- 3, 4. damaged curve atlases ---------------------------------------------------------
+@pytest.fixture(scope="module")
+def curve_atlas(tmp_path_factory):
+    pytest.importorskip("usearch")
+    from multiloop.catalogue.synthesis import nauty_available
+    from tests.common import four_bar_curve_atlas
+    if not nauty_available():
+        pytest.skip("nauty's geng/genbg not installed")
+    return four_bar_curve_atlas(tmp_path_factory.mktemp("atlas") / "atlas.sqlite")
+
+
+def _damaged(src: Path, dst: Path, sql: str, params=()) -> Path:
+    import sqlite3
+    dst.write_bytes(src.read_bytes())
+    con = sqlite3.connect(dst)
+    con.executescript(sql) if not params else con.execute(sql, params)
+    con.commit()
+    con.close()
+    return dst
+
+
+def _flipped(data: bytes, seed: int = 1, bits: int = 40) -> bytes:
+    import random
+    rng, b = random.Random(seed), bytearray(data)
+    for _ in range(bits):
+        b[rng.randrange(len(b))] ^= 1 << rng.randrange(8)
+    return bytes(b)
+
+
+def _stored_graph(db: Path) -> bytes:
+    import sqlite3
+    con = sqlite3.connect(db)
+    try:
+        return con.execute("SELECT data FROM curve_indexes WHERE n = 4").fetchone()[0]
+    finally:
+        con.close()
+
+
+_INDEX_KIND = """
+import sys
+from multiloop.catalogue.atlas import Atlas
+from multiloop.catalogue.curve_atlas import CurveIndex
+with Atlas(sys.argv[1], readonly=True) as atlas:
+    ix, exact = CurveIndex(atlas), CurveIndex(atlas, exact=True)
+    same = all(abs(ix.query(q, 1)[0].distance - exact.query(q, 1)[0].distance) < 1e-6 for q in exact.vectors)
+    print(ix.kind, same)
+"""
+
+
+@pytest.mark.parametrize("damage", ["flip", "truncate", "empty", "text"])
+def test_a_stored_graph_that_fails_its_checksum_is_rebuilt_from_the_curves(curve_atlas, tmp_path, damage):
+    """Flipped bytes crashed usearch's reader (signal 11): the child process runs the
+    index so that a crash is a failed assertion, not a lost test run."""
+    import subprocess
+    import sys
+    data = _stored_graph(curve_atlas)
+    new = {"flip": _flipped(data), "truncate": data[: len(data) // 2], "empty": b"", "text": "a graph"}[damage]
+    db = _damaged(curve_atlas, tmp_path / "a.sqlite", "UPDATE curve_indexes SET data = ? WHERE n = 4", (new,))
+    proc = subprocess.run([sys.executable, "-c", _INDEX_KIND, str(db)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-1500:]
+    assert proc.stdout.split() == ["usearch-hnsw", "True"]          # rebuilt in memory, same answers
+    assert "table curve_indexes row 4: the stored graph fails its SHA-256 checksum" in proc.stderr
+
+
+def test_synthesis_on_an_atlas_with_a_flipped_graph_gives_designs(curve_atlas, tmp_path):
+    import subprocess
+    import sys
+    db = _damaged(curve_atlas, tmp_path / "a.sqlite", "UPDATE curve_indexes SET data = ? WHERE n = 4",
+                  (_flipped(_stored_graph(curve_atlas)),))
+    st = solve(load(FOUR_BAR), np.radians(np.arange(0.0, 360.0, 15.0)))
+    target = tmp_path / "t.csv"
+    np.savetxt(target, st.point_positions[:, 0], delimiter=",")
+    out = tmp_path / "o.toml"
+    proc = subprocess.run([sys.executable, "-m", "multiloop", "synthesise", "--path", str(target), "--out", str(out),
+                           "--db", str(db), "--links", "4", "--budget", "5", "--top", "1"],
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0 and out.is_file(), proc.stderr[-1500:]
+    assert "fails its SHA-256 checksum; it is rebuilt from the curves" in proc.stderr
+
+
+def test_an_atlas_without_checksums_rebuilds_its_graphs_and_its_next_build_stores_them(curve_atlas, tmp_path):
+    """An atlas written before the checksum column: its graph is not trusted (built from
+    the curves in memory); the next build adds the column and stores the checksum."""
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.curve_atlas import CurveIndex
+    db = _damaged(curve_atlas, tmp_path / "old.sqlite",
+                  "CREATE TABLE old AS SELECT n, curves, data FROM curve_indexes; DROP TABLE curve_indexes; "
+                  "CREATE TABLE curve_indexes (n INTEGER PRIMARY KEY, curves INTEGER NOT NULL, data BLOB NOT NULL); "
+                  "INSERT INTO curve_indexes SELECT * FROM old; DROP TABLE old;")
+    with Atlas(db, readonly=True) as atlas:
+        assert CurveIndex(atlas).kind == "usearch-hnsw"
+    assert main(["atlas", "--links", "4", "--dof", "1", "--simple-joints", "--no-loops", "--mechanisms",
+                 "--curves", "6", "--db", str(db), "--no-progress"]) == 0
+    with Atlas(db, readonly=True) as atlas:
+        assert CurveIndex(atlas).kind == "usearch-hnsw (stored)"
+
+
+_CORRUPTIONS = {
+    # name: (SQL, command, what the message says)
+    "descriptor-short": ("UPDATE curves SET descriptor = substr(descriptor, 1, 64) WHERE id = 1", "build",
+                         "table curves row 1: expected descriptor: a BLOB of 128 bytes, got a BLOB of 64 bytes"),
+    "descriptor-text": ("UPDATE curves SET descriptor = 'text' WHERE id = 1", "build",
+                        "table curves row 1: expected descriptor: a BLOB of 128 bytes, got the text 'text'"),
+    "descriptor-empty": ("UPDATE curves SET descriptor = x'' WHERE id = 1", "build",
+                         "table curves row 1: expected descriptor: a BLOB of 128 bytes, got a BLOB of 0 bytes"),
+    "shape-short": ("UPDATE curves SET shape = substr(shape, 1, 100)", "synthesise",
+                    "expected shape: a BLOB of 512 bytes, got a BLOB of 100 bytes"),
+    "shape-text": ("UPDATE curves SET shape = 'x'", "synthesise", "expected shape: a BLOB of 512 bytes, got the text"),
+    "radius-zero": ("UPDATE curves SET radius = 0", "synthesise", "expected radius: a finite number > 0, got 0"),
+    "radius-nan": ("UPDATE curves SET radius = 'NaN'", "synthesise",
+                   "expected radius: a finite number > 0, got the text 'NaN'"),
+    "realisation-json": ("UPDATE realisations SET joints = '{garbage'", "synthesise",
+                         "table realisations row 1: expected joints: a JSON object of 4 positions"),
+    "index-schema": ("DROP TABLE curve_indexes; CREATE TABLE curve_indexes (a TEXT, b BLOB)", "synthesise",
+                     "table curve_indexes: expected the columns n, curves, data, sha256, got the columns a, b"),
+    "chain-utf8": ("UPDATE chains SET LA = CAST(x'c328ff' AS TEXT)", "query",
+                   "table chains row 1: expected LA: UTF-8 text, got an undecodable byte"),
+    "chain-json": ("UPDATE chains SET joints = '[[0, 99]]'", "query",
+                   "table chains row 1: expected joints: a JSON list of lists of link indices below 4"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_CORRUPTIONS))
+def test_a_damaged_atlas_exits_2_naming_the_table_and_the_row(curve_atlas, tmp_path, capsys, case):
+    sql, command, words = _CORRUPTIONS[case]
+    db = _damaged(curve_atlas, tmp_path / "a.sqlite", sql)
+    target = tmp_path / "t.csv"
+    target.write_text(_circle(0.05, 40))
+    argv = {"synthesise": ["synthesise", "--path", str(target), "--out", str(tmp_path / "o.toml"), "--db", str(db),
+                           "--links", "4", "--budget", "1"],
+            "query": ["atlas", "--db", str(db), "--query", "n = 4"],
+            "build": ["atlas", "--links", "4", "--dof", "1", "--simple-joints", "--no-loops", "--mechanisms",
+                      "--curves", "6", "--db", str(db), "--no-progress"]}[command]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"error: atlas '{db}': {words}" in err or f"error: atlas '{db}': table" in err and words in err, err
+    assert "hint: rebuild the atlas into a new file" in err
+    assert not (tmp_path / "o.toml").exists()
+
+
+def test_a_query_that_is_not_utf8_exits_2(curve_atlas, capsys):
+    assert main(["atlas", "--db", str(curve_atlas), "--query", "LA = '\udcff'"]) == 2
+    assert "--query: expected UTF-8 text, got an undecodable byte" in capsys.readouterr().err
