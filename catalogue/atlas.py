@@ -28,12 +28,13 @@ SQL with bound parameters (no user text reaches SQL unquoted).
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
 import sqlite3
 import sys
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
@@ -278,9 +279,11 @@ class Atlas:
         self.path = str(path)
         if self.path != ":memory:" and Path(self.path).is_dir():
             raise InputError(explain("--db", expected="an atlas file (SQLite)", got=f"the directory {self.path!r}"))
+        self.created = False             # this Atlas made the file: a run that fails removes it
         if readonly:
             self._open_readonly()
             return
+        self.created = self.path != ":memory:" and not os.path.lexists(self.path)
         try:
             self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
             self.con.text_factory = sr.decoded_text
@@ -289,7 +292,8 @@ class Atlas:
             self.con.executescript(_SCHEMA)
             self.con.execute("PRAGMA user_version = 1")
             self.con.commit()
-        except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place
+        except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place, a full disk
+            self._remove_created()
             raise InputError(explain("--db", expected="an atlas file (SQLite) or a new file name",
                                      got=f"{self.path!r}: {exc}",
                                      hint="give another --db path")) from None
@@ -312,21 +316,34 @@ class Atlas:
     def close(self) -> None:
         self.con.close()
 
+    def _remove_created(self) -> None:
+        """Remove the file this Atlas created, with SQLite's journal files (a failed run
+        leaves nothing behind; a file that was there before is kept)."""
+        if getattr(self, "con", None) is not None:
+            self.con.close()
+        if self.created:
+            for suffix in ("", "-wal", "-shm", "-journal"):
+                with contextlib.suppress(FileNotFoundError):
+                    os.remove(self.path + suffix)
+
     def __enter__(self) -> "Atlas":
         return self
 
     def __exit__(self, kind, exc, tb) -> None:
-        """Close; a read that failed on the file's contents (SQLite's ``DatabaseError``: a
+        """Close; when a run fails (but for an interrupt) the file it created is removed.  A
+        read that failed on the file's contents (SQLite's ``DatabaseError``: a
         malformed page, a table of another schema; JSON that does not parse; text that is
         not UTF-8) names the atlas (the readers of :mod:`.stored_rows` name the table and
         the row as well)."""
         self.close()
+        if exc is not None and not isinstance(exc, KeyboardInterrupt):     # (an interrupted build resumes)
+            self._remove_created()
         if isinstance(exc, (sqlite3.DatabaseError, json.JSONDecodeError, UnicodeError)) \
                 and not isinstance(exc, sqlite3.IntegrityError):
             raise InputError(explain(f"atlas {self.path!r}", expected="an intact atlas",
                                      got=f"{type(exc).__name__}: {exc}", hint=sr.REBUILD)) from None
 
-    @contextmanager
+    @contextlib.contextmanager
     def _tx(self):
         """One write transaction; a full disk is an :class:`OutputError` naming the file
         (the rollback that follows it must not hide it)."""

@@ -421,3 +421,30 @@ def test_a_damaged_atlas_exits_2_naming_the_table_and_the_row(curve_atlas, tmp_p
 def test_a_query_that_is_not_utf8_exits_2(curve_atlas, capsys):
     assert main(["atlas", "--db", str(curve_atlas), "--query", "LA = '\udcff'"]) == 2
     assert "--query: expected UTF-8 text, got an undecodable byte" in capsys.readouterr().err
+
+
+# --- 7. smaller ----------------------------------------------------------------------------
+def _fill_the_disk(atlas) -> None:
+    pages = atlas.con.execute("PRAGMA page_count").fetchone()[0]
+    atlas.con.execute(f"PRAGMA max_page_count = {pages + 2}")             # SQLITE_FULL, as a full disk
+
+
+def test_a_failed_atlas_build_removes_the_file_it_created_and_keeps_one_it_found(tmp_path):
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.synthesis import SynthesisOptions
+    from multiloop.topo.errors import OutputError
+    new = tmp_path / "new.sqlite"
+    with pytest.raises(OutputError, match="disk full"):
+        with Atlas(new) as atlas:
+            _fill_the_disk(atlas)
+            atlas.build(SynthesisOptions(10, 1), progress=False, workers=1)
+    assert list(tmp_path.iterdir()) == []
+    old = tmp_path / "old.sqlite"
+    with Atlas(old) as atlas:
+        atlas.build(SynthesisOptions(6, 1), progress=False, workers=1)
+    with pytest.raises(OutputError, match="disk full"):
+        with Atlas(old) as atlas:
+            _fill_the_disk(atlas)
+            atlas.build(SynthesisOptions(10, 1), progress=False, workers=1)
+    with Atlas(old, readonly=True) as atlas:
+        assert atlas.count(SynthesisOptions(6, 1)) == 4
