@@ -41,6 +41,7 @@ from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.synthesise import check_budget, check_tol
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
+from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
 __all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files"]
@@ -113,13 +114,27 @@ class TopologySynthesis:
 
 
 def parse_links(text) -> tuple[int, ...]:
-    """``"4,6,8"`` → ``(4, 6, 8)``; even numbers of links from 4 (1-DOF chains)."""
+    """``"4,6,8"`` → ``(4, 6, 8)``; even numbers of links from 4 (1-DOF chains) that an
+    atlas can hold (:class:`.synthesis.SynthesisOptions`).
+
+    Raises
+    ------
+    ParameterError
+        Names the parameter ``links``.
+    """
+    why = None
     try:
         links = tuple(int(v) for v in str(text).split(","))
+        for n in links:
+            if n >= 4 and n % 2 == 0:
+                SynthesisOptions(n, 1)    # the atlas's own bound on the number of links
+    except InputError as exc:
+        links, why = (), str(exc)
     except ValueError:
         links = ()
     if not links or any(n < 4 or n % 2 for n in links):
-        raise InputError(explain("--links", expected="even numbers of links >= 4, e.g. 4,6,8", got=repr(text)))
+        raise ParameterError(explain("links", expected="even numbers of links >= 4, e.g. 4,6,8", got=repr(text)[:80],
+                                     hint=why), "links")
     return links
 
 

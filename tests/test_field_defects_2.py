@@ -448,3 +448,23 @@ def test_a_failed_atlas_build_removes_the_file_it_created_and_keeps_one_it_found
             atlas.build(SynthesisOptions(10, 1), progress=False, workers=1)
     with Atlas(old, readonly=True) as atlas:
         assert atlas.count(SynthesisOptions(6, 1)) == 4
+
+
+def test_synthesise_links_beyond_the_atlas_exit_2(tmp_path, capsys):
+    target = tmp_path / "t.csv"
+    target.write_text(_circle(0.05, 40))
+    assert main(["synthesise", "--path", str(target), "--out", str(tmp_path / "o.toml"), "--links", str(2 ** 70),
+                 "--db", str(tmp_path / "none.sqlite")]) == 2
+    err = capsys.readouterr().err
+    assert f"error: --links: expected even numbers of links >= 4, e.g. 4,6,8, got '{2 ** 70}'" in err
+    assert "hint: links: expected an integer 2…" in err
+
+
+@pytest.mark.parametrize("plot", ["p.png", "adir"])
+def test_plot_without_a_start_is_refused_before_the_work(tmp_path, monkeypatch, capsys, plot):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "adir").mkdir()
+    (tmp_path / "t.csv").write_text(_circle(0.05, 40))
+    assert main(["synthesise", "--path", "t.csv", "--out", "o.toml", "--plot", plot, "--db", "none.sqlite"]) == 2
+    assert f"error: --plot: expected a START mechanism, got --plot '{plot}' without one" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "t.csv"]
