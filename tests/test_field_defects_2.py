@@ -468,3 +468,17 @@ def test_plot_without_a_start_is_refused_before_the_work(tmp_path, monkeypatch, 
     assert main(["synthesise", "--path", "t.csv", "--out", "o.toml", "--plot", plot, "--db", "none.sqlite"]) == 2
     assert f"error: --plot: expected a START mechanism, got --plot '{plot}' without one" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "t.csv"]
+
+
+def test_a_read_only_output_is_never_replaced(tmp_path, capsys):
+    import os
+    import stat
+    out = tmp_path / "out.toml"
+    out.write_text("# mine\n")
+    out.chmod(0o444)
+    assert main(["convert", "four_bar", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"--out '{out}': expected a writable file, got a read-only file (-r--r--r--" in err or \
+        f"'{out}': expected a writable file, got a read-only file (-r--r--r--" in err, err
+    assert out.read_text() == "# mine\n" and stat.S_IMODE(os.stat(out).st_mode) == 0o444
+    assert [p.name for p in tmp_path.iterdir()] == ["out.toml"]          # no temporary file left
