@@ -61,6 +61,10 @@ class Probe:
     branches); ``pts`` (n, k, 2): the group's signature points (first) and the known
     points it hangs from (the tangent rule predicts the first).
 
+    ``refined``: a group without a margin whose tracker refines its own steps down to
+    where it fails (Newton's continuation halves its step up to 12 times), so that a walk
+    needing only the samples on either side of a limit need not zoom it.
+
     ``margin`` (n,): the group's reach margin, positive where the group assembles with
     its two branches apart and zero on its singular set (limits and crossings alike);
     ``lip`` (n, k, 2): points whose displacement bounds the change of ``margin``: it is
@@ -79,6 +83,7 @@ class Probe:
     curv: np.ndarray | None = None      # (n,) |d²margin/ds²| along the path, where known
     tol: np.ndarray | None = None       # (n,) rounding of ``margin``
     lip_scale: np.ndarray | None = None  # (n,) |lip| when the margin is quadratic in ``lip``
+    refined: bool = False               # a failure is where the group's own continuation stopped
 
 
 @dataclass(frozen=True)
@@ -284,9 +289,9 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
     order.  ``P`` must already be sampled finely enough (steps ≤ :data:`MAX_STEP`).
     Returns the sign flips, the crossings met and the first limit (``block``).
     ``refine_limits=False``: a tracked group (no reach margin) makes no event, its own
-    tracker reports its failures; ``zoom_tracked=False``: a tracked group's limit is
-    the interval between its last assembled sample and the next (no zoom: every round
-    follows the whole path again), which is all a path's rows need.
+    tracker reports its failures; ``zoom_tracked=False``: the limit of a group whose
+    probe is ``refined`` is the interval between its last assembled sample and the next
+    (no zoom: every round follows the whole path again), which is all a path's rows need.
     """
     P = np.asarray(P, float)
     s_nodes = path_parameter(P)
@@ -310,7 +315,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             if not refine_limits and tracked:
                 continue                     # a tracked group: its own tracker reports failures
             stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
-            lim_floor = lim & ((width <= floor) | (tracked and not zoom_tracked))
+            lim_floor = lim & ((width <= floor) | (tracked and probes[g].refined and not zoom_tracked))
             at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
             ready[g] = (at_floor, lim[at_floor])
             if at_floor.size and (event is None or at_floor[0] < event[0]):

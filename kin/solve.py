@@ -582,8 +582,9 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
         last["n"] = Xs.shape[0]
         return _with_curvatures(sp, last["run"], kernels, scale)
-    # method="newton": its tracker decides; a Newton group's limit is not zoomed (rows need
-    # only the samples on either side of it; a one-driver motion's chart has it exactly)
+    # method="newton": its tracker decides; a Newton group's limit is not zoomed (its
+    # continuation refined its steps; rows need only the samples on either side of it; a
+    # one-driver motion's chart has it exactly); a triad's is
     w = walk(evaluate, P, groups, refine_limits=kernels, zoom_tracked=False)
     s_nodes = path_parameter(P)
     s = w.s

@@ -529,6 +529,6 @@ class NewtonStep(GroupStep):
         tr = self._last = track(st.system, Z, X, u, singular_tol=SINGULAR, stop_at_loss=probe, resume=self._last)
         G.from_Z(tr.Z, u)
         why = {int(n): (int(tr.code[n]), tr.reason[n]) for n in np.flatnonzero(~tr.ok)}
-        return Outcome(tr.ok, why, Probe(tr.ok.copy()) if probe else None)
+        return Outcome(tr.ok, why, Probe(tr.ok.copy(), refined=True) if probe else None)
 
     rates = jacobian_rates
