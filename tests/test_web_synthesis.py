@@ -150,7 +150,7 @@ def test_a_bad_links_choice_is_one_line(tiny_atlas):
     sv = _no_start(wb, tiny_atlas)
     sv.w["links"].active = []
     sv.run()
-    assert sv.job is None and "--links: expected even numbers" in wb.message.text
+    assert sv.job is None and "links: expected even numbers" in wb.message.text     # (the library names the parameter)
 
 
 @pytest.fixture(scope="module")
