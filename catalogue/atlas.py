@@ -331,15 +331,14 @@ class Atlas:
 
     def __exit__(self, kind, exc, tb) -> None:
         """Close; when a run fails (but for an interrupt) the file it created is removed.  A
-        read that failed on the file's contents (SQLite's ``DatabaseError``: a
-        malformed page, a table of another schema; JSON that does not parse; text that is
-        not UTF-8) names the atlas (the readers of :mod:`.stored_rows` name the table and
+        read or write that failed on the file's contents (SQLite's ``DatabaseError``: a
+        malformed page, a table of another schema, rows that collide because a table is
+        missing; JSON that does not parse; text that is not UTF-8) names the atlas (the readers of :mod:`.stored_rows` name the table and
         the row as well)."""
         self.close()
         if exc is not None and not isinstance(exc, KeyboardInterrupt):     # (an interrupted build resumes)
             self._remove_created()
-        if isinstance(exc, (sqlite3.DatabaseError, json.JSONDecodeError, UnicodeError)) \
-                and not isinstance(exc, sqlite3.IntegrityError):
+        if isinstance(exc, (sqlite3.DatabaseError, json.JSONDecodeError, UnicodeError)):
             raise InputError(explain(f"atlas {self.path!r}", expected="an intact atlas",
                                      got=f"{type(exc).__name__}: {exc}", hint=sr.REBUILD)) from None
 
