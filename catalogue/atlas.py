@@ -32,18 +32,20 @@ SQL with bound parameters (no user text reaches SQL unquoted).
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
 import sqlite3
 import sys
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
 from multiloop.topo.errors import InputError, OutputError, explain
 
+from . import stored_rows as sr
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
 from .synthesis.counting import count_signature, count_tasks
 
@@ -174,6 +176,11 @@ def parse_query(text: str) -> tuple[str, list]:
     >>> parse_query("La = '4-4-5-5-5'")[1]
     ['[4, 4, 5, 5, 5]']
     """
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as exc:          # a byte of the command line that is not UTF-8
+        raise InputError(explain("--query", expected="UTF-8 text", got=f"an undecodable byte at {exc.start}",
+                                 hint="write the query in UTF-8")) from None
     toks = _tokens(text)
     _check_size(toks)
     if not toks:
@@ -284,17 +291,21 @@ class Atlas:
         self.path = str(path)
         if self.path != ":memory:" and Path(self.path).is_dir():
             raise InputError(explain("--db", expected="an atlas file (SQLite)", got=f"the directory {self.path!r}"))
+        self.created = False             # this Atlas made the file: a run that fails removes it
         if readonly:
             self._open_readonly()
             return
+        self.created = self.path != ":memory:" and not os.path.lexists(self.path)
         try:
             self.con = sqlite3.connect(self.path, timeout=60, isolation_level=None)
+            self.con.text_factory = sr.decoded_text
             self.con.execute("PRAGMA journal_mode=WAL" if self.path != ":memory:" else "PRAGMA journal_mode=MEMORY")
             self.con.execute("PRAGMA synchronous=NORMAL")
             self.con.executescript(_SCHEMA)
             self.con.execute("PRAGMA user_version = 1")
             self.con.commit()
-        except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place
+        except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place, a full disk
+            self._remove_created()
             raise InputError(explain("--db", expected="an atlas file (SQLite) or a new file name",
                                      got=f"{self.path!r}: {exc}",
                                      hint="give another --db path")) from None
@@ -308,6 +319,7 @@ class Atlas:
         try:
             self.con = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro&immutable=1", uri=True,
                                        check_same_thread=False)
+            self.con.text_factory = sr.decoded_text
             self.con.execute("SELECT count(*) FROM chains").fetchone()
         except sqlite3.DatabaseError as exc:
             raise InputError(explain("atlas", expected="an atlas file (SQLite) with a chains table",
@@ -316,13 +328,33 @@ class Atlas:
     def close(self) -> None:
         self.con.close()
 
+    def _remove_created(self) -> None:
+        """Remove the file this Atlas created, with SQLite's journal files (a failed run
+        leaves nothing behind; a file that was there before is kept)."""
+        if getattr(self, "con", None) is not None:
+            self.con.close()
+        if self.created:
+            for suffix in ("", "-wal", "-shm", "-journal"):
+                with contextlib.suppress(FileNotFoundError):
+                    os.remove(self.path + suffix)
+
     def __enter__(self) -> "Atlas":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, kind, exc, tb) -> None:
+        """Close; when a run fails (but for an interrupt) the file it created is removed.  A
+        read or write that failed on the file's contents (SQLite's ``DatabaseError``: a
+        malformed page, a table of another schema, rows that collide because a table is
+        missing; JSON that does not parse; text that is not UTF-8) names the atlas (the readers of :mod:`.stored_rows` name the table and
+        the row as well)."""
         self.close()
+        if exc is not None and not isinstance(exc, KeyboardInterrupt):     # (an interrupted build resumes)
+            self._remove_created()
+        if isinstance(exc, (sqlite3.DatabaseError, json.JSONDecodeError, UnicodeError)):
+            raise InputError(explain(f"atlas {self.path!r}", expected="an intact atlas",
+                                     got=f"{type(exc).__name__}: {exc}", hint=sr.REBUILD)) from None
 
-    @contextmanager
+    @contextlib.contextmanager
     def _tx(self):
         """One write transaction; a full disk is an :class:`OutputError` naming the file
         (the rollback that follows it must not hide it)."""
@@ -511,18 +543,27 @@ class Atlas:
                limit: int | None = None) -> Iterator[ChainRecord]:
         """Stored chains (ordered by n, F, V, LA, canonical)."""
         where, params = self._where(opts, query)
-        sql = (f"SELECT n, F, K, V, j_max, LA, MJA, code, code_star, planar, fractionated, loops, L0,"
+        sql = (f"SELECT id, n, F, K, V, j_max, LA, MJA, code, code_star, planar, fractionated, loops, L0,"
                f" joints, canonical FROM chains WHERE {where} ORDER BY n, F, V, LA, canonical")
         if limit is not None:
             sql += " LIMIT ?"
             params = params + [int(limit)]
         for row in self.con.execute(sql, params):
-            n, F, K, V, jmax, LA, MJA, code, code_star, planar, frac, La, L0, joints, canon = row
-            yield ChainRecord(n=n, F=F, joints=tuple(tuple(j) for j in json.loads(joints)),
-                              canonical=canon, LA=tuple(json.loads(LA)), MJA=tuple(json.loads(MJA)),
-                              V=V, K=K, j_max=jmax, code=code, code_star=code_star,
-                              fractionated=bool(frac), planar=None if planar is None else bool(planar),
-                              La=None if La is None else tuple(json.loads(La)), L0=L0)
+            yield self._chain(row)
+
+    def _chain(self, row) -> ChainRecord:
+        """A stored chain row (``id`` first) as a record, every value checked (:mod:`.stored_rows`)."""
+        rid, n, F, K, V, jmax, LA, MJA, code, code_star, planar, frac, La, L0, joints, canon = row
+        at = (self.path, "chains", rid)
+        n = sr.integer(*at, "n", n, 1, 10_000)
+        return ChainRecord(n=n, F=sr.integer(*at, "F", F, -10_000, 10_000),
+                           joints=tuple(tuple(j) for j in sr.int_lists(*at, "joints", joints, below=n)),
+                           canonical=sr.text(*at, "canonical", canon), LA=tuple(sr.int_list(*at, "LA", LA)),
+                           MJA=tuple(sr.int_list(*at, "MJA", MJA)), V=sr.integer(*at, "V", V),
+                           K=sr.integer(*at, "K", K), j_max=sr.integer(*at, "j_max", jmax),
+                           code=sr.text(*at, "code", code), code_star=sr.text(*at, "code_star", code_star),
+                           fractionated=bool(frac), planar=None if planar is None else bool(planar),
+                           La=None if La is None else tuple(sr.int_list(*at, "loops", La)), L0=L0)
 
     def builds(self) -> list[dict]:
         cur = self.con.execute("SELECT options, n, F, status, count, seconds FROM builds ORDER BY n, F")

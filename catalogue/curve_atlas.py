@@ -14,20 +14,26 @@ transaction (a killed build resumes).
 with usearch's HNSW graph (Malkov & Yashunin 2020) when the ``usearch`` package is
 installed (extra ``[curves]``), else by an exact NumPy scan; ``exact=True`` forces the
 scan (the reference of the recall measurement).  The build stores one graph per number
-of links in the atlas (table ``curve_indexes``), so a query loads it instead of
-building it.
+of links in the atlas (table ``curve_indexes``) with the SHA-256 of its bytes, so a query
+loads it instead of building it.  The checksum is verified before usearch reads the bytes
+(a damaged graph crashed it); a graph that fails it, or one stored without a checksum by
+an older release, is rebuilt from the curves in memory (the next build stores it again).
+Every stored value read back is checked (:mod:`.stored_rows`).
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import sqlite3
 import time
+import warnings
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Sequence
 
 import numpy as np
 
+from . import stored_rows as sr
 from .atlas import Atlas, each_with_progress
 from .curves import CURVE_POINTS, DESCRIPTOR_HARMONICS, descriptor, normalise, reversed_descriptor
 from .distributed import map_calls
@@ -52,7 +58,7 @@ CREATE TABLE IF NOT EXISTS curve_mechanisms (
     mechanism INTEGER PRIMARY KEY, wanted INTEGER NOT NULL, kept INTEGER NOT NULL, seconds REAL
 );
 CREATE TABLE IF NOT EXISTS curve_indexes (
-    n INTEGER PRIMARY KEY, curves INTEGER NOT NULL, data BLOB NOT NULL
+    n INTEGER PRIMARY KEY, curves INTEGER NOT NULL, data BLOB NOT NULL, sha256 TEXT
 );
 """
 
@@ -73,8 +79,33 @@ class CurveBuild:
                 f"{self.mechanisms} mechanisms ({self.skipped_newton} with Newton-solved groups left out)")
 
 
+@cache
+def _columns() -> dict[str, tuple[str, ...]]:
+    """The columns of each curve table, read from :data:`_SCHEMA` itself."""
+    con = sqlite3.connect(":memory:")
+    con.executescript(_SCHEMA)
+    tables = [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
+    return {t: tuple(r[1] for r in con.execute(f"PRAGMA table_info({t})")) for t in tables}
+
+
+def _check_tables(atlas: Atlas) -> None:
+    """Each curve table the atlas has holds the columns of :data:`_SCHEMA` (a stored graph
+    without its checksum column is from before it: its graph is rebuilt from the curves)."""
+    for table, want in _columns().items():
+        have = [r[1] for r in atlas.con.execute(f"PRAGMA table_info({table})")]
+        missing = [c for c in want if c not in have and (table, c) != ("curve_indexes", "sha256")]
+        if have and missing:
+            raise sr.corrupt(atlas.path, table, None, f"the columns {', '.join(want)}",
+                             f"the columns {', '.join(have)[:200]} (no {', '.join(missing)})")
+
+
 def _ensure(atlas: Atlas) -> None:
+    """The curve tables, created or checked; an atlas from before the stored graphs'
+    checksums gets the column (its graphs are stored again by the next build)."""
     atlas.con.executescript(_SCHEMA)
+    _check_tables(atlas)
+    if "sha256" not in [r[1] for r in atlas.con.execute("PRAGMA table_info(curve_indexes)")]:
+        atlas.con.execute("ALTER TABLE curve_indexes ADD COLUMN sha256 TEXT")
 
 
 def _mechanism_ids(atlas: Atlas, opts: SynthesisOptions) -> list[tuple[int, InversionRecord]]:
@@ -197,12 +228,16 @@ _OF_N = ("FROM curves c JOIN realisations r ON r.id = c.realisation "
 
 
 def _rows(atlas: Atlas, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Row ids and descriptors of the curves of ``n``-link mechanisms."""
+    """Row ids and descriptors of the curves of ``n``-link mechanisms (each a BLOB of
+    finite float32 values, checked)."""
     rows = atlas.con.execute(f"SELECT c.id, c.descriptor {_OF_N} ORDER BY c.id", (int(n),)).fetchall()
     width = 2 * DESCRIPTOR_HARMONICS
     ids = np.array([r[0] for r in rows], dtype=np.int64)
-    vectors = (np.frombuffer(b"".join(r[1] for r in rows), dtype=np.float32).reshape(-1, width)
-               if rows else np.zeros((0, width), np.float32))
+    data = b"".join(sr.blob(atlas.path, "curves", i, "descriptor", d, 4 * width) for i, d in rows)
+    vectors = np.frombuffer(data, dtype=np.float32).reshape(-1, width)
+    bad = np.flatnonzero(~np.all(np.isfinite(vectors), axis=1))
+    if bad.size:
+        raise sr.corrupt(atlas.path, "curves", int(ids[bad[0]]), "descriptor: finite numbers", "NaN or infinity")
     return ids, vectors
 
 
@@ -211,30 +246,37 @@ def _count(atlas: Atlas, n: int) -> int:
 
 
 def _stored_index(atlas: Atlas, n: int, count: int):
-    """The HNSW graph stored for ``n`` links when it covers all ``count`` curves."""
+    """The HNSW graph stored for ``n`` links when it covers all ``count`` curves and its
+    bytes pass their SHA-256 checksum (checked before usearch reads them: a damaged graph
+    crashed its reader).  None otherwise: the caller builds the graph from the curves.  An
+    atlas from before the checksum (or the table) has none: its graph is rebuilt too."""
     Index = _usearch()
     try:
-        row = atlas.con.execute("SELECT curves, data FROM curve_indexes WHERE n = ?", (int(n),)).fetchone()
-    except sqlite3.OperationalError:          # an atlas written before the table existed
+        row = atlas.con.execute("SELECT curves, data, sha256 FROM curve_indexes WHERE n = ?", (int(n),)).fetchone()
+    except sqlite3.OperationalError:          # an atlas written before the table or the checksum
         return None
-    if Index is None or row is None or row[0] != count:
+    if Index is None or row is None or row[0] != count or row[2] is None:
         return None
-    return Index.restore(bytes(row[1]))
+    if not isinstance(row[1], bytes) or hashlib.sha256(row[1]).hexdigest() != row[2]:
+        warnings.warn(f"atlas {atlas.path!r}: table curve_indexes row {int(n)}: the stored graph fails its SHA-256 "
+                      f"checksum; it is rebuilt from the curves (hint: {sr.REBUILD})", stacklevel=3)
+        return None
+    return Index.restore(row[1])
 
 
 def save_index(atlas: Atlas, n: int) -> int:
     """Build the HNSW graph of the curves of ``n``-link mechanisms (keys: curve row ids)
-    and store it in the atlas, so that a query loads it instead of building it; the
-    number of curves indexed (0 without usearch)."""
+    and store it in the atlas with the SHA-256 of its bytes, so that a query loads it
+    instead of building it; the number of curves indexed (0 without usearch)."""
     _ensure(atlas)
     Index = _usearch()
     ids, vectors = _rows(atlas, n)
     if Index is None or not len(ids):
         return 0
-    ix = _hnsw(Index, ids, vectors)
+    data = bytes(_hnsw(Index, ids, vectors).save())
     with atlas._tx() as con:
-        con.execute("INSERT OR REPLACE INTO curve_indexes (n, curves, data) VALUES (?, ?, ?)",
-                    (int(n), len(ids), bytes(ix.save())))
+        con.execute("INSERT OR REPLACE INTO curve_indexes (n, curves, data, sha256) VALUES (?, ?, ?, ?)",
+                    (int(n), len(ids), data, hashlib.sha256(data).hexdigest()))
     return len(ids)
 
 
@@ -257,7 +299,7 @@ class CurveIndex:
         try:
             _ensure(atlas)
         except sqlite3.OperationalError:      # read-only, written before a table existed
-            pass
+            _check_tables(atlas)
         self.atlas = atlas
         ns = sorted({int(r[0]) for r in atlas.con.execute(
             "SELECT DISTINCT m.n FROM curve_mechanisms c JOIN mechanisms m ON m.id = c.mechanism")}
@@ -334,14 +376,30 @@ class CurveIndex:
 def stored_curve(atlas: Atlas, curve_id: int) -> dict:
     """A stored curve with its realisation and mechanism: ``shape`` (complex normalised
     samples), ``centre``, ``radius``, ``link``, ``at``, ``joints`` (positions by name),
-    ``mechanism`` (row id), ``joints_of_chain`` (link indices per joint), ``chain``, ``frame``, ``joint``, ``driven``, ``n``, ``formula``."""
+    ``mechanism`` (row id), ``joints_of_chain`` (link indices per joint), ``chain``, ``frame``,
+    ``joint``, ``driven``, ``n``, ``formula``; every value checked (:mod:`.stored_rows`)."""
     row = atlas.con.execute(
-        "SELECT c.shape, c.cx, c.cy, c.radius, c.link, c.x, c.y, r.joints, m.id, m.chain, m.frame, m.joint, "
+        "SELECT c.shape, c.cx, c.cy, c.radius, c.link, c.x, c.y, r.id, r.joints, m.id, m.chain, m.frame, m.joint, "
         "m.driven, m.n, m.formula FROM curves c JOIN realisations r ON r.id = c.realisation "
         "JOIN mechanisms m ON m.id = r.mechanism WHERE c.id = ?", (int(curve_id),)).fetchone()
-    shape, cx, cy, rad, link, x, y, joints, mid, chain, f, a, xd, n, formula = row
-    chain_joints = json.loads(atlas.con.execute("SELECT joints FROM chains WHERE canonical = ?",
-                                                (chain,)).fetchone()[0])
-    return {"joints_of_chain": tuple(tuple(int(v) for v in j) for j in chain_joints),"shape": np.frombuffer(shape, np.complex64).astype(complex), "centre": complex(cx, cy),
-            "radius": rad, "link": link, "at": (x, y), "joints": json.loads(joints), "mechanism": mid,
-            "chain": chain, "frame": f, "joint": a, "driven": xd, "n": n, "formula": formula}
+    at = (atlas.path, "curves", int(curve_id))
+    if row is None:
+        raise sr.corrupt(*at, "a curve whose realisation and mechanism are stored", "a dangling reference")
+    shape, cx, cy, rad, link, x, y, rid, joints, mid, chain, f, a, xd, n, formula = row
+    m_at = (atlas.path, "mechanisms", mid)
+    n = sr.integer(*m_at, "n", n, 2, 10_000)
+    found = atlas.con.execute("SELECT id, joints FROM chains WHERE canonical = ?",
+                              (sr.text(*m_at, "chain", chain),)).fetchone()
+    if found is None:
+        raise sr.corrupt(*m_at, "chain: the canonical form of a stored chain", "a dangling reference")
+    chain_joints = sr.int_lists(atlas.path, "chains", found[0], "joints", found[1], below=n)
+    return {"joints_of_chain": tuple(tuple(j) for j in chain_joints),
+            "shape": np.frombuffer(sr.blob(*at, "shape", shape, 8 * CURVE_POINTS), np.complex64).astype(complex),
+            "centre": complex(sr.real(*at, "cx", cx), sr.real(*at, "cy", cy)),
+            "radius": sr.real(*at, "radius", rad, positive=True), "link": sr.text(*at, "link", link),
+            "at": (sr.real(*at, "x", x), sr.real(*at, "y", y)),
+            "joints": sr.positions(atlas.path, "realisations", rid, "joints", joints,
+                                   [f"J{i + 1}" for i in range(len(chain_joints))]),
+            "mechanism": mid, "chain": chain, "frame": sr.integer(*m_at, "frame", f, 0, n - 1),
+            "joint": sr.integer(*m_at, "joint", a, 0, len(chain_joints) - 1),
+            "driven": sr.integer(*m_at, "driven", xd, 0, n - 1), "n": n, "formula": sr.text(*m_at, "formula", formula)}

@@ -39,6 +39,7 @@ from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 from multiloop.kin.groups.driver import is_closed_form as driver_closed_form
 from multiloop.kin.groups.registry import CLOSED_FORM
 
+from . import stored_rows as sr
 from .atlas import Atlas, each_with_progress
 from .synthesis import ChainRecord, SynthesisOptions, mechanism_choices
 from .synthesis.records import _nauty_incidence
@@ -325,8 +326,11 @@ def iter_mechanisms(atlas: Atlas, opts: SynthesisOptions, where: str = "1",
     _ensure(atlas)
     cond, cp = _chain_filter(atlas, opts)
     joints = {r.canonical: r.joints for r in atlas.chains(opts)}
-    sql = (f"SELECT chain, n, F, V, frame, joint, driven, formula, class, closed_form, kinds FROM mechanisms "
+    sql = (f"SELECT id, chain, n, F, V, frame, joint, driven, formula, class, closed_form, kinds FROM mechanisms "
            f"WHERE {cond} AND ({where}) ORDER BY class, chain, frame, joint, driven")
-    for ch, n, F, V, f, a, x, formula, cls, closed, kinds in atlas.con.execute(sql, list(cp) + list(params)):
+    for mid, ch, n, F, V, f, a, x, formula, cls, closed, kinds in atlas.con.execute(sql, list(cp) + list(params)):
+        if ch not in joints:
+            raise sr.corrupt(atlas.path, "mechanisms", mid, "chain: the canonical form of a stored chain",
+                             "a dangling reference")
         yield InversionRecord(ch, n, F, V, joints[ch], f, a, x, formula, cls, bool(closed),
-                              tuple(json.loads(kinds)))
+                              tuple(sr.text_list(atlas.path, "mechanisms", mid, "kinds", kinds)))

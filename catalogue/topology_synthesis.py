@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.topo.assur import decompose
-from multiloop.topo.errors import InputError, LinkageError, explain
+from multiloop.topo.errors import InputError, LinkageError, ParameterError, explain
 from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.check import check
 from multiloop.kin.solve import solve
@@ -43,10 +43,11 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.budget import LIMITS, Budget, Meter
-from .dimensional.synthesise import one_blas_thread
+from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
+from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
 __all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files"]
@@ -131,13 +132,27 @@ class TopologySynthesis:
 
 
 def parse_links(text) -> tuple[int, ...]:
-    """``"4,6,8"`` → ``(4, 6, 8)``; even numbers of links from 4 (1-DOF chains)."""
+    """``"4,6,8"`` → ``(4, 6, 8)``; even numbers of links from 4 (1-DOF chains) that an
+    atlas can hold (:class:`.synthesis.SynthesisOptions`).
+
+    Raises
+    ------
+    ParameterError
+        Names the parameter ``links``.
+    """
+    why = None
     try:
         links = tuple(int(v) for v in str(text).split(","))
+        for n in links:
+            if n >= 4 and n % 2 == 0:
+                SynthesisOptions(n, 1)    # the atlas's own bound on the number of links
+    except InputError as exc:
+        links, why = (), str(exc)
     except ValueError:
         links = ()
     if not links or any(n < 4 or n % 2 for n in links):
-        raise InputError(explain("--links", expected="even numbers of links >= 4, e.g. 4,6,8", got=repr(text)))
+        raise ParameterError(explain("links", expected="even numbers of links >= 4, e.g. 4,6,8", got=repr(text)[:80],
+                                     hint=why), "links")
     return links
 
 
@@ -301,13 +316,20 @@ def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, limi
 
 def _order(items: list, tol: float, key=lambda d: (d.error_rms, d.links)) -> list:
     """By RMS error, in bands: a band holds the items within ``tol`` of its best error,
-    and inside a band fewer links come first (``key(item) = (rms, links)``)."""
-    rest = sorted(items, key=lambda d: key(d)[0])
+    and inside a band fewer links come first (``key(item) = (rms, links)``).  A NaN
+    error counts as infinite (last); every band holds at least its best item, so the
+    loop ends for any ``tol``."""
+    def rms(d) -> float:
+        e = float(key(d)[0])
+        return e if e == e else np.inf
+    rest = sorted(items, key=rms)
     out: list = []
     while rest:
-        band = [d for d in rest if key(d)[0] <= key(rest[0])[0] + tol]
-        out += sorted(band, key=lambda d: (key(d)[1], key(d)[0]))
-        rest = rest[len(band):]
+        k = 1
+        while k < len(rest) and rms(rest[k]) <= rms(rest[0]) + tol:
+            k += 1
+        out += sorted(rest[:k], key=lambda d: (key(d)[1], rms(d)))
+        rest = rest[k:]
     return out
 
 
@@ -370,10 +392,17 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     Returns
     -------
     TopologySynthesis
+
+    Raises
+    ------
+    ParameterError
+        ``budget`` not a positive number of seconds, ``tol`` not a finite number >= 0,
+        ``top`` not a positive integer.
     """
     t0 = time.perf_counter()
     target = _target(path)
     closed = is_closed(target)
+    tol = check_tol(tol)
     if start is not None:
         limits = Budget.of(evaluations, budget)
         d, res = _polish(start, target, closed, point, limits, seed, float("nan"), target)
@@ -381,7 +410,7 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
                                  0 if res is None else res.evaluations, limits, "converged" if res is None else res.stopped)
     limits = Budget.of(evaluations, budget, default=DEFAULT_EVALUATIONS)
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
-        raise InputError(explain("top (--top)", expected="a positive number of designs", got=repr(top)))
+        raise ParameterError(explain("top", expected="a positive number of designs", got=repr(top)), "top")
     if not Path(atlas).is_file():
         raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                  hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))

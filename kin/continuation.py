@@ -61,6 +61,10 @@ class Probe:
     branches); ``pts`` (n, k, 2): the group's signature points (first) and the known
     points it hangs from (the tangent rule predicts the first).
 
+    ``refined``: a group without a margin whose tracker refines its own steps down to
+    where it fails (Newton's continuation halves its step up to 12 times), so that a walk
+    needing only the samples on either side of a limit need not zoom it.
+
     ``margin`` (n,): the group's reach margin, positive where the group assembles with
     its two branches apart and zero on its singular set (limits and crossings alike);
     ``lip`` (n, k, 2): points whose displacement bounds the change of ``margin``: it is
@@ -79,6 +83,7 @@ class Probe:
     curv: np.ndarray | None = None      # (n,) |d²margin/ds²| along the path, where known
     tol: np.ndarray | None = None       # (n,) rounding of ``margin``
     lip_scale: np.ndarray | None = None  # (n,) |lip| when the margin is quadratic in ``lip``
+    refined: bool = False               # a failure is where the group's own continuation stopped
 
 
 @dataclass(frozen=True)
@@ -276,13 +281,17 @@ def _crossing(evaluate, P, s_nodes, flips, handled, crossings, pr, s, i, g, delt
 
 def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
          delta: float = DELTA, kappa: float = KAPPA, max_rounds: int = 400,
-         refine_limits: bool = True) -> Walk:
+         refine_limits: bool = True, zoom_tracked: bool = True) -> Walk:
     """Follow the polyline of inputs ``P`` (K, d) from ``P[0]`` (where every group
     has its reference sign) with certified steps; see the module docstring.
 
     ``groups`` are the keys of :class:`Probe` returned by ``evaluate``, in solving
     order.  ``P`` must already be sampled finely enough (steps ≤ :data:`MAX_STEP`).
     Returns the sign flips, the crossings met and the first limit (``block``).
+    ``refine_limits=False``: a tracked group (no reach margin) makes no event, its own
+    tracker reports its failures; ``zoom_tracked=False``: the limit of a group whose
+    probe is ``refined`` is the interval between its last assembled sample and the next
+    (no zoom: every round follows the whole path again), which is all a path's rows need.
     """
     P = np.asarray(P, float)
     s_nodes = path_parameter(P)
@@ -290,6 +299,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
     flips = {g: [] for g in groups}
     handled: dict = {g: [] for g in groups}
     crossings = []
+    tail = s[:0]                             # samples set aside past a limit (_set_aside)
     for rounds in range(1, max_rounds + 1):
         signs = {g: sign_factor(flips[g], s) for g in groups}
         probes = evaluate(_at(P, s_nodes, s), signs)
@@ -298,17 +308,22 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         refine = np.zeros(len(s) - 1, bool)
         zoom = np.zeros(len(s) - 1, bool)     # a limit's bracket: split in LIMIT_ZOOM
         ready = {}                           # group -> (intervals at the floor, their limit flags)
+        stop = len(s)                        # the first interval with a limit
         for g in groups:
             lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
-            if not refine_limits and probes[g].gap is None and probes[g].margin is None:
+            tracked = probes[g].gap is None and probes[g].margin is None
+            if not refine_limits and tracked:
                 continue                     # a tracked group: its own tracker reports failures
-            lim_floor = lim & (width <= floor)
+            stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
+            lim_floor = lim & ((width <= floor) | (tracked and probes[g].refined and not zoom_tracked))
             at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
             ready[g] = (at_floor, lim[at_floor])
             if at_floor.size and (event is None or at_floor[0] < event[0]):
                 event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
             refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
-            zoom |= lim & (width > floor)
+            zoom |= lim & (width > floor) & ~lim_floor
+        if stop + 2 < len(s):
+            tail, s, refine, zoom, event, ready = _set_aside(stop, s, tail, refine, zoom, event, ready)
         # the last group's crossings change no other probe (nor its own reach margin): the
         # walk refines past them and resolves them all in one round
         last = event is not None and event[1] == groups[-1] and not event[2]
@@ -325,19 +340,34 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             s = np.sort(np.concatenate([s, mid, sub]))
             continue
         if event is None:
+            if tail.size:                    # the limit is gone: walk on
+                s, tail = np.concatenate([s, tail]), tail[:0]
+                continue
             return Walk(s, _frozen(flips), tuple(crossings), None, rounds)
         g = event[1]
         done = len(handled[g])
         for i, is_limit in _ready_events(event, ready, last):   # in order, up to a limit
             if any(a <= s[i] < b for a, b in handled[g][done:]):
                 continue                     # inside a run resolved this round
-            if is_limit:
-                a, b = _limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+            if is_limit:                     # (a tracked group has no margin to zoom on)
+                a, b = (_limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+                        if probes[g].margin is not None else (s[i], s[i + 1]))
                 return Walk(s[: i + 2], _frozen(flips), tuple(crossings), (a, b, g), rounds)
             block = _crossing(evaluate, P, s_nodes, flips, handled, crossings, probes[g], s, i, g, delta)
             if block is not None:
                 return Walk(s, _frozen(flips), tuple(crossings), block, rounds)
     raise RuntimeError("continuation did not settle")  # pragma: no cover
+
+
+def _set_aside(stop: int, s, tail, refine, zoom, event, ready):
+    """The samples past interval ``stop`` (a limit) set aside: nothing beyond a limit is
+    refined, and a probe there costs (a tracked group re-runs the whole path each round).
+    They come back if the refinement finds no limit there after all."""
+    keep = stop + 1
+    ready = {g: (at[at < keep], lim[at < keep]) for g, (at, lim) in ready.items()}
+    if event is not None and event[0] >= keep:
+        event = None
+    return np.concatenate([s[stop + 2:], tail]), s[: stop + 2], refine[:keep], zoom[:keep], event, ready
 
 
 def _frozen(flips: dict) -> dict:

@@ -36,7 +36,7 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from .geometry import Geometry, design_names
 from .poses import Poses
-from .solve import SolvePlan, needed_steps, plan_of, solve
+from .solve import SolvePlan, check_finite_inputs, needed_steps, plan_of, solve
 
 __all__ = ["DesignPoses", "solve_designs", "design_names", "design_mechanism", "branch_signs",
            "unbatched_steps"]
@@ -148,10 +148,11 @@ def _as_design_inputs(m: Mechanism, inputs, D: int) -> np.ndarray:
     if nd == 1 and (x.ndim == 1 or (x.ndim == 2 and x.shape[0] == D and x.shape[1] != 1)):
         x = x[..., None]
     ok = x.ndim in (2, 3) and x.shape[-1] == nd and (x.ndim == 2 or x.shape[0] == D)
-    if not ok or not np.all(np.isfinite(x)):
+    if not ok:
         raise InputError(explain("inputs", expected=f"finite values of shape (N,{' ' + str(nd) if nd > 1 else ''}) "
                                  f"or (D, N{', ' + str(nd) if nd > 1 else ''}) with D = {D}",
-                                 got=f"shape {np.shape(inputs)}" if not ok else "NaN or infinity"))
+                                 got=f"shape {np.shape(inputs)}"))
+    check_finite_inputs(m, x)
     return x
 
 

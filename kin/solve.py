@@ -53,7 +53,7 @@ from .rigid import transport
 from .state import KinematicState
 
 __all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
-           "motion_events"]
+           "motion_events", "check_finite_inputs"]
 
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = SINGULAR       # relative determinant below which a position is singular
@@ -129,7 +129,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
                 if isinstance(s, AssurGroup) and s.kind in (GroupKind.PRP, GroupKind.RPP) else \
                 "move a joint so that the group is not at a dead centre / toggle position"
             raise SingularityError(explain(
-                label, expected="a regular group in the reference configuration",
+                f"mechanism '{m.name or ''}': {label}", expected="a regular group in the reference configuration",
                 got=f"a singular one (relative determinant {rel:.1e})", hint=hint))
         st = StepPlan(s, sysm, unknown, "newton", label)
         closed = closed_form_step(m, st, size)
@@ -161,9 +161,18 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
     if x.ndim != 2 or x.shape[1] != nd:
         raise InputError(explain("inputs", expected=f"shape (N,) for one driver or (N, {nd}) for {nd} drivers",
                                  got=f"shape {np.shape(inputs)}"))
-    if not np.all(np.isfinite(x)):
-        raise InputError(explain("inputs", expected="finite numbers", got="NaN or infinity"))
+    check_finite_inputs(m, x)
     return x, single
+
+
+def check_finite_inputs(m: Mechanism, x: np.ndarray, what: str = "inputs") -> None:
+    """Refuse driver inputs ``x`` (..., n_drivers) with a NaN or an infinity, naming the
+    first one's index and its driver."""
+    bad = np.argwhere(~np.isfinite(x))
+    if bad.size:
+        i = tuple(int(v) for v in bad[0])
+        raise InputError(explain(f"{what}[{', '.join(map(str, i))}] (driver {m.drivers[i[-1]].joint!r})",
+                                 expected="finite numbers", got=repr(float(x[i]))))
 
 
 #: largest number of samples of a path (lead-in and fill-ins included) before it is refused
@@ -575,11 +584,15 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         last["run"] = _run(sp, Xs * scale, steps, signs, kernels, probe=True)
         last["n"] = Xs.shape[0]
         return _with_curvatures(sp, last["run"], kernels, scale)
-    w = walk(evaluate, P, groups, refine_limits=kernels)   # method="newton": its tracker decides
+    # method="newton": its tracker decides; a Newton group's limit is not zoomed (its
+    # continuation refined its steps; rows need only the samples on either side of it; a
+    # one-driver motion's chart has it exactly); a triad's is
+    w = walk(evaluate, P, groups, refine_limits=kernels, zoom_tracked=False)
     s_nodes = path_parameter(P)
     s = w.s
-    if only_all(sp, needed) and last.get("n") == len(s) and w.block is None:
-        run = last["run"]                  # the walk's last round is the answer
+    if only_all(sp, needed) and last.get("n") == len(s) and w.block is None \
+            and not np.any(last["run"].code == Status.MODE_LOST):
+        run = last["run"]                  # the walk's last round is the answer (no probe stopped early)
     else:
         Xs = np.stack([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])], axis=1) * scale
         signs = {k: sign_factor(f, s) for k, f in w.flips.items() if f}
@@ -589,17 +602,18 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     sn = s_nodes[idx[1:]]
     notes = []
     if w.block is not None:
-        s_b, _, k = w.block
-        xb = np.array([np.interp(s_b, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
-        where = ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(xb))
+        s_b, s_f, k = w.block
+        place = f"at {_fmt_path(sp, P, s_nodes, scale, s_b)}"
+        if s_f - s_b > 1e-9:                 # a Newton group's limit: between two samples
+            place = f"between {place[3:]} and {_fmt_path(sp, P, s_nodes, scale, s_f)}"
         past = np.flatnonzero(sn > s_b)
         for n in past:
             run.code[n] = Status.LIMIT
-            run.reason[int(n)] = f"{sp.steps[k].label}: unreachable: limit at {where} (out of reach beyond it)"
+            run.reason[int(n)] = f"{sp.steps[k].label}: unreachable: limit {place} (out of reach beyond it)"
         run.G.invalidate(range(sp.mechanism.n_links), sn > s_b)
         if past.size:
-            notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} at "
-                         f"{where}; rows {int(past[0])}… lie beyond it")
+            notes.append(f"the motion from the reference stops at the limit of {sp.steps[k].label} {place}; "
+                         f"rows {int(past[0])}… lie beyond it")
     for c, k in w.crossings:
         near = np.flatnonzero(np.abs(sn - c) <= 10 * _AT_CROSSING)
         for n in near:
@@ -613,6 +627,12 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
                          f"{'the reference' if n == 0 else f'row {n - 1}'} and row {n}; the motion keeps "
                          f"the mode of the reference")
     return run, notes
+
+
+def _fmt_path(sp: SolvePlan, P: np.ndarray, s_nodes: np.ndarray, scale: np.ndarray, s: float) -> str:
+    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text."""
+    x = np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
+    return ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(x))
 
 
 def only_all(sp: SolvePlan, needed) -> bool:
@@ -707,14 +727,15 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
     """Inputs outside a driver's ``range`` are failed positions (status ``out of range``);
     the path through them was solved as usual, so the motion on either side is unchanged.
-    A value within 1e-12 of the size (P) or 1e-12 rad (R) of an end is inside."""
+    A value within 1e-12 of the size (P) or 1e-12 rad (R) of an end, or within a few units
+    in the last place of it (an end read in degrees and converted twice), is inside."""
     m = sp.mechanism
     for k, d in enumerate(m.drivers):
         if d.range is None:
             continue
         rotary = m.joint(d.joint).kind is JointKind.R
-        tol = 1e-12 * (1.0 if rotary else sp.size)
-        out = (X[:, k] < d.range[0] - tol) | (X[:, k] > d.range[1] + tol)
+        tol = 1e-12 * (1.0 if rotary else sp.size) + 4 * np.spacing(np.abs(np.asarray(d.range, float)))
+        out = (X[:, k] < d.range[0] - tol[0]) | (X[:, k] > d.range[1] + tol[1])
         if not out.any():
             continue
         lo, hi = np.degrees(d.range) if rotary else d.range

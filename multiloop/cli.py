@@ -12,7 +12,8 @@ import argparse
 import importlib
 import sys
 
-from multiloop.topo.errors import LinkageError, cap_message
+from multiloop.topo.errors import (AssemblyError, DecompositionError, LinkageError, MobilityError, ParameterError,
+                                   SingularityError, TopologyError, cap_message)
 
 COMMANDS = {
     "analyse": "structural report of a chain or mechanism (Pozhbelko & Kuts 2020 numbers)",
@@ -61,8 +62,29 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
             raise
         p = sub.add_parser(name, help=help_text, description=help_text)
         module.add_arguments(p)
-        p.set_defaults(_run=module.run)
+        p.set_defaults(_run=module.run, _flags=_flags(p))
     return parser
+
+
+def _flags(p: argparse.ArgumentParser) -> dict[str, str]:
+    """A command's options by the parameter they set: ``{"tol": "--tol", "start": "--from"}``."""
+    return {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings}
+
+
+#: errors about the mechanism a command read: their message names the file
+_OF_THE_MECHANISM = (TopologyError, MobilityError, DecompositionError, AssemblyError, SingularityError)
+
+
+def _message(exc: LinkageError, args) -> str:
+    """The error's message; a library parameter it starts with becomes the option's flag,
+    and a fault of the mechanism names the file it came from."""
+    text = str(exc)
+    if isinstance(exc, ParameterError) and exc.parameter in args._flags and text.startswith(exc.parameter):
+        text = args._flags[exc.parameter] + text[len(exc.parameter):]
+    source = getattr(args, "file", None) or getattr(args, "input", None) or getattr(args, "start", None)
+    if isinstance(exc, _OF_THE_MECHANISM) and isinstance(source, str) and source not in text:
+        text = f"{source}: {text}"
+    return cap_message(text)
 
 
 def _tolerant_streams() -> None:
@@ -90,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         with quiet_warnings(f"multiloop {args.command}"):   # one line per warning, no source path
             return int(args._run(args) or 0)
     except LinkageError as exc:
-        print(f"multiloop {args.command}: error: {cap_message(str(exc))}", file=sys.stderr)
+        print(f"multiloop {args.command}: error: {_message(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -20,6 +20,9 @@ in ``tests/test_outputs.py``):
 * **Bad targets are exit 2, checked before the work starts:** an empty name, a
   directory where a file is expected (or a file where a directory is expected), a
   missing parent directory, no write permission, an unknown figure format.
+* **A read-only file is never replaced**, even by root (whom the permission check
+  lets through, and whose atomic rename would replace it): a regular target with no
+  write bit is exit 2; make it writable or name another file.
 
 Figures are rendered in memory (:meth:`Outputs.add_figure`); matplotlib's warnings
 are collected and reported as one line each on stderr, never raw
@@ -119,6 +122,11 @@ def _check_parent(p: Path, parent: Path, what: str) -> Path:
     return p
 
 
+#: a regular file with none of these permission bits is read-only: never replaced (root
+#: passes ``os.access``, and the atomic rename would replace it silently)
+_WRITE_BITS = stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH
+
+
 def check_target(path, what: str = "output", formats=None, pending=()) -> Path:
     """Validate a file target before any work; returns it as a :class:`~pathlib.Path`.
 
@@ -156,8 +164,10 @@ def check_target(path, what: str = "output", formats=None, pending=()) -> Path:
     if kind == "other":
         raise _err(what, p, "a regular file, a FIFO or a character device",
                    "a block device or a socket", "multiloop never writes over those")
-    if kind == "regular" and not os.access(p, os.W_OK):
-        raise _err(what, p, "a writable file", "permission denied")
+    if kind == "regular" and not (os.access(p, os.W_OK) and os.stat(p).st_mode & _WRITE_BITS):
+        raise _err(what, p, "a writable file", f"a read-only file ({stat.filemode(os.stat(p).st_mode)}: "
+                   "permission denied)", "multiloop never replaces a read-only file, even as root: make it "
+                   "writable (chmod u+w) or name another file")
     if kind in ("regular", "fifo", "chardev"):
         return p
     real = Path(os.path.realpath(p))

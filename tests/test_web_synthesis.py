@@ -194,7 +194,7 @@ def test_a_bad_links_choice_is_one_line(tiny_atlas):
     sv = _no_start(wb, tiny_atlas)
     sv.w["links"].active = []
     sv.run()
-    assert sv.job is None and "--links: expected even numbers" in wb.message.text
+    assert sv.job is None and "links: expected even numbers" in wb.message.text     # (the library names the parameter)
     sv.w["links"].active = [0, 7]                   # no box 7: set by a script, not a click
     sv.run()
     assert sv.job is None and "links (--links): expected one of its entries, got '[0, 7]'" in _message(wb)

@@ -190,43 +190,46 @@ class PairEquations:
 
     @staticmethod
     def _rho(Z, k, r):
-        """Rotated local vectors R(θ_k) r, shape (N, n, 2)."""
+        """Rotated local vectors R(θ_k) r, shape (N, n, 2) (written in place: this runs in
+        every Newton iteration, where np.stack's overhead was most of its time)."""
         c, s = _rot(Z[:, k, 2])
-        return np.stack([c * r[:, 0] - s * r[:, 1], c * r[:, 1] + s * r[:, 0]], axis=-1)
+        out = np.empty(c.shape + (2,))
+        out[..., 0] = c * r[:, 0] - s * r[:, 1]
+        out[..., 1] = c * r[:, 1] + s * r[:, 0]
+        return out
 
     def jacobian(self, Z: np.ndarray) -> np.ndarray:
         """∂Φ/∂Z at the poses ``Z`` (shape (N, n_links, 3)), shape (N, n_eq, 3 n_links)."""
         N = Z.shape[0]
         J = np.zeros((N, self.n_eq, 3 * self.n_links))
-        if self.R_a.size:
+        if self.R_a.size:               # (each block writes one entry per row: no index repeats)
             ra = self._rho(Z, self.R_a, self.R_ra)
             rb = self._rho(Z, self.R_b, self.R_rb)
-            for k in range(self.R_a.size):
-                r0, a, b = self.R_row[k], 3 * self.R_a[k], 3 * self.R_b[k]
-                J[:, r0, a] += 1.0
-                J[:, r0 + 1, a + 1] += 1.0
-                J[:, r0, a + 2] += -ra[:, k, 1]
-                J[:, r0 + 1, a + 2] += ra[:, k, 0]
-                J[:, r0, b] -= 1.0
-                J[:, r0 + 1, b + 1] -= 1.0
-                J[:, r0, b + 2] -= -rb[:, k, 1]
-                J[:, r0 + 1, b + 2] -= rb[:, k, 0]
+            r0, a, b = self.R_row, 3 * self.R_a, 3 * self.R_b
+            J[:, r0, a] += 1.0
+            J[:, r0 + 1, a + 1] += 1.0
+            J[:, r0, a + 2] += -ra[..., 1]
+            J[:, r0 + 1, a + 2] += ra[..., 0]
+            J[:, r0, b] -= 1.0
+            J[:, r0 + 1, b + 1] -= 1.0
+            J[:, r0, b + 2] -= -rb[..., 1]
+            J[:, r0 + 1, b + 2] -= rb[..., 0]
         if self.P_a.size:
             ra = self._rho(Z, self.P_a, self.P_ra)
             rb = self._rho(Z, self.P_b, self.P_rb)
             n = self._rho(Z, self.P_a, self.P_dir)
             d = Z[:, self.P_b, :2] + rb - Z[:, self.P_a, :2] - ra
-            for k in range(self.P_a.size):
-                r0, a, b = self.P_row[k], 3 * self.P_a[k], 3 * self.P_b[k]
-                nk = n[:, k]
-                J[:, r0, b:b + 2] += nk
-                J[:, r0, b + 2] += nk[:, 0] * -rb[:, k, 1] + nk[:, 1] * rb[:, k, 0]
-                J[:, r0, a:a + 2] -= nk
-                J[:, r0, a + 2] += (-nk[:, 1] * d[:, k, 0] + nk[:, 0] * d[:, k, 1]
-                                    - (nk[:, 0] * -ra[:, k, 1] + nk[:, 1] * ra[:, k, 0]))
-        for k in range(self.A_a.size):
-            J[:, self.A_row[k], 3 * self.A_b[k] + 2] += 1.0
-            J[:, self.A_row[k], 3 * self.A_a[k] + 2] -= 1.0
+            r0, a, b = self.P_row, 3 * self.P_a, 3 * self.P_b
+            J[:, r0, b] += n[..., 0]
+            J[:, r0, b + 1] += n[..., 1]
+            J[:, r0, b + 2] += n[..., 0] * -rb[..., 1] + n[..., 1] * rb[..., 0]
+            J[:, r0, a] -= n[..., 0]
+            J[:, r0, a + 1] -= n[..., 1]
+            J[:, r0, a + 2] += (-n[..., 1] * d[..., 0] + n[..., 0] * d[..., 1]
+                                - (n[..., 0] * -ra[..., 1] + n[..., 1] * ra[..., 0]))
+        if self.A_a.size:
+            J[:, self.A_row, 3 * self.A_b + 2] += 1.0
+            J[:, self.A_row, 3 * self.A_a + 2] -= 1.0
         return J
 
 

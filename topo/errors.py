@@ -9,6 +9,7 @@ Tree (the one home of every multiloop exception; a new error class goes here)::
 
     LinkageError
     ├── InputError        (ValueError)  malformed file, unknown key, bad value
+    │   ├── ParameterError              a function's argument out of its domain (names the parameter)
     │   └── OutputError                 an output target is unusable (multiloop.outputs)
     ├── TopologyError     (ValueError)  graph-level problem (disconnected, unknown link, ...)
     ├── MobilityError     (ValueError)  drivers do not fit the mobility
@@ -35,6 +36,7 @@ __all__ = [
     "SingularStrutsError",
     "ScrewPairingError",
     "OutputError",
+    "ParameterError",
     "SingularityWarning",
     "explain",
     "list_problems",
@@ -161,6 +163,23 @@ class SingularStrutsError(SingularityError):
 
 class ScrewPairingError(LinkageError, TypeError):
     """Two screws of kinds that cannot be paired (e.g. a twist with a twist)."""
+
+
+class ParameterError(InputError):
+    """An argument of a library function lies outside its domain (a NaN tolerance, a
+    negative count).  The message starts with the parameter's name, ``parameter``; the
+    command line puts the option's flag in its place (``tol`` → ``--tol``).
+
+    Examples
+    --------
+    >>> e = ParameterError(explain("tol", expected="a finite number >= 0", got="nan"), "tol")
+    >>> e.parameter, str(e)
+    ('tol', 'tol: expected a finite number >= 0, got nan')
+    """
+
+    def __init__(self, message: str, parameter: str):
+        super().__init__(message)
+        self.parameter = parameter
 
 
 class OutputError(InputError):

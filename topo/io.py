@@ -121,7 +121,7 @@ def read_input_bytes(path: str | Path, limit: int = MAX_INPUT_BYTES) -> bytes:
                                      got=exc.strerror or type(exc).__name__)) from None
     if len(data) > limit:
         raise InputError(explain(f"file '{p}'", expected=f"at most {limit >> 20} MiB",
-                                 got="a larger file", hint="an input file describes one mechanism"))
+                                 got="a larger file", hint="an input file describes one mechanism or one target"))
     return data
 
 

@@ -36,6 +36,9 @@ __all__ = [
     "Mechanism",
     "MechanismBuilder",
     "chain_from_joint_lists",
+    "driver_bound",
+    "MAX_ANGLE_DEG",
+    "MAX_SLIDE_SIZES",
 ]
 
 Vec2 = tuple[float, float]
@@ -101,6 +104,13 @@ class Joint:
     @property
     def is_multiple(self) -> bool:
         return len(self.links) > 2
+
+
+#: largest |R input| accepted (deg): beyond it a float has no sub-microdegree resolution
+MAX_ANGLE_DEG = 1e9
+#: largest |P input| accepted, in units of the mechanism's size (the solver's lead-in
+#: walks it in steps of 1 % of the size)
+MAX_SLIDE_SIZES = 100.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -196,6 +206,12 @@ class Mechanism:
         return bool(self.joints) and all(
             j.at is not None and (j.kind is JointKind.R or j.axis is not None)
             for j in self.joints)
+
+    @property
+    def size(self) -> float:
+        """The mechanism's size (m): the larger spread of its joints' reference positions
+        in x and y (at least 1e-12; 1.0 with fewer than two positioned joints)."""
+        return _extent([j.at for j in self.joints if j.at is not None])
 
     def link(self, name: str) -> Link:
         for lk in self.links:
@@ -504,7 +520,7 @@ def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, 
             continue
         if any(x.joint == jn and set(x.links) == set(dl) for x in drivers):
             problems.append(explain(f"[[driver]] on joint '{jn}'", expected="one driver per pair", got="a duplicate"))
-        bad = _range_problem(jn, jt.kind, rng)
+        bad = _range_problem(jn, jt.kind, rng, _extent([j.at for j in joints if j.at is not None]))
         if bad:
             problems.append(bad)
             rng = None
@@ -512,9 +528,23 @@ def _collect_drivers(given: Iterable, joints: Sequence[Joint], links: dict[str, 
     return drivers
 
 
-def _range_problem(jn: str, kind, rng) -> str | None:
+def _extent(points: Sequence) -> float:
+    """The larger spread in x and y of ``points`` (at least 1e-12; 1.0 for fewer than two)."""
+    if len(points) < 2:
+        return 1.0
+    return max(max(max(p[k] for p in points) - min(p[k] for p in points) for k in (0, 1)), 1e-12)
+
+
+def driver_bound(kind, size: float) -> float:
+    """The largest magnitude of a driver's input (rad for an R joint, m for a P joint of a
+    mechanism of ``size`` m): :data:`MAX_ANGLE_DEG`, or :data:`MAX_SLIDE_SIZES` × the size."""
+    return math.radians(MAX_ANGLE_DEG) if JointKind(kind) is JointKind.R else MAX_SLIDE_SIZES * size
+
+
+def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
     """What is wrong with driver ``jn``'s ``range`` (SI), in the file's units (degrees
-    for an R joint, m for a P joint), or None."""
+    for an R joint, m for a P joint), or None.  Its ends lie within :func:`driver_bound`
+    (the mechanism's ``size`` for a P joint)."""
     if rng is None:
         return None
     rotary = JointKind(kind) is JointKind.R
@@ -535,6 +565,11 @@ def _range_problem(jn: str, kind, rng) -> str | None:
         return explain(where, expected=f"a range that contains the reference, low <= 0 <= high ({unit})",
                        got=got, hint="the range is measured from the joint's reference position, "
                                      "like --from and --to")
+    bound = driver_bound(kind, size)
+    if max(-lo, hi) > bound:
+        limit = f"{MAX_ANGLE_DEG:g} deg" if rotary else f"{bound:.6g} m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"
+        return explain(where, expected=f"ends of magnitude at most {limit}", got=got,
+                       hint="the bound of every driver input (solve --from/--to, forces --at)")
     return None
 
 

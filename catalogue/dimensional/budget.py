@@ -27,15 +27,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import ParameterError, explain
 
-__all__ = ["Budget", "Meter", "DEFAULT_EVALUATIONS", "MAX_EVALUATIONS", "STOPS", "LIMITS"]
+__all__ = ["Budget", "Meter", "DEFAULT_EVALUATIONS", "MAX_EVALUATIONS", "MAX_SECONDS", "STOPS", "LIMITS"]
 
 #: evaluations of a run with a start when neither limit is given (a four-bar: a few
 #: seconds; a triad mechanism: about a minute)
 DEFAULT_EVALUATIONS = 20_000
 #: the largest evaluation budget accepted
 MAX_EVALUATIONS = 10 ** 12
+#: the longest wall-time cap accepted (s): a day
+MAX_SECONDS = 86_400.0
 #: why a run stopped: the error met ``tol``; the evaluations or the seconds ran out; the
 #: search ended on its own (a local polish converged, every start was polished)
 STOPS = ("tolerance", "evaluations", "budget", "converged")
@@ -57,18 +59,19 @@ def _evaluations(value, what: str) -> int | None:
     elif isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
         n = int(value)
     if n is None or not 1 <= n <= MAX_EVALUATIONS:
-        raise InputError(explain(what, expected=f"a whole number of evaluations from 1 to {MAX_EVALUATIONS:.0e}",
-                                 got=repr(value)))
+        raise ParameterError(explain(what, expected=f"a whole number of evaluations from 1 to {MAX_EVALUATIONS:.0e}",
+                                     got=repr(value)), what)
     return n
 
 
 def _seconds(value, what: str) -> float | None:
-    """``value`` as a positive, finite number of seconds, or None."""
+    """``value`` as a number of seconds in (0, :data:`MAX_SECONDS`], or None."""
     if value is None:
         return None
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-    if not ok or not math.isfinite(value) or value <= 0:
-        raise InputError(explain(what, expected="a positive number of seconds", got=repr(value)))
+    if not ok or not math.isfinite(value) or not 0 < value <= MAX_SECONDS:
+        raise ParameterError(explain(what, expected=f"a positive number of seconds, at most {MAX_SECONDS:g} (a day)",
+                                     got=repr(value)), what)
     return float(value)
 
 
@@ -98,8 +101,9 @@ class Budget:
 
         Raises
         ------
-        InputError
-            A limit out of range, not a number, or (evaluations) not a whole number.
+        ParameterError
+            A limit out of range, not a number, or (evaluations) not a whole number; the
+            message starts with the limit's name from ``names``.
 
         Examples
         --------

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .budget import Budget, Meter
@@ -138,10 +138,29 @@ def motion_target(m: Mechanism, motion, link: str) -> MotionTarget:
     return MotionTarget(np.column_stack([a[:, :2], np.radians(a[:, 2])]), link, src)
 
 
-def _check_start(m: Mechanism, method: str, seed) -> None:
+def check_tol(tol) -> float:
+    """``tol``, a tolerance on a relative error, as a float: a finite number >= 0.
+
+    Raises
+    ------
+    ParameterError
+        ``tol`` is not a number, NaN, infinite or negative.
+    """
+    try:
+        value = float(tol)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if isinstance(tol, bool) or not (np.isfinite(value) and value >= 0.0):
+        raise ParameterError(explain("tol", expected="a finite number >= 0 (a relative RMS error)", got=repr(tol),
+                                     hint="1e-6 stops at a relative RMS error of one millionth"), "tol")
+    return value
+
+
+def _check_start(m: Mechanism, method: str, seed, tol) -> None:
     from multiloop.kin.solve import solve
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2 ** 32:
-        raise InputError(explain("seed (--seed)", expected="an integer in [0, 2**32)", got=repr(seed)))
+        raise ParameterError(explain("seed", expected="an integer in [0, 2**32)", got=repr(seed)), "seed")
+    check_tol(tol)
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(map(repr, METHODS)), got=repr(method)))
     if not m.has_geometry or len(m.drivers) != 1:
@@ -151,11 +170,9 @@ def _check_start(m: Mechanism, method: str, seed) -> None:
 
 
 def _checked(task: str, target, direction: str):
-    """Refuse a target of zero size and a direction the timing already fixes; resample
-    more than :data:`~.targets.MAX_ROWS` rows.  Returns the target and a note or None."""
-    if task != "function" and not target.size > 1e-12 * max(1e-300, float(np.max(np.abs(target.target_points())))):
-        raise InputError(explain(f"{task} target ({target.source})", expected="points that are not all the same",
-                                 got=f"a target of size {target.size:.3g}", hint="the error is relative to the size"))
+    """Refuse a direction the timing already fixes (the target's size is checked as it
+    is read, :func:`~.targets.check_rows`); resample more than :data:`~.targets.MAX_ROWS`
+    rows.  Returns the target and a note or None."""
     if isinstance(target, PathTarget) and target.timing is not None and target.timing_mode != "step" \
             and direction != "any":
         raise InputError(explain(f"direction {direction!r} (--direction)", expected="'any' with --timing "
@@ -294,8 +311,11 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     Raises
     ------
     InputError
-        Too few targets, NaN, unknown point/joint/link, a limit out of range (evaluations
-        not a whole number in [1, 10**12], budget <= 0), unknown method.
+        Too few targets, NaN, unknown point/joint/link, unknown method.
+    ParameterError
+        A limit out of range (``evaluations`` not a whole number in [1, 10**12],
+        ``budget`` not a number of seconds up to a day), ``tol`` not a finite number >= 0,
+        a bad ``seed``.
     AssemblyError, SingularityError
         The start does not assemble in its reference configuration.
     """
@@ -313,7 +333,7 @@ def _synthesise(m, path, point, shape_only, function, output, motion, link, seed
     """:func:`synthesise`'s work (its arguments, checked here).  The search has 60 % of
     what the run has left after set-up (its probes included), the final polish the rest."""
     t0 = time.perf_counter()
-    _check_start(m, method, seed)
+    _check_start(m, method, seed, tol)
     cons = Constraints(full_rotation, min_transmission, length_bounds, max_ratio, grashof=grashof, mode=mode,
                        direction=direction)
     task, target = _target(m, path, point, shape_only, function, output, motion, link, timing)

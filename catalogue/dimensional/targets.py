@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.topo.errors import InputError, explain
+from multiloop.topo.io import read_input_bytes
 
 __all__ = ["PathTarget", "FunctionTarget", "MotionTarget", "read_table", "parse_table", "MIN_ROWS", "MAX_ROWS",
-           "MAX_VALUE", "resample", "TIMINGS"]
+           "MAX_VALUE", "MIN_SIZE", "resample", "TIMINGS"]
 
 #: fewest rows each task needs: a path needs 3 points (a circle passes through any
 #: 3 points, so fewer say nothing), function and motion need 3 precision positions
@@ -31,8 +32,10 @@ MAX_ROWS = 200
 #: largest magnitude of a table value (as ``forces`` and ``check`` cap their inputs)
 MAX_VALUE = 1e9
 
-#: largest target file read (bytes)
-MAX_BYTES = 16 * 2 ** 20
+#: smallest target size (m): the spread of a path's points or a motion's pose origins
+#: (a picometre; below it the relative errors and the search's tolerances lose meaning,
+#: and the squares of the distances underflow)
+MIN_SIZE = 1e-12
 
 #: meanings of a path table's third column: the driver value from the reference,
 #: the driver's absolute value (crank angle from the x-axis, slider position along
@@ -119,14 +122,17 @@ def read_table(path: str | Path, columns: tuple[int, ...], what: str) -> np.ndar
         Allowed numbers of columns, e.g. ``(2, 3)``.
     what : str
         ``"path"``, ``"function"`` or ``"motion"`` (for :data:`MIN_ROWS` and messages).
+
+    Raises
+    ------
+    InputError
+        No such file, not a regular file, over :data:`~multiloop.topo.io.MAX_INPUT_BYTES`,
+        not UTF-8, or a table :func:`parse_table` refuses.
     """
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise InputError(explain(f"{what} table {str(p)!r}", expected="an existing CSV file", got="no such file"))
-    if p.stat().st_size > MAX_BYTES:
-        raise InputError(explain(f"{what} table {p.name!r}", expected=f"a CSV file of at most {MAX_BYTES} bytes",
-                                 got=f"{p.stat().st_size} bytes"))
-    raw = p.read_bytes()
+    raw = read_input_bytes(p)           # a regular file within the input cap of every reader
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
@@ -145,7 +151,7 @@ def parse_table(text: str, columns: tuple[int, ...], what: str, name: str) -> np
     lines = text.splitlines()
     first = next((ln for ln in lines if ln.strip()), "")
     sep = ";" if ";" in first and "," not in first else ","
-    rows = [(n + 1, r) for n, r in enumerate(csv.reader(lines, delimiter=sep)) if r and any(c.strip() for c in r)]
+    rows = _csv_rows(lines, sep, name)
     if not rows:
         raise InputError(explain(f"{what} table {name!r}", expected="rows of numbers", got="an empty file"))
     out, where = [], []
@@ -168,6 +174,23 @@ def parse_table(text: str, columns: tuple[int, ...], what: str, name: str) -> np
     return check_rows(np.array(out, float).reshape(len(out), -1), what, name, where)
 
 
+def _csv_rows(lines: list[str], sep: str, name: str) -> list[tuple[int, list[str]]]:
+    """The non-blank rows of a CSV text with their line numbers; a row the csv module
+    refuses (a field over its limit of 131 072 characters, a stray quote) names its line."""
+    reader = csv.reader(lines, delimiter=sep, strict=False)
+    rows = []
+    while True:
+        try:
+            r = next(reader)
+        except StopIteration:
+            return rows
+        except csv.Error as exc:
+            raise InputError(explain(f"{name} line {reader.line_num}", expected="numbers separated by "
+                                     f"{sep!r}", got=f"a row the CSV reader refuses ({exc})")) from None
+        if r and any(c.strip() for c in r):
+            rows.append((reader.line_num, r))
+
+
 def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:
     """At most ``n`` rows of ``a``, evenly by row number (the first and the last kept)."""
     if len(a) <= n:
@@ -176,8 +199,9 @@ def resample(a: np.ndarray, n: int = MAX_ROWS) -> np.ndarray:
 
 
 def check_rows(a: np.ndarray, what: str, where: str, lines=None) -> np.ndarray:
-    """Validate a target array: enough rows, finite values; ``lines`` are the rows' line
-    numbers in their file (messages then say ``line``, else ``row``)."""
+    """Validate a target array: enough rows, finite values of a bounded magnitude, and the
+    points of a path or a motion spread (:func:`_check_spread`); ``lines`` are the rows'
+    line numbers in their file (messages then say ``line``, else ``row``)."""
     def at(i):
         return f"{where} line {lines[i]}" if lines is not None else f"{where} row {i + 1}"
 
@@ -194,4 +218,20 @@ def check_rows(a: np.ndarray, what: str, where: str, lines=None) -> np.ndarray:
         i, j = np.argwhere(big)[0]
         raise InputError(explain(at(int(i)), expected=f"numbers of magnitude at most {MAX_VALUE:g}",
                                  got=f"{a[i, j]:g} in column {int(j) + 1}"))
+    if what in ("path", "motion"):
+        span = (lines[0], lines[-1]) if lines is not None else (1, len(a))
+        _check_spread(a[:, :2], what, f"{where} {'lines' if lines is not None else 'rows'} {span[0]}–{span[1]}")
     return a
+
+
+def _check_spread(xy: np.ndarray, what: str, where: str) -> None:
+    """The points ``xy`` of a path or motion target spread over at least :data:`MIN_SIZE`
+    and over 1e-12 of their distance from the origin (else they are one point)."""
+    size, far = _size(xy), float(np.max(np.abs(xy)))
+    if size >= MIN_SIZE and size > 1e-12 * far:
+        return
+    got = (f"every point at ({xy[0, 0]:.6g}, {xy[0, 1]:.6g})" if size == 0.0 else
+           f"a target of size {size:.3g} m" + (f" {far:.3g} m from the origin" if size >= MIN_SIZE else ""))
+    raise InputError(explain(where, expected=f"{what} points that are not all the same: a spread of at least "
+                             f"{MIN_SIZE:g} m and of 1e-12 of their distance from the origin", got=got,
+                             hint="the error is relative to the target's size"))

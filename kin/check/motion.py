@@ -121,8 +121,7 @@ def _segment(side: Side, chunk: int | None = None, stop: float | None = None) ->
         return Segment(_guarded(side, st), side.grid.size, st, None, None, singular)
     if f is None:                         # chunk ended on an isolated singular sample
         f = st.n_positions - 1
-    probe = side if chunk is None else replace(side, samples=1)
-    lo, hi = probe.bisect([side.grid[f - 1]], [side.grid[f]],
+    lo, hi = side.bisect([side.grid[f - 1]], [side.grid[f]],
                           lambda s, r: np.where(s.ok[r], 1.0, -1.0))
     st_ok = side.solve(side.grid[:f], derivatives=True)
     return Segment(_guarded(side, st_ok), f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])),
@@ -138,7 +137,9 @@ def _guarded(side: Side, st) -> Side:
 def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch,
           cancel=None) -> Side:
     """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
-    ``range`` on that side at the same spacing (a range end at the reference: that value)."""
+    ``range`` on that side at the same spacing (a range end at the reference: that value).
+    An R range wider than the turn is sampled over the turn: the motion repeats beyond it,
+    and a turn without a limit runs to the range's end (:func:`_bounded`)."""
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     if rotary:
         h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
@@ -147,9 +148,11 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
         h = mechanism_size(m) / n
     rng = m.drivers[k].range
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
+    if rotary:
+        span = min(span, n * h)
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
-    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel)
+    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)
 
 
 def _bounded(seg: Segment, rng, sign: int) -> Segment:
@@ -173,10 +176,11 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
-    # millisecond per position: its mechanism gets a coarser P grid and fewer samples per
-    # zoom iteration (same 1e-10 tolerance, more iterations)
+    # millisecond per position: its mechanism gets a coarser P grid, fewer samples per
+    # zoom iteration (same 1e-10 tolerance, more iterations), the solver's own 2° path
+    # steps between the grid's values, and its brackets refined one at a time (Side.each)
     heavy = any(not has_closed_form(kd) for kd in kinds)
-    samples, stride = (8, 1) if heavy else (32, 1)
+    samples, stride = (8, 4) if heavy else (32, 1)
     chunk = 8 if heavy else None
     # the certified walk searches ± the size, or to the ends of the range when it is wider
     extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])

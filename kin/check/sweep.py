@@ -63,6 +63,7 @@ class Side:
     branch: object = None            # D(state) -> (N, q) signed dyad determinants
     signs: np.ndarray | None = None  # sign of D on the assembled grid
     cancel: object = None            # callable polled before every solve; it stops the check by raising
+    each: bool = False               # refine bracket by bracket (tracked groups: see :meth:`_each`)
 
     @classmethod
     def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
@@ -177,6 +178,9 @@ class Side:
         hi = np.array(hi, float)
         if lo.size == 0:
             return lo, hi
+        if self.each and lo.size > 1:
+            parts = self._each(self.bisect, lo, hi, value, derivatives)
+            return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
         st, r = self.at(lo, derivatives)
         s_lo = np.sign(value(st, r))
         rows = np.arange(lo.size)
@@ -202,6 +206,8 @@ class Side:
         b = np.array(b, float)
         if a.size == 0:
             return a
+        if self.each and a.size > 1:
+            return np.concatenate(self._each(self.golden, a, b, value, derivatives))
         rows = np.arange(a.size)
         while np.max(np.abs(b - a)) > self.xtol:
             x, v = self._sample(a, b, value, derivatives)
@@ -209,3 +215,19 @@ class Side:
             xl = np.concatenate([a[:, None], x, b[:, None]], axis=1)
             a, b = xl[rows, i], xl[rows, i + 2]
         return 0.5 * (a + b)
+
+    def _each(self, refine, lo, hi, value, derivatives) -> list:
+        """``refine`` (:meth:`bisect` or :meth:`golden`) on each bracket alone, in turn.
+
+        Every solve follows the path from the reference; one through a single bracket
+        shares all its positions before the bracket with the previous solve, which a
+        tracked group's continuation resumes from (:func:`~multiloop.kin.groups.newton.track`)
+        instead of following the whole path again past every other bracket.  ``value`` of
+        bracket i is read with every row set to bracket i's rows."""
+        K = lo.size
+        out = []
+        for i in range(K):
+            def alone(st, r, i=i):
+                return value(st, np.broadcast_to(r, (K,) + np.shape(r)[1:]))[i:i + 1]
+            out.append(refine(lo[i:i + 1], hi[i:i + 1], alone, derivatives))
+        return out

@@ -16,8 +16,9 @@ from typing import Sequence
 import numpy as np
 
 from multiloop.topo.errors import InputError, SingularityWarning, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import MAX_ANGLE_DEG, MAX_SLIDE_SIZES, JointKind, Mechanism
 
+from ..solve import check_finite_inputs
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
 from .loads import (LoadColumns, PointLoad, StateColumns, check_mass_data, driver_speeds, load_columns, table_period,
@@ -354,11 +355,6 @@ def _sing_mask(sol: _Solved, n: int) -> np.ndarray:
     return np.any([mk for mk, _ in sol.singular], axis=0) if sol.singular else np.zeros(n, bool)
 
 
-#: largest |R input| accepted (deg): beyond it a float has no sub-microdegree resolution
-MAX_ANGLE_DEG = 1e9
-#: largest |P input| accepted, in units of the mechanism's size (the solver's lead-in
-#: walks it in steps of 1 % of the size)
-MAX_SLIDE_SIZES = 100.0
 
 
 def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
@@ -380,8 +376,7 @@ def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
     q = np.array(inputs, float)
     if q.ndim == 1:
         q = q[:, None] if len(m.drivers) == 1 else q[None, :]
-    if not np.all(np.isfinite(q)):
-        raise InputError(explain("driver inputs", expected="finite numbers", got="NaN or infinity"))
+    check_finite_inputs(m, q, "driver inputs")
     period = table_period(m) if degrees else np.radians(table_period(m))
     limit = MAX_ANGLE_DEG if degrees else np.radians(MAX_ANGLE_DEG)
     xy = np.array([j.at for j in m.joints], float)

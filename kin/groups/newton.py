@@ -194,7 +194,8 @@ def relative_det(J: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class TrackResult:
-    """Result of :func:`track`: poses, per-position ok mask, reasons, relative det."""
+    """Result of :func:`track`: poses, per-position ok mask, reasons, relative det;
+    ``memo``, what a later track along the same first positions resumes from."""
 
     Z: np.ndarray
     ok: np.ndarray
@@ -202,11 +203,36 @@ class TrackResult:
     rel_det: np.ndarray
     n_iter: int
     code: np.ndarray | None = None      # (N,) int: 0 ok, else a :class:`kin.result.Status`
+    memo: "_Memo | None" = None
+
+
+@dataclass(frozen=True)
+class _Memo:
+    """A track's inputs, the poses it was given, its settings and the tracker's state
+    after each position: ``marks[n]`` = (last good position, the one before it, lost,
+    corrections spent, iterations), −1 for none."""
+
+    inputs: np.ndarray
+    Z_in: np.ndarray
+    settings: tuple
+    max_steps: int
+    marks: np.ndarray
+
+
+#: Newton iterations of one correction in a continuation step (a converging correction
+#: from the predictor takes 5 to 7; a step that needs more is halved instead)
+CORRECTOR_ITERATIONS = 10
+#: Newton corrections a :func:`track` may spend per position on average, and in addition
+STEPS_PER_POSITION = 16
+STEPS_BASE = 64
+#: longest track kept as a memo for the next one (its inputs and poses, twice)
+MEMO_POSITIONS = 20_000
 
 
 def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
           start: np.ndarray | None = None, singular_tol: float = 1e-9,
-          max_halvings: int = 12, tol: float = 1e-13) -> TrackResult:
+          max_halvings: int = 12, tol: float = 1e-13, stop_at_loss: bool = False,
+          max_steps: int | None = None, resume: TrackResult | None = None) -> TrackResult:
     """Follow the unknown links along a sequence of positions by continuation.
 
     Position 0 starts from ``start`` (default: the guess already in ``Z[0]``, e.g.
@@ -216,6 +242,16 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
     is halved, the known poses and inputs being interpolated linearly between the
     two positions (a homotopy that ends at the exact knowns).
 
+    The work is bounded by a count: at most ``max_steps`` Newton corrections in all
+    (default :data:`STEPS_PER_POSITION` per position plus :data:`STEPS_BASE`), each of
+    at most :data:`CORRECTOR_ITERATIONS` iterations; the positions left when they are
+    spent fail with a message that says so.  ``stop_at_loss``: the positions are one
+    path, and those after the first one the continuation cannot reach are not tried
+    (status ``MODE_LOST``; a walk along a path needs no more).  ``resume``: an earlier
+    result; the first positions it shares with this track (the same inputs, poses and
+    settings, its corrections within both budgets) are taken from it as they are (a
+    track depends on its earlier positions only, so the result is the same).
+
     Returns
     -------
     TrackResult
@@ -223,58 +259,128 @@ def track(sys: ConstraintSystem, Z: np.ndarray, inputs: np.ndarray, unknown, *,
     """
     Z = np.array(Z, float, copy=True)
     u = np.asarray(unknown, int)
-    cols = _cols(u)
     N = Z.shape[0]
-    ok = np.zeros(N, bool)
-    reason = np.full(N, "", dtype=object)
-    code = np.zeros(N, np.int8)
-    rel = np.full(N, np.nan)
+    res = _Track(N, STEPS_PER_POSITION * N + STEPS_BASE if max_steps is None else int(max_steps))
     if start is not None:
         Z[0, u] = start
+    Z_in, settings = Z.copy(), (float(singular_tol), int(max_halvings), float(tol), bool(stop_at_loss))
     known = np.setdiff1d(sys.involved, u)
-    prev = prev2 = None          # (Zfull, inputs) of the last two good positions
-    iters = 0
-    for n in range(N):
-        if not np.all(np.isfinite(Z[n, known])):
-            reason[n] = "upstream"
-            code[n] = Status.UPSTREAM
+    k0 = res.resume(resume, Z, inputs, settings)
+    for n in range(k0, N):
+        res.step(n, sys, Z, inputs, u, known, singular_tol, max_halvings, tol, stop_at_loss)
+    memo = _Memo(inputs.copy(), Z_in, settings, res.max_steps, res.marks) if N <= MEMO_POSITIONS else None
+    return TrackResult(Z, res.ok, res.reason, res.rel, res.iters, res.code, memo)
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per row: every entry equal, or NaN in both."""
+    eq = (a == b) | (np.isnan(a) & np.isnan(b))
+    return np.all(eq.reshape(eq.shape[0], -1), axis=1)
+
+
+class _Track:
+    """The per-position results of a :func:`track`, its state (the last two good
+    positions, whether the assembly was lost) and its count of corrections."""
+
+    def __init__(self, N: int, max_steps: int):
+        self.ok = np.zeros(N, bool)
+        self.reason = np.full(N, "", dtype=object)
+        self.code = np.zeros(N, np.int8)
+        self.rel = np.full(N, np.nan)
+        self.marks = np.full((N, 5), -1, np.int64)
+        self.iters = 0
+        self.steps, self.max_steps, self.lost = 0, max_steps, False
+        self.p1 = self.p2 = -1           # the last two good positions (−1: none)
+
+    def resume(self, old: TrackResult | None, Z, inputs, settings) -> int:
+        """Take the first positions ``old`` shares with this track; how many."""
+        memo = None if old is None else old.memo
+        if memo is None or memo.settings != settings:
+            return 0
+        L = min(len(inputs), len(memo.inputs))
+        same = _same(inputs[:L], memo.inputs[:L]) & _same(Z[:L], memo.Z_in[:L])
+        k = L if same.all() else int(np.argmin(same))
+        k = int(np.searchsorted(memo.marks[:k, 3], min(memo.max_steps, self.max_steps)))   # within both budgets
+        if k == 0:
+            return 0
+        Z[:k] = old.Z[:k]
+        self.ok[:k], self.reason[:k], self.code[:k], self.rel[:k] = old.ok[:k], old.reason[:k], old.code[:k], old.rel_det[:k]
+        self.marks[:k] = memo.marks[:k]
+        self.p1, self.p2, lost, self.steps, self.iters = (int(v) for v in memo.marks[k - 1])
+        self.lost = bool(lost)
+        return k
+
+    def step(self, n, sys, Z, inputs, u, known, singular_tol, max_halvings, tol, stop_at_loss) -> None:
+        """Position ``n``: given up, failed upstream, first, or continued from the last good one."""
+        if self.spent() or (stop_at_loss and self.lost):
+            self.give_up(n, Z, u, stop_at_loss and self.lost)
+        elif not np.all(np.isfinite(Z[n, known])):
+            self.fail(n, Status.UPSTREAM, "upstream")
             Z[n, u] = np.nan
-            prev2 = None
-            continue
-        if prev is None:
-            guess = Z[n:n + 1].copy()
-            if n > 0 and np.all(np.isfinite(Z[n - 1, u])):
-                guess[0, u] = Z[n - 1, u]
-            Zs, conv, it = newton(sys, guess, inputs[n:n + 1], u, tol=tol)
-            iters += it
-            if conv[0]:
-                Z[n] = Zs[0]
-                ok[n] = True
-            else:
-                reason[n] = "no assembly (Newton did not converge)"
-                code[n] = Status.NOT_CONVERGED
-                Z[n, u] = np.nan
+            self.p2 = -1
         else:
-            zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol,
-                          known=known)
+            zz = self.reach(n, sys, Z, inputs, u, known, max_halvings, tol)
             if zz is None:
-                reason[n] = "no assembly (continuation failed: out of reach, or a turning point)"
-                code[n] = Status.OUT_OF_REACH
                 Z[n, u] = np.nan
+                self.p2 = -1       # keep the last good position: the next one continues from it
+                self.lost = True
             else:
                 Z[n] = zz
-                ok[n] = True
-        if ok[n]:
-            J = sys.jacobian(Z[n:n + 1])[:, :, cols]
-            rel[n] = relative_det(J)[0]
-            if rel[n] < singular_tol:
-                reason[n] = f"singular position (relative det {rel[n]:.1e})"
-                code[n] = Status.SINGULAR
-                ok[n] = False
-            prev2, prev = prev, (Z[n].copy(), inputs[n].copy())
+                self.accept(n, sys, Z, u, singular_tol)
+                self.p1, self.p2 = n, self.p1
+        self.marks[n] = (self.p1, self.p2, self.lost, self.steps, self.iters)
+
+    def reach(self, n, sys, Z, inputs, u, known, max_halvings, tol):
+        """The poses at position ``n`` (None when it cannot be reached)."""
+        if self.p1 < 0:
+            return _first(sys, Z, n, inputs, u, tol, self)
+        prev = (Z[self.p1].copy(), inputs[self.p1].copy())
+        prev2 = None if self.p2 < 0 else (Z[self.p2].copy(), inputs[self.p2].copy())
+        zz = _advance(sys, prev, prev2, Z[n], inputs[n], u, max_halvings, tol, known=known, budget=self)
+        if zz is None:
+            self.fail(n, Status.OUT_OF_REACH, "no assembly (continuation failed: out of reach, or a turning point)")
+        return zz
+
+    def spent(self) -> bool:
+        return self.steps >= self.max_steps
+
+    def count(self, iterations: int) -> None:
+        self.steps += 1
+        self.iters += iterations
+
+    def fail(self, n: int, code: Status, text: str) -> None:
+        self.code[n] = code
+        self.reason[n] = text
+
+    def give_up(self, n: int, Z: np.ndarray, u: np.ndarray, lost: bool) -> None:
+        Z[n, u] = np.nan
+        if lost:
+            self.fail(n, Status.MODE_LOST, "not tried: the continuation lost the assembly earlier in the path")
         else:
-            prev2 = None       # keep the last good position: the next one continues from it
-    return TrackResult(Z, ok, reason, rel, iters, code)
+            self.fail(n, Status.NOT_CONVERGED, f"no assembly (the continuation stopped: its {self.max_steps} "
+                                                f"Newton corrections for {len(self.ok)} positions are spent)")
+
+    def accept(self, n: int, sys, Z: np.ndarray, u: np.ndarray, singular_tol: float) -> None:
+        """Position ``n`` assembled: ok unless its relative determinant is below ``singular_tol``."""
+        J = sys.jacobian(Z[n:n + 1])[:, :, _cols(u)]
+        self.rel[n] = relative_det(J)[0]
+        self.ok[n] = self.rel[n] >= singular_tol
+        if not self.ok[n]:
+            self.fail(n, Status.SINGULAR, f"singular position (relative det {self.rel[n]:.1e})")
+
+
+def _first(sys, Z, n, inputs, u, tol, res: _Track):
+    """The first position of a track (or the first after a failure upstream of all
+    positions so far): Newton from the guess in ``Z[n]`` or the previous position."""
+    guess = Z[n:n + 1].copy()
+    if n > 0 and np.all(np.isfinite(Z[n - 1, u])):
+        guess[0, u] = Z[n - 1, u]
+    Zs, conv, it = newton(sys, guess, inputs[n:n + 1], u, tol=tol)
+    res.count(it)
+    if conv[0]:
+        return Zs[0]
+    res.fail(n, Status.NOT_CONVERGED, "no assembly (Newton did not converge)")
+    return None
 
 
 def _euler_tangent(sys, Za, xa, Zn, xn, u, known):
@@ -294,8 +400,10 @@ def _euler_tangent(sys, Za, xa, Zn, xn, u, known):
     return dU.reshape(len(u), 3)
 
 
-def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13, *, known=None):
-    """One continuation step from ``prev`` to the target knowns ``Zn``/inputs ``xn``.
+def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13, *, known=None, budget=None):
+    """One continuation step from ``prev`` to the target knowns ``Zn``/inputs ``xn``;
+    None when it fails (``max_halvings`` halvings, or the corrections of ``budget``, a
+    :class:`_Track`, spent).
 
     Predictor: the Euler tangent of the implicit function (``_euler_tangent``), which
     follows any direction of the step in the group's parameters (several drivers
@@ -319,13 +427,17 @@ def _advance(sys, prev, prev2, Zn, xn, u, max_halvings, tol=1e-13, *, known=None
     t, h, cur = 0.0, 1.0, Za[u].copy()
     halvings = 0
     while t < 1.0:
+        if budget is not None and budget.spent():
+            return None
         t1 = min(1.0, t + h)
         Zt = Za + (Zn - Za) * t1
         xt = xa + (xn - xa) * t1
         guess = Zt.copy()
         pred = tangent * (t1 - t)
         guess[u] = cur + pred
-        Zs, conv, _ = newton(sys, guess[None], xt[None], u, tol=tol)
+        Zs, conv, it = newton(sys, guess[None], xt[None], u, tol=tol, maxiter=CORRECTOR_ITERATIONS)
+        if budget is not None:
+            budget.count(it)
         good = bool(conv[0])
         if good and prev2 is not None:
             corr = np.max(np.abs(Zs[0, u] - guess[u]))
@@ -398,10 +510,15 @@ def jacobian_rates(step: GroupStep, R, input_rates: np.ndarray) -> None:
 
 class NewtonStep(GroupStep):
     """Any step solved by Newton with continuation (:func:`track`) from the reference
-    configuration; rates from the group's Jacobian."""
+    configuration; rates from the group's Jacobian.  A probe (a walk along one path)
+    stops at the first position the continuation cannot reach: the walk looks no
+    further, and every position past a limit would cost a continuation that fails."""
 
     batched = False          # solved design by design (kin.design falls back)
     solver = "newton"
+    #: the last track (a memo: the next one along the same first positions resumes from
+    #: it, with the same result; the walks and the check re-solve one path many times)
+    _last: TrackResult | None = None
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         st = self.st
@@ -409,9 +526,9 @@ class NewtonStep(GroupStep):
         Z = G.to_Z(np.setdiff1d(st.system.involved, u))
         Z[:, u, :2] = G.sp.origins[u]
         Z[:, u, 2] = 0.0
-        tr = track(st.system, Z, X, u, singular_tol=SINGULAR)
+        tr = self._last = track(st.system, Z, X, u, singular_tol=SINGULAR, stop_at_loss=probe, resume=self._last)
         G.from_Z(tr.Z, u)
         why = {int(n): (int(tr.code[n]), tr.reason[n]) for n in np.flatnonzero(~tr.ok)}
-        return Outcome(tr.ok, why, Probe(tr.ok.copy()) if probe else None)
+        return Outcome(tr.ok, why, Probe(tr.ok.copy(), refined=True) if probe else None)
 
     rates = jacobian_rates

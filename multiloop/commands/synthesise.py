@@ -17,7 +17,8 @@ Tables are CSV with an optional header line:
 Without ``START`` (``--path`` only), the atlas chooses the topology
 (``catalogue.topology_synthesis``): ``--db ATLAS`` with stored coupler curves,
 ``--links 4,6,8``, ``--top K`` designs written as ``OUT.toml``, ``OUT-2.toml``, …;
-``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``.
+``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``;
+``--plot`` is refused there (exit 2): draw a design with ``multiloop solve OUT.toml --plot``.
 
 ``OUT.toml`` is a normal mechanism file (the start's topology and names, the new
 dimensions, ``source`` citing the target).  ``--evaluations`` (reproducible) and ``--budget``
@@ -96,6 +97,9 @@ def run_without_start(args, limits: dict) -> int:
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
                                  got="no START"))
+    if args.plot is not None:        # refused, not ignored: the atlas route draws no figure
+        raise InputError(explain("--plot", expected="a START mechanism", got=f"--plot {args.plot!r} without one",
+                                 hint="draw a design it writes: multiloop solve OUT.toml --plot P.png"))
     links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
