@@ -194,3 +194,34 @@ def test_local_processes_and_dask_cluster_count_the_same_table(tmp_path):
             a.count_table(opts, progress=False, scheduler=client)
             tables.append(a.table_counts(opts))
     assert tables[0] == tables[1] == tables[2] and sum(tables[0].values()) == 2645
+
+
+TABLE_14 = os.path.join(os.path.dirname(__file__), "..", "docs", "atlas", "table_n14_F1.json")
+
+
+def test_the_committed_14_link_table_has_every_row_of_the_number_synthesis():
+    """The committed 14-link, 1-DOF table (``docs/atlas/table_n14_F1.json``): its rows are
+    exactly the rows of the number synthesis (Assur-group structural equations), and
+    its simple-joint rows sum to the published count of 14-link one-DOF simple-joint
+    chains, 318 162 (Tsai 2001; Mruthyunjaya 2003)."""
+    with open(TABLE_14) as f:
+        doc = json.load(f)
+    assert doc["complete"] is True and doc["count"] == sum(r["chains"] for r in doc["table"])
+    rows = {(tuple(r["LA"]), tuple(r["MJA"])) for r in doc["table"]}
+    expected = {(tuple(r.LA), tuple(r.MJA)) for r in number_synthesis(SynthesisOptions(14, 1))}
+    assert rows == expected
+    assert sum(r["chains"] for r in doc["table"] if r["V"] == 0) == 318162
+
+
+@compiled
+@pytest.mark.parametrize("la, mja", [("14", "8-1"), ("13-1", "0-3-1"), ("14", "4-3")])
+def test_a_committed_14_link_row_recounts_alone_to_the_same_number(tmp_path, capsys, la, mja):
+    """Any row of the committed table recounts by one command (``--la/--mja``: the
+    enumeration restricted to the row) to its committed number."""
+    with open(TABLE_14) as f:
+        committed = {("-".join(map(str, r["LA"])), "-".join(map(str, r["MJA"]))): r["chains"]
+                     for r in json.load(f)["table"]}
+    assert main(["atlas", "--links", "14", "--dof", "1", "--table", "--la", la, "--mja", mja,
+                 "--db", str(tmp_path / "row.sqlite"), "--no-progress", "--json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)["table"]
+    assert row["chains"] == committed[(la, mja)] > 0
