@@ -404,10 +404,7 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
     closed = is_closed(target)
     tol = check_tol(tol)
     if start is not None:
-        limits = Budget.of(evaluations, budget)
-        d, res = _polish(start, target, closed, point, limits, seed, float("nan"), target)
-        return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0,
-                                 0 if res is None else res.evaluations, limits, "converged" if res is None else res.stopped)
+        return _with_start(start, target, closed, point, Budget.of(evaluations, budget), seed, t0)
     limits = Budget.of(evaluations, budget, default=DEFAULT_EVALUATIONS)
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
         raise ParameterError(explain("top", expected="a positive number of designs", got=repr(top)), "top")
@@ -432,6 +429,14 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
                 if len(designs) == top:
                     break
     return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0, run.used, limits, stopped)
+
+
+def _with_start(start, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,
+                t0: float) -> TopologySynthesis:
+    """:func:`synthesise` given a start: the dimensional synthesiser on its topology."""
+    d, res = _polish(start, target, closed, point, limits, seed, float("nan"), target)
+    return TopologySynthesis(tuple([d] if d else []), closed, 1, time.perf_counter() - t0,
+                             0 if res is None else res.evaluations, limits, "converged" if res is None else res.stopped)
 
 
 def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
