@@ -175,3 +175,32 @@ def test_menu_entries_of_served_files_show_no_folder():
         assert w.menu.choices[0] == "mine.toml" and not any("/" in c for c in w.menu.choices)
     finally:
         w.close()
+
+
+def test_a_new_run_clears_the_last_candidates_and_a_big_target_gets_a_target_hint():
+    from types import SimpleNamespace
+
+    import numpy as np
+    w = Workbench()
+    try:
+        w.tabs.active = 2                                   # builds the Synthesis tab
+        sv = w.synthesis
+        sv.csv.target.tags = [1, "big.csv", 50 << 20]        # the browser's notice of a large file
+        assert "upload a target table" in _message(w) and "mechanism file" not in _message(w)
+        rows = "\n".join(f"{0.05 + 0.01 * np.cos(t):.5f},{0.07 + 0.01 * np.sin(t):.5f}"
+                         for t in np.linspace(0, 6, 20))
+        sv._upload("t.csv", ("x,y\n" + rows + "\n").encode())
+        m = load_mechanism("four_bar")
+        sv.results = [SimpleNamespace(mechanism=m, error_max=0.1, error_rms=0.05, seed=1, stopped="budget",
+                                      achieved=np.zeros((3, 2)))]
+        sv._list()
+        assert 'data-candidate="1"' in sv.table.text
+        assert sv._download("toml")[0] == "four_bar-candidate-1.toml"
+        sv.menus["start"].select.value = "four_bar"
+        sv.run()
+        assert sv.results == [] and sv.table.text == ""     # the old candidates are gone at once
+        sv._open()
+        assert "candidate: expected a candidate of a synthesis run, got " in _message(w)
+        sv.cancel()
+    finally:
+        w.close()
