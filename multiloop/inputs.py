@@ -84,8 +84,13 @@ def _bytes(n: int) -> str:
     return f"{n >> 20} MiB" if n >= 1 << 20 and n % (1 << 20) == 0 else f"{n} bytes"
 
 
-def check_upload_size(name: str, size: int, max_bytes: int = MAX_UPLOAD) -> None:
-    """Refuse an upload ``name`` of ``size`` bytes larger than ``max_bytes``.
+#: what an upload is, in the hint of its size refusal
+MECHANISM_UPLOAD = "upload a mechanism file, not a data set"
+
+
+def check_upload_size(name: str, size: int, max_bytes: int = MAX_UPLOAD, hint: str = MECHANISM_UPLOAD) -> None:
+    """Refuse an upload ``name`` of ``size`` bytes larger than ``max_bytes`` (``hint``: what
+    the upload should be).
 
     Raises
     ------
@@ -94,10 +99,10 @@ def check_upload_size(name: str, size: int, max_bytes: int = MAX_UPLOAD) -> None
     """
     if size > max_bytes:
         raise InputError(explain(f"file '{name}'", expected=f"at most {_bytes(max_bytes)}",
-                                 got=f"{size} bytes", hint="upload a mechanism file, not a data set"))
+                                 got=f"{size} bytes", hint=hint))
 
 
-def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> str:
+def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD, hint: str = MECHANISM_UPLOAD) -> str:
     """The UTF-8 text of an uploaded file ``name`` (no disk), at most ``max_bytes``.
 
     Raises
@@ -105,7 +110,7 @@ def upload_text(name: str, data: bytes, max_bytes: int = MAX_UPLOAD) -> str:
     InputError
         Too large, or not UTF-8 (the messages of the file readers).
     """
-    check_upload_size(name, len(data), max_bytes)
+    check_upload_size(name, len(data), max_bytes, hint)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -377,3 +377,23 @@ def test_redraw_latency_of_every_catalogue_mechanism(page):
         print(f"{name:24s} frames {n + 1:4d}  key press to painted frame: median {worst[name][0]:6.1f} ms, "
               f"max {worst[name][1]:6.1f} ms")
     assert max(w[0] for w in worst.values()) <= 50      # the goal, on the median of 11 key presses
+
+
+def test_share_by_name_opens_the_mechanism_in_a_fresh_browser_context(browser, server):
+    """``?mechanism=NAME`` beside the page's token opens that mechanism in a fresh
+    context (no cookie); a name that is not in the menu is the one-line message over
+    the default mechanism, and the page keeps working."""
+    url, _, _ = server
+    ctx = browser.new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        page = ctx.new_page()
+        page.goto(url + ("&" if "?" in url else "?") + "mechanism=stephenson_2")
+        page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+            return r && r.getAttribute('data-mechanism') == 'stephenson_2'; }}""", timeout=60000)
+        page.goto(url + ("&" if "?" in url else "?") + "mechanism=%3Cimg%20src%3Dx%3E")
+        page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=60000)
+        assert "expected one of its entries, got '<img src=x>'" in page.locator("#ml-message").text_content()
+        _wait_frames(page)
+        _pick(page, "crank_slider")
+    finally:
+        ctx.close()

@@ -185,8 +185,9 @@ class StructuralReport:
         from .svg import report_html  # noqa: PLC0415 - only when a notebook asks
         return report_html(self)
 
-    def to_text(self) -> str:
-        """A readable table in the order of Pozhbelko & Kuts 2020's bullet list (``multiloop analyse``)."""
+    def labelled(self) -> list[tuple[str, str]]:
+        """The report as (name, value) rows in the order of Pozhbelko & Kuts 2020's bullet
+        list: the names ``multiloop analyse`` prints and the workbench's Structure tab shows."""
         la = "-".join(map(str, self.La)) if self.La is not None else "— (non-planar)"
         rows = [
             ("name", self.name or "(unnamed)"),
@@ -214,6 +215,11 @@ class StructuralReport:
         if self.actual_F is not None:
             rows.append(("actual mobility (Jacobian rank)", str(self.actual_F) + (f"; redundant: {', '.join(self.redundant)}" if self.redundant else "")))
         rows.append(("canonical form", self.canonical if len(self.canonical) <= 60 else self.canonical[:57] + "..."))
+        return [(k, str(v)) for k, v in rows]
+
+    def to_text(self) -> str:
+        """A readable table in the order of Pozhbelko & Kuts 2020's bullet list (``multiloop analyse``)."""
+        rows = self.labelled()
         width = max(len(k) for k, _ in rows)
         lines = [f"  {k:<{width}}  {v}" for k, v in rows]
         lines.append(f"  [La] rule: {self.la_rule}")

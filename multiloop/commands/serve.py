@@ -46,7 +46,8 @@ def run(args) -> int:
 
     if not 0 <= args.port <= 65535:
         raise InputError(explain("--port", expected="0 … 65535", got=str(args.port)))
-    files = {str(f): load_mechanism(f) for f in args.files}
+    from multiloop.web.menus import file_entries
+    files = dict(zip(file_entries(args.files), (load_mechanism(f) for f in args.files)))
     if args.atlas:
         from multiloop.catalogue.atlas import Atlas
         for db in args.atlas:

@@ -147,12 +147,16 @@ def _first_choice(files: dict) -> str:
 class Workbench:
     """Every widget and result of one browser session."""
 
-    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False):
+    def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False,
+                 requested: str | None = None):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
-        render then carries the drawing and its player alone)."""
+        render then carries the drawing and its player alone); ``requested``: the menu
+        entry the page's address names (``?mechanism=NAME``), opened first (anything but
+        an entry is the one-line message, over the default mechanism)."""
         from bokeh.models import Column, Row, TabPanel, Tabs
 
         from .check_view import CheckView
+        from .exports import ExportBar
         from .glue import Upload, div
         from .mechanism_view import MechanismView
         from .menus import Menu
@@ -160,18 +164,20 @@ class Workbench:
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
         self.mechanism, self.mechanism_name = None, ""
+        self.check_doc = None                   # the open design's check, once computed
         self.job = None
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor])
         choices = list(self.files) + catalogue_names()
-        first = _first_choice(self.files)
+        first = requested if requested in choices else _first_choice(self.files)
         self.menu = Menu("mechanism menu", self.say, choices, first, MENU_HINT, title="mechanism", width=240,
                          css_classes=["ml-pick"])
         self.pick = self.menu.select
         self.opener = Upload("open a .toml, .json or .pyslvs file…", ".toml,.json,.pyslvs", self.open_upload,
                              self.say, "ml-open")
         self.upload = self.opener.target
+        self.exports = ExportBar(lambda: (self.mechanism, self.check_doc, self.threshold), self.say)
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
         self.menu.on_choice(self.open_name)
@@ -184,15 +190,19 @@ class Workbench:
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
             tabs.append(("Atlas", div("…")))
-        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload)
+        header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload,
+                     self.exports.menu.select, self.exports.download.button)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
         self.open_name(first)
+        if requested is not None and requested != first:
+            from .menus import refusal
+            self.say(refusal("mechanism (the address's ?mechanism=)", requested, MENU_HINT))
 
     def _synthesis_view(self, choices, atlases):
         from .synthesis_view import SynthesisView
-        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_design, self.say,
+        self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_candidate, self.say,
                                        atlases)
         return self.synthesis.panel
 
@@ -262,6 +272,12 @@ class Workbench:
             return self.mechanism
         return load_choice(self.files, name)
 
+    def open_candidate(self, m, name: str | None = None) -> None:
+        """Open a synthesised design and show it in the mechanism tab."""
+        self.open_design(m, name)
+        if self.mechanism is m:
+            self.tabs.active = 0
+
     def open_design(self, m, name: str | None = None, key: str | None = None) -> None:
         """Show ``m``: the reference drawing and the structure now, motion and check later
         (at once when the server has them for ``key``, a catalogue name or FILE); the job
@@ -279,6 +295,7 @@ class Workbench:
             self.job.cancel()
         self.clear()
         self.mechanism, self.mechanism_name = m, name or f"design: {m.name or 'unnamed'}"
+        self.check_doc = None
         if key is None:
             self.designs[self.mechanism_name] = m
         self._follow()
@@ -294,7 +311,6 @@ class Workbench:
         else:
             self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check")
-        self.tabs.active = 0
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -322,6 +338,7 @@ class Workbench:
             self.say(job.error)
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
+            self.check_doc = job.result
             events = self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
             if self.view.sweeps:
                 self.view.mark(events)
@@ -370,6 +387,25 @@ def _start_warm_up(files: dict, threshold: float):
     return then
 
 
+#: longest ``?mechanism=`` value read from the page's address (longer is refused as it is)
+MAX_REQUESTED = 200
+
+
+def requested_mechanism(doc) -> str | None:
+    """The menu entry the page's address names (``?mechanism=NAME``; its token and other
+    arguments are left to :mod:`.access`), or None: text only, looked up among the
+    menu's entries, never used as a path."""
+    try:
+        values = doc.session_context.request.arguments.get("mechanism") or []
+    except AttributeError:               # no request (a document made outside a server)
+        return None
+    if not values:
+        return None
+    raw = values[0]
+    text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else str(raw)
+    return text[:MAX_REQUESTED]
+
+
 def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     """The server's page function: the session's :class:`Workbench` once the warm-up is
     ``warm``; the check panel follows once the browser shows the drawing (``shown``).
@@ -378,7 +414,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
-        wb = Workbench(files, atlases, threshold, later=True)
+        wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc))
         doc.add_periodic_callback(wb.poll, 150)
 
         def rest(_event):               # a second message, after the drawing's

@@ -14,7 +14,7 @@ import base64
 
 from bokeh.models import Button, CustomJS, Div, FileInput, Slider, Toggle
 
-from multiloop.inputs import MAX_UPLOAD, check_upload_size
+from multiloop.inputs import MAX_UPLOAD, MECHANISM_UPLOAD, check_upload_size
 from multiloop.topo.errors import InputError, explain
 
 from .markup import Html, html, join
@@ -34,13 +34,15 @@ if (cb_obj.active) {
 cb_obj.label = cb_obj.active ? '❚❚ pause' : '▶ play';
 """
 
-#: the download button's glue: the server puts [count, file name, text] in the button's
-#: tags; the browser saves the text under that name (a blob: URL, nothing fetched)
+#: the download button's glue: the server puts [count, file name, text, encoding] in the
+#: button's tags (encoding "base64" for a binary file); the browser saves the file under
+#: that name (a blob: URL, nothing fetched)
 DOWNLOAD_JS = """
-const [count, name, text] = cb_obj.tags;
+const [count, name, text, encoding] = cb_obj.tags;
 if (!name) { return; }
+const body = encoding === 'base64' ? Uint8Array.from(atob(text), c => c.charCodeAt(0)) : text;
 const a = document.createElement('a');
-a.href = URL.createObjectURL(new Blob([text], {type: 'text/plain'}));
+a.href = URL.createObjectURL(new Blob([body], {type: encoding === 'base64' ? 'application/octet-stream' : 'text/plain'}));
 a.download = name;
 document.body.appendChild(a); a.click(); a.remove();
 setTimeout(() => URL.revokeObjectURL(a.href), 10000);
@@ -106,19 +108,32 @@ class Player:
 
 
 class Download:
-    """A button that downloads text the server makes when it is clicked:
-    ``make()`` returns (file name, text), or None when there is nothing to download."""
+    """A button that downloads a file the server makes when it is clicked: ``make()``
+    returns (file name, text or bytes), or None when there is nothing to download."""
 
-    def __init__(self, label: str, make, width: int = 150):
+    def __init__(self, label: str, make, width: int = 150, css: str | None = None):
         self.make = make
-        self.button = Button(label=label, width=width, tags=[0, "", ""])     # [clicks, name, text]
+        self.button = Button(label=label, width=width, tags=[0, "", "", ""],      # [clicks, name, text, encoding]
+                             css_classes=[css] if css else [])
         self.button.js_on_change("tags", CustomJS(code=DOWNLOAD_JS))
         self.button.on_click(lambda: self.click())
 
     def click(self) -> None:
         out = self.make()
-        if out is not None:           # a new count: the same file twice is still a change
-            self.button.tags = [self.button.tags[0] + 1, out[0], out[1]]
+        if out is None:
+            return
+        name, body = out
+        binary = isinstance(body, bytes)
+        text = base64.b64encode(body).decode("ascii") if binary else body
+        # a new count: the same file twice is still a change
+        self.button.tags = [self.button.tags[0] + 1, name, text, "base64" if binary else ""]
+
+    def payload(self) -> tuple[str, str | bytes] | None:
+        """The last file sent to the browser: (name, text or bytes), None before any."""
+        _, name, text, encoding = self.button.tags
+        if not name:
+            return None
+        return name, base64.b64decode(text) if encoding == "base64" else text
 
 
 class Upload:
@@ -129,19 +144,20 @@ class Upload:
     shows the message: it never reaches the socket (whose messages Bokeh caps at 20 MB;
     past that the page lost its session and its results)."""
 
-    def __init__(self, label: str, accept: str, fn, fail, css: str, limit: int = MAX_UPLOAD):
+    def __init__(self, label: str, accept: str, fn, fail, css: str, limit: int = MAX_UPLOAD,
+                 hint: str = MECHANISM_UPLOAD):
         self.target = FileInput(accept=accept, multiple=False, visible=False, tags=[0, "", 0])
         self.button = Button(label=label, css_classes=[css])
         self.button.js_on_click(CustomJS(args=dict(target=self.target, accept=accept, limit=int(limit),
                                                    css=f"{css}-file"), code=UPLOAD_JS))
-        self.limit = limit
+        self.limit, self.hint = limit, hint
         on_upload(self.target, fn, fail)
         self.target.on_change("tags", lambda attr, old, new: self._refused(new, fail))
 
     def _refused(self, tags, fail) -> None:
         """The browser's notice of a file larger than the cap: (count, name, size)."""
         try:
-            check_upload_size(str(tags[1]), int(tags[2]), self.limit)
+            check_upload_size(str(tags[1]), int(tags[2]), self.limit, self.hint)
         except InputError as exc:
             fail(str(exc))
         except (IndexError, TypeError, ValueError):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from multiloop.topo.errors import explain
 
-__all__ = ["Menu", "refusal"]
+__all__ = ["Menu", "refusal", "file_entries"]
 
 #: characters of a refused value quoted in the message
 QUOTED = 60
@@ -22,6 +22,21 @@ def refusal(what: str, value, hint: str | None = None) -> str:
     text = str(value)
     shown = repr(text if len(text) <= QUOTED else text[:QUOTED] + "…")
     return explain(what, expected="one of its entries", got=shown, hint=hint or "choose an entry of the menu")
+
+
+def file_entries(paths) -> list[str]:
+    """Menu entries for the files given to ``serve``: each file's name without its
+    folders (a page shows no path of the server's); a name met again gets " (2)", " (3)"…"""
+    from pathlib import PurePath
+    out: list[str] = []
+    for p in paths:
+        base, k = PurePath(str(p)).name or str(p), 1
+        entry = base
+        while entry in out:
+            k += 1
+            entry = f"{base} ({k})"
+        out.append(entry)
+    return out
 
 
 class Menu:
@@ -39,17 +54,23 @@ class Menu:
         The first choice shown (default: the first of ``choices``).
     hint : str, optional
         The hint of the message for a value that is not a choice.
+    labels : dict, optional
+        What the menu shows for a choice (default: the choice itself).
     **select : keywords of the ``Select`` (title, width, css_classes…).
     """
 
-    def __init__(self, what: str, say, choices=(), value: str | None = None, hint: str | None = None, **select):
+    def __init__(self, what: str, say, choices=(), value: str | None = None, hint: str | None = None,
+                 labels: dict | None = None, **select):
         from bokeh.models import Select
-        self.what, self.say, self.hint = what, say, hint
+        self.what, self.say, self.hint, self.labels = what, say, hint, dict(labels or {})
         self.choices: tuple[str, ...] = tuple(choices)
         self.value = self._default(value)        # the last choice accepted
-        self.select = Select(options=list(self.choices), value=self.value, **select)
+        self.select = Select(options=self._options(), value=self.value, **select)
         self._calls: list = []
         self.select.on_change("value", lambda attr, old, new: self._changed(new))
+
+    def _options(self) -> list:
+        return [(c, self.labels[c]) if c in self.labels else c for c in self.choices]
 
     def _default(self, value) -> str:
         if value in self.choices:
@@ -64,7 +85,7 @@ class Menu:
         """The server's change of the choices and/or the value shown (no ``on_choice`` call)."""
         if choices is not None:
             self.choices = tuple(choices)
-            self.select.options = list(self.choices)
+            self.select.options = self._options()
         self.value = self._default(self.value if value is None else value)
         self.select.value = self.value
 

@@ -1,4 +1,5 @@
-"""The structure tab: the numbers of ``multiloop analyse`` (:func:`topo.numbers.structural_report`),
+"""The structure tab: the numbers of ``multiloop analyse`` under its names
+(:meth:`topo.numbers.StructuralReport.labelled`),
 the structure formula and the Assur groups of :func:`topo.assur.decompose`, as HTML tables."""
 from __future__ import annotations
 
@@ -13,10 +14,7 @@ def structure_html(m) -> Html:
     from multiloop.topo.errors import LinkageError
     from multiloop.topo.numbers import structural_report
 
-    rep = structural_report(m).as_dict()
-    keep = ("n", "p", "LA", "MJA", "V", "K", "L", "AVC", "F", "N", "rc", "SL", "La", "L0", "code", "code_star",
-            "planar", "degenerate", "fractionated", "actual_F", "redundant", "canonical")
-    rows = join(html("<tr><td>{k}</td><td>{v}</td></tr>", k=k, v=rep.get(k)) for k in keep if k in rep)
+    rows = join(html("<tr><td>{k}</td><td>{v}</td></tr>", k=k, v=v) for k, v in structural_report(m).labelled())
     out = html('<h3>Structural report</h3><table id="ml-structure">{rows}</table>', rows=rows)
     if not m.drivers:
         return out

@@ -25,6 +25,9 @@ from .jobs import Job
 from .markup import Html, html, join
 from .menus import Menu, refusal
 
+#: what a target upload is, in the hint of its size refusal
+TARGET_UPLOAD = "upload a target table of x, y rows (a few hundred points are plenty)"
+
 __all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
 
 TARGET_POINTS = 24      # points of a freehand target after resampling
@@ -194,7 +197,7 @@ class SynthesisView:
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
         self.menus["start"].on_choice(lambda name: self._start_changed())
-        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv")
+        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
         w["clear"].on_click(lambda: self._clear())
@@ -249,7 +252,7 @@ class SynthesisView:
         from multiloop.catalogue.dimensional.targets import parse_table
         from multiloop.inputs import upload_text
         try:
-            a = parse_table(upload_text(name, data), (2, 3), "path", name)
+            a = parse_table(upload_text(name, data, hint=TARGET_UPLOAD), (2, 3), "path", name)
         except LinkageError as exc:
             self.say(str(exc))
             return
@@ -300,6 +303,7 @@ class SynthesisView:
             return
         n = int(self.w["candidates"].value or 1)
         self.results = []
+        self._list()                        # the last run's candidates go
         if none:
             self.job = Job(lambda job: run_atlas(job, target, atlas), "synthesis")
             self.job.detach = True          # cancel: stops at the next polish, the page at once
@@ -368,9 +372,9 @@ class SynthesisView:
                              "<td>{links}</td><td>{formula}</td><td>{seed}</td><td>{stopped}</td></tr>",
                              i=i, emax=r.error_max, erms=r.error_rms, links=len(m.links), formula=formula,
                              seed=r.seed, stopped=r.stopped))
-        self.table.text = html('<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
-                               "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>",
-                               rows=join(rows))
+        self.table.text = "" if not rows else html(
+            '<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
+            "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>", rows=join(rows))
         best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms, default=-1)
         self.menus["pick"].set([str(i) for i in range(1, len(self.results) + 1)], str(best + 1))
         self._draw_candidates()
@@ -378,7 +382,10 @@ class SynthesisView:
     def _chosen(self):
         v = self.menus["pick"].value
         if not v or int(v) > len(self.results):
-            raise InputError(explain("candidate", expected="a finished synthesis run", got="none"))
+            running = self.job is not None and self.job.running
+            raise InputError(explain("candidate", expected="a candidate of a synthesis run",
+                                     got="a run still searching" if running else "none",
+                                     hint="wait for its first candidate" if running else "press Run"))
         return self.results[int(v) - 1]
 
     def _draw_candidates(self) -> None:
@@ -400,8 +407,10 @@ class SynthesisView:
     def _download(self, fmt: str):
         """(file name, text) of the chosen candidate as ``.toml`` or ``.pyslvs``, made in
         memory (nothing kept on the server); None, with the message shown, if it fails."""
+        from .exports import file_stem
         try:
             m = self._chosen().mechanism
+            stem = f"{file_stem(m, 'design')}-candidate-{self.menus['pick'].value}"
             if fmt == "toml":
                 from multiloop.topo.io import dumps_toml
                 text = dumps_toml(m)
@@ -411,4 +420,4 @@ class SynthesisView:
         except LinkageError as exc:
             self.say(str(exc))
             return None
-        return f"{m.name or 'candidate'}.{fmt}", text
+        return f"{stem}.{fmt}", text
