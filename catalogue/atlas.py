@@ -565,6 +565,36 @@ class Atlas:
                            fractionated=bool(frac), planar=None if planar is None else bool(planar),
                            La=None if La is None else tuple(sr.int_list(*at, "loops", La)), L0=L0)
 
+    def sizes(self) -> list[tuple[int, int]]:
+        """The (n, F) pairs the atlas holds chains of, sorted."""
+        return sorted((int(r[0]), int(r[1])) for r in self.con.execute("SELECT DISTINCT n, F FROM chains"))
+
+    def domain_cells(self, pairs=None) -> dict[int, set[tuple[int, int]]]:
+        """The occupied cells of the existence domain: ``{K: {(V, j_max), …}}`` over the
+        chains of every (n, F) in ``pairs`` (default: all)."""
+        sql, params = "SELECT DISTINCT K, V, j_max FROM chains", []
+        if pairs:
+            sql += " WHERE " + " OR ".join("(n = ? AND F = ?)" for _ in pairs)
+            params = [int(x) for pr in pairs for x in pr]
+        cells: dict[int, set] = {}
+        for K, V, j in self.con.execute(sql, params):
+            cells.setdefault(int(K), set()).add((int(V), int(j)))
+        return cells
+
+    def signatures(self, n: int, F: int) -> list[tuple[str, str, str | None, list]]:
+        """(LA, MJA, La as stored JSON text, joints) of every chain of (n, F): the paper's
+        invariants, compared as text."""
+        rows = self.con.execute("SELECT id, LA, MJA, loops, joints FROM chains WHERE n = ? AND F = ?", (n, F))
+        return [(LA, MJA, La, sr.int_lists(self.path, "chains", rid, "joints", joints, below=n))
+                for rid, LA, MJA, La, joints in rows]
+
+    def sizes_with_loops(self, at_least: int = 4) -> list[tuple[int, int]]:
+        """The (n, F) pairs with at least ``at_least`` chains whose loops are known (stored,
+        or non-planar chains, which have none)."""
+        return sorted((int(r[0]), int(r[1])) for r in self.con.execute(
+            "SELECT n, F FROM chains WHERE loops IS NOT NULL OR planar = 0 GROUP BY n, F HAVING count(*) >= ?",
+            (at_least,)))
+
     def builds(self) -> list[dict]:
         cur = self.con.execute("SELECT options, n, F, status, count, seconds FROM builds ORDER BY n, F")
         return [dict(zip(("options", "n", "F", "status", "count", "seconds"), r)) for r in cur]

@@ -95,7 +95,7 @@ def gallery_files(atlas: Atlas, pairs=None, query: str | None = None,
     from .synthesis import SynthesisOptions
 
     if pairs is None:
-        pairs = sorted({(r[0], r[1]) for r in atlas.con.execute("SELECT DISTINCT n, F FROM chains")})
+        pairs = atlas.sizes()
     files: dict[str, str] = {}
     items = []
     for n, F in pairs:

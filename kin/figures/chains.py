@@ -135,14 +135,7 @@ def existence_domain_chart(atlas, path, pairs=None, title: str | None = None) ->
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    sql = "SELECT DISTINCT K, V, j_max FROM chains"
-    params: list = []
-    if pairs:
-        sql += " WHERE " + " OR ".join("(n = ? AND F = ?)" for _ in pairs)
-        params = [x for pr in pairs for x in pr]
-    cells: dict[int, set] = {}
-    for K, V, j in atlas.con.execute(sql, params):
-        cells.setdefault(K, set()).add((V, j))
+    cells = atlas.domain_cells(pairs)
     fig, ax = plt.subplots(figsize=(7, 5))
     colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(cells), 1)))
     for c, K in zip(colours, sorted(cells)):
@@ -179,14 +172,11 @@ def invariant_merges(atlas, n: int, F: int) -> dict[str, tuple[int, int, int]]:
     number of chains, of distinct signatures, and of chains that share their
     signature with at least one non-isomorphic chain.
     """
-    import json as _json
     from collections import Counter
 
-    rows = list(atlas.con.execute("SELECT LA, MJA, loops, joints, n FROM chains WHERE n = ? AND F = ?",
-                                  (n, F)))
+    rows = atlas.signatures(n, F)
     sigs: dict[str, list] = {"[LA]": [], "+[MJA]": [], "+[La]": [], "+MJ link sets": []}
-    for LA, MJA, La, joints, nn in rows:
-        js = _json.loads(joints)
+    for LA, MJA, La, js in rows:
         deg = Counter(x for j in js for x in j)
         mj = tuple(sorted(tuple(sorted(deg[x] for x in j)) for j in js if len(j) > 2))
         sigs["[LA]"].append(LA)
@@ -207,9 +197,7 @@ def invariant_merge_chart(atlas, path, pairs=None) -> dict:
     import matplotlib.pyplot as plt
 
     if pairs is None:
-        pairs = sorted((r[0], r[1]) for r in atlas.con.execute(
-            "SELECT n, F FROM chains WHERE loops IS NOT NULL OR planar = 0 GROUP BY n, F "
-            "HAVING count(*) >= 4"))
+        pairs = atlas.sizes_with_loops(4)
     data = {pr: invariant_merges(atlas, *pr) for pr in pairs}
     levels = ["[LA]", "+[MJA]", "+[La]", "+MJ link sets"]
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(pairs) + 2), 4.5))

@@ -42,7 +42,7 @@ class AtlasView:
         a = self.atlases.get(self.files.value)
         if a is None:
             return
-        pairs = sorted({(r[0], r[1]) for r in a.con.execute("SELECT DISTINCT n, F FROM chains")})
+        pairs = a.sizes()
         self.pairs.set([f"{n}, {F}" for n, F in pairs])
         self.show()
 
