@@ -50,7 +50,8 @@ from .inversions import inversion
 from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
-__all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files"]
+__all__ = ["Design", "TopologySynthesis", "synthesise", "candidate_mechanism", "parse_links", "design_files",
+           "read_target", "check_top"]
 
 #: target points handed to the dimensional synthesiser (arc-length resampled)
 POLISH_POINTS = 40
@@ -162,7 +163,9 @@ def design_files(out, k: int) -> list[Path]:
     return [p] + [p.with_name(f"{p.stem}-{i}{p.suffix}") for i in range(2, k + 1)]
 
 
-def _target(path) -> np.ndarray:
+def read_target(path) -> np.ndarray:
+    """The path target as an (N, 2) array: a table file (:func:`.dimensional.targets.read_table`)
+    or an array, checked (finite, spread out)."""
     if isinstance(path, (str, Path)):
         return read_table(path, (2, 3), "path")[:, :2]
     a = np.asarray(path, float)
@@ -351,7 +354,7 @@ def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[floa
     return out
 
 
-def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "atlas.sqlite", top: int = 3,
+def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | None = None, top: int = 3,
                evaluations: int | None = None, budget: float | None = None, point: str = "P", tol: float = 1e-4,
                per_topology: int = 2, topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
                progress=None) -> TopologySynthesis:
@@ -367,8 +370,10 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         topology is fixed); without one the atlas chooses.
     links : tuple of int
         Numbers of links to consider.
-    atlas : str or Path
-        The atlas file with stored curves (``multiloop atlas … --mechanisms --curves K``).
+    atlas : str or Path, optional
+        The atlas file with stored curves (``multiloop atlas … --mechanisms --curves K``);
+        default: the default atlas, built into the user's cache on first use
+        (:func:`.default_atlas.ensure_default_atlas`).
     top : int
         Designs returned.
     evaluations, budget : optional
@@ -400,17 +405,14 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
         ``top`` not a positive integer.
     """
     t0 = time.perf_counter()
-    target = _target(path)
+    target = read_target(path)
     closed = is_closed(target)
     tol = check_tol(tol)
     if start is not None:
         return _with_start(start, target, closed, point, Budget.of(evaluations, budget), seed, t0)
     limits = Budget.of(evaluations, budget, default=DEFAULT_EVALUATIONS)
-    if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
-        raise ParameterError(explain("top", expected="a positive number of designs", got=repr(top)), "top")
-    if not Path(atlas).is_file():
-        raise InputError(explain("--db", expected="an atlas file with coupler curves", got=repr(str(atlas)),
-                                 hint="build one: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
+    check_top(top)
+    atlas = _atlas_file(atlas)
     run = Meter.start(limits, None if limits.seconds is None else t0 + limits.seconds)
     tick = None if progress is None else (lambda: progress(run.fraction()))
     with one_blas_thread():                 # (one BLAS thread: the same sums on any machine, and faster)
@@ -429,6 +431,27 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path = "a
                 if len(designs) == top:
                     break
     return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0, run.used, limits, stopped)
+
+
+def _atlas_file(atlas) -> Path:
+    """The atlas to read: ``atlas``, which must be a file, or (None) the default atlas,
+    built first if need be (:func:`.default_atlas.ensure_default_atlas`)."""
+    if atlas is None:
+        from .default_atlas import ensure_default_atlas
+        return ensure_default_atlas()
+    if not Path(atlas).is_file():
+        raise ParameterError(explain("atlas", expected="an atlas file with coupler curves", got=repr(str(atlas)),
+                                     hint="build one (multiloop atlas --links 6 --dof 1 --mechanisms --curves 8), "
+                                          "or leave it out for the default atlas"), "atlas")
+    return Path(atlas)
+
+
+def check_top(top) -> int:
+    """``top``, the number of designs asked for: a positive integer, else a
+    :class:`ParameterError` (checked before any atlas is read or built)."""
+    if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
+        raise ParameterError(explain("top", expected="a positive number of designs", got=repr(top)), "top")
+    return int(top)
 
 
 def _with_start(start, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,

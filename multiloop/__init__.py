@@ -98,8 +98,9 @@ def synthesise(start=None, **kwargs):
     """Dimensional synthesis from a start mechanism (path, function or motion targets),
     returning :class:`~multiloop.catalogue.dimensional.SynthesisResult`; without a
     start, path synthesis in which the atlas chooses the topology
-    (``synthesise(path=..., links=(4, 6, 8), atlas="atlas.sqlite", top=3, budget=60)``),
-    returning :class:`~multiloop.catalogue.topology_synthesis.TopologySynthesis`.
+    (``synthesise(path=..., links=(4, 6, 8), top=3, evaluations=100_000)``; ``atlas=`` an
+    atlas with coupler curves, default the default atlas built into the user cache on
+    first use), returning :class:`~multiloop.catalogue.topology_synthesis.TopologySynthesis`.
     """
     if start is None:
         from multiloop.catalogue.topology_synthesis import synthesise as _topo  # noqa: PLC0415

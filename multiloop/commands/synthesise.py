@@ -66,7 +66,9 @@ def add_arguments(p) -> None:
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
                         "errors within it tie and fewer links win (default 1e-4)")
-    p.add_argument("--db", default="atlas.sqlite", help="without START: the atlas with coupler curves")
+    p.add_argument("--db", dest="atlas", default=None,
+                   help="without START: the atlas with coupler curves (default: the default atlas, built into the "
+                        "user cache on first use)")
     p.add_argument("--links", default="4,6,8", help="without START: numbers of links to try (default 4,6,8)")
     p.add_argument("--top", type=int, default=3, metavar="K", help="without START: designs returned (default 3)")
     p.add_argument("--full-rotation", action="store_true", help="require a fully rotating driver")
@@ -92,7 +94,9 @@ def add_arguments(p) -> None:
 
 def run_without_start(args, limits: dict) -> int:
     """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
-    from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
+    from multiloop.catalogue.dimensional.synthesise import check_tol
+    from multiloop.catalogue.topology_synthesis import (check_top, design_files, parse_links, read_target,
+                                                        synthesise as topo_synthesise)
 
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
@@ -103,8 +107,16 @@ def run_without_start(args, limits: dict) -> int:
     links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
-    res = topo_synthesise(args.path, links=links, atlas=args.db, top=args.top, **limits,
-                          point=args.point or "P", tol=1e-4 if args.tol is None else args.tol, seed=args.seed)
+    # the target and the options first: a bad one is refused before the atlas is read or built
+    target, tol = read_target(args.path), check_tol(1e-4 if args.tol is None else args.tol)
+    check_top(args.top)
+    atlas = args.atlas
+    if atlas is None:
+        from multiloop.catalogue.default_atlas import ensure_default_atlas
+        atlas = ensure_default_atlas(progress=sys.stderr.isatty(),
+                                     say=lambda text: print(f"multiloop synthesise: {text}", file=sys.stderr, flush=True))
+    res = topo_synthesise(target, links=links, atlas=atlas, top=args.top, **limits, point=args.point or "P", tol=tol,
+                          seed=args.seed)
     if not res.designs:
         raise InputError(explain("--path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
