@@ -397,3 +397,25 @@ def test_share_by_name_opens_the_mechanism_in_a_fresh_browser_context(browser, s
         _pick(page, "crank_slider")
     finally:
         ctx.close()
+
+
+def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
+    """Type B's coordinates, Apply: the drawing is the edited design at its reference;
+    Ctrl-Z in the page gives the original back, Ctrl-Shift-Z the edit."""
+    _pick(page, "four_bar")
+    original = load_mechanism("four_bar").joint("B").at
+    page.locator(".ml-edit-point select").select_option("B")
+    for css, v in ((".ml-edit-x input", "0.12"), (".ml-edit-y input", "0.08")):
+        page.locator(css).fill(v)
+        page.locator(css).press("Enter")
+    page.locator(".ml-edit-apply button").click()
+    at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
+        if (!r || !r.getAttribute('data-positions')) return false;
+        const b = JSON.parse(r.getAttribute('data-positions'))['B'];
+        return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+    page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)
+    page.mouse.click(5, 5)                      # the focus leaves the text field
+    page.keyboard.press("Control+z")
+    page.wait_for_function(at_b, arg=list(original), timeout=60000)
+    page.keyboard.press("Control+Shift+z")
+    page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)

@@ -156,6 +156,7 @@ class Workbench:
         from bokeh.models import Column, Row, TabPanel, Tabs
 
         from .check_view import CheckView
+        from .editing import Editor
         from .exports import ExportBar
         from .glue import Upload, div
         from .mechanism_view import MechanismView
@@ -169,6 +170,8 @@ class Workbench:
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor])
+        self.editor = Editor(self.say, self._show_edit)
+        self.edit_base = ""                      # the name of the design the edits start from
         choices = list(self.files) + catalogue_names()
         first = requested if requested in choices else _first_choice(self.files)
         self.menu = Menu("mechanism menu", self.say, choices, first, MENU_HINT, title="mechanism", width=240,
@@ -185,7 +188,7 @@ class Workbench:
         # the tabs behind the first are built when first shown: the first page then
         # carries (and the browser renders) the mechanism tab alone
         self._later = {2: lambda: self._synthesis_view(choices, atlases)}
-        self.mechanism_tab = Row(self.view.panel, *([] if later else [self.check.panel]))
+        self.mechanism_tab = Row(Column(self.editor.panel, self.view.panel), *([] if later else [self.check.panel]))
         tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure), ("Synthesis", div("…"))]
         if atlases:
             self._later[3] = lambda: self._atlas_view(list(atlases))
@@ -278,17 +281,22 @@ class Workbench:
         if self.mechanism is m:
             self.tabs.active = 0
 
-    def open_design(self, m, name: str | None = None, key: str | None = None) -> None:
+    def _show_edit(self, m) -> None:
+        """Show a design the editor made (an edit, an undo or a redo)."""
+        self.open_design(m, f"edited: {self.edit_base}", edited=True)
+
+    def open_design(self, m, name: str | None = None, key: str | None = None, edited: bool = False) -> None:
         """Show ``m``: the reference drawing and the structure now, motion and check later
         (at once when the server has them for ``key``, a catalogue name or FILE); the job
-        of the mechanism shown before is cancelled."""
+        of the mechanism shown before is cancelled.  A design not ``edited`` starts the
+        editor's history."""
         from multiloop.topo.errors import LinkageError
 
         from .jobs import Job
         try:
             scene, structure = _scene(m, key)
         except LinkageError as exc:
-            self.say(str(exc))
+            self.say(f"{name}: {exc}" if edited else str(exc))
             self._follow()                  # the menu goes back to the mechanism shown
             return
         if self.job is not None:
@@ -296,6 +304,9 @@ class Workbench:
         self.clear()
         self.mechanism, self.mechanism_name = m, name or f"design: {m.name or 'unnamed'}"
         self.check_doc = None
+        if not edited:
+            self.edit_base = self.mechanism_name
+            self.editor.reset(m)
         if key is None:
             self.designs[self.mechanism_name] = m
         self._follow()
@@ -421,6 +432,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
             wb.show_rest()
             shown.set()
         doc.on_event(DocumentReady, rest)
+        doc.js_on_event(DocumentReady, wb.editor.keys)
         watch.add(doc.session_context.id, wb.stop_jobs)
 
         def closed(ctx):                # the session's callbacks are removed by Bokeh itself

@@ -1,0 +1,94 @@
+"""Editing the open design in the workbench (``multiloop/web/editing.py``), at the level
+of :class:`multiloop.web.app.Workbench`: typed coordinates, undo and redo (the buttons
+and the page's Ctrl-Z / Ctrl-Shift-Z message), and bad values as one line."""
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("bokeh")
+
+from multiloop.inputs import load_mechanism  # noqa: E402
+from multiloop.kin.solve import solve  # noqa: E402
+from multiloop.topo.io import dumps_toml  # noqa: E402
+from multiloop.web.app import Workbench  # noqa: E402
+from multiloop.web.editing import History, moved  # noqa: E402
+
+
+def _message(wb) -> str:
+    import html
+    import re
+    return html.unescape(re.sub(r"<[^>]+>", "", wb.message.text))
+
+
+def _edit(wb, name, x, y):
+    wb.editor.point.select.value = name          # as the page's menu sets it
+    wb.editor.x.value, wb.editor.y.value = str(x), str(y)
+    wb.editor.edit(name, (wb.editor.x.value, wb.editor.y.value))
+
+
+@pytest.fixture
+def wb():
+    w = Workbench(requested="four_bar")
+    yield w
+    w.close()
+
+
+def test_undo_three_edits_three_times_gives_the_original_byte_for_byte(wb):
+    original = dumps_toml(wb.mechanism)
+    edits = [("B", 0.11, 0.07), ("A", 0.012, 0.021), ("O4", 0.095, 0.0)]
+    for name, x, y in edits:
+        _edit(wb, name, x, y)
+        assert wb.mechanism.joint(name).at == (x, y) and wb.mechanism_name == "edited: four_bar"
+        assert wb.view.scene.mechanism is wb.mechanism            # the drawing is the edited design's
+    third = dumps_toml(wb.mechanism)
+    for _ in edits:
+        wb.editor.step(-1)
+    assert dumps_toml(wb.mechanism) == original and wb.editor.undo.disabled and not wb.editor.redo.disabled
+    for _ in edits:
+        wb.editor.step(+1)
+    assert dumps_toml(wb.mechanism) == third and wb.editor.redo.disabled
+
+
+def test_the_pages_undo_keys_step_the_history(wb):
+    _edit(wb, "B", 0.12, 0.08)
+    edited = dumps_toml(wb.mechanism)
+    wb.editor.undo.tags = [1, -1]                               # Ctrl-Z in the page
+    assert wb.mechanism.joint("B").at == load_mechanism("four_bar").joint("B").at
+    wb.editor.undo.tags = [2, 1]                                # Ctrl-Shift-Z
+    assert dumps_toml(wb.mechanism) == edited
+    wb.editor.undo.tags = [3, "rm -rf"]                         # written by hand: ignored
+    assert dumps_toml(wb.mechanism) == edited
+
+
+def test_an_edited_design_solves_as_the_library_solves_it(wb):
+    _edit(wb, "A", 0.015, 0.02)
+    m = moved(load_mechanism("four_bar"), "A", (0.015, 0.02))
+    assert dumps_toml(wb.mechanism) == dumps_toml(m)
+    ref = solve(m, [0.0])
+    assert ref.success
+
+
+def test_bad_values_and_forged_points_are_one_line(wb):
+    before = dumps_toml(wb.mechanism)
+    wb.editor.edit("B", ("abc", "0.1"))
+    assert "position of B: expected two finite numbers" in _message(wb)
+    wb.editor.edit("B", ("nan", "0.1"))
+    assert "position of B: expected two finite numbers" in _message(wb)
+    wb.editor.point.select.value = "../../etc/passwd"
+    assert "edited point: expected one of its entries" in _message(wb)
+    wb.editor.edit("nowhere", (0, 0))
+    assert "edited point: expected a joint or tracer point of the design, got 'nowhere'" in _message(wb)
+    assert dumps_toml(wb.mechanism) == before and not wb.editor.history.can_undo
+
+
+def test_opening_another_design_starts_a_new_history(wb):
+    _edit(wb, "B", 0.12, 0.08)
+    wb.pick.value = "crank_slider"
+    assert wb.editor.history.designs == (wb.mechanism,) and wb.editor.undo.disabled
+    assert "A" in wb.editor.point.choices
+
+
+def test_history_drops_what_was_undone_after_a_new_edit():
+    h = History.of("m0").edited("m1").edited("m2").undone().edited("m3")
+    assert h.designs == ("m0", "m1", "m3") and h.current == "m3" and not h.can_redo
+    assert History.of("m0").undone().at == 0 and History.of("m0").redone().at == 0
