@@ -329,7 +329,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     ics = instant_centres(st, 0)
     circ = group_circuits(ap, dcs)
     loops = four_bar_loops(m, dict(ap.link_numbers))
-    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs))
+    ends = [(dc.bound_at("low"), dc.bound_at("high")) for dc in dcs]
+    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs), ends)
     rep = CheckReport(m.name, ap.formula, float(min_transmission), dcs, circ, loops, ics,
                       tuple(float(x) for x in x0), (), ws)
     return CheckReport(**{**rep.__dict__, "verdict": verdict(rep)})

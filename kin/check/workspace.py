@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from multiloop.kin.solve import solve
+
+from .envelope import envelope
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
@@ -66,6 +68,16 @@ class Workspace:
     box: tuple[tuple[float, float], ...]
     rotary: tuple[bool, ...]
     samples: np.ndarray = field(repr=False)
+    arcs: tuple = ()        # (label, (K, 2) points) per boundary arc, labelled by what sets it
+    exact: bool = False     # boundary and area from the box edges and singular curves
+
+    def arc_labels(self) -> list[str]:
+        """The boundary arcs' labels, in order around the boundary, runs merged."""
+        out = []
+        for lab, _ in self.arcs:
+            if not out or out[-1] != lab:
+                out.append(lab)
+        return out
 
     def user(self, xs) -> list[float]:
         """Driver values in the user's units (deg for R, m for P)."""
@@ -74,7 +86,9 @@ class Workspace:
     def as_dict(self) -> dict:
         return {"point": self.point, "x": list(self.x), "y": list(self.y),
                 "x_at": [self.user(v) for v in self.x_at], "y_at": [self.user(v) for v in self.y_at],
-                "boundary": self.boundary.tolist(), "area": self.area}
+                "boundary": self.boundary.tolist(), "area": self.area, "exact": self.exact,
+                "arcs": [{"set_by": lab, "from": pts[0].tolist(), "to": pts[-1].tolist(),
+                          "n_points": len(pts)} for lab, pts in self.arcs]}
 
 
 def _box_samples(box: np.ndarray) -> np.ndarray:
@@ -187,9 +201,24 @@ def _largest_loop(P: np.ndarray, edges: np.ndarray) -> list[int]:
     return best
 
 
-def workspace(m, point: str, box) -> Workspace:
+def _arc_label(m, arc, ends) -> str:
+    """What sets a boundary arc: the drivers held at an end (their range, or an assembly
+    limit), or a singular curve."""
+    if arc.kind == "singular":
+        return "singular curve (the Jacobian has rank one)"
+    parts = []
+    for k, end in arc.ends:
+        why = ends[k][0 if end == "low" else 1] if ends is not None else None
+        what = {"assembly": "an assembly limit", "range": "its range"}.get(why, why)
+        parts.append(f"{m.drivers[k].joint} at its {end} end" + (f" ({what})" if what else ""))
+    return ", ".join(parts)
+
+
+def workspace(m, point: str, box, ends=None) -> Workspace:
     """The workspace of tracer point ``point`` over ``box`` = ((low, high) per driver,
-    rad or m from the reference; see the module docstring)."""
+    rad or m from the reference; see the module docstring); ``ends`` (optional): what
+    sets each driver's low and high end (``"range"`` or ``"assembly"``), for the arcs'
+    labels."""
     names = [p.name for p in m.points]
     if point not in names:
         raise InputError(explain("--workspace", expected="a tracer point of the mechanism",
@@ -201,14 +230,33 @@ def workspace(m, point: str, box) -> Workspace:
     good = np.isfinite(P).all(axis=1)
     if not good.any():
         raise InputError(explain("--workspace", expected="positions that assemble", got="none in the box"))
+    env = _envelope(m, ip, box)
     Xg, Pg = X[good], P[good]
+    if env is not None:                  # the box edges' Chebyshev samples: the corners exactly
+        Xg, Pg = np.vstack([Xg, env.edge_inputs]), np.vstack([Pg, env.edge_points])
     coords = np.array([0, 0, 1, 1])
     signs = np.array([-1.0, 1.0, -1.0, 1.0])
     starts = np.array([Xg[np.argmax(s * Pg[:, c])] for s, c in zip(signs, coords)])
     xs, vals = _refine(m, ip, box, starts, signs, coords)
-    boundary, area = alpha_outline(Pg)
+    if env is not None:
+        boundary, area = env.boundary, env.area
+        arcs = tuple((_arc_label(m, a, ends), a.points) for a in env.arcs)
+    else:
+        boundary, area = alpha_outline(Pg)
+        arcs = ()
     rotary = tuple(m.joint(d.joint).kind is JointKind.R for d in m.drivers)
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,
-                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg)
+                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None)
+
+
+def _envelope(m, ip, box):
+    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two drivers whose
+    box assembles everywhere on the reference's modes, else None (the alpha shape)."""
+    if box.shape[0] != 2 or np.any(box[:, 1] <= box[:, 0]):
+        return None
+    try:
+        return envelope(m, ip, box)
+    except ValueError:
+        return None

@@ -1,0 +1,147 @@
+"""The workspace of a tracer point over the box of its drivers' usable ranges
+(``check(..., workspace=POINT)``): its exact boundary and area.
+
+Oracle: a boom and stick, each turned by a cylinder, move the tip as a two-link arm
+``F + R(θ₁)(a + R(θ₂) b)``; each angle follows from its cylinder length by the law of
+cosines, and the area of ``{R(θ₁) v(θ₂)}`` over a box of angles is the polar integral
+``∫ r · |Φ(r)| dr``, with ``Φ(r)`` the union of the arcs ``[ψ + θ₁ˡᵒ, ψ + θ₁ʰⁱ]`` over the
+``θ₂`` (at most two) where ``|v(θ₂)| = r`` (``ψ = arg v(θ₂)``), integrated by adaptive
+Gauss-Kronrod (scipy ``quad``), independent of the solver and of the boundary tracing.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from multiloop.kin.check import check
+from multiloop.kin.solve import solve
+from multiloop.topo.model import MechanismBuilder
+
+# boom foot F, boom cylinder base A (frame) and end E (boom), boom-stick pin P, stick
+# cylinder base A2 (boom) and end E2 (stick), the tip T on the stick (the catalogue
+# excavator's boom and stick, metres)
+F, A, E = (0.6, 1.9), (1.0, 1.1), (2.6, 2.7)
+P, A2, E2 = (6.2, 3.6), (3.0, 3.5), (6.0, 4.6)
+T = (7.379008, -0.568595)
+
+
+def _d(p, q):
+    return math.hypot(q[0] - p[0], q[1] - p[1])
+
+
+#: the stick cylinder's stroke end where its triangle P-A2-E2 is flat (the assembly limit)
+STICK_LIMIT = _d(P, A2) + _d(P, E2) - _d(A2, E2)
+
+
+def boom_stick(stick_high: float, boom=(-0.6, 0.7), stick_low: float = -0.8):
+    b = MechanismBuilder()
+    b.add_link("frame", frame=True)
+    for x in ("boom", "stick", "boom_barrel", "boom_rod", "stick_barrel", "stick_rod"):
+        b.add_link(x)
+
+    def cyl(name, base, end, barrel, rod, links_base, links_end):
+        u = np.subtract(end, base) / _d(base, end)
+        b.add_joint(f"{name}_base", "R", (links_base, barrel), at=base)
+        b.add_joint(f"{name}_slide", "P", (barrel, rod), at=tuple((np.add(base, end)) / 2), axis=tuple(u))
+        b.add_joint(f"{name}_end", "R", (rod, links_end), at=end)
+    b.add_joint("foot", "R", ("frame", "boom"), at=F)
+    b.add_joint("boom_stick", "R", ("boom", "stick"), at=P)
+    cyl("boom_cyl", A, E, "boom_barrel", "boom_rod", "frame", "boom")
+    cyl("stick_cyl", A2, E2, "stick_barrel", "stick_rod", "boom", "stick")
+    b.add_driver("boom_cyl_slide", range=boom)
+    b.add_driver("stick_cyl_slide", range=(stick_low, stick_high))
+    b.add_point("tip", "stick", T)
+    return b.build()
+
+
+def _turn(pivot, base, end, s):
+    """Rotation of the link carrying ``end`` about ``pivot`` when the cylinder
+    ``base``-``end`` grows by ``s`` (law of cosines)."""
+    fa, fe, L0 = _d(pivot, base), _d(pivot, end), _d(base, end)
+    u, v = np.subtract(base, pivot), np.subtract(end, pivot)
+    sgn = math.copysign(1.0, u[0] * v[1] - u[1] * v[0])
+
+    def g(L):
+        return math.acos(max(-1.0, min(1.0, (fa * fa + fe * fe - L * L) / (2 * fa * fe))))
+    return sgn * (g(L0 + s) - g(L0))
+
+
+def _rot(t, v):
+    return np.array([math.cos(t) * v[0] - math.sin(t) * v[1], math.sin(t) * v[0] + math.cos(t) * v[1]])
+
+
+def two_link_area(a, b, t1, t2) -> float:
+    """Area of ``{R(θ₁)(a + R(θ₂) b)}``, θ₁ ∈ t1, θ₂ ∈ t2 (span of θ₁ below 2π)."""
+    la, lb = math.hypot(*a), math.hypot(*b)
+    delta = math.atan2(b[1], b[0]) - math.atan2(a[1], a[0])     # a·R(θ)b = la lb cos(θ + δ)
+    span = t1[1] - t1[0]
+
+    def cover(r):
+        c = (r * r - la * la - lb * lb) / (2 * la * lb)
+        if abs(c) > 1:
+            return 0.0
+        starts = []
+        for root in (math.acos(c), -math.acos(c)):
+            th = root - delta + 2 * math.pi * math.ceil((t2[0] - (root - delta)) / (2 * math.pi))
+            while th <= t2[1]:
+                v = np.asarray(a) + _rot(th, b)
+                starts.append((math.atan2(v[1], v[0]) + t1[0]) % (2 * math.pi))
+                th += 2 * math.pi
+        starts = sorted(set(starts))
+        if not starts:
+            return 0.0
+        gaps = np.diff(starts + [starts[0] + 2 * math.pi])
+        return float(np.sum(np.minimum(span, gaps)))
+
+    def radius(th):
+        return float(np.hypot(*(np.asarray(a) + _rot(th, b))))
+    th = np.linspace(t2[0], t2[1], 20001)
+    rs = [radius(x) for x in th]
+    cuts = sorted({min(rs), max(rs), radius(t2[0]), radius(t2[1])})
+    return sum(quad(lambda r: r * cover(r), lo, hi, limit=400, epsabs=0.0, epsrel=1e-12)[0]
+               for lo, hi in zip(cuts[:-1], cuts[1:]))
+
+
+def boom_stick_area(box) -> float:
+    t1 = sorted(_turn(F, A, E, s) for s in box[0])
+    t2 = sorted(_turn(P, A2, E2, s) for s in box[1])
+    return two_link_area(np.subtract(P, F), np.subtract(T, P), t1, t2)
+
+
+def _distance_outside(Q, loop):
+    """Distance from each point of ``Q`` outside the closed polygon ``loop`` to it (0
+    inside; matplotlib's point-in-polygon test, then point-segment distances)."""
+    from matplotlib.path import Path
+
+    out = np.zeros(len(Q))
+    far = np.flatnonzero(~Path(loop).contains_points(Q))
+    a, d = loop[:-1], np.diff(loop, axis=0)
+    for i in far:
+        t = np.clip(np.sum((Q[i] - a) * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300), 0, 1)
+        out[i] = np.min(np.hypot(*(Q[i] - a - t[:, None] * d).T))
+    return out
+
+
+@pytest.mark.parametrize("stick_high, where", [(0.8, "before"), (STICK_LIMIT, "at"), (2.0, "beyond")])
+def test_two_cylinder_area_against_the_polar_integral(stick_high, where):
+    m = boom_stick(stick_high)
+    ws = check(m, workspace="tip").workspace
+    box = np.array(ws.box)
+    assert box[1, 1] == pytest.approx(min(stick_high, STICK_LIMIT), abs=1e-7)
+    ref = boom_stick_area(box)
+    assert ws.exact
+    assert ws.area == pytest.approx(ref, rel=1e-6)
+    # no position the solver returns lies outside the boundary (beyond the chords' sag)
+    g = [np.linspace(lo, hi, 151) for lo, hi in box]
+    X = np.array(np.meshgrid(*g, indexing="ij")).reshape(2, -1).T
+    Q = solve(m, X, assemble=True).point_positions[:, 0]
+    assert np.isfinite(Q).all()
+    assert _distance_outside(Q, ws.boundary).max() < 1e-6
+    labels = ws.arc_labels()
+    limit = "stick_cyl_slide at its high end (an assembly limit)"
+    assert (limit in labels) == (where != "before")
+    # past the stick's straight position the stick folds back: a singular curve bounds it
+    assert any(lab.startswith("singular curve") for lab in labels) == (where != "before")
