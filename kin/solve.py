@@ -636,9 +636,12 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
 
 
 def _fmt_path(sp: SolvePlan, P: np.ndarray, s_nodes: np.ndarray, scale: np.ndarray, s: float) -> str:
-    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text."""
+    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text; with several
+    drivers each is named (``boom_slide = 0 m, stick_slide = 0.825 m``)."""
     x = np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
-    return ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(x))
+    if len(x) == 1:
+        return _fmt_x(sp, 0, x[0])
+    return ", ".join(f"{d.joint} = {_fmt_x(sp, j, v)}" for j, (d, v) in enumerate(zip(sp.mechanism.drivers, x)))
 
 
 def only_all(sp: SolvePlan, needed) -> bool:

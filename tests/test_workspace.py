@@ -145,3 +145,13 @@ def test_two_cylinder_area_against_the_polar_integral(stick_high, where):
     assert (limit in labels) == (where != "before")
     # past the stick's straight position the stick folds back: a singular curve bounds it
     assert any(lab.startswith("singular curve") for lab in labels) == (where != "before")
+
+
+def test_a_two_cylinder_limit_message_names_each_driver():
+    """Issue 36 part 2, 4: the limit of a two-driver path read "limit at 0.82528 m, 0 m"."""
+    m = boom_stick(2.0)
+    st = solve(m, np.array([[0.0, 0.0], [0.0, 1.2]]))
+    assert not st.ok[1]
+    assert f"limit at boom_cyl_slide = 0 m, stick_cyl_slide = {STICK_LIMIT:.6g} m" in st.status[1]
+    dc = check(m).drivers[1]
+    assert any(f"stick_cyl_slide = {STICK_LIMIT:.6g} m" in g for g in dc.limit_groups)
