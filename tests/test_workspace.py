@@ -130,7 +130,9 @@ def test_two_cylinder_area_against_the_polar_integral(stick_high, where):
     m = boom_stick(stick_high)
     ws = check(m, workspace="tip").workspace
     box = np.array(ws.box)
-    assert box[1, 1] == pytest.approx(min(stick_high, STICK_LIMIT), abs=1e-7)
+    # the assembly limit to the floating point's resolution (was 2.2e-10 m short, which
+    # put the tip 1e-4 m off at the corner: it moves like the square root of the stroke left)
+    assert box[1, 1] == pytest.approx(min(stick_high, STICK_LIMIT), abs=1e-12)
     ref = boom_stick_area(box)
     assert ws.exact
     assert ws.area == pytest.approx(ref, rel=1e-6)
@@ -140,6 +142,17 @@ def test_two_cylinder_area_against_the_polar_integral(stick_high, where):
     Q = solve(m, X, assemble=True).point_positions[:, 0]
     assert np.isfinite(Q).all()
     assert _distance_outside(Q, ws.boundary).max() < 1e-6
+    if where != "before":
+        # x is least on the edge where the stick's triangle is flat: the closed form's
+        # minimum along it (was 8.7e-5 m off, read 1e-10 m inside the limit)
+        from scipy.optimize import minimize_scalar
+
+        def x_tip(s1):
+            t1, t2 = _turn(F, A, E, s1), _turn(P, A2, E2, STICK_LIMIT)
+            return float(F[0] + _rot(t1, np.subtract(P, F))[0] + _rot(t1 + t2, np.subtract(T, P))[0])
+        best = min(x_tip(box[0, 1]), minimize_scalar(x_tip, bounds=tuple(box[0]), method="bounded",
+                                                     options={"xatol": 1e-12}).fun)
+        assert ws.x[0] == pytest.approx(best, abs=1e-5)     # √(2.9e-13 m left) × the lever
     labels = ws.arc_labels()
     limit = "stick_cyl_slide at its high end (an assembly limit)"
     assert (limit in labels) == (where != "before")

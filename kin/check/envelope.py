@@ -36,7 +36,7 @@ import numpy as np
 
 from multiloop.kin.solve import solve
 
-__all__ = ["Envelope", "BoundaryArc", "envelope"]
+__all__ = ["Envelope", "BoundaryArc", "envelope", "edge_fractions"]
 
 _SEED = 65          # seed grid per face (Chebyshev points per driver)
 _EDGE = 4097        # Chebyshev points per box edge
@@ -66,6 +66,12 @@ class Envelope:
     area: float
     edge_inputs: np.ndarray
     edge_points: np.ndarray
+
+
+def edge_fractions() -> np.ndarray:
+    """Where a box edge is solved, as fractions of the driver's range from its low end:
+    the Chebyshev points ``(1 - cos πw)/2``, ``w`` in ``_EDGE`` equal steps."""
+    return 0.5 * (1.0 - np.cos(np.pi * np.linspace(0.0, 1.0, _EDGE)))
 
 
 def _solve_p(m, ip, S, rate=None):

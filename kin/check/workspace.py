@@ -37,7 +37,7 @@ import numpy as np
 
 from multiloop.kin.solve import solve
 
-from .envelope import envelope
+from .envelope import edge_fractions, envelope
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
@@ -224,7 +224,7 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
         raise InputError(explain("--workspace", expected="a tracer point of the mechanism",
                                  got=repr(point), hint="points: " + (", ".join(names) or "none ([[point]])")))
     ip = names.index(point)
-    box = np.array(box, float).reshape(len(m.drivers), 2)
+    box = _inside_limits(m, ip, np.array(box, float).reshape(len(m.drivers), 2))
     X = _box_samples(box)
     P = _solve_point(m, X, ip)
     good = np.isfinite(P).all(axis=1)
@@ -260,3 +260,23 @@ def _envelope(m, ip, box):
         return envelope(m, ip, box)
     except ValueError:
         return None
+
+
+def _inside_limits(m, ip, box: np.ndarray) -> np.ndarray:
+    """``box`` with each end that lies on a reach limit (the solver reports the flat
+    position there as singular: its determinant is zero) moved toward the reference by
+    as few units in the last place as make its edge assemble (at most 2⁴⁰)."""
+    box = box.copy()
+    t = edge_fractions()                 # the envelope's own edge samples
+    for k in range(box.shape[0]):
+        for e in (0, 1):
+            ulps = 0
+            while ulps <= 2 ** 40:
+                X = box[:, 0] + np.outer(t, box[:, 1] - box[:, 0])
+                X[:, k] = box[k, e]
+                if np.isfinite(_solve_point(m, X, ip)).all():
+                    break
+                ulps = max(1, 2 * ulps)
+                inward = box[k, 1 - e] - box[k, e]
+                box[k, e] += np.sign(inward) * ulps * np.spacing(abs(box[k, e]))
+    return box
