@@ -168,3 +168,17 @@ def test_a_two_cylinder_limit_message_names_each_driver():
     assert f"limit at boom_cyl_slide = 0 m, stick_cyl_slide = {STICK_LIMIT:.6g} m" in st.status[1]
     dc = check(m).drivers[1]
     assert any(f"stick_cyl_slide = {STICK_LIMIT:.6g} m" in g for g in dc.limit_groups)
+
+
+def test_a_stroke_that_ends_at_its_assembly_limit_solves_at_its_usable_end():
+    """Issue 36 part 2, 2: the stick's stroke ends at its assembly limit; every position
+    at the usable range's end (as check reports it, within 1e-12 m of the limit) solves,
+    alone and with the boom anywhere in its range (the path ends in a touch of the
+    limit; it used to be a 'singular position' within 1e-8 m of it)."""
+    m = boom_stick(STICK_LIMIT)
+    lo, hi = check(m).drivers[1].usable
+    assert hi == pytest.approx(STICK_LIMIT, abs=1e-12)
+    for boom in np.linspace(-0.6, 0.7, 7):
+        for end in (lo, hi):
+            st = solve(m, np.array([[boom, end]]))
+            assert st.ok.all(), (boom, end, list(st.status))
