@@ -36,23 +36,39 @@ def _d(p, q):
 STICK_LIMIT = _d(P, A2) + _d(P, E2) - _d(A2, E2)
 
 
-def boom_stick(stick_high: float, boom=(-0.6, 0.7), stick_low: float = -0.8):
+#: a turret pivoted at the boom foot, turned by a third cylinder from A3 (frame) to E3
+A3, E3 = (-0.4, 1.2), (0.1, 2.6)
+
+
+def boom_stick(stick_high: float, boom=(-0.6, 0.7), stick_low: float = -0.8, turret=None):
+    """The boom and stick; with ``turret`` = (low, high), the boom cylinder's base and the
+    boom foot sit on a turret that a third cylinder turns about the foot (one pin joins
+    frame, turret and boom), so the boom's angle is the sum of two cylinders' turns."""
     b = MechanismBuilder()
     b.add_link("frame", frame=True)
     for x in ("boom", "stick", "boom_barrel", "boom_rod", "stick_barrel", "stick_rod"):
         b.add_link(x)
+    base = "frame"
+    if turret is not None:
+        for x in ("turret", "turret_barrel", "turret_rod"):
+            b.add_link(x)
+        base = "turret"
 
     def cyl(name, base, end, barrel, rod, links_base, links_end):
         u = np.subtract(end, base) / _d(base, end)
         b.add_joint(f"{name}_base", "R", (links_base, barrel), at=base)
         b.add_joint(f"{name}_slide", "P", (barrel, rod), at=tuple((np.add(base, end)) / 2), axis=tuple(u))
         b.add_joint(f"{name}_end", "R", (rod, links_end), at=end)
-    b.add_joint("foot", "R", ("frame", "boom"), at=F)
+    b.add_joint("foot", "R", ("frame", "boom") if turret is None else ("frame", "turret", "boom"), at=F)
     b.add_joint("boom_stick", "R", ("boom", "stick"), at=P)
-    cyl("boom_cyl", A, E, "boom_barrel", "boom_rod", "frame", "boom")
+    if turret is not None:
+        cyl("turret_cyl", A3, E3, "turret_barrel", "turret_rod", "frame", "turret")
+    cyl("boom_cyl", A, E, "boom_barrel", "boom_rod", base, "boom")
     cyl("stick_cyl", A2, E2, "stick_barrel", "stick_rod", "boom", "stick")
     b.add_driver("boom_cyl_slide", range=boom)
     b.add_driver("stick_cyl_slide", range=(stick_low, stick_high))
+    if turret is not None:
+        b.add_driver("turret_cyl_slide", range=turret)
     b.add_point("tip", "stick", T)
     return b.build()
 
@@ -107,6 +123,9 @@ def two_link_area(a, b, t1, t2) -> float:
 
 def boom_stick_area(box) -> float:
     t1 = sorted(_turn(F, A, E, s) for s in box[0])
+    if len(box) == 3:                     # the turret's turn adds to the boom's
+        t3 = sorted(_turn(F, A3, E3, s) for s in box[2])
+        t1 = [t1[0] + t3[0], t1[1] + t3[1]]
     t2 = sorted(_turn(P, A2, E2, s) for s in box[1])
     return two_link_area(np.subtract(P, F), np.subtract(T, P), t1, t2)
 
@@ -182,3 +201,26 @@ def test_a_stroke_that_ends_at_its_assembly_limit_solves_at_its_usable_end():
         for end in (lo, hi):
             st = solve(m, np.array([[boom, end]]))
             assert st.ok.all(), (boom, end, list(st.status))
+
+
+
+def test_two_drivers_that_turn_one_link_fall_back_to_the_samples():
+    """A turret and a boom cylinder both turn the boom about its foot: the Jacobian has
+    rank one everywhere, no fold to trace; the workspace (an annular sector) is the
+    samples' outline, computed in the usual time (the exact construction refuses it)."""
+    b = MechanismBuilder()
+    b.add_link("frame", frame=True)
+    for x in ("turret", "boom", "t_barrel", "t_rod", "b_barrel", "b_rod"):
+        b.add_link(x)
+    b.add_joint("foot", "R", ("frame", "turret", "boom"), at=F)
+    for name, base, end, barrel, rod, lb, le in (("t", A3, E3, "t_barrel", "t_rod", "frame", "turret"),
+                                                 ("b", A, E, "b_barrel", "b_rod", "turret", "boom")):
+        u = np.subtract(end, base) / _d(base, end)
+        b.add_joint(f"{name}_base", "R", (lb, barrel), at=base)
+        b.add_joint(f"{name}_slide", "P", (barrel, rod), at=tuple(np.add(base, end) / 2), axis=tuple(u))
+        b.add_joint(f"{name}_end", "R", (rod, le), at=end)
+    b.add_driver("t_slide", range=(-0.3, 0.3))
+    b.add_driver("b_slide", range=(-0.6, 0.7))
+    b.add_point("tip", "boom", P)
+    ws = check(b.build(), workspace="tip").workspace
+    assert not ws.exact and ws.area >= 0.0

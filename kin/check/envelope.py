@@ -41,6 +41,7 @@ __all__ = ["Envelope", "BoundaryArc", "envelope", "edge_fractions"]
 _SEED = 65          # seed grid per face (Chebyshev points per driver)
 _EDGE = 4097        # Chebyshev points per box edge
 _NUDGE = 1e-9       # D at a box edge is read this far (of the range) inside it
+_CHORDS = 4000      # a singular curve's chords are refined below the corners' spread / this
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,6 +158,10 @@ def _crossing_segments(face, t, D):
         sl0 = (slice(0, n - 1), slice(None)) if axis == 0 else (slice(None), slice(0, n - 1))
         sl1 = (slice(1, n), slice(None)) if axis == 0 else (slice(None), slice(1, n))
         idx = np.argwhere(pos[sl0] != pos[sl1])
+        if len(idx) > n * n // 8:
+            # D changes sign on most grid edges: the face is degenerate (two drivers move
+            # the point along one line everywhere, rank one throughout), not a fold
+            raise ValueError("the Jacobian has rank one over much of a face")
         if not len(idx):
             continue
         a = np.stack([U[sl0][tuple(idx.T)], V[sl0][tuple(idx.T)]], axis=1)
@@ -192,22 +197,32 @@ def _crossing_segments(face, t, D):
     return np.array(segs, float).reshape(-1, 2, 2), bx
 
 
-def _refine_segments(face, segs, rounds: int):
-    """Halve each singular-curve segment ``rounds`` times: the new point is bracketed on
-    the segment's perpendicular bisector (kept as a chord where no bracket is found)."""
-    for _ in range(rounds):
+def _refine_segments(face, segs, rounds: int, chord: float):
+    """Halve each singular-curve segment ``rounds`` times, then each whose image is
+    longer than ``chord`` (at most 6 more times): the new point is bracketed on the
+    segment's perpendicular bisector; a segment with no bracket there is kept whole (a
+    point off the curve would map inside the fold, not on it)."""
+    for r in range(rounds + 6):
         if not len(segs):
             return segs
+        if r < rounds:
+            split = np.ones(len(segs), bool)
+        else:
+            P, Q = face.points(segs[:, 0]), face.points(segs[:, 1])
+            split = np.hypot(*(Q - P).T) > chord
+            if not split.any():
+                return segs
+        keep, segs = segs[~split], segs[split]
         p, q = segs[:, 0], segs[:, 1]
         mid, d = 0.5 * (p + q), q - p
         nrm = np.stack([-d[:, 1], d[:, 0]], axis=1)
         a, b = np.clip(mid - nrm, 0, 1), np.clip(mid + nrm, 0, 1)
         fa, fb = face.det(a), face.det(b)
         ok = np.sign(fa) * np.sign(fb) < 0
-        r = mid.copy()
-        if ok.any():
-            r[ok] = _bisect(face.det, a[ok], b[ok], fa[ok])
-        segs = np.concatenate([np.stack([p, r], axis=1), np.stack([r, q], axis=1)])
+        if not ok.any():
+            return np.concatenate([keep, segs])
+        c = _bisect(face.det, a[ok], b[ok], fa[ok])
+        segs = np.concatenate([keep, segs[~ok], np.stack([p[ok], c], axis=1), np.stack([c, q[ok]], axis=1)])
     return segs
 
 
@@ -292,6 +307,8 @@ def _sheets(m, ip, box):
     arcs: a list of (label, (K, 2) polyline, split flags per vertex)."""
     faces = _faces(m, ip, box)
     t = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, _SEED)))
+    corners = _solve_p(m, ip, np.array(list(itertools.product(*box))))
+    chord = float(np.hypot(*(np.nanmax(corners, axis=0) - np.nanmin(corners, axis=0)))) / _CHORDS
     splits, crit, seeds = {}, [], []
     UV = np.stack(np.meshgrid(t, t, indexing="ij"), axis=-1).reshape(-1, 2)
     for face, keys in faces:
@@ -301,7 +318,7 @@ def _sheets(m, ip, box):
         segs, bx = _crossing_segments(face, t, D)
         for side, key in enumerate(keys):
             splits.setdefault(key, []).extend(bx[side])
-        crit.append(_refine_segments(face, segs, 4))
+        crit.append(_refine_segments(face, segs, 4, chord))
         seeds.append({0: D[:, 0], 1: D[-1, :], 2: D[:, -1], 3: D[0, :]})
     edges = {key: _edge_points(m, ip, box, key, np.array(x)) for key, x in splits.items()}
     A, B, W, arcs = [], [], [], []
