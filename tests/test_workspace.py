@@ -36,39 +36,28 @@ def _d(p, q):
 STICK_LIMIT = _d(P, A2) + _d(P, E2) - _d(A2, E2)
 
 
-#: a turret pivoted at the boom foot, turned by a third cylinder from A3 (frame) to E3
+#: a turret pivoted at the boom foot, turned by a cylinder from A3 (frame) to E3
 A3, E3 = (-0.4, 1.2), (0.1, 2.6)
 
 
-def boom_stick(stick_high: float, boom=(-0.6, 0.7), stick_low: float = -0.8, turret=None):
-    """The boom and stick; with ``turret`` = (low, high), the boom cylinder's base and the
-    boom foot sit on a turret that a third cylinder turns about the foot (one pin joins
-    frame, turret and boom), so the boom's angle is the sum of two cylinders' turns."""
+def boom_stick(stick_high: float, boom=(-0.6, 0.7), stick_low: float = -0.8):
+    """The boom and stick, each turned by a cylinder; the tip T on the stick."""
     b = MechanismBuilder()
     b.add_link("frame", frame=True)
     for x in ("boom", "stick", "boom_barrel", "boom_rod", "stick_barrel", "stick_rod"):
         b.add_link(x)
-    base = "frame"
-    if turret is not None:
-        for x in ("turret", "turret_barrel", "turret_rod"):
-            b.add_link(x)
-        base = "turret"
 
     def cyl(name, base, end, barrel, rod, links_base, links_end):
         u = np.subtract(end, base) / _d(base, end)
         b.add_joint(f"{name}_base", "R", (links_base, barrel), at=base)
         b.add_joint(f"{name}_slide", "P", (barrel, rod), at=tuple((np.add(base, end)) / 2), axis=tuple(u))
         b.add_joint(f"{name}_end", "R", (rod, links_end), at=end)
-    b.add_joint("foot", "R", ("frame", "boom") if turret is None else ("frame", "turret", "boom"), at=F)
+    b.add_joint("foot", "R", ("frame", "boom"), at=F)
     b.add_joint("boom_stick", "R", ("boom", "stick"), at=P)
-    if turret is not None:
-        cyl("turret_cyl", A3, E3, "turret_barrel", "turret_rod", "frame", "turret")
-    cyl("boom_cyl", A, E, "boom_barrel", "boom_rod", base, "boom")
+    cyl("boom_cyl", A, E, "boom_barrel", "boom_rod", "frame", "boom")
     cyl("stick_cyl", A2, E2, "stick_barrel", "stick_rod", "boom", "stick")
     b.add_driver("boom_cyl_slide", range=boom)
     b.add_driver("stick_cyl_slide", range=(stick_low, stick_high))
-    if turret is not None:
-        b.add_driver("turret_cyl_slide", range=turret)
     b.add_point("tip", "stick", T)
     return b.build()
 
@@ -123,9 +112,6 @@ def two_link_area(a, b, t1, t2) -> float:
 
 def boom_stick_area(box) -> float:
     t1 = sorted(_turn(F, A, E, s) for s in box[0])
-    if len(box) == 3:                     # the turret's turn adds to the boom's
-        t3 = sorted(_turn(F, A3, E3, s) for s in box[2])
-        t1 = [t1[0] + t3[0], t1[1] + t3[1]]
     t2 = sorted(_turn(P, A2, E2, s) for s in box[1])
     return two_link_area(np.subtract(P, F), np.subtract(T, P), t1, t2)
 
