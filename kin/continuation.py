@@ -264,6 +264,11 @@ def _crossing(evaluate, P, s_nodes, flips, handled, crossings, pr, s, i, g, delt
     at the vertex of the margin, keep or flip the sign by the tangent rule, record it;
     returns the limit ``(a, b, g)`` when the group cannot go on there, else None."""
     lo, hi = _zero_run(pr, s, i)
+    if 0.5 * (lo + hi) + max(delta, hi - lo) >= s[-1]:
+        # the path ends in the touch (a range end at a reach limit): the tangent rule's
+        # probes would lie past its end, and there is nothing past it to resolve
+        handled[g].append((lo - delta, np.inf))
+        return None
     s_star = 0.5 * (lo + hi)
     d = max(delta, hi - lo)
     d = min(d, 0.25 * (s_star - s[0])) if s_star > s[0] else d

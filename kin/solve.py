@@ -335,6 +335,12 @@ def _walk_dir(sp: SolvePlan, kernels, extent: float, sign: float) -> Walk:
     return _walk_on(sp, kernels, sign * np.linspace(0.0, extent, n)[:, None])
 
 
+def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
+    """How far an unblocked walk went (input units): a slide's walk reaches the extent
+    asked for, exactly (``asked / scale * scale`` may fall an ulp short of it)."""
+    return walk.s[-1] * scale if is_r else max(walk.s[-1] * scale, asked)
+
+
 def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart:
     """Walk up and down from the reference (one driver; scaled inputs)."""
     is_r = sp.mechanism.joint(sp.mechanism.drivers[0].joint).kind is JointKind.R
@@ -351,7 +357,7 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
             odd = [k for k, f in up.flips.items() if len(f) % 2]
         period = (2 * np.pi if len(up.s) and up.s[-1] < 3 * np.pi else 4 * np.pi) if not odd else None
     hi = np.inf if period else (up.block[0] * scale if up is not None and up.block else
-                                (up.s[-1] * scale if up is not None else 0.0))
+                                (_walked(up, scale, hi_req, is_r) if up is not None else 0.0))
     if up is not None:
         if up.block:
             limits["hi"] = up.block[2]
@@ -362,7 +368,7 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
     ext_dn = 2 * np.pi if is_r else max(-lo_req / scale, 0.0)
     if not period and ext_dn > 0:
         dn = _walk_dir(sp, kernels, ext_dn, -1.0)
-        lo = -(dn.block[0] if dn.block else dn.s[-1]) * scale
+        lo = -dn.block[0] * scale if dn.block else -_walked(dn, scale, -lo_req, is_r)
         if dn.block:
             limits["lo"] = dn.block[2]
         for k, f in dn.flips.items():
@@ -630,9 +636,12 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
 
 
 def _fmt_path(sp: SolvePlan, P: np.ndarray, s_nodes: np.ndarray, scale: np.ndarray, s: float) -> str:
-    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text."""
+    """The inputs at parameter ``s`` of the path ``P`` (scaled), as text; with several
+    drivers each is named (``boom_slide = 0 m, stick_slide = 0.825 m``)."""
     x = np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
-    return ", ".join(_fmt_x(sp, j, v) for j, v in enumerate(x))
+    if len(x) == 1:
+        return _fmt_x(sp, 0, x[0])
+    return ", ".join(f"{d.joint} = {_fmt_x(sp, j, v)}" for j, (d, v) in enumerate(zip(sp.mechanism.drivers, x)))
 
 
 def only_all(sp: SolvePlan, needed) -> bool:

@@ -384,3 +384,15 @@ def test_driver_angles_of_a_limited_crank_and_bad_index():
     assert da.flagged(20.0)                   # stretched to 180° at its limits
     with pytest.raises(InputError, match="driver index"):
         driver_angles(m, 1)
+
+
+def test_readme_check_example_is_what_check_prints(capsys):
+    """Issue 36 part 2, 4: the README's ``multiloop check`` example had fallen behind the
+    command's output (the velocity ratio's extremes gained their positions)."""
+    import re
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text()
+    block = re.search(r"```\n\$ multiloop check catalogue/mechanisms/four_bar.toml[^\n]*\n(.*?)```", readme, re.S)
+    assert block is not None
+    assert main(["check", str(root / "catalogue/mechanisms/four_bar.toml")]) == 0
+    assert capsys.readouterr().out.strip() == block.group(1).strip()

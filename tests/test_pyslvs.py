@@ -18,6 +18,7 @@ from multiloop.topo.pyslvs import (dumps_pyslvs, expression_of, mechanism_from_e
 from multiloop.kin.solve import solve
 from multiloop.topo.errors import InputError
 from multiloop.topo.isomorphism import canonical_form
+from multiloop.topo.model import MechanismBuilder
 
 DATA = json.loads((Path(__file__).parent / "data" / "pyslvs_solutions.json").read_text())
 EXAMPLES = DATA["examples"]
@@ -101,3 +102,23 @@ def test_convert_command_round_trip_and_every_command_reads_pyslvs(tmp_path, cap
     bad.write_text("mechanism: 12\n")
     assert main(["analyse", str(bad)]) == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_a_written_project_says_how_it_rounds(tmp_path):
+    """Issue 36 part 2, 4: the export rounds coordinates to 12 significant digits; the
+    project's first line (a YAML comment) says so, and it reads back within that."""
+    from multiloop.topo.pyslvs import DIGITS, HEADER
+    b = MechanismBuilder()
+    b.add_link("ground", frame=True)
+    third = 1.0 / 3.0
+    for n, lk, at in [("O", ("ground", "L1"), (0.0, 0.0)), ("A", ("L1", "L2"), (third, 2 * third)),
+                      ("B", ("L2", "L3"), (3.0 + third, 2.0)), ("C", ("L3", "ground"), (4.0, 0.0))]:
+        b.add_joint(n, "R", lk, at=at)
+    b.add_driver("O")
+    text = dumps_pyslvs(b.build())
+    assert text.startswith(HEADER) and f"{DIGITS} significant digits" in HEADER
+    assert "0.333333333333," in text and "0.3333333333333333" not in text
+    f = tmp_path / "m.pyslvs"
+    f.write_text(text)
+    back = read_pyslvs(f)
+    assert back.joints[1].at == pytest.approx((third, 2 * third), rel=1e-12)

@@ -172,3 +172,37 @@ def test_builder_rejects_bad_range():
     b.add_driver("O", range=(0.5, 1.0))
     with pytest.raises(InputError, match=r"contains the reference.*got \[28.6479, 57.2958\]"):
         b.build()
+
+
+def _lifted_boom(factor: float, rng):
+    """A boom pinned at the origin, lifted by one cylinder from (1.5, -0.5) to (2, 1),
+    every length times ``factor``."""
+    b = MechanismBuilder()
+    b.add_link("frame", frame=True)
+    for x in ("boom", "barrel", "rod"):
+        b.add_link(x)
+    A, B = np.array([1.5, -0.5]) * factor, np.array([2.0, 1.0]) * factor
+    b.add_joint("foot", "R", ("frame", "boom"), at=(0.0, 0.0))
+    b.add_joint("base", "R", ("frame", "barrel"), at=tuple(A))
+    b.add_joint("slide", "P", ("barrel", "rod"), at=tuple((A + B) / 2), axis=tuple((B - A) / np.hypot(*(B - A))))
+    b.add_joint("end", "R", ("rod", "boom"), at=tuple(B))
+    b.add_driver("slide", range=rng)
+    return b.build()
+
+
+@pytest.mark.parametrize("factor", [0.7, 1.0, 1.7, 3.0, 5.0, 11.0])
+@pytest.mark.parametrize("rng", [(-0.25, 0.45), (-0.3, 0.4), (-0.1, 0.7)])
+def test_every_position_at_a_closed_stroke_range_end_solves(factor, rng):
+    """A cylinder's range ends are part of its motion: both solve (alone, together, and
+    as the default sweep's first and last rows), whatever the mechanism's size (the walk
+    from the reference runs in units of the size; ``x / size * size`` may fall an ulp
+    short of ``x``, which made the end an "other circuit")."""
+    m = _lifted_boom(factor, rng)
+    lo, hi = rng
+    for X in ([hi], [lo], [lo, hi], [hi, lo]):
+        st = solve(m, np.array(X))
+        assert st.ok.all(), (X, list(st.status))
+    x = input_range(m, 36)
+    assert x[0] == lo and x[-1] == hi
+    assert solve(m, si_inputs(m, x)).ok.all()
+    assert check(m).drivers[0].usable == (lo, hi)

@@ -402,3 +402,57 @@ def test_an_unreachable_slide_names_the_limit_it_lies_beyond():
     state = solve(m, np.array([0.0, 1.0, 1.5, -0.7]))
     assert state.codes.tolist()[:2] == [0, 0] and set(state.codes[2:].tolist()) == {int(Status.LIMIT)}
     assert f"limit at {hi:.6g} m" in state.status[2] and f"limit at {lo:.6g} m" in state.status[3]
+
+
+def _lifted_boom():
+    """A boom pinned at the origin, lifted by a cylinder from (1, 0) to (1, 1) with no
+    stroke range: the cylinder side L of the triangle base–end–foot reaches |AC| ± l,
+    i.e. the stroke limits √2 − 2 and √2, where the triangle is flat (law of cosines)."""
+    b = MechanismBuilder("boom")
+    b.add_link("frame", frame=True)
+    for lk in ("boom", "barrel", "rod"):
+        b.add_link(lk)
+    b.add_joint("foot", "R", ("frame", "boom"), at=(0.0, 0.0))
+    b.add_joint("base", "R", ("frame", "barrel"), at=(1.0, 0.0))
+    b.add_joint("slide", "P", ("barrel", "rod"), at=(1.0, 0.5), axis=(0.0, 1.0))
+    b.add_joint("end", "R", ("rod", "boom"), at=(1.0, 1.0))
+    b.add_driver("slide")
+    return b.build()
+
+
+def test_angles_at_located_singular_points_are_their_exact_values():
+    """Issue 36 part 2, 3: at a located limit or crossing the angle is known exactly (0°
+    or 180° for a flat triangle, 90° for a rod normal to its guide, 0° for a triad's
+    concurrent legs), not read slightly inside it (5.8e-6°, 179.9999935°, 89.9999943°,
+    1.4e-3°, 0.009° before)."""
+    from pathlib import Path
+    from multiloop.topo.io import load
+    data = Path(__file__).parent / "data" / "branches"
+    tol = 1e-9
+    e = _check(load(data / "parallelogram.toml")).drivers[0].angles[0].extreme
+    assert abs(e.min - 0.0) <= tol and abs(e.max - 180.0) <= tol
+    assert math.degrees(e.at_min) == pytest.approx(300.0, abs=1e-6)
+    e = _check(load(data / "crank_equals_rod.toml")).drivers[0].angles[0].extreme
+    assert abs(e.max - 90.0) <= tol
+    assert math.degrees(e.at_max) == pytest.approx(225.0, abs=1e-6)
+    for a in _check(limited_triad()).drivers[0].angles:
+        assert abs(a.extreme.min - 0.0) <= tol
+    e = _check(dead_zone_at_pi(0.37, math.radians(40.0))).drivers[0].angles[0].extreme
+    assert abs(e.max - 180.0) <= tol
+    dc = _check(_lifted_boom()).drivers[0]
+    low = min(dc.limits)                  # (√2 lies beyond the check's search extent)
+    assert low == pytest.approx(math.sqrt(2.0) - 2.0, abs=1e-9)
+    (a,) = [a for a in dc.angles if a.joint == "end"]
+    assert a.extreme.min == 0.0 and a.extreme.at_min == low     # flat: the end folds onto the base
+
+
+def test_a_kite_lists_its_change_point_once():
+    """The kite's motion is periodic in two turns: it meets its change point at 300° on
+    both, the same crank angle on the turn, listed once (was twice)."""
+    a, bb, t = 0.5, 1.2, math.radians(60.0)
+    A, O4 = np.array([a * math.cos(t), a * math.sin(t)]), np.array([a, 0.0])
+    d = np.hypot(*(O4 - A))
+    n = np.array([-(O4 - A)[1], (O4 - A)[0]]) / d
+    m = four_bar((0, 0), A, 0.5 * (A + O4) + math.sqrt(bb * bb - d * d / 4) * n, O4)
+    dc = _check(m).drivers[0]
+    assert [round(math.degrees(x), 6) for x, _ in dc.branch_points] == [300.0]

@@ -23,6 +23,7 @@ from .events import extremes, roots
 from .grashof import four_bar_loops
 from .instant_centres import instant_centres
 from .motion import driver_motion
+from .singular_values import exact_extremes
 from .report import AngleResult, CheckReport, DriverAngles, DriverCheck
 from .transmission import angle_specs, angle_values, guide_direction
 from .sweep import mechanism_size
@@ -122,9 +123,11 @@ def _motion(m, ap, plan, k, cancel=None):
 
 def _angles(mo, specs) -> tuple[AngleResult, ...]:
     """Exact extremes of every monitored angle over the motion ``mo``, read on both sides
-    of the certified walk's crossings (:func:`~kin.check.events.extremes`)."""
+    of the certified walk's crossings (:func:`~kin.check.events.extremes`), with the
+    exact value at a located limit or crossing (:mod:`~kin.check.singular_values`)."""
     crossings = [x for x, _ in mo.events.crossings] if mo.events is not None else []
     ext = extremes(mo, lambda s: angle_values(s, specs), events=crossings)
+    ext = exact_extremes(mo, specs, ext, lambda s: angle_values(s, specs))
     return tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
 
 
@@ -183,11 +186,21 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
     ratio_ext = (extremes(mo, lambda s: np.abs(_ratio(s, out))[:, None], derivatives=True, events=crossings,
                           beside=(1e-5, 1e-4))[0] if out else None)
     return DriverCheck(d.joint, rotary, mo.full_rotation, mo.periodic, mo.limits,
-                       tuple(limit_groups), tuple(sorted(bps)),
+                       tuple(limit_groups), _distinct(bps),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
                        angles, out[0] if out else None, unit,
                        np.concatenate(xs), np.concatenate(rs), bad, unbounded, ratio_ext,
                        d.range, mo.binds)
+
+
+def _distinct(bps) -> tuple:
+    """Branch points (input, group) sorted, each listed once: a motion periodic in two
+    turns meets a change point twice at the same crank angle on the turn (the kite)."""
+    out: list = []
+    for x, g in sorted(bps):
+        if not any(g == g2 and abs(x - x2) <= 1e-9 * max(1.0, abs(x)) for x2, g2 in out):
+            out.append((x, g))
+    return tuple(out)
 
 
 def usable_box(m: Mechanism, dcs) -> tuple[tuple[float, float], ...]:
@@ -329,7 +342,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     ics = instant_centres(st, 0)
     circ = group_circuits(ap, dcs)
     loops = four_bar_loops(m, dict(ap.link_numbers))
-    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs))
+    ends = [(dc.bound_at("low"), dc.bound_at("high")) for dc in dcs]
+    ws = None if workspace is None else workspace_of(m, workspace, usable_box(m, dcs), ends)
     rep = CheckReport(m.name, ap.formula, float(min_transmission), dcs, circ, loops, ics,
                       tuple(float(x) for x in x0), (), ws)
     return CheckReport(**{**rep.__dict__, "verdict": verdict(rep)})

@@ -20,11 +20,12 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from multiloop.kin.solve import motion_events
 
-from .sweep import Side, mechanism_size
+from .sweep import XTOL, Side, mechanism_size
 
 __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
 R_STEPS = 720            # grid steps per turn (0.5°)
+_LIMIT_TOL = 1e-13       # a limit's bracket (rad, or fraction of the size for P drivers)
 P_STEPS = 400            # grid steps over ± the mechanism's size
 
 
@@ -121,8 +122,12 @@ def _segment(side: Side, chunk: int | None = None, stop: float | None = None) ->
         return Segment(_guarded(side, st), side.grid.size, st, None, None, singular)
     if f is None:                         # chunk ended on an isolated singular sample
         f = st.n_positions - 1
+    # to 1e-13 of the size: a driven point moves like the square root of the stroke left
+    # before a reach limit, so a limit known to 1e-10 of the size put a tool position
+    # 1e-5 of the size off (the workspace's corners); closer than 1e-13 the rounding of
+    # another path may put the end past the limit (the row would not solve)
     lo, hi = side.bisect([side.grid[f - 1]], [side.grid[f]],
-                          lambda s, r: np.where(s.ok[r], 1.0, -1.0))
+                          lambda s, r: np.where(s.ok[r], 1.0, -1.0), xtol=_LIMIT_TOL * side.xtol / XTOL)
     st_ok = side.solve(side.grid[:f], derivatives=True)
     return Segment(_guarded(side, st_ok), f, st_ok, float(lo[0]), (float(lo[0]), float(hi[0])),
                    singular)

@@ -154,7 +154,7 @@ class Side:
         st, r = self.at(x.ravel(), derivatives)      # lo too: the path approaches gradually
         return x[:, 1:], value(st, r.reshape(x.shape))[:, 1:]
 
-    def bisect(self, lo, hi, value, derivatives: bool = False):
+    def bisect(self, lo, hi, value, derivatives: bool = False, xtol: float | None = None):
         """Roots of sign changes, one per bracket, vectorised (zoom search).
 
         Each iteration samples ``samples`` interior points of every bracket in one solve
@@ -170,9 +170,12 @@ class Side:
             The quantity of bracket i at ``state`` rows ``rows[i]``; NaN counts as
             the sign of ``hi`` (the failing side of a limit).
 
+        xtol : float, optional
+            Bracket width to stop at (default :attr:`xtol`).
+
         Returns
         -------
-        (lo, hi) : arrays (K,), the final brackets (width below :attr:`xtol`).
+        (lo, hi) : arrays (K,), the final brackets (width below ``xtol``).
         """
         lo = np.array(lo, float)
         hi = np.array(hi, float)
@@ -184,7 +187,10 @@ class Side:
         st, r = self.at(lo, derivatives)
         s_lo = np.sign(value(st, r))
         rows = np.arange(lo.size)
-        while np.max(np.abs(hi - lo)) > self.xtol:
+        tol = self.xtol if xtol is None else xtol
+        while np.max(np.abs(hi - lo)) > tol:
+            if np.all(np.abs(hi - lo) <= 4 * np.spacing(np.maximum(np.abs(lo), np.abs(hi)))):
+                break                            # as narrow as the floating point allows
             x, v = self._sample(lo, hi, value, derivatives)
             same = (np.sign(v) == s_lo[:, None]) & np.isfinite(v)
             # first sample on the other side (or none: the root is in the last sub-interval)

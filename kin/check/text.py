@@ -52,7 +52,10 @@ def _workspace(ws) -> list[str]:
     return [f"workspace of {ws.point} over the usable ranges (driver values in deg / m from the reference):",
             f"  x from {ws.x[0]:.6g} m (at {at(ws.x_at[0])}) to {ws.x[1]:.6g} m (at {at(ws.x_at[1])})",
             f"  y from {ws.y[0]:.6g} m (at {at(ws.y_at[0])}) to {ws.y[1]:.6g} m (at {at(ws.y_at[1])})",
-            f"  area {ws.area:.6g} m², boundary polygon of {len(ws.boundary)} vertices (--json)"]
+            f"  area {ws.area:.6g} m², boundary polygon of {len(ws.boundary)} vertices (--json)"
+            + ("" if ws.exact else " (the outline of the samples)")] + (
+            ["  boundary arcs, in order (each set by):"] + [f"    {lab}" for lab in ws.arc_labels()]
+            if ws.exact else [])
 
 
 def format_report(rep) -> str:

@@ -21,12 +21,17 @@ halves the window, down to 1e-10 of each range; all four extremes are polled in 
 per iteration.  Polling every direction of the window (not only the driver axes) keeps
 the search moving along a curved assembly limit, where a compass search stalls.
 
-The boundary is the outline of the samples' alpha shape (Edelsbrunner, Kirkpatrick &
-Seidel 1983, "On the shape of a set of points in the plane", IEEE Trans. Inf. Theory
-29(4) 551-559): the triangles of their Delaunay triangulation whose longest edge is
-below ``alpha`` (6 × the median edge), the edges of one kept triangle only, chained into
-loops; the loop of largest area is the boundary, and the area is that of the kept
-triangles (holes excluded).  Its accuracy is the sampling's: about one grid step.
+With two drivers whose box assembles everywhere, the boundary and area are exact
+(:mod:`~kin.check.envelope`: the box's edges and the singular curves, each arc labelled
+by what sets it, the area by Green's theorem); a box end at a reach limit is first
+moved inside it by the fewest units in the last place that make its edge assemble.
+Otherwise the boundary is the outline of the samples' alpha shape (Edelsbrunner,
+Kirkpatrick & Seidel 1983, "On the shape of a set of points in the plane", IEEE Trans.
+Inf. Theory 29(4) 551-559): the triangles of their Delaunay triangulation whose longest
+edge is below ``alpha`` (6 × the median edge), the edges of one kept triangle only,
+chained into loops; the loop of largest area is the boundary, and the area is that of
+the kept triangles (holes excluded).  Its accuracy is the sampling's: about one grid
+step.
 """
 from __future__ import annotations
 
@@ -36,6 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from multiloop.kin.solve import solve
+
+from .envelope import edge_fractions, envelope
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind
 
@@ -66,6 +73,16 @@ class Workspace:
     box: tuple[tuple[float, float], ...]
     rotary: tuple[bool, ...]
     samples: np.ndarray = field(repr=False)
+    arcs: tuple = ()        # (label, (K, 2) points) per boundary arc, labelled by what sets it
+    exact: bool = False     # boundary and area from the box edges and singular curves
+
+    def arc_labels(self) -> list[str]:
+        """The boundary arcs' labels, in order around the boundary, runs merged."""
+        out = []
+        for lab, _ in self.arcs:
+            if not out or out[-1] != lab:
+                out.append(lab)
+        return out
 
     def user(self, xs) -> list[float]:
         """Driver values in the user's units (deg for R, m for P)."""
@@ -74,7 +91,9 @@ class Workspace:
     def as_dict(self) -> dict:
         return {"point": self.point, "x": list(self.x), "y": list(self.y),
                 "x_at": [self.user(v) for v in self.x_at], "y_at": [self.user(v) for v in self.y_at],
-                "boundary": self.boundary.tolist(), "area": self.area}
+                "boundary": self.boundary.tolist(), "area": self.area, "exact": self.exact,
+                "arcs": [{"set_by": lab, "from": pts[0].tolist(), "to": pts[-1].tolist(),
+                          "n_points": len(pts)} for lab, pts in self.arcs]}
 
 
 def _box_samples(box: np.ndarray) -> np.ndarray:
@@ -187,28 +206,82 @@ def _largest_loop(P: np.ndarray, edges: np.ndarray) -> list[int]:
     return best
 
 
-def workspace(m, point: str, box) -> Workspace:
+def _arc_label(m, arc, ends) -> str:
+    """What sets a boundary arc: the drivers held at an end (their range, or an assembly
+    limit), or a singular curve."""
+    if arc.kind == "singular":
+        return "singular curve (the Jacobian has rank one)"
+    parts = []
+    for k, end in arc.ends:
+        why = ends[k][0 if end == "low" else 1] if ends is not None else None
+        what = {"assembly": "an assembly limit", "range": "its range"}.get(why, why)
+        parts.append(f"{m.drivers[k].joint} at its {end} end" + (f" ({what})" if what else ""))
+    return ", ".join(parts)
+
+
+def workspace(m, point: str, box, ends=None) -> Workspace:
     """The workspace of tracer point ``point`` over ``box`` = ((low, high) per driver,
-    rad or m from the reference; see the module docstring)."""
+    rad or m from the reference; see the module docstring); ``ends`` (optional): what
+    sets each driver's low and high end (``"range"`` or ``"assembly"``), for the arcs'
+    labels."""
     names = [p.name for p in m.points]
     if point not in names:
         raise InputError(explain("--workspace", expected="a tracer point of the mechanism",
                                  got=repr(point), hint="points: " + (", ".join(names) or "none ([[point]])")))
     ip = names.index(point)
-    box = np.array(box, float).reshape(len(m.drivers), 2)
+    box = _inside_limits(m, ip, np.array(box, float).reshape(len(m.drivers), 2))
     X = _box_samples(box)
     P = _solve_point(m, X, ip)
     good = np.isfinite(P).all(axis=1)
     if not good.any():
         raise InputError(explain("--workspace", expected="positions that assemble", got="none in the box"))
+    env = _envelope(m, ip, box)
     Xg, Pg = X[good], P[good]
+    if env is not None:                  # the box edges' Chebyshev samples: the corners exactly
+        Xg, Pg = np.vstack([Xg, env.edge_inputs]), np.vstack([Pg, env.edge_points])
     coords = np.array([0, 0, 1, 1])
     signs = np.array([-1.0, 1.0, -1.0, 1.0])
     starts = np.array([Xg[np.argmax(s * Pg[:, c])] for s, c in zip(signs, coords)])
     xs, vals = _refine(m, ip, box, starts, signs, coords)
-    boundary, area = alpha_outline(Pg)
+    if env is not None:
+        boundary, area = env.boundary, env.area
+        arcs = tuple((_arc_label(m, a, ends), a.points) for a in env.arcs)
+    else:
+        boundary, area = alpha_outline(Pg)
+        arcs = ()
     rotary = tuple(m.joint(d.joint).kind is JointKind.R for d in m.drivers)
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,
-                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg)
+                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None)
+
+
+def _envelope(m, ip, box):
+    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two drivers whose
+    box assembles everywhere on the reference's modes, else None (the alpha shape)."""
+    if box.shape[0] != 2 or np.any(box[:, 1] <= box[:, 0]):
+        return None
+    try:
+        return envelope(m, ip, box)
+    except ValueError:
+        return None
+
+
+def _inside_limits(m, ip, box: np.ndarray) -> np.ndarray:
+    """``box`` with each end that lies on a reach limit (the solver reports the flat
+    position there as singular: its determinant is zero) moved toward the reference by
+    as few units in the last place as make its edge assemble (at most 2⁴⁰)."""
+    box = box.copy()
+    t = edge_fractions()                 # the envelope's own edge samples
+    for k in range(box.shape[0]):
+        for e in (0, 1):
+            ulps = 0
+            while ulps <= 2 ** 40:
+                X = box[:, 0] + np.outer(t, box[:, 1] - box[:, 0])
+                X[:, k] = box[k, e]
+                if np.isfinite(_solve_point(m, X, ip)).all():
+                    break
+                ulps = max(1, 2 * ulps)
+                inward = box[k, 1 - e] - box[k, e]
+                box[k, e] += np.sign(inward) * ulps * np.spacing(abs(box[k, e]))
+    return box
