@@ -204,3 +204,20 @@ def test_a_new_run_clears_the_last_candidates_and_a_big_target_gets_a_target_hin
         sv.cancel()
     finally:
         w.close()
+
+
+def test_event_labels_at_nearly_the_same_place_are_stacked():
+    """Event labels whose marks nearly coincide (the excavator's limits) go one line apart
+    instead of overlapping."""
+    from multiloop.web.mechanism_view import LABEL_LINE, stacked_offsets
+    assert stacked_offsets([0, 0.001, 5, 0.0005], [0, 0, 5, 0.001], 0.01) == \
+        [-4.0, -4.0 + LABEL_LINE, -4.0, -4.0 + 2 * LABEL_LINE]
+    w = Workbench(requested="excavator")
+    try:
+        _finish_check(w, timeout=600)
+        d = w.view.marks.data
+        assert len(d["label"]) >= 2
+        pairs = {(round(x, 9), round(y, 9), dy) for x, y, dy in zip(d["x"], d["y"], d["dy"])}
+        assert len(pairs) == len(d["label"])                 # no two labels drawn at one place
+    finally:
+        w.close()

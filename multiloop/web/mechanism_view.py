@@ -57,6 +57,23 @@ if (el) {
 """
 
 
+#: marks closer than this share of the drawing's width + height are one cluster of labels
+LABEL_GAP = 0.03
+#: screen pixels between the lines of a cluster's labels (9 px text)
+LABEL_LINE = 11
+
+
+def stacked_offsets(xs, ys, near: float) -> list[float]:
+    """Screen y offsets (px) of event labels: a label whose mark lies within ``near``
+    (data units) of an earlier label's mark goes one line below the last of that cluster,
+    so that labels of events at nearly the same place do not overlap."""
+    out: list[float] = []
+    for i, (x, y) in enumerate(zip(xs, ys)):
+        below = [out[k] for k in range(i) if abs(xs[k] - x) <= near and abs(ys[k] - y) <= near]
+        out.append(max(below) + LABEL_LINE if below else -4.0)
+    return out
+
+
 def readout_html(sw: Sweep, i: int, names, mech: str) -> Html:
     """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
@@ -85,7 +102,7 @@ class MechanismView:
         self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
         self.joints = ColumnDataSource(dict(x=[], y=[], name=[], fill=[], size=[], marker=[], links=[]), name="ml-joints")
         self.paths = ColumnDataSource(dict(xs=[], ys=[]))
-        self.marks = ColumnDataSource(dict(x=[], y=[], label=[]))
+        self.marks = ColumnDataSource(dict(x=[], y=[], label=[], dy=[]))
         self.sweep = ColumnDataSource(dict(nx=[], ny=[], input=[]))
         # fixed size: a new text then repaints the readout alone, not the whole layout
         self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
@@ -116,7 +133,7 @@ class MechanismView:
         f.add_tools(HoverTool(renderers=[j], tooltips=[("joint", "@name"), ("links", "@links")]))
         f.scatter("x", "y", source=self.marks, marker="diamond", size=11, color="#d62728", alpha=0.8)
         f.text("x", "y", text="label", source=self.marks, text_font_size="9px", text_color="#d62728",
-               x_offset=6, y_offset=-4)
+               x_offset=6, y_offset="dy")
         return f
 
     # ------------------------------------------------------------------ content
@@ -126,7 +143,7 @@ class MechanismView:
         self.scene, self.sweeps, self.name = scene, sweeps, name
         if not sweeps:
             self.readout.text = html('<span id="ml-positions" data-mechanism="{name}"></span>', name=name)
-            self.marks.data = dict(x=[], y=[], label=[])
+            self.marks.data = dict(x=[], y=[], label=[], dy=[])
             self.paths.data = dict(xs=[], ys=[])
             self.sweep.data = dict(nx=[], ny=[], input=[])
             self.player.disabled = True
@@ -221,4 +238,5 @@ class MechanismView:
             xs.append(float(sw.nodes[f, idx[0], 0]))
             ys.append(float(sw.nodes[f, idx[0], 1]))
             labels.append(label)
-        self.marks.data = dict(x=xs, y=ys, label=labels)
+        near = LABEL_GAP * float(np.ptp(sw.nodes[..., 0]) + np.ptp(sw.nodes[..., 1]) or 1.0)
+        self.marks.data = dict(x=xs, y=ys, label=labels, dy=stacked_offsets(xs, ys, near))
