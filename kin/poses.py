@@ -266,6 +266,17 @@ class Poses:
                     self.points[k] = {key: (np.where(bad, np.nan, px), np.where(bad, np.nan, py))
                                       for key, (px, py) in self.points[k].items()}
 
+    def adopt(self, links, C, S, pending=()) -> None:
+        """Links ``links`` placed by the compiled kernel (:mod:`kin.kernel`): their rows of
+        ``T`` are written, except the angle rows of the links in ``pending`` (computed on
+        first use, as :meth:`angle`); their cos and sin are the rows of ``C``, ``S``."""
+        for k in links:
+            self.pending.discard(k)
+            self.x[k], self.y[k], self.th[k] = self.T[k]
+            self.c[k], self.s[k] = C[k], S[k]
+            self.points[k] = {}
+        self.pending.update(int(k) for k in pending if k in set(links))
+
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
         """The ``(M, n_links, 3)`` pose array: with ``links`` None (every link placed),

@@ -43,6 +43,7 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
 
+from . import kernel
 from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
@@ -197,7 +198,43 @@ class _Run:
 
 def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
     """Solve the steps ``steps`` at the inputs ``X`` (M, n_drivers), the closed-form dyads
-    on the branch ``reference sign × signs[k]`` (default 1)."""
+    on the branch ``reference sign × signs[k]`` (default 1): by the compiled kernel when
+    it covers them (:mod:`kin.kernel`), else by the NumPy path (:func:`_numpy_run`)."""
+    if kernels and not probe:
+        run = _compiled_run(sp, X, steps, signs, kernels)
+        if run is not None:
+            return run
+    return _numpy_run(sp, X, steps, signs, kernels, probe)
+
+
+def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> _Run | None:
+    """:func:`_run` by the compiled kernel, or None when it is not wanted for this batch
+    (:func:`kin.kernel.wanted`) or a step has no compiled form.  The rows that fail are
+    solved again by the NumPy path, which gives their statuses and reasons."""
+    if not kernel.wanted(X.shape[0]):
+        return None
+    kp = kernel.kernel_plan(sp)
+    if not kp.covers(steps):
+        return None
+    G = Poses(sp, X.shape[0])
+    C, S, fail, pending = kernel.run_positions(kp, X, steps, signs, G.T)
+    links = [i for k in steps for i in sp.steps[k].unknown]
+    G.adopt(links, C, S, pending)
+    bad = np.flatnonzero(fail)
+    if not bad.size:
+        return _Run(G, fail, {}, {})
+    sub = _numpy_run(sp, X[bad], steps, {k: v[bad] if np.ndim(v) else v for k, v in signs.items()}, kernels)
+    sub.G.angles()
+    for k in links:
+        G.T[k][:, bad] = sub.G.T[k]
+        C[k, bad], S[k, bad] = sub.G.c[k], sub.G.s[k]     # (a pending angle row follows them)
+    fail[bad] = sub.code
+    return _Run(G, fail, {int(bad[i]): text for i, text in sub.reason.items()}, {})
+
+
+def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
+    """:func:`_run` by the NumPy kernels of the steps (each vectorised over the batch):
+    the compiled kernel's oracle, and the solver of every step it does not cover."""
     M = X.shape[0]
     G = Poses(sp, M)
     code = np.zeros(M, np.int8)

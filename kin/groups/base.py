@@ -20,7 +20,8 @@ import numpy as np
 
 from multiloop.topo.errors import SingularityError, explain
 
-__all__ = ["SINGULAR_RTOL", "REACH_RTOL", "xy", "stack", "cramer", "is_singular",
+__all__ = ["SINGULAR_RTOL", "REACH_RTOL", "scalar", "SCALAR_HELPERS", "angle",
+           "carry", "turned", "place", "place_along", "place_like", "xy", "stack", "cramer", "is_singular",
            "sign_of", "quiet", "num", "pair", "length", "dot"]
 
 #: ``|det| <= SINGULAR_RTOL · |c1| |c2|`` marks a singular system.  For a dyad
@@ -32,6 +33,69 @@ SINGULAR_RTOL = 1e-8
 #: a distance beyond reach by at most this relative amount (rounding) is clamped (tangency);
 #: more is a failure, so a dead zone deeper than rounding is never assembled through.
 REACH_RTOL = 1e-14
+
+
+#: the scalar helpers that compiled steps call (:func:`scalar`)
+SCALAR_HELPERS: list = []
+
+
+def scalar(func):
+    """Decorator: ``func`` is a scalar helper that the compiled steps of
+    :mod:`kin.kernel` call; numba compiles it with them (``register_jitable`` when the
+    kernel loads).  Without numba it stays a plain Python function."""
+    SCALAR_HELPERS.append(func)
+    return func
+
+
+@scalar
+def angle(k, n, T, C, S, PP):
+    """Link k's angle at position ``n`` in the compiled kernel's pose store: its row of
+    ``T`` (``PP[k]`` unset), else (pending: the caller computes the row later) from its
+    cos and sin, as :meth:`kin.poses.Poses.angle`."""
+    return np.arctan2(S[k, n], C[k, n]) if PP[k] else T[k, 2, n]
+
+
+@scalar
+def carry(k, n, T, C, S, rx, ry):
+    """The material point of link k at ``(rx, ry)`` from its reference point, at position
+    ``n`` of the compiled kernel's pose store (:meth:`kin.poses.Poses.carry`)."""
+    return T[k, 0, n] + (C[k, n] * rx - S[k, n] * ry), T[k, 1, n] + (S[k, n] * rx + C[k, n] * ry)
+
+
+@scalar
+def turned(k, n, C, S, vx, vy):
+    """A direction ``(vx, vy)`` of link k's reference turned with the link
+    (:meth:`kin.poses.Poses.direction`)."""
+    return C[k, n] * vx - S[k, n] * vy, S[k, n] * vx + C[k, n] * vy
+
+
+@scalar
+def place(k, n, T, C, S, px, py, ox, oy, c, s):
+    """Link k at position ``n``: its material point with reference point at ``(-ox, -oy)``
+    from the link's is at ``(px, py)``, rotated by ``(c, s)`` (:meth:`kin.poses.Poses.place_k`;
+    the angle row is the caller's)."""
+    T[k, 0, n] = px + (c * ox - s * oy)
+    T[k, 1, n] = py + (s * ox + c * oy)
+    C[k, n] = c
+    S[k, n] = s
+
+
+@scalar
+def place_along(k, n, T, C, S, px, py, ox, oy, dx, dy, ux, uy, PP):
+    """As :func:`place`, turned by the rotation taking the unit ``(ux, uy)`` to the
+    direction ``(dx, dy)`` (:meth:`kin.poses.Poses.place_dir_xy`); the angle pending."""
+    inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+    nx, ny = dx * inv, dy * inv
+    place(k, n, T, C, S, px, py, ox, oy, nx * ux + ny * uy, ny * ux - nx * uy)
+    PP[k] = 1
+
+
+@scalar
+def place_like(k, o, n, T, C, S, px, py, ox, oy, PP):
+    """As :func:`place`, turned as link ``o`` (:meth:`kin.poses.Poses.place_like`)."""
+    place(k, n, T, C, S, px, py, ox, oy, C[o, n], S[o, n])
+    T[k, 2, n] = angle(o, n, T, C, S, PP)
+    PP[k] = 0
 
 
 def quiet(func):

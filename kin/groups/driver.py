@@ -13,9 +13,10 @@ import numpy as np
 
 from ..continuation import Probe
 from ..rigid import perp
-from .step import GroupStep, Outcome
+from .base import angle
+from .step import GroupStep, Lowered, Outcome, trig_row
 
-__all__ = ["DriverStepSolver", "is_closed_form"]
+__all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place"]
 
 
 def is_closed_form(group) -> bool:
@@ -29,6 +30,48 @@ def is_closed_form(group) -> bool:
     if drive[0].kind == "drive_R":
         return len(pins) == 1 and not sliders
     return len(sliders) == 1 and not pins and {drive[0].a, drive[0].b} == {sliders[0].a, sliders[0].b}
+
+
+def turn_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
+    """A turning driver at position ``n`` for the compiled kernel (:mod:`kin.kernel`).
+
+    ``ip`` = (driver, the known link of the joint, the link carrying the pin, the driven
+    link, whether the known link is the frame, the row of cos(sign × input) in ``W``);
+    ``fp`` = (sign, the pin relative to its link's reference point, the driven link's
+    reference point relative to the pin).  On the frame the angle is ``sign × input``
+    and its cos and sin come from ``W``; else the known link's angle is added.
+    """
+    h, k = ip[2], ip[3]
+    if ip[4]:
+        th = fp[0] * X[n, ip[0]]
+        c, s = W[ip[5], n], W[ip[5] + 1, n]
+    else:
+        th = angle(ip[1], n, T, C, S, PP) + fp[0] * X[n, ip[0]]
+        c, s = np.cos(th), np.sin(th)
+    px = T[h, 0, n] + (C[h, n] * fp[1] - S[h, n] * fp[2])
+    py = T[h, 1, n] + (S[h, n] * fp[1] + C[h, n] * fp[2])
+    T[k, 0, n] = px + (c * fp[3] - s * fp[4])
+    T[k, 1, n] = py + (s * fp[3] + c * fp[4])
+    T[k, 2, n], C[k, n], S[k, n], PP[k] = th, c, s, 0
+    return 0 if np.isfinite(c) else 1
+
+
+def slide_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
+    """A sliding driver at position ``n`` for the compiled kernel (:mod:`kin.kernel`).
+
+    ``ip`` = (driver, the guide's link, the driven link); ``fp`` = (sign, the joint
+    relative to the guide's reference point, the guide's direction, the driven link's
+    reference point relative to the joint).  The driven link turns with the guide.
+    """
+    o, k = ip[1], ip[2]
+    c, s = C[o, n], S[o, n]
+    d = fp[0] * X[n, ip[0]]
+    px = T[o, 0, n] + (c * fp[1] - s * fp[2]) + d * (c * fp[3] - s * fp[4])
+    py = T[o, 1, n] + (s * fp[1] + c * fp[2]) + d * (s * fp[3] + c * fp[4])
+    T[k, 0, n] = px + (c * fp[5] - s * fp[6])
+    T[k, 1, n] = py + (s * fp[5] + c * fp[6])
+    T[k, 2, n], C[k, n], S[k, n], PP[k] = angle(o, n, T, C, S, PP), c, s, 0
+    return 0 if np.isfinite(c) else 1
 
 
 class DriverStepSolver(GroupStep):
@@ -61,6 +104,21 @@ class DriverStepSolver(GroupStep):
             G.place_cs(self.link, P, self.r, G.c[k], G.s[k], G.angle(k))
         ok = G.finite([G.idx[self.link]])
         return Outcome(ok, {}, Probe(ok) if probe else None)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`turn_place` or :func:`slide_place`."""
+        if self.geo.batch:
+            return None
+        k, o = self.link_index(self.link), self.link_index(self.other)
+        r = self.r.tolist()
+        if self.u is None:
+            h = self.link_index(self.host)
+            d, frame = self.drive.driver, o == self.link_index(self.mechanism.frame)
+            return Lowered("drive_R", (d, o, h, k, int(frame), trig_row(d, self.sign)),
+                           (self.sign, *self.rel(origins, h, r), *self.off(origins, k, r)),
+                           ((d, self.sign),) if frame else ())
+        return Lowered("drive_P", (self.drive.driver, o, k),
+                       (self.sign, *self.rel(origins, o, r), *self.u.tolist(), *self.off(origins, k, r)))
 
     def rates(self, R, input_rates) -> None:
         rate = input_rates[self.drive.driver]

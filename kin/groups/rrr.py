@@ -25,14 +25,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, length, num, pair, sign_of,
-                   stack, xy, quiet)
+from multiloop.topo.assur import GroupKind
+
+from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, length, num, pair, scalar,
+                   sign_of, stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
-from .step import GroupStep, Outcome, dyad_outcome
+from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
 
-__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep"]
+__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep", "rrr_place",
+           "triangle_apex"]
 
 
 class RRRPosition(NamedTuple):
@@ -215,6 +218,69 @@ def _rotation(dx, dy, rot, d_ref, exact):
     return c, s
 
 
+@scalar
+def triangle_apex(ax, ay, cx, cy, l2, l3, sign):
+    """:func:`rrr_xy` at one position (scalars, compiled by :mod:`kin.kernel`): ``bx, by,
+    ok, det, exact``; the same operations in the same order, so the same floats."""
+    dx = cx - ax
+    dy = cy - ay
+    d2 = dx * dx + dy * dy
+    l2s = l2 * l2
+    inv = 1.0 / d2
+    r = l2s * inv
+    t = 0.5 + (0.5 * (l2s - l3 * l3)) * inv
+    q = r - t * t
+    exact = not q < 0.0
+    if exact:
+        k = np.sqrt(q)
+        ok = k == k
+        k = k * sign
+    else:
+        ok = q >= -REACH_RTOL * r
+        k = 0.0 * sign if ok else np.nan
+    return ax + t * dx - k * dy, ay + t * dy + k * dx, ok, -(k * d2), exact
+
+
+def rrr_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
+    """An RRR step at position ``n`` for the compiled kernel (:mod:`kin.kernel`): reads
+    the known links' poses from the pose store ``T`` (n_links, 3, M), ``C``, ``S``
+    (n_links, M), writes its two links (their angles pending), returns the
+    :class:`~kin.result.Status` (0, out of reach, singular).
+
+    ``ip`` = (known1, known2, link1, link2); ``fp`` = (A and C relative to their known
+    links' reference points, la, lc, sign, rot1, rot2, unit B−A, unit B−C, link1's and
+    link2's reference points relative to their placing points, from_B1, from_B2,
+    singular threshold).  Vasechkin et al. 2017, eqs. (1)-(3), as :meth:`RRRStep.positions`.
+    """
+    k1, k2, l1, l2 = ip[0], ip[1], ip[2], ip[3]
+    ax = T[k1, 0, n] + (C[k1, n] * fp[0] - S[k1, n] * fp[1])
+    ay = T[k1, 1, n] + (S[k1, n] * fp[0] + C[k1, n] * fp[1])
+    cx = T[k2, 0, n] + (C[k2, n] * fp[2] - S[k2, n] * fp[3])
+    cy = T[k2, 1, n] + (S[k2, n] * fp[2] + C[k2, n] * fp[3])
+    bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, fp[4], fp[5], fp[6] * factor)
+    for j in range(2):
+        lk = l1 if j == 0 else l2
+        px, py = (ax, ay) if j == 0 else (cx, cy)
+        dx, dy = bx - px, by - py
+        if exact:                          # |B − A| = la: the compiled rotation
+            c = dx * fp[7 + 2 * j] + dy * fp[8 + 2 * j]
+            s = dy * fp[7 + 2 * j] - dx * fp[8 + 2 * j]
+        else:                              # clamped to the tangent: normalised
+            inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+            nx, ny = dx * inv, dy * inv
+            c = nx * fp[11 + 2 * j] + ny * fp[12 + 2 * j]
+            s = ny * fp[11 + 2 * j] - nx * fp[12 + 2 * j]
+        if fp[19 + j] != 0.0:
+            px, py = bx, by
+        ox, oy = fp[15 + 2 * j], fp[16 + 2 * j]
+        T[lk, 0, n] = px + (c * ox - s * oy)
+        T[lk, 1, n] = py + (s * ox + c * oy)
+        C[lk, n], S[lk, n], PP[lk] = c, s, 1
+    if not ok:
+        return 1
+    return 0 if abs(det) > fp[21] else 2
+
+
 class RRRStep(GroupStep):
     """An RRR dyad of a plan: lengths, branch sign and reference directions compiled
     once; positions by :func:`rrr_position`, rates by :func:`rrr_rates`."""
@@ -267,6 +333,18 @@ class RRRStep(GroupStep):
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
         return dyad_outcome(ok, why, det, la * lc, False, pr, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`rrr_place`."""
+        if self.geo.batch:
+            return None
+        o = origins
+        at1, at2 = (self.B if self.from_B1 else self.A), (self.B if self.from_B2 else self.C)
+        f = (*self.rel(o, self.k1, self.A), *self.rel(o, self.k2, self.C), self.la, self.lc, self.sign,
+             *self.rot1, *self.rot2, *unit(self.dir1).tolist(), *unit(self.dir2).tolist(),
+             *self.off(o, self.l1, at1), *self.off(o, self.l2, at2),
+             float(self.from_B1), float(self.from_B2), SINGULAR * (self.la * self.lc))
+        return Lowered(GroupKind.RRR, (self.k1, self.k2, self.l1, self.l2), f)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (the reach margin of the probe is

@@ -1,0 +1,186 @@
+"""Compiled plans: a mechanism's solving plan lowered to flat arrays and run by one
+compiled kernel over a whole batch of positions.
+
+:func:`kernel_plan` lowers a :class:`~kin.solve.SolvePlan` once: each compiled step
+gives its :class:`~kin.groups.step.Lowered` numbers (its kind's code in
+:data:`kin.groups.registry.COMPILED`, link indices, lengths, signs, reference
+directions).  :func:`run_positions` then runs one numba kernel (``kin._kernel_nb``)
+that loops over the positions and, at each, over the steps, calling the scalar closed
+form of each step's kind: the five dyads (Vasechkin et al. 2017 [1]_, eqs. (1)-(3),
+(9)-(11), (15)-(18), (23)-(25), (30)-(32)), the driver and the actuated triangle.  It
+computes the same floats as the NumPy path (:mod:`kin.groups`: the same operations in
+the same order) and the same statuses; the NumPy path stays as its oracle
+(``tests/test_kernels.py``) and solves whatever the kernel does not: a plan with a
+triad, a class IV group or a Newton group, the probes of the continuation walk,
+velocities and accelerations, batches of designs.
+
+Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships
+wheels for Linux, macOS and Windows, and it caches compiled code on disk
+(``cache=True``), so a process after the first loads the kernel instead of compiling it.
+
+When: importing numba costs about 0.3 s, more than a small batch saves.  With
+``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when numba is already
+loaded in the process (:func:`load`, or a batch before it), and loads it itself for a
+batch of at least :data:`LAZY_MIN` positions; ``on`` always uses it (if numba is
+installed), ``off`` never.  The command line's small batches therefore never import
+numba, and its cold start does not grow.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical model
+   of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2) (2017) 73-79.
+   doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from .groups.registry import COMPILED
+from .groups.step import trig_row
+
+__all__ = ["KernelPlan", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
+           "mode", "MODES", "LAZY_MIN"]
+
+#: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
+MODES = ("auto", "on", "off")
+#: in mode "auto", a batch of at least this many positions loads numba itself
+LAZY_MIN = 200_000
+_MODE = [os.environ.get("MULTILOOP_KERNEL", "auto")]
+_CODES = {key: i for i, key in enumerate(COMPILED)}
+_NB = "multiloop.kin._kernel_nb"
+
+
+@dataclass(frozen=True, eq=False)
+class KernelPlan:
+    """A plan lowered to flat arrays (read-only): ``codes`` (n_steps,) the kind of each
+    step (its index in the registry; -1: no compiled step), ``ints`` / ``floats``
+    (n_steps, width) each step's numbers, ``unknown`` (n_steps, width) the links each
+    step places (-1 padded), ``frame`` the frame's link index, ``trig`` the (driver,
+    sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``."""
+
+    codes: np.ndarray
+    ints: np.ndarray
+    floats: np.ndarray
+    unknown: np.ndarray
+    frame: int
+    trig: tuple = ()
+
+    def covers(self, steps) -> bool:
+        """Whether every step of ``steps`` has a compiled step."""
+        return bool(np.all(self.codes[np.asarray(list(steps), int)] >= 0))
+
+
+def _table(rows, dtype, fill) -> np.ndarray:
+    width = max((len(r) for r in rows), default=0) or 1
+    out = np.full((len(rows), width), fill, dtype)
+    for i, r in enumerate(rows):
+        out[i, :len(r)] = r
+    out.flags.writeable = False
+    return out
+
+
+def lower_plan(sp) -> KernelPlan:
+    """Lower the compiled plan ``sp`` (:class:`~kin.solve.SolvePlan`) to flat arrays."""
+    low = [st.closed.lower(sp.origins) if st.closed is not None else None for st in sp.steps]
+    codes = np.array([_CODES.get(lw.key, -1) if lw is not None else -1 for lw in low], np.int64)
+    codes.flags.writeable = False
+    return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
+                      _table([lw.floats if lw else () for lw in low], float, np.nan),
+                      _table([st.unknown for st in sp.steps], np.int64, -1),
+                      sp.mechanism.link_names.index(sp.mechanism.frame),
+                      tuple(sorted({t for lw in low if lw is not None for t in lw.trig})))
+
+
+def kernel_plan(sp) -> KernelPlan:
+    """The lowered plan of ``sp``, kept on it (lowered on first use)."""
+    hit = sp.extra.get("kernel")
+    if hit is None:
+        hit = sp.extra["kernel"] = lower_plan(sp)
+    return hit
+
+
+def mode() -> str:
+    """The kernel's mode: ``"auto"``, ``"on"`` or ``"off"`` (see the module's notes)."""
+    return _MODE[0]
+
+
+@contextlib.contextmanager
+def using(m: str):
+    """Run a block with the kernel's mode ``m`` (one of :data:`MODES`)."""
+    if m not in MODES:
+        raise ValueError(f"kernel mode: expected one of {MODES}, got {m!r}")
+    old = _MODE[0]
+    _MODE[0] = m
+    try:
+        yield
+    finally:
+        _MODE[0] = old
+
+
+def is_loaded() -> bool:
+    """Whether the compiled kernel is loaded in this process."""
+    return _NB in sys.modules
+
+
+def load():
+    """Import numba and the kernel (compiled on first use, then read from the disk
+    cache); None when numba is not installed."""
+    try:
+        from . import _kernel_nb
+    except ImportError:
+        return None
+    return _kernel_nb
+
+
+def wanted(n_positions: int) -> bool:
+    """Whether a batch of ``n_positions`` is solved by the kernel in the current mode."""
+    m = _MODE[0]
+    if m == "off":
+        return False
+    if m == "on" or is_loaded() or n_positions >= LAZY_MIN:
+        return load() is not None
+    return False
+
+
+def _factors(n_steps: int, M: int, signs: dict) -> np.ndarray:
+    """Each step's branch factor: (n_steps, 1), or (n_steps, M) when one varies by row."""
+    per_row = any(np.ndim(v) for v in signs.values())
+    F = np.ones((n_steps, M if per_row else 1))
+    for k, v in signs.items():
+        F[k] = v
+    return F
+
+
+def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
+    """The table ``W`` (4 n_drivers, M): cos and sin of ±input (the rows asked for)."""
+    W = np.empty((4 * X.shape[1] if kp.trig else 0, X.shape[0]))
+    for d, sign in kp.trig:
+        r = trig_row(d, sign)
+        th = X[:, d] if sign > 0 else -X[:, d]
+        np.cos(th, out=W[r])
+        np.sin(th, out=W[r + 1])
+    return W
+
+
+def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray):
+    """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
+    branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
+    (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
+    each position's first failing step (M,) int8 and the links whose angle rows are
+    left to compute (``arctan2(S, C)``)."""
+    nb = load()
+    X = np.ascontiguousarray(X, float)
+    M = X.shape[0]
+    nl = T.shape[0]
+    C, S = np.empty((nl, M)), np.empty((nl, M))
+    C[kp.frame], S[kp.frame] = 1.0, 0.0
+    fail = np.zeros(M, np.int8)
+    pend = np.zeros(nl, np.int8)
+    nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, np.asarray(list(steps), np.int64),
+                       X, _trig(kp, X), _factors(len(kp.codes), M, signs), T, C, S, fail, pend)
+    return C, S, fail, np.flatnonzero(pend)
