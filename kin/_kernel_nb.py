@@ -21,7 +21,10 @@ __all__ = ["solve_positions", "SLOTS"]
 #: the number of scalar steps the kernel dispatches on (the registry's order)
 SLOTS = 8
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
-#: the steps and helpers are inlined into the kernel (no call, no reference counting per step)
+#: the steps are inlined into the kernel at numba's IR level (no call, no reference counting
+#: per step); the helpers they call stay functions (LLVM inlines them): inlining those at the
+#: IR level too gave wrong results with numba 0.61 (a step's locals clobbered, the
+#: kernel-vs-NumPy tests caught it)
 _INLINE = dict(_JIT, inline="always")
 
 
@@ -30,7 +33,7 @@ def _unused(ip, fp, X, n, W, factor, T, C, S, PP) -> int:  # pragma: no cover - 
 
 
 for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
-    register_jitable(**_INLINE)(_helper)
+    register_jitable(**_JIT)(_helper)
 if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
 _s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7 = (numba.njit(**_INLINE)(f) for f in
