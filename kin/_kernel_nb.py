@@ -23,7 +23,7 @@ SLOTS = 8
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 #: the steps are inlined into the kernel at numba's IR level (no call, no reference counting
 #: per step); the helpers they call stay functions (LLVM inlines them): inlining those at the
-#: IR level too gave wrong results with numba 0.61 (a step's locals clobbered, the
+#: IR level too gave wrong results with numba 0.68 (a step's locals clobbered, the
 #: kernel-vs-NumPy tests caught it)
 _INLINE = dict(_JIT, inline="always")
 
