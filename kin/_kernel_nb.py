@@ -16,46 +16,50 @@ from numba.extending import register_jitable
 from .groups.base import SCALAR_HELPERS
 from .groups.registry import COMPILED
 
-__all__ = ["solve_positions", "SLOTS"]
+__all__ = ["solve_positions", "finish_rows", "SLOTS"]
 
 #: the number of scalar steps the kernel dispatches on (the registry's order)
 SLOTS = 8
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
-#: the steps are inlined into the kernel at numba's IR level (no call, no reference counting
-#: per step); the helpers they call stay functions (LLVM inlines them): inlining those at the
-#: IR level too gave wrong results with numba 0.68 (a step's locals clobbered, the
-#: kernel-vs-NumPy tests caught it)
-_INLINE = dict(_JIT, inline="always")
 
 
-def _unused(ip, fp, X, n, W, factor, T, C, S, PP) -> int:  # pragma: no cover - a free slot
-    return 1
+def _unused(ip, fp, X, W, F, T, C, S, PP, out) -> None:  # pragma: no cover - a free slot
+    out[:] = 1
 
 
 for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
     register_jitable(**_JIT)(_helper)
 if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
-_s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7 = (numba.njit(**_INLINE)(f) for f in
+_s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7 = (numba.njit(**_JIT)(f) for f in
                                           (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
 
 
-@numba.njit(**_INLINE)
-def _failed(st, k, n, unknown, T, C, S, fail) -> None:
-    """Step k failed at position n with status ``st``: its links are NaN there, and the
-    position's status is the first failure's."""
-    if fail[n] == 0:
-        fail[n] = st
-    for j in range(unknown.shape[1]):
-        u = unknown[k, j]
-        if u >= 0:
-            T[u, 0, n] = T[u, 1, n] = T[u, 2, n] = C[u, n] = S[u, n] = np.nan
+@numba.njit(**_JIT)
+def _step(c, ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """The steps of code ``c`` (its index in the registry) at every position."""
+    if c == 0:
+        _s0(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 1:
+        _s1(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 2:
+        _s2(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 3:
+        _s3(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 4:
+        _s4(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 5:
+        _s5(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 6:
+        _s6(ip, fp, X, W, F, T, C, S, PP, out)
+    else:
+        _s7(ip, fp, X, W, F, T, C, S, PP, out)
 
 
 @numba.njit(**_JIT)
 def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend):
     """Solve the steps ``steps`` of a lowered plan at every row of ``X`` (M, n_drivers),
-    step by step, each over all positions (one loop per kind: no dispatch per position).
+    step by step, each over all positions (its kind's loop: no dispatch per position).
 
     Writes the steps' links into the pose store ``T`` (n_links, 3, M) (x, y, θ of each
     link's reference point; the frame's row set by the caller) with their cos and sin
@@ -66,48 +70,33 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
     branch factor.  A failing step's links are NaN at that position, and so are the
     links of the steps after it that read them, as in the NumPy path.
     """
-    M = X.shape[0]
+    out = np.empty(X.shape[0], np.int8)
     for i in range(steps.size):
         k = steps[i]
-        c, ip, fp, f = codes[k], ints[k], floats[k], F[k]
-        w = f.size > 1
-        if c == 0:
+        _step(codes[k], ints[k], floats[k], X, W, F[k], T, C, S, pend, out)
+        for n in range(X.shape[0]):
+            if out[n] != 0:
+                if fail[n] == 0:
+                    fail[n] = out[n]
+                for j in range(unknown.shape[1]):
+                    u = unknown[k, j]
+                    if u >= 0:
+                        T[u, 0, n] = T[u, 1, n] = T[u, 2, n] = C[u, n] = S[u, n] = np.nan
+
+
+@numba.njit(**_JIT)
+def finish_rows(T, C, S, pend, hosts, offs, P):
+    """After :func:`solve_positions`: the angle rows of the pending links
+    (``arctan2(S, C)``) and the points ``P`` (n_points, 2, M) of the joints and tracer
+    points, each carried by its host link ``hosts[i]`` from the offset ``offs[i]``
+    (:meth:`kin.poses.Poses.carry`)."""
+    M = T.shape[2]
+    for k in range(T.shape[0]):
+        if pend[k]:
             for n in range(M):
-                st = _s0(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 1:
-            for n in range(M):
-                st = _s1(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 2:
-            for n in range(M):
-                st = _s2(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 3:
-            for n in range(M):
-                st = _s3(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 4:
-            for n in range(M):
-                st = _s4(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 5:
-            for n in range(M):
-                st = _s5(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        elif c == 6:
-            for n in range(M):
-                st = _s6(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
-        else:
-            for n in range(M):
-                st = _s7(ip, fp, X, n, W, f[n] if w else f[0], T, C, S, pend)
-                if st != 0:
-                    _failed(st, k, n, unknown, T, C, S, fail)
+                T[k, 2, n] = np.arctan2(S[k, n], C[k, n])
+    for i in range(hosts.size):
+        h, ox, oy = hosts[i], offs[i, 0], offs[i, 1]
+        for n in range(M):
+            P[i, 0, n] = T[h, 0, n] + (C[h, n] * ox - S[h, n] * oy)
+            P[i, 1, n] = T[h, 1, n] + (S[h, n] * ox + C[h, n] * oy)

@@ -61,7 +61,9 @@ class KernelPlan:
     step (its index in the registry; -1: no compiled step), ``ints`` / ``floats``
     (n_steps, width) each step's numbers, ``unknown`` (n_steps, width) the links each
     step places (-1 padded), ``frame`` the frame's link index, ``trig`` the (driver,
-    sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``."""
+    sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``,
+    ``hosts`` / ``offs`` the link carrying each joint and tracer point and the point's
+    offset from that link's reference point."""
 
     codes: np.ndarray
     ints: np.ndarray
@@ -69,6 +71,8 @@ class KernelPlan:
     unknown: np.ndarray
     frame: int
     trig: tuple = ()
+    hosts: np.ndarray | None = None
+    offs: np.ndarray | None = None
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
@@ -93,7 +97,18 @@ def lower_plan(sp) -> KernelPlan:
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
                       sp.mechanism.link_names.index(sp.mechanism.frame),
-                      tuple(sorted({t for lw in low if lw is not None for t in lw.trig})))
+                      tuple(sorted({t for lw in low if lw is not None for t in lw.trig})),
+                      *_hosts(sp))
+
+
+def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
+    """Host link and offset of every joint, then every tracer point (``SolvePlan``)."""
+    m = sp.mechanism
+    hosts = np.array([*sp.joint_host, *sp.point_host], np.int64)
+    at = np.array([*(j.at for j in m.joints), *(p.at for p in m.points)], float).reshape(-1, 2)
+    offs = at - np.asarray(sp.origins, float)[hosts]
+    hosts.flags.writeable = offs.flags.writeable = False
+    return hosts, offs
 
 
 def kernel_plan(sp) -> KernelPlan:
@@ -167,12 +182,14 @@ def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
     return W
 
 
-def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray):
+def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray, points: bool = False):
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
     (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
-    each position's first failing step (M,) int8 and the links whose angle rows are
-    left to compute (``arctan2(S, C)``)."""
+    each position's first failing step (M,) int8, the links whose angle rows are left
+    to compute (``arctan2(S, C)``), and with ``points`` (every step solved) the angle
+    rows computed and the positions (M, n_joints + n_points, 2) of the joints and tracer
+    points (else None)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     M = X.shape[0]
@@ -183,4 +200,8 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     pend = np.zeros(nl, np.int8)
     nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, np.asarray(list(steps), np.int64),
                        X, _trig(kp, X), _factors(len(kp.codes), M, signs), T, C, S, fail, pend)
-    return C, S, fail, np.flatnonzero(pend)
+    if not points:
+        return C, S, fail, np.flatnonzero(pend), None
+    P = np.empty((kp.hosts.size, 2, M))
+    nb.finish_rows(T, C, S, pend, kp.hosts, kp.offs, P)
+    return C, S, fail, (), P.transpose(2, 0, 1)

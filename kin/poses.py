@@ -69,7 +69,8 @@ def _origins_xy(sp) -> tuple:
 class Poses:
     """Working store of link poses: one preallocated ``(n_links, 3, *shape)`` array.
 
-    ``shape`` is ``(M,)`` for one design at M inputs, or ``(D, N)`` for D designs at N
+    ``store`` (optional) is the array to use, e.g. a transposed view of an ``(M, n_links,
+    3)`` pose array that the compiled kernel writes.  ``shape`` is ``(M,)`` for one design at M inputs, or ``(D, N)`` for D designs at N
     inputs each (a plan bound to designs by :mod:`kin.design`: the reference points of
     the links and of the steps are then arrays ``(D, 1)`` that broadcast over inputs).
 
@@ -82,13 +83,13 @@ class Poses:
     so the joints' positions reuse them.
     """
 
-    def __init__(self, sp, M):
+    def __init__(self, sp, M, store=None):
         self.shape = (M,) if isinstance(M, int) else tuple(int(v) for v in M)
         self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else int(np.prod(self.shape))
         self.reasons = len(self.shape) == 1          # per-position failure texts (one design)
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
-        self.T = np.empty((nl, 3, *self.shape))
+        self.T = np.empty((nl, 3, *self.shape)) if store is None else store
         self.x = [None] * nl
         self.y = [None] * nl
         self.th = [None] * nl

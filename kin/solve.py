@@ -194,6 +194,7 @@ class _Run:
     code: np.ndarray                  # (M,) int8 Status of the first failing group
     reason: dict                      # n -> text (the group's label and why)
     probes: dict                      # step index -> Probe (only when asked)
+    direct: np.ndarray | None = None  # (M, n_joints + n_points, 2) from the kernel, valid while every code is 0
 
 
 def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
@@ -217,12 +218,12 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     if not kp.covers(steps):
         return None
     G = Poses(sp, X.shape[0])
-    C, S, fail, pending = kernel.run_positions(kp, X, steps, signs, G.T)
+    C, S, fail, pending, P = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
     links = [i for k in steps for i in sp.steps[k].unknown]
     G.adopt(links, C, S, pending)
     bad = np.flatnonzero(fail)
     if not bad.size:
-        return _Run(G, fail, {}, {})
+        return _Run(G, fail, {}, {}, P)
     sub = _numpy_run(sp, X[bad], steps, {k: v[bad] if np.ndim(v) else v for k, v in signs.items()}, kernels)
     sub.G.angles()
     for k in links:
@@ -867,7 +868,8 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     Zd = Zdd = rates_in = None
     if derivatives:
         rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links)
-    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select)
+    direct = run.direct if all_ok and select is None else None      # the kernel's points, still valid
+    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select, direct)
     if single and code[0] != 0:
         msg = f"input {_fmt_input(m, X[0])}: {status[0]}"
         if code[0] == Status.SINGULAR:
@@ -930,9 +932,11 @@ def needed_steps(sp: SolvePlan, only) -> list[int]:
 
 
 def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, code,
-           select=None) -> KinematicState:
+           select=None, direct=None) -> KinematicState:
     m = sp.mechanism
-    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0])
+    nj = m.n_joints
+    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0]) \
+        if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
     if Zd is not None:
         host = np.asarray(sp.joint_host)
@@ -941,7 +945,8 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1])
+        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1]) \
+            if direct is None else direct[:, nj:]
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
     return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,

@@ -49,8 +49,10 @@ def _raw_agree(m, X, signs=None):
     ref = solve_mod._numpy_run(sp, X, steps, signs or {}, True)
     ref.G.unset_to_nan()
     Zr = ref.G.to_Z()
+    Pr = solve_mod._points(sp, ref.G, sp.joint_host, "joints")
     G = solve_mod.Poses(sp, X.shape[0])
-    C, S, fail, pending = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T)
+    C, S, fail, pending, P = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T, points=True)
+    assert len(pending) == 0                  # every angle row computed
     G.adopt([i for k in steps for i in sp.steps[k].unknown], C, S, pending)
     G.unset_to_nan()
     Zk = G.to_Z()
@@ -59,6 +61,9 @@ def _raw_agree(m, X, signs=None):
     ok = ~np.isnan(Zr)
     scale = np.where(np.arange(3) < 2, sp.size, 1.0)
     assert np.all(np.abs(Zk - Zr)[ok] <= 1e-12 * np.broadcast_to(scale, Zr.shape)[ok])
+    Pk = P[:, :m.n_joints]
+    np.testing.assert_array_equal(np.isnan(Pk), np.isnan(Pr))
+    assert np.nanmax(np.abs(Pk - Pr), initial=0.0) <= 1e-12 * sp.size
 
 
 def _same_states(m, X, **kw):

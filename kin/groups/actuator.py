@@ -44,8 +44,8 @@ def _length_curvature(r, v):
     return np.abs(np.sum(v * v, axis=-1) - rv * rv / (n * n)) / n
 
 
-def actuator_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """An actuated triangle at position ``n`` for the compiled kernel (:mod:`kin.kernel`),
+def actuator_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """Actuated triangles at every position for the compiled kernel (:mod:`kin.kernel`),
     as :meth:`ActuatorStep.positions` (Vasechkin et al. 2017, eqs. (1)-(3) with the
     driven side ``L(s)``).
 
@@ -53,23 +53,26 @@ def actuator_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
     relative to their links, lc, sign, near's, far's and link2's reference points
     relative to A, B and C, the unit reference direction of C–B).
     """
-    k1, k3, kn, kf, k2 = ip[1], ip[2], ip[3], ip[4], ip[5]
-    s = fp[0] * X[n, ip[0]]
-    dx, dy = fp[1] + s * fp[3], fp[2] + s * fp[4]
-    L = np.sqrt(dx * dx + dy * dy)
-    ax, ay = carry(k1, n, T, C, S, fp[5], fp[6])
-    cx, cy = carry(k3, n, T, C, S, fp[7], fp[8])
-    bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, L, fp[9], fp[10] * factor)
-    rx, ry = bx - ax, by - ay
-    inv = 1.0 / (L * L)
-    c, sn = (dx * rx + dy * ry) * inv, (dx * ry - dy * rx) * inv
-    place(kn, n, T, C, S, ax, ay, fp[11], fp[12], c, sn)
-    place(kf, n, T, C, S, bx, by, fp[13], fp[14], c, sn)
-    PP[kn] = PP[kf] = 1
-    place_along(k2, n, T, C, S, cx, cy, fp[15], fp[16], bx - cx, by - cy, fp[17], fp[18], PP)
-    if not ok:
-        return 1
-    return 0 if abs(det) > SINGULAR * (L * fp[9]) else 2
+    d, k1, k3, kn, kf, k2 = ip[0], ip[1], ip[2], ip[3], ip[4], ip[5]
+    sigma, d0, d1, u0, u1, a0, a1, c0, c1, lc, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], \
+        fp[8], fp[9], fp[10]
+    onx, ony, ofx, ofy, o2x, o2y, ec, es = fp[11], fp[12], fp[13], fp[14], fp[15], fp[16], fp[17], fp[18]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        s = sigma * X[n, d]
+        dx, dy = d0 + s * u0, d1 + s * u1
+        L = np.sqrt(dx * dx + dy * dy)
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        cx, cy = carry(k3, n, T, C, S, c0, c1)
+        bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, L, lc, sign * (F[n] if rows else F[0]))
+        rx, ry = bx - ax, by - ay
+        inv = 1.0 / (L * L)
+        c, sn = (dx * rx + dy * ry) * inv, (dx * ry - dy * rx) * inv
+        place(kn, n, T, C, S, ax, ay, onx, ony, c, sn)
+        place(kf, n, T, C, S, bx, by, ofx, ofy, c, sn)
+        place_along(k2, n, T, C, S, cx, cy, o2x, o2y, bx - cx, by - cy, ec, es)
+        out[n] = 1 if not ok else (0 if abs(det) > SINGULAR * (L * lc) else 2)
+    PP[kn] = PP[kf] = PP[k2] = 1
 
 
 class ActuatorStep(GroupStep):

@@ -81,13 +81,12 @@ def place(k, n, T, C, S, px, py, ox, oy, c, s):
 
 
 @scalar
-def place_along(k, n, T, C, S, px, py, ox, oy, dx, dy, ux, uy, PP):
+def place_along(k, n, T, C, S, px, py, ox, oy, dx, dy, ux, uy):
     """As :func:`place`, turned by the rotation taking the unit ``(ux, uy)`` to the
     direction ``(dx, dy)`` (:meth:`kin.poses.Poses.place_dir_xy`); the angle pending."""
     inv = 1.0 / np.sqrt(dx * dx + dy * dy)
     nx, ny = dx * inv, dy * inv
     place(k, n, T, C, S, px, py, ox, oy, nx * ux + ny * uy, ny * ux - nx * uy)
-    PP[k] = 1
 
 
 @scalar
@@ -95,7 +94,6 @@ def place_like(k, o, n, T, C, S, px, py, ox, oy, PP):
     """As :func:`place`, turned as link ``o`` (:meth:`kin.poses.Poses.place_like`)."""
     place(k, n, T, C, S, px, py, ox, oy, C[o, n], S[o, n])
     T[k, 2, n] = angle(o, n, T, C, S, PP)
-    PP[k] = 0
 
 
 def quiet(func):

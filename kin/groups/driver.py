@@ -13,7 +13,7 @@ import numpy as np
 
 from ..continuation import Probe
 from ..rigid import perp
-from .base import angle
+from .base import angle, carry, place
 from .step import GroupStep, Lowered, Outcome, trig_row
 
 __all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place"]
@@ -32,8 +32,8 @@ def is_closed_form(group) -> bool:
     return len(sliders) == 1 and not pins and {drive[0].a, drive[0].b} == {sliders[0].a, sliders[0].b}
 
 
-def turn_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """A turning driver at position ``n`` for the compiled kernel (:mod:`kin.kernel`).
+def turn_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A turning driver at every position for the compiled kernel (:mod:`kin.kernel`).
 
     ``ip`` = (driver, the known link of the joint, the link carrying the pin, the driven
     link, whether the known link is the frame, the row of cos(sign × input) in ``W``);
@@ -41,37 +41,41 @@ def turn_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
     reference point relative to the pin).  On the frame the angle is ``sign × input``
     and its cos and sin come from ``W``; else the known link's angle is added.
     """
-    h, k = ip[2], ip[3]
-    if ip[4]:
-        th = fp[0] * X[n, ip[0]]
-        c, s = W[ip[5], n], W[ip[5] + 1, n]
-    else:
-        th = angle(ip[1], n, T, C, S, PP) + fp[0] * X[n, ip[0]]
-        c, s = np.cos(th), np.sin(th)
-    px = T[h, 0, n] + (C[h, n] * fp[1] - S[h, n] * fp[2])
-    py = T[h, 1, n] + (S[h, n] * fp[1] + C[h, n] * fp[2])
-    T[k, 0, n] = px + (c * fp[3] - s * fp[4])
-    T[k, 1, n] = py + (s * fp[3] + c * fp[4])
-    T[k, 2, n], C[k, n], S[k, n], PP[k] = th, c, s, 0
-    return 0 if np.isfinite(c) else 1
+    d, o, h, k, frame, r = ip[0], ip[1], ip[2], ip[3], ip[4] != 0, ip[5]
+    sign, rx, ry, ox, oy = fp[0], fp[1], fp[2], fp[3], fp[4]
+    for n in range(X.shape[0]):
+        if frame:
+            th = sign * X[n, d]
+            c, s = W[r, n], W[r + 1, n]
+        else:
+            th = angle(o, n, T, C, S, PP) + sign * X[n, d]
+            c, s = np.cos(th), np.sin(th)
+        px, py = carry(h, n, T, C, S, rx, ry)
+        place(k, n, T, C, S, px, py, ox, oy, c, s)
+        T[k, 2, n] = th
+        out[n] = 0 if np.isfinite(c) else 1
+    PP[k] = 0
 
 
-def slide_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """A sliding driver at position ``n`` for the compiled kernel (:mod:`kin.kernel`).
+def slide_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A sliding driver at every position for the compiled kernel (:mod:`kin.kernel`).
 
     ``ip`` = (driver, the guide's link, the driven link); ``fp`` = (sign, the joint
     relative to the guide's reference point, the guide's direction, the driven link's
     reference point relative to the joint).  The driven link turns with the guide.
     """
-    o, k = ip[1], ip[2]
-    c, s = C[o, n], S[o, n]
-    d = fp[0] * X[n, ip[0]]
-    px = T[o, 0, n] + (c * fp[1] - s * fp[2]) + d * (c * fp[3] - s * fp[4])
-    py = T[o, 1, n] + (s * fp[1] + c * fp[2]) + d * (s * fp[3] + c * fp[4])
-    T[k, 0, n] = px + (c * fp[5] - s * fp[6])
-    T[k, 1, n] = py + (s * fp[5] + c * fp[6])
-    T[k, 2, n], C[k, n], S[k, n], PP[k] = angle(o, n, T, C, S, PP), c, s, 0
-    return 0 if np.isfinite(c) else 1
+    d, o, k = ip[0], ip[1], ip[2]
+    sign, rx, ry, ux, uy, ox, oy = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6]
+    for n in range(X.shape[0]):
+        c, s = C[o, n], S[o, n]
+        t = sign * X[n, d]
+        px, py = carry(o, n, T, C, S, rx, ry)
+        px, py = px + t * (c * ux - s * uy), py + t * (s * ux + c * uy)
+        th = angle(o, n, T, C, S, PP)
+        place(k, n, T, C, S, px, py, ox, oy, c, s)
+        T[k, 2, n] = th
+        out[n] = 0 if np.isfinite(c) else 1
+    PP[k] = 0
 
 
 class DriverStepSolver(GroupStep):

@@ -145,8 +145,8 @@ def prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2,
     return PRPRates(s1d, s2d, vB, s1dd, s2dd, aB, det, sing)
 
 
-def prp_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """A PRP step at position ``n`` for the compiled kernel (:mod:`kin.kernel`), as
+def prp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """PRP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
     :meth:`PRPStep.positions` (Vasechkin et al. 2017, eqs. (23)-(25)).
 
     ``ip`` = (guide link 1, guide link 2, link1, link2); ``fp`` = (P1, u1, h1, P2, u2,
@@ -154,23 +154,25 @@ def prp_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
     to B).
     """
     k1, k2, l1, l2 = ip[0], ip[1], ip[2], ip[3]
-    p1x, p1y = carry(k1, n, T, C, S, fp[0], fp[1])
-    u1x, u1y = turned(k1, n, C, S, fp[2], fp[3])
-    p2x, p2y = carry(k2, n, T, C, S, fp[5], fp[6])
-    u2x, u2y = turned(k2, n, C, S, fp[7], fp[8])
-    h1, h2 = fp[4], fp[9]
-    q1x, q1y = p1x - h1 * u1y, p1y + h1 * u1x
-    bx, by = (p2x - h2 * u2y) - q1x, (p2y + h2 * u2x) - q1y
-    det = u1x * -u2y - u1y * -u2x
-    ok = abs(det) > SINGULAR_RTOL * np.sqrt((u1x * u1x + u1y * u1y) * (u2x * u2x + u2y * u2y))
-    s1 = (bx * -u2y - by * -u2x) / det if ok else np.nan
-    bx, by = q1x + s1 * u1x, q1y + s1 * u1y
-    ok = ok and np.isfinite(bx) and np.isfinite(by)
-    place_like(l1, k1, n, T, C, S, bx, by, fp[10], fp[11], PP)
-    place_like(l2, k2, n, T, C, S, bx, by, fp[12], fp[13], PP)
-    if not ok:
-        return 1
-    return 0 if abs(det) > PARALLEL_GUIDES else 2
+    p10, p11, v10, v11, h1, p20, p21, v20, v21, h2 = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], \
+        fp[8], fp[9]
+    o1x, o1y, o2x, o2y = fp[10], fp[11], fp[12], fp[13]
+    for n in range(X.shape[0]):
+        p1x, p1y = carry(k1, n, T, C, S, p10, p11)
+        u1x, u1y = turned(k1, n, C, S, v10, v11)
+        p2x, p2y = carry(k2, n, T, C, S, p20, p21)
+        u2x, u2y = turned(k2, n, C, S, v20, v21)
+        q1x, q1y = p1x - h1 * u1y, p1y + h1 * u1x
+        bx, by = (p2x - h2 * u2y) - q1x, (p2y + h2 * u2x) - q1y
+        det = u1x * -u2y - u1y * -u2x
+        ok = abs(det) > SINGULAR_RTOL * np.sqrt((u1x * u1x + u1y * u1y) * (u2x * u2x + u2y * u2y))
+        s1 = (bx * -u2y - by * -u2x) / det if ok else np.nan
+        bx, by = q1x + s1 * u1x, q1y + s1 * u1y
+        ok = ok and np.isfinite(bx) and np.isfinite(by)
+        place_like(l1, k1, n, T, C, S, bx, by, o1x, o1y, PP)
+        place_like(l2, k2, n, T, C, S, bx, by, o2x, o2y, PP)
+        out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
+    PP[l1] = PP[l2] = 0
 
 
 class PRPStep(GroupStep):

@@ -151,30 +151,31 @@ def rpp_rates(A, Q, P, u, alpha, vA, vP, omega, aA=None, aP=None, eps=None) -> R
     return RPPRates(s1d, s2d, vQ, s1dd, s2dd, aQ, det, sing)
 
 
-def rpp_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """An RPP step at position ``n`` for the compiled kernel (:mod:`kin.kernel`), as
+def rpp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RPP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
     :meth:`RPPStep.positions` (Vasechkin et al. 2017, eqs. (30)-(32)).
 
     ``ip`` = (known1, the guide's link, link1, link2); ``fp`` = (A, Q relative to their
     links, u, cos α, sin α, h, link2's and link1's reference points relative to Q and A).
     """
     k1, kq, l1, l2 = ip[0], ip[1], ip[2], ip[3]
-    ax, ay = carry(k1, n, T, C, S, fp[0], fp[1])
-    px, py = carry(kq, n, T, C, S, fp[2], fp[3])
-    ux, uy = turned(kq, n, C, S, fp[4], fp[5])
-    ca, sa, h = fp[6], fp[7], fp[8]
-    wx, wy = ca * ux - sa * uy, sa * ux + ca * uy
-    b1, b2 = ax - px + h * wy, ay - py - h * wx
-    det = ux * wy - uy * wx
-    ok = abs(det) > SINGULAR_RTOL * np.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy))
-    s1 = (b1 * wy - b2 * wx) / det if ok else np.nan
-    qx, qy = px + s1 * ux, py + s1 * uy
-    ok = ok and np.isfinite(qx) and np.isfinite(qy)
-    place_like(l2, kq, n, T, C, S, qx, qy, fp[9], fp[10], PP)
-    place_like(l1, kq, n, T, C, S, ax, ay, fp[11], fp[12], PP)
-    if not ok:
-        return 1
-    return 0 if abs(det) > PARALLEL_GUIDES else 2
+    a0, a1, q0, q1, v0, v1, ca, sa, h = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], fp[8]
+    o2x, o2y, o1x, o1y = fp[9], fp[10], fp[11], fp[12]
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        px, py = carry(kq, n, T, C, S, q0, q1)
+        ux, uy = turned(kq, n, C, S, v0, v1)
+        wx, wy = ca * ux - sa * uy, sa * ux + ca * uy
+        b1, b2 = ax - px + h * wy, ay - py - h * wx
+        det = ux * wy - uy * wx
+        ok = abs(det) > SINGULAR_RTOL * np.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy))
+        s1 = (b1 * wy - b2 * wx) / det if ok else np.nan
+        qx, qy = px + s1 * ux, py + s1 * uy
+        ok = ok and np.isfinite(qx) and np.isfinite(qy)
+        place_like(l2, kq, n, T, C, S, qx, qy, o2x, o2y, PP)
+        place_like(l1, kq, n, T, C, S, ax, ay, o1x, o1y, PP)
+        out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
+    PP[l1] = PP[l2] = 0
 
 
 class RPPStep(GroupStep):

@@ -153,8 +153,8 @@ def rpr_rates(A, C, u, vA, vC, aA=None, aC=None) -> RPRRates:
     return RPRRates(sd, w3, sdd, e3, det, sing)
 
 
-def rpr_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """An RPR step at position ``n`` for the compiled kernel (:mod:`kin.kernel`), as
+def rpr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RPR steps at every position for the compiled kernel (:mod:`kin.kernel`), as
     :meth:`RPRStep.positions` (Vasechkin et al. 2017, eqs. (15)-(18)).
 
     ``ip`` = (the guide's pivot link, the block's pivot link, guide, block); ``fp`` =
@@ -162,24 +162,25 @@ def rpr_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
     guide's and the block's reference points relative to X and Y, singular threshold).
     """
     kx, ky, g, b = ip[0], ip[1], ip[2], ip[3]
-    xx, xy_ = carry(kx, n, T, C, S, fp[0], fp[1])
-    yx, yy = carry(ky, n, T, C, S, fp[2], fp[3])
-    h = fp[4]
-    dx, dy = yx - xx, yy - xy_
-    d2 = dx * dx + dy * dy
-    q = d2 - h * h
-    ok = q >= -REACH_RTOL * d2 and d2 > 0
-    s = np.sqrt(max(q, 0.0)) * (fp[5] * factor) if ok else np.nan
-    ux = (s * dx + h * dy) / d2
-    uy = (s * dy - h * dx) / d2
-    ok = ok and np.isfinite(ux) and np.isfinite(uy)
-    place_along(g, n, T, C, S, xx, xy_, fp[8], fp[9], ux, uy, fp[6], fp[7], PP)
-    place(b, n, T, C, S, yx, yy, fp[10], fp[11], C[g, n], S[g, n])
-    T[b, 2, n] = np.arctan2(S[g, n], C[g, n])
-    PP[b] = 0
-    if not ok:
-        return 1
-    return 0 if abs(s) > fp[12] else 2
+    x0, x1, y0, y1, h, sign, dc, ds = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7]
+    ogx, ogy, obx, oby, thr = fp[8], fp[9], fp[10], fp[11], fp[12]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        xx, xy_ = carry(kx, n, T, C, S, x0, x1)
+        yx, yy = carry(ky, n, T, C, S, y0, y1)
+        dx, dy = yx - xx, yy - xy_
+        d2 = dx * dx + dy * dy
+        q = d2 - h * h
+        ok = q >= -REACH_RTOL * d2 and d2 > 0
+        s = np.sqrt(max(q, 0.0)) * (sign * (F[n] if rows else F[0])) if ok else np.nan
+        ux = (s * dx + h * dy) / d2
+        uy = (s * dy - h * dx) / d2
+        ok = ok and np.isfinite(ux) and np.isfinite(uy)
+        place_along(g, n, T, C, S, xx, xy_, ogx, ogy, ux, uy, dc, ds)
+        place(b, n, T, C, S, yx, yy, obx, oby, C[g, n], S[g, n])
+        T[b, 2, n] = np.arctan2(S[g, n], C[g, n])
+        out[n] = 1 if not ok else (0 if abs(s) > thr else 2)
+    PP[g], PP[b] = 1, 0
 
 
 class RPRStep(GroupStep):

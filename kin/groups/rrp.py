@@ -177,8 +177,8 @@ def rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates
     return RRPRates(w2, sd, vB, e2, sdd, aB, det, sing)
 
 
-def rrp_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """An RRP step at position ``n`` for the compiled kernel (:mod:`kin.kernel`), as
+def rrp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RRP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
     :meth:`RRPStep.positions` (Vasechkin et al. 2017, eqs. (9)-(11)).
 
     ``ip`` = (known1, the guide's link, link1, link2); ``fp`` = (A, P relative to their
@@ -186,25 +186,27 @@ def rrp_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
     and B, singular threshold).
     """
     k1, kp, l1, l2 = ip[0], ip[1], ip[2], ip[3]
-    ax, ay = carry(k1, n, T, C, S, fp[0], fp[1])
-    px, py = carry(kp, n, T, C, S, fp[2], fp[3])
-    ux, uy = turned(kp, n, C, S, fp[4], fp[5])
-    h, la = fp[6], fp[7]
-    rx, ry = ax - px, ay - py
-    dy = h - (ry * ux - rx * uy)
+    a0, a1, p0, p1, u0, u1, h, la, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], fp[8]
+    dc, ds, o1x, o1y, o2x, o2y, thr = fp[9], fp[10], fp[11], fp[12], fp[13], fp[14], fp[15]
+    rows = F.size > 1
     l2s = la * la
-    q = l2s - dy * dy
-    ok = q >= -REACH_RTOL * l2s
-    x2 = np.sqrt(max(q, 0.0)) * (fp[8] * factor) if ok else np.nan
-    s = (rx * ux + ry * uy) + x2
-    bx = px + s * ux - h * uy
-    by = py + s * uy + h * ux
-    ok = ok and np.isfinite(bx) and np.isfinite(by)
-    place_along(l1, n, T, C, S, ax, ay, fp[11], fp[12], bx - ax, by - ay, fp[9], fp[10], PP)
-    place_like(l2, kp, n, T, C, S, bx, by, fp[13], fp[14], PP)
-    if not ok:
-        return 1
-    return 0 if abs(x2) > fp[15] else 2
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        px, py = carry(kp, n, T, C, S, p0, p1)
+        ux, uy = turned(kp, n, C, S, u0, u1)
+        rx, ry = ax - px, ay - py
+        dy = h - (ry * ux - rx * uy)
+        q = l2s - dy * dy
+        ok = q >= -REACH_RTOL * l2s
+        x2 = np.sqrt(max(q, 0.0)) * (sign * (F[n] if rows else F[0])) if ok else np.nan
+        s = (rx * ux + ry * uy) + x2
+        bx = px + s * ux - h * uy
+        by = py + s * uy + h * ux
+        ok = ok and np.isfinite(bx) and np.isfinite(by)
+        place_along(l1, n, T, C, S, ax, ay, o1x, o1y, bx - ax, by - ay, dc, ds)
+        place_like(l2, kp, n, T, C, S, bx, by, o2x, o2y, PP)
+        out[n] = 1 if not ok else (0 if abs(x2) > thr else 2)
+    PP[l1], PP[l2] = 1, 0
 
 
 class RRPStep(GroupStep):

@@ -27,15 +27,15 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, length, num, pair, scalar,
-                   sign_of, stack, xy, quiet)
+from .base import (square_curvature, margin_tol, REACH_RTOL, carry, cramer, is_singular, length, num, pair, place,
+                   scalar, sign_of, stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
 from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep", "rrr_place",
-           "triangle_apex"]
+           "triangle_apex", "link_turn"]
 
 
 class RRRPosition(NamedTuple):
@@ -241,44 +241,47 @@ def triangle_apex(ax, ay, cx, cy, l2, l3, sign):
     return ax + t * dx - k * dy, ay + t * dy + k * dx, ok, -(k * d2), exact
 
 
-def rrr_place(ip, fp, X, n, W, factor, T, C, S, PP) -> int:
-    """An RRR step at position ``n`` for the compiled kernel (:mod:`kin.kernel`): reads
-    the known links' poses from the pose store ``T`` (n_links, 3, M), ``C``, ``S``
-    (n_links, M), writes its two links (their angles pending), returns the
-    :class:`~kin.result.Status` (0, out of reach, singular).
+def rrr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RRR steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`RRRStep.positions` (Vasechkin et al. 2017, eqs. (1)-(3)): reads the known
+    links' poses from the pose store ``T`` (n_links, 3, M), ``C``, ``S`` (n_links, M),
+    writes its two links (their angles pending) and each position's
+    :class:`~kin.result.Status` into ``out`` (0, out of reach, singular); ``F`` the
+    branch factor (one, or one per position).
 
     ``ip`` = (known1, known2, link1, link2); ``fp`` = (A and C relative to their known
     links' reference points, la, lc, sign, rot1, rot2, unit B−A, unit B−C, link1's and
     link2's reference points relative to their placing points, from_B1, from_B2,
-    singular threshold).  Vasechkin et al. 2017, eqs. (1)-(3), as :meth:`RRRStep.positions`.
+    singular threshold).
     """
     k1, k2, l1, l2 = ip[0], ip[1], ip[2], ip[3]
-    ax = T[k1, 0, n] + (C[k1, n] * fp[0] - S[k1, n] * fp[1])
-    ay = T[k1, 1, n] + (S[k1, n] * fp[0] + C[k1, n] * fp[1])
-    cx = T[k2, 0, n] + (C[k2, n] * fp[2] - S[k2, n] * fp[3])
-    cy = T[k2, 1, n] + (S[k2, n] * fp[2] + C[k2, n] * fp[3])
-    bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, fp[4], fp[5], fp[6] * factor)
-    for j in range(2):
-        lk = l1 if j == 0 else l2
-        px, py = (ax, ay) if j == 0 else (cx, cy)
-        dx, dy = bx - px, by - py
-        if exact:                          # |B − A| = la: the compiled rotation
-            c = dx * fp[7 + 2 * j] + dy * fp[8 + 2 * j]
-            s = dy * fp[7 + 2 * j] - dx * fp[8 + 2 * j]
-        else:                              # clamped to the tangent: normalised
-            inv = 1.0 / np.sqrt(dx * dx + dy * dy)
-            nx, ny = dx * inv, dy * inv
-            c = nx * fp[11 + 2 * j] + ny * fp[12 + 2 * j]
-            s = ny * fp[11 + 2 * j] - nx * fp[12 + 2 * j]
-        if fp[19 + j] != 0.0:
-            px, py = bx, by
-        ox, oy = fp[15 + 2 * j], fp[16 + 2 * j]
-        T[lk, 0, n] = px + (c * ox - s * oy)
-        T[lk, 1, n] = py + (s * ox + c * oy)
-        C[lk, n], S[lk, n], PP[lk] = c, s, 1
-    if not ok:
-        return 1
-    return 0 if abs(det) > fp[21] else 2
+    a0, a1, c0, c1, la, lc, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6]
+    r1c, r1s, r2c, r2s, u1c, u1s, u2c, u2s = fp[7], fp[8], fp[9], fp[10], fp[11], fp[12], fp[13], fp[14]
+    o1x, o1y, o2x, o2y, at_b1, at_b2, thr = fp[15], fp[16], fp[17], fp[18], fp[19] != 0.0, fp[20] != 0.0, fp[21]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        cx, cy = carry(k2, n, T, C, S, c0, c1)
+        bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, la, lc, sign * (F[n] if rows else F[0]))
+        c, s = link_turn(bx - ax, by - ay, exact, r1c, r1s, u1c, u1s)
+        place(l1, n, T, C, S, bx if at_b1 else ax, by if at_b1 else ay, o1x, o1y, c, s)
+        c, s = link_turn(bx - cx, by - cy, exact, r2c, r2s, u2c, u2s)
+        place(l2, n, T, C, S, bx if at_b2 else cx, by if at_b2 else cy, o2x, o2y, c, s)
+        out[n] = 1 if not ok else (0 if abs(det) > thr else 2)
+    PP[l1] = PP[l2] = 1
+
+
+@scalar
+def link_turn(dx, dy, exact, rc, rs, uc, us):
+    """(c, s) of a link of known length whose side is ``(dx, dy)``: by the compiled
+    rotation ``(rc, rs)`` (reference direction / length) where the length holds
+    (``exact``), else normalised against the unit reference ``(uc, us)``
+    (:func:`_rotation`)."""
+    if exact:
+        return dx * rc + dy * rs, dy * rc - dx * rs
+    inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+    nx, ny = dx * inv, dy * inv
+    return nx * uc + ny * us, ny * uc - nx * us
 
 
 class RRRStep(GroupStep):
