@@ -74,8 +74,15 @@ class KernelPlan:
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
 
+    @property
+    def complete(self) -> bool:
+        """Whether every step has a compiled step."""
+        return bool(np.all(self.codes >= 0))
+
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
+        if len(steps) == len(self.codes):
+            return self.complete
         return bool(np.all(self.codes[np.asarray(list(steps), int)] >= 0))
 
 
@@ -162,8 +169,16 @@ def wanted(n_positions: int) -> bool:
     return False
 
 
+_ONES: dict = {}
+
+
 def _factors(n_steps: int, M: int, signs: dict) -> np.ndarray:
     """Each step's branch factor: (n_steps, 1), or (n_steps, M) when one varies by row."""
+    if not signs:
+        hit = _ONES.get(n_steps)
+        if hit is None:
+            hit = _ONES[n_steps] = np.ones((n_steps, 1))    # (writable: one compiled signature)
+        return hit
     per_row = any(np.ndim(v) for v in signs.values())
     F = np.ones((n_steps, M if per_row else 1))
     for k, v in signs.items():
@@ -182,6 +197,20 @@ def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
     return W
 
 
+def _steps(kp: KernelPlan, steps) -> np.ndarray:
+    """The steps to run as an array (every step's cached)."""
+    n = len(kp.codes)
+    if len(steps) == n:
+        hit = _ALL.get(n)
+        if hit is None:
+            hit = _ALL[n] = np.arange(n, dtype=np.int64)
+        return hit
+    return np.asarray(list(steps), np.int64)
+
+
+_ALL: dict = {}
+
+
 def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray, points: bool = False):
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
@@ -192,13 +221,15 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     points (else None)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
+    if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
+        X = X.copy()
     M = X.shape[0]
     nl = T.shape[0]
     C, S = np.empty((nl, M)), np.empty((nl, M))
     C[kp.frame], S[kp.frame] = 1.0, 0.0
     fail = np.zeros(M, np.int8)
     pend = np.zeros(nl, np.int8)
-    nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, np.asarray(list(steps), np.int64),
+    nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps),
                        X, _trig(kp, X), _factors(len(kp.codes), M, signs), T, C, S, fail, pend)
     if not points:
         return C, S, fail, np.flatnonzero(pend), None
