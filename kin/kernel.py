@@ -152,11 +152,17 @@ def is_loaded() -> bool:
 def load():
     """Import numba and the kernel (compiled on first use, then read from the disk
     cache); None when numba is not installed."""
+    if _LOADED:
+        return _LOADED[0]
     try:
         from . import _kernel_nb
     except ImportError:
         return None
+    _LOADED.append(_kernel_nb)
     return _kernel_nb
+
+
+_LOADED: list = []
 
 
 def wanted(n_positions: int) -> bool:

@@ -745,6 +745,10 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     sp = plan_of(m, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
+    if not (assemble or derivatives or only or outputs is not None or method == "newton"):
+        state = _compiled_motion(sp, X)
+        if state is not None:
+            return state
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
@@ -760,6 +764,35 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     _mark_out_of_range(sp, X, run)
     select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
+
+
+def _compiled_motion(sp: SolvePlan, X: np.ndarray) -> KinematicState | None:
+    """The whole answer from the compiled kernel alone, or None (the general path then
+    decides): one driver without a ``range`` whose cached chart puts every input on the
+    reference branch (a full turn, no flip, no crossing), every step compiled, and every
+    row assembled.  The state is the one :func:`_solve_chart` and :func:`_finish` give
+    then, without the pose store's bookkeeping."""
+    m = sp.mechanism
+    ch = sp.extra.get("chart")
+    if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
+            or not kernel.wanted(X.shape[0]):
+        return None
+    kp = kernel.kernel_plan(sp)
+    if not kp.complete:
+        return None
+    T = np.empty((m.n_links, 3, X.shape[0]))
+    T[kp.frame] = 0.0
+    C, S, fail, pending, P = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
+    if fail.any():
+        return None
+    for k in pending:                        # as Poses.angle: NumPy's arctan2 of the row
+        np.arctan2(S[k], C[k], out=T[k, 2])
+    Z = T.transpose(2, 0, 1)
+    status = np.empty(X.shape[0], dtype=object)
+    status.fill("ok")
+    nj = m.n_joints
+    return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
+                          point_positions=P[:, nj:] if m.points else None, poses=Z, codes=fail)
 
 
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
