@@ -63,7 +63,8 @@ class KernelPlan:
     step places (-1 padded), ``frame`` the frame's link index, ``trig`` the (driver,
     sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``,
     ``hosts`` / ``offs`` the link carrying each joint and tracer point and the point's
-    offset from that link's reference point."""
+    offset from that link's reference point, ``complete`` whether every step has a
+    compiled step."""
 
     codes: np.ndarray
     ints: np.ndarray
@@ -73,11 +74,7 @@ class KernelPlan:
     trig: tuple = ()
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
-
-    @property
-    def complete(self) -> bool:
-        """Whether every step has a compiled step."""
-        return bool(np.all(self.codes >= 0))
+    complete: bool = False
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
@@ -105,7 +102,7 @@ def lower_plan(sp) -> KernelPlan:
                       _table([st.unknown for st in sp.steps], np.int64, -1),
                       sp.mechanism.link_names.index(sp.mechanism.frame),
                       tuple(sorted({t for lw in low if lw is not None for t in lw.trig})),
-                      *_hosts(sp))
+                      *_hosts(sp), bool(np.all(codes >= 0)))
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:

@@ -169,6 +169,8 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
 def check_finite_inputs(m: Mechanism, x: np.ndarray, what: str = "inputs") -> None:
     """Refuse driver inputs ``x`` (..., n_drivers) with a NaN or an infinity, naming the
     first one's index and its driver."""
+    if np.isfinite(x).all():
+        return
     bad = np.argwhere(~np.isfinite(x))
     if bad.size:
         i = tuple(int(v) for v in bad[0])
