@@ -5,25 +5,29 @@ compiled kernel over a whole batch of positions.
 gives its :class:`~kin.groups.step.Lowered` numbers (its kind's code in
 :data:`kin.groups.registry.COMPILED`, link indices, lengths, signs, reference
 directions).  :func:`run_positions` then runs one numba kernel (``kin._kernel_nb``)
-that loops over the positions and, at each, over the steps, calling the scalar closed
-form of each step's kind: the five dyads (Vasechkin et al. 2017 [1]_, eqs. (1)-(3),
-(9)-(11), (15)-(18), (23)-(25), (30)-(32)), the driver and the actuated triangle.  It
-computes the same floats as the NumPy path (:mod:`kin.groups`: the same operations in
-the same order) and the same statuses; the NumPy path stays as its oracle
-(``tests/test_kernels.py``) and solves whatever the kernel does not: a plan with a
-triad, a class IV group or a Newton group, the probes of the continuation walk,
-velocities and accelerations, batches of designs.
+that takes the steps in order and, for each, calls the scalar closed form of its kind
+once, looping over all the positions: the five dyads (Vasechkin et al. 2017 [1]_, eqs.
+(1)-(3), (9)-(11), (15)-(18), (23)-(25), (30)-(32)), the two drivers and the actuated
+triangle.  Each does the NumPy kernel's operations in the same order (the floats agree
+to rounding) and gives the same statuses; the angle rows and the drivers' cos and sin
+are NumPy's own (``arctan2``, ``cos``, ``sin`` vectorised, before and after the loop).
+The NumPy path stays as the oracle (``tests/test_kernels.py``) and solves what the
+kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
+the continuation walk, velocities and accelerations, batches of designs
+(:mod:`kin.design`), and the reasons of the rows that fail.
 
 Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships
 wheels for Linux, macOS and Windows, and it caches compiled code on disk
 (``cache=True``), so a process after the first loads the kernel instead of compiling it.
 
-When: importing numba costs about 0.3 s, more than a small batch saves.  With
-``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when numba is already
-loaded in the process (:func:`load`, or a batch before it), and loads it itself for a
+When: importing numba and reading the cached kernel cost about a second of CPU in a
+fresh process (``benchmarks/bench_solve.py`` prints it), more than a single batch saves
+(the kernel saves well under a microsecond per position).  With
+``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when it is already loaded
+in the process (:func:`load`, or a batch before it), and loads it itself only for a
 batch of at least :data:`LAZY_MIN` positions; ``on`` always uses it (if numba is
-installed), ``off`` never.  The command line's small batches therefore never import
-numba, and its cold start does not grow.
+installed), ``off`` never.  The command line's batches never import numba, so its cold
+start does not grow.
 
 References
 ----------
@@ -49,7 +53,7 @@ __all__ = ["KernelPlan", "kernel_plan", "lower_plan", "run_positions", "load", "
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
 MODES = ("auto", "on", "off")
 #: in mode "auto", a batch of at least this many positions loads numba itself
-LAZY_MIN = 200_000
+LAZY_MIN = 2_000_000
 _MODE = [os.environ.get("MULTILOOP_KERNEL", "auto")]
 _CODES = {key: i for i, key in enumerate(COMPILED)}
 _NB = "multiloop.kin._kernel_nb"
