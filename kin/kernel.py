@@ -223,8 +223,9 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
     (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
     each position's first failing step (M,) int8, the links whose angle rows are left
-    to compute (``arctan2(S, C)``), and with ``points`` (every step solved) the
-    positions (M, n_joints + n_points, 2) of the joints and tracer points (else None)."""
+    to compute (``arctan2(S, C)``), and with ``points`` (every step solved) the angle
+    rows computed and the positions (M, n_joints + n_points, 2) of the joints and tracer
+    points (else None)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
@@ -240,5 +241,5 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     if not points:
         return C, S, fail, np.flatnonzero(pend), None
     P = np.empty((kp.hosts.size, 2, M))
-    nb.carry_points(T, C, S, kp.hosts, kp.offs, P)
-    return C, S, fail, np.flatnonzero(pend), P.transpose(2, 0, 1)
+    nb.finish_rows(T, C, S, pend, kp.hosts, kp.offs, P)
+    return C, S, fail, (), P.transpose(2, 0, 1)
