@@ -9,8 +9,9 @@ that takes the steps in order and, for each, calls the scalar closed form of its
 once, looping over all the positions: the five dyads (Vasechkin et al. 2017 [1]_, eqs.
 (1)-(3), (9)-(11), (15)-(18), (23)-(25), (30)-(32)), the two drivers and the actuated
 triangle.  Each does the NumPy kernel's operations in the same order (the floats agree
-to rounding) and gives the same statuses; the angle rows and the drivers' cos and sin
-are NumPy's own (``arctan2``, ``cos``, ``sin`` vectorised, before and after the loop).
+to rounding) and gives the same statuses.  The drivers' cos and sin are NumPy's own,
+computed before the loop; the angle rows are fdlibm's ``atan2`` (Sun Microsystems 1993,
+within 1 ulp of NumPy's) in the kernel when every step is solved, else NumPy's, later.
 The NumPy path stays as the oracle (``tests/test_kernels.py``) and solves what the
 kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
 the continuation walk, velocities and accelerations, batches of designs

@@ -194,6 +194,19 @@ def test_kernel_not_loaded_for_small_batches():
     assert out.stdout.split() == ["False"]
 
 
+def test_arctan2_within_one_ulp():
+    """The kernel's arctan2 (fdlibm's) against NumPy's, with the signed zeros."""
+    from multiloop.kin.groups.base import arctan2
+    rng = np.random.default_rng(3)
+    y, x = (rng.standard_normal(3000) * 10.0 ** rng.uniform(-6, 6, 3000) for _ in range(2))
+    ours = np.array([arctan2(a, b) for a, b in zip(y, x)])
+    ref = np.arctan2(y, x)
+    assert np.all(np.abs(ours - ref) <= np.spacing(np.abs(ref)))
+    for a, b in ((0.0, -1.0), (-0.0, -1.0), (0.0, 0.0), (-0.0, -0.0), (1.0, 0.0), (-2.0, -0.0), (1.0, -1.0)):
+        assert arctan2(a, b) == np.arctan2(a, b)
+    assert np.isnan(arctan2(np.nan, 1.0))
+
+
 def test_modes():
     with pytest.raises(ValueError):
         with kernel.using("fast"):
