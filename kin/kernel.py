@@ -21,9 +21,10 @@ Why numba: it is the JIT that pylinkage uses (the peer we measure against), it s
 wheels for Linux, macOS and Windows, and it caches compiled code on disk
 (``cache=True``), so a process after the first loads the kernel instead of compiling it.
 
-When: importing numba and reading the cached kernel cost about a second of CPU in a
-fresh process (``benchmarks/bench_solve.py`` prints it), more than a single batch saves
-(the kernel saves well under a microsecond per position).  With
+When: in a fresh process, importing numba and reading the cached kernel cost about
+1.5 s of CPU, most of it numba's own start-up (``benchmarks/bench_solve.py`` prints
+both).  That is more than one batch saves: the kernel saves well under a microsecond
+per position.  With
 ``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when it is already loaded
 in the process (:func:`load`, or a batch before it), and loads it itself only for a
 batch of at least :data:`LAZY_MIN` positions; ``on`` always uses it (if numba is
