@@ -224,10 +224,10 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
     (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
-    each position's first failing step (M,) int8, the links whose angle rows are left
-    to compute (``arctan2(S, C)``), and with ``points`` (every step solved) the angle
-    rows computed and the positions (M, n_joints + n_points, 2) of the joints and tracer
-    points (else None)."""
+    each position's first failing step (M,) int8, the links whose angle rows come from
+    their cos and sin (``arctan2(S, C)``: left to the caller, or with ``points``
+    computed), and with ``points`` (every step solved) the positions (M, n_joints +
+    n_points, 2) of the joints and tracer points (else None)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
@@ -244,4 +244,4 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
         return C, S, fail, np.flatnonzero(pend), None
     P = np.empty((kp.hosts.size, 2, M))
     nb.finish_rows(T, C, S, pend, kp.hosts, kp.offs, P)
-    return C, S, fail, (), P.transpose(2, 0, 1)
+    return C, S, fail, np.flatnonzero(pend), P.transpose(2, 0, 1)

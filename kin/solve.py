@@ -222,7 +222,7 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     G = Poses(sp, X.shape[0])
     C, S, fail, pending, P = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
     links = [i for k in steps for i in sp.steps[k].unknown]
-    G.adopt(links, C, S, pending)
+    G.adopt(links, C, S, pending if P is None else ())      # (with the points: angles computed)
     bad = np.flatnonzero(fail)
     if not bad.size:
         return _Run(G, fail, {}, {}, P)
@@ -747,13 +747,14 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     sp = plan_of(m, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
-    if not (assemble or derivatives or only or outputs is not None or method == "newton"):
-        state = _compiled_motion(sp, X)
-        if state is not None:
-            return state
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
+    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
+    if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps):
+        state = _compiled_motion(sp, X, select)
+        if state is not None:
+            return state
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
@@ -764,16 +765,16 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
     _mark_out_of_range(sp, X, run)
-    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
 
 
-def _compiled_motion(sp: SolvePlan, X: np.ndarray) -> KinematicState | None:
+def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicState | None:
     """The whole answer from the compiled kernel alone, or None (the general path then
     decides): one driver without a ``range`` whose cached chart puts every input on the
     reference branch (a full turn, no flip, no crossing), every step compiled, and every
     row assembled.  The state is the one :func:`_solve_chart` and :func:`_finish` give
-    then, without the pose store's bookkeeping."""
+    then (with ``select``, the outputs asked for: the other points NaN, and the angles
+    computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
     m = sp.mechanism
     ch = sp.extra.get("chart")
     if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
@@ -784,15 +785,17 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray) -> KinematicState | None:
         return None
     T = np.empty((m.n_links, 3, X.shape[0]))
     T[kp.frame] = 0.0
-    C, S, fail, pending, P = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
+    C, S, fail, derived, P = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
     if fail.any():
         return None
-    for k in pending:                        # as Poses.angle: NumPy's arctan2 of the row
-        np.arctan2(S[k], C[k], out=T[k, 2])
+    nj = m.n_joints
+    if select is not None:                   # as _finish and _points with outputs=
+        T[[k for k in derived if k not in select[2]], 2] = np.nan
+        P[:, [i for i in range(nj) if i not in select[0]]] = np.nan
+        P[:, [nj + i for i in range(len(m.points)) if i not in select[1]]] = np.nan
     Z = T.transpose(2, 0, 1)
     status = np.empty(X.shape[0], dtype=object)
     status.fill("ok")
-    nj = m.n_joints
     return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
                           point_positions=P[:, nj:] if m.points else None, poses=Z, codes=fail)
 

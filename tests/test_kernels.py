@@ -111,8 +111,10 @@ def test_catalogue_against_numpy(name):
             assert solve_mod._compiled_run(sp, X, range(len(sp.steps)), {}, True) is None
         return
     _raw_agree(m, X)
-    _same_states(m, X if len(m.drivers) > 1 else X[:, 0])
-    _same_states(m, X if len(m.drivers) > 1 else X[:, 0], assemble=True)
+    x = X if len(m.drivers) > 1 else X[:, 0]
+    _same_states(m, x)
+    _same_states(m, x, assemble=True)
+    _same_states(m, x, outputs=[m.joint_names[-1], m.link_names[-1], *(p.name for p in m.points[:1])])
 
 
 def test_catalogue_coverage():

@@ -50,9 +50,12 @@ def scalar(func):
 @scalar
 def angle(k, n, T, C, S, PP):
     """Link k's angle at position ``n`` in the compiled kernel's pose store: its row of
-    ``T`` (``PP[k]`` unset), else (pending: the caller computes the row later) from its
-    cos and sin, as :meth:`kin.poses.Poses.angle`."""
-    return np.arctan2(S[k, n], C[k, n]) if PP[k] else T[k, 2, n]
+    ``T``, computed from its cos and sin when pending (``PP[k]`` set), as
+    :meth:`kin.poses.Poses.angle`; a step that reads it at every position then clears
+    ``PP[k]`` (the row is whole)."""
+    if PP[k]:
+        T[k, 2, n] = arctan2(S[k, n], C[k, n])
+    return T[k, 2, n]
 
 
 #: fdlibm's atan: breakpoints' arctangents (high and low parts) and the minimax coefficients

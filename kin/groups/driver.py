@@ -55,6 +55,8 @@ def turn_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         T[k, 2, n] = th
         out[n] = 0 if np.isfinite(c) else 1
     PP[k] = 0
+    if not frame:
+        PP[o] = 0                         # its angle row computed above
 
 
 def slide_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
@@ -75,7 +77,7 @@ def slide_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         place(k, n, T, C, S, px, py, ox, oy, c, s)
         T[k, 2, n] = th
         out[n] = 0 if np.isfinite(c) else 1
-    PP[k] = 0
+    PP[k] = PP[o] = 0
 
 
 class DriverStepSolver(GroupStep):

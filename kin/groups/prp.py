@@ -172,7 +172,7 @@ def prp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         place_like(l1, k1, n, T, C, S, bx, by, o1x, o1y, PP)
         place_like(l2, k2, n, T, C, S, bx, by, o2x, o2y, PP)
         out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
-    PP[l1] = PP[l2] = 0
+    PP[l1] = PP[l2] = PP[k1] = PP[k2] = 0
 
 
 class PRPStep(GroupStep):

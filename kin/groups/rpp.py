@@ -175,7 +175,7 @@ def rpp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         place_like(l2, kq, n, T, C, S, qx, qy, o2x, o2y, PP)
         place_like(l1, kq, n, T, C, S, ax, ay, o1x, o1y, PP)
         out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
-    PP[l1] = PP[l2] = 0
+    PP[l1] = PP[l2] = PP[kq] = 0
 
 
 class RPPStep(GroupStep):

@@ -24,8 +24,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, num, place,
-                   place_along, sign_of, stack, xy,
+from .base import (square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cramer, dot, is_singular, num,
+                   place, place_along, sign_of, stack, xy,
                    quiet)
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
@@ -178,9 +178,9 @@ def rpr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         ok = ok and np.isfinite(ux) and np.isfinite(uy)
         place_along(g, n, T, C, S, xx, xy_, ogx, ogy, ux, uy, dc, ds)
         place(b, n, T, C, S, yx, yy, obx, oby, C[g, n], S[g, n])
-        T[b, 2, n] = np.arctan2(S[g, n], C[g, n])
+        T[g, 2, n] = T[b, 2, n] = arctan2(S[g, n], C[g, n])     # the block turns with the guide
         out[n] = 1 if not ok else (0 if abs(s) > thr else 2)
-    PP[g], PP[b] = 1, 0
+    PP[g] = PP[b] = 0
 
 
 class RPRStep(GroupStep):

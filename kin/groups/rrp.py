@@ -206,7 +206,7 @@ def rrp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         place_along(l1, n, T, C, S, ax, ay, o1x, o1y, bx - ax, by - ay, dc, ds)
         place_like(l2, kp, n, T, C, S, bx, by, o2x, o2y, PP)
         out[n] = 1 if not ok else (0 if abs(x2) > thr else 2)
-    PP[l1], PP[l2] = 1, 0
+    PP[l1], PP[l2], PP[kp] = 1, 0, 0
 
 
 class RRPStep(GroupStep):
