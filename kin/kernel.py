@@ -50,7 +50,7 @@ from .groups.registry import COMPILED
 from .groups.step import trig_row
 
 __all__ = ["KernelPlan", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
-           "mode", "MODES", "LAZY_MIN"]
+           "mode", "using", "MODES", "LAZY_MIN"]
 
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
 MODES = ("auto", "on", "off")
@@ -122,7 +122,22 @@ def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
 
 
 def kernel_plan(sp) -> KernelPlan:
-    """The lowered plan of ``sp``, kept on it (lowered on first use)."""
+    """The lowered plan of ``sp``, kept on it (lowered on first use).
+
+    Examples
+    --------
+    >>> from multiloop.kin.solve import plan_of
+    >>> from multiloop.topo.model import MechanismBuilder
+    >>> b = MechanismBuilder()
+    >>> b.add_link("ground", frame=True)
+    >>> for n, lk, at in [("O", ("ground", "crank"), (0, 0)), ("A", ("crank", "rod"), (1, 0)),
+    ...                   ("B", ("rod", "rocker"), (3, 2)), ("C", ("rocker", "ground"), (4, 0))]:
+    ...     b.add_joint(n, "R", lk, at=at)
+    >>> b.add_driver("O")
+    >>> kp = kernel_plan(plan_of(b.build()))
+    >>> [list(COMPILED)[c] for c in kp.codes], kp.complete
+    (['drive_R', <GroupKind.RRR: 'RRR'>], True)
+    """
     hit = sp.extra.get("kernel")
     if hit is None:
         hit = sp.extra["kernel"] = lower_plan(sp)
