@@ -65,7 +65,8 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
     link's reference point; the frame's row set by the caller) with their cos and sin
     ``C``, ``S`` (n_links, M), ``fail`` (M,): the status of the first failing step (0
     where every step assembles), and ``pend`` (n_links,): 1 for the links whose angle
-    row is left to the caller (``arctan2(S, C)``, as the NumPy path computes it).  ``W``
+    row comes from their cos and sin (:func:`finish_rows` computes it, as the NumPy path's
+    pending rows).  ``W``
     holds the cos and sin the steps asked for, ``F`` (n_steps, 1 or M) each step's
     branch factor.  A failing step's links are NaN at that position, and so are the
     links of the steps after it that read them, as in the NumPy path.

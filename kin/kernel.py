@@ -42,6 +42,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -176,6 +177,10 @@ def load():
         from . import _kernel_nb
     except ImportError:
         return None
+    except RuntimeError as e:               # numba found no writable cache directory
+        warnings.warn(f"compiled plans unavailable, the NumPy path solves: {e}", RuntimeWarning, stacklevel=2)
+        _MODE[0] = "off"
+        return None
     _LOADED.append(_kernel_nb)
     return _kernel_nb
 
@@ -239,10 +244,10 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
     (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
-    each position's first failing step (M,) int8, the links whose angle rows come from
-    their cos and sin (``arctan2(S, C)``: left to the caller, or with ``points``
-    computed), and with ``points`` (every step solved) the positions (M, n_joints +
-    n_points, 2) of the joints and tracer points (else None)."""
+    each position's first failing step (M,) int8, the links whose angle rows were
+    derived from their cos and sin (``arctan2(S, C)``, in the kernel), and with
+    ``points`` (every step solved) the positions (M, n_joints + n_points, 2) of the
+    joints and tracer points (else None)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
@@ -255,8 +260,7 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     pend = np.zeros(nl, np.int8)
     nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps),
                        X, _trig(kp, X), _factors(len(kp.codes), M, signs), T, C, S, fail, pend)
-    if not points:
-        return C, S, fail, np.flatnonzero(pend), None
-    P = np.empty((kp.hosts.size, 2, M))
-    nb.finish_rows(T, C, S, pend, kp.hosts, kp.offs, P)
-    return C, S, fail, np.flatnonzero(pend), P.transpose(2, 0, 1)
+    hosts = kp.hosts if points else kp.hosts[:0]
+    P = np.empty((hosts.size, 2, M))
+    nb.finish_rows(T, C, S, pend, hosts, kp.offs, P)
+    return C, S, fail, np.flatnonzero(pend), P.transpose(2, 0, 1) if points else None

@@ -97,6 +97,7 @@ class Poses:
         self.s = [None] * nl
         self.points = [{} for _ in range(nl)]
         self.pending = set()                          # links whose angle row is not computed yet
+        self.derived = set()                          # links whose angle row the kernel derived from (c, s)
         self.org = _origins_xy(sp)
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
@@ -124,7 +125,7 @@ class Poses:
         self.angles()
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
-        out.shape, out.reasons, out.pending = (len(rows),), self.reasons, set()
+        out.shape, out.reasons, out.pending, out.derived = (len(rows),), self.reasons, set(), set(self.derived)
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
@@ -267,16 +268,18 @@ class Poses:
                     self.points[k] = {key: (np.where(bad, np.nan, px), np.where(bad, np.nan, py))
                                       for key, (px, py) in self.points[k].items()}
 
-    def adopt(self, links, C, S, pending=()) -> None:
+    def adopt(self, links, C, S, derived=()) -> None:
         """Links ``links`` placed by the compiled kernel (:mod:`kin.kernel`): their rows of
-        ``T`` are written, except the angle rows of the links in ``pending`` (computed on
-        first use, as :meth:`angle`); their cos and sin are the rows of ``C``, ``S``."""
+        ``T`` are written; their cos and sin are the rows of ``C``, ``S``.  The angle rows
+        of the links in ``derived`` came from their cos and sin (``arctan2``), as
+        :meth:`angle` computes a pending row: a caller that computes only the angles
+        asked for treats them as pending."""
         for k in links:
             self.pending.discard(k)
             self.x[k], self.y[k], self.th[k] = self.T[k]
             self.c[k], self.s[k] = C[k], S[k]
             self.points[k] = {}
-        self.pending.update(int(k) for k in pending if k in set(links))
+        self.derived.update(int(k) for k in derived if k in set(links))
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:

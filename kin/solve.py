@@ -220,9 +220,9 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     if not kp.covers(steps):
         return None
     G = Poses(sp, X.shape[0])
-    C, S, fail, pending, P = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
+    C, S, fail, derived, P = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
     links = [i for k in steps for i in sp.steps[k].unknown]
-    G.adopt(links, C, S, pending if P is None else ())      # (with the points: angles computed)
+    G.adopt(links, C, S, derived)
     bad = np.flatnonzero(fail)
     if not bad.size:
         return _Run(G, fail, {}, {}, P)
@@ -230,7 +230,7 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     sub.G.angles()
     for k in links:
         G.T[k][:, bad] = sub.G.T[k]
-        C[k, bad], S[k, bad] = sub.G.c[k], sub.G.s[k]     # (a pending angle row follows them)
+        C[k, bad], S[k, bad] = sub.G.c[k], sub.G.s[k]
     fail[bad] = sub.code
     return _Run(G, fail, {int(bad[i]): text for i, text in sub.reason.items()}, {})
 
@@ -896,7 +896,7 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
         for n in np.flatnonzero(~okm):
             status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
     if select is not None and not derivatives:       # only the links' angles asked for
-        for k in list(G.pending):
+        for k in list(G.pending | G.derived):
             if k in select[2]:
                 G.angle(k)
             else:
