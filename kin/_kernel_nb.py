@@ -3,11 +3,15 @@ one kernel that runs a lowered plan over a batch of positions.
 
 Imported only by :func:`kin.kernel.load` (importing numba costs ~0.3 s).  The compiled
 code is cached on disk (``cache=True``, numba's ``__pycache__/*.nbi``/``*.nbc`` beside
-this file, or ``NUMBA_CACHE_DIR``); numba keys the kernel's cache on *this* file's
-timestamp, so after editing a kind's scalar function (``kin/groups/*.py``) clear the
-cache or touch this file.
+this file, or ``NUMBA_CACHE_DIR``).  numba keys the kernel's cache on *this* file's
+timestamp only, so on import a scalar step or helper edited after it
+(``kin/groups/*.py``) makes this file as new as that edit (:func:`_fresh_cache`): the
+cache is then rebuilt once.
 """
 from __future__ import annotations
+
+import inspect
+import os
 
 import numba
 import numpy as np
@@ -18,6 +22,20 @@ from .groups.registry import COMPILED
 
 __all__ = ["solve_positions", "finish_rows", "SLOTS"]
 
+
+def _fresh_cache() -> None:
+    """Touch this file when a compiled step's source is newer (numba's cache would
+    otherwise keep the old code); a read-only install is left alone."""
+    sources = {inspect.getsourcefile(f) for f in (*COMPILED.values(), *SCALAR_HELPERS)}
+    newest = max(os.path.getmtime(f) for f in sources if f)
+    if newest > os.path.getmtime(__file__):
+        try:
+            os.utime(__file__, (newest, newest))
+        except OSError:
+            pass
+
+
+_fresh_cache()                             # before the decorators read the timestamp
 #: the number of scalar steps the kernel dispatches on (the registry's order)
 SLOTS = 8
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
