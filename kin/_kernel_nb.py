@@ -75,7 +75,7 @@ def _step(c, ip, fp, X, W, F, T, C, S, PP, out) -> None:
 
 
 @numba.njit(**_JIT)
-def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend):
+def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend, hosts, offs, P) -> int:
     """Solve the steps ``steps`` of a lowered plan at every row of ``X`` (M, n_drivers),
     step by step, each over all positions (its kind's loop: no dispatch per position).
 
@@ -87,9 +87,12 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
     pending rows).  ``W``
     holds the cos and sin the steps asked for, ``F`` (n_steps, 1 or M) each step's
     branch factor.  A failing step's links are NaN at that position, and so are the
-    links of the steps after it that read them, as in the NumPy path.
+    links of the steps after it that read them, as in the NumPy path.  Then
+    :func:`finish_rows` (the derived angle rows, the points ``P`` of ``hosts``).
+    Returns the number of rows that failed.
     """
     out = np.empty(X.shape[0], np.int8)
+    failed = 0
     for i in range(steps.size):
         k = steps[i]
         _step(codes[k], ints[k], floats[k], X, W, F[k], T, C, S, pend, out)
@@ -97,10 +100,13 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
             if out[n] != 0:
                 if fail[n] == 0:
                     fail[n] = out[n]
+                    failed += 1
                 for j in range(unknown.shape[1]):
                     u = unknown[k, j]
                     if u >= 0:
                         T[u, 0, n] = T[u, 1, n] = T[u, 2, n] = C[u, n] = S[u, n] = np.nan
+    finish_rows(T, C, S, pend, hosts, offs, P)
+    return failed
 
 
 @numba.njit(**_JIT)

@@ -44,13 +44,14 @@ import os
 import sys
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from .groups.registry import COMPILED
 from .groups.step import trig_row
 
-__all__ = ["KernelPlan", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
+__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
@@ -240,14 +241,31 @@ def _steps(kp: KernelPlan, steps) -> np.ndarray:
 _ALL: dict = {}
 
 
-def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray, points: bool = False):
+class KernelRun(NamedTuple):
+    """What :func:`run_positions` gives: the cos and sin rows ``C``, ``S`` (n_links, M),
+    ``fail`` (M,) int8 the status of each position's first failing step, ``failed`` the
+    number of such positions, ``pend`` (n_links,) 1 for the links whose angle rows were
+    derived from their cos and sin (``arctan2``, in the kernel), and ``points`` the
+    positions (M, n_joints + n_points, 2) of the joints and tracer points (or None)."""
+
+    C: np.ndarray
+    S: np.ndarray
+    fail: np.ndarray
+    failed: int
+    pend: np.ndarray
+    points: np.ndarray | None
+
+    @property
+    def derived(self) -> np.ndarray:
+        return np.flatnonzero(self.pend)
+
+
+def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray,
+                  points: bool = False) -> KernelRun:
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
-    (n_links, 3, M).  Returns the cos and sin rows ``C, S`` (n_links, M), the status of
-    each position's first failing step (M,) int8, the links whose angle rows were
-    derived from their cos and sin (``arctan2(S, C)``, in the kernel), and with
-    ``points`` (every step solved) the positions (M, n_joints + n_points, 2) of the
-    joints and tracer points (else None)."""
+    (n_links, 3, M).  With ``points`` (every step solved) the joints and tracer points
+    too."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
@@ -258,9 +276,8 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     C[kp.frame], S[kp.frame] = 1.0, 0.0
     fail = np.zeros(M, np.int8)
     pend = np.zeros(nl, np.int8)
-    nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps),
-                       X, _trig(kp, X), _factors(len(kp.codes), M, signs), T, C, S, fail, pend)
     hosts = kp.hosts if points else kp.hosts[:0]
     P = np.empty((hosts.size, 2, M))
-    nb.finish_rows(T, C, S, pend, hosts, kp.offs, P)
-    return C, S, fail, np.flatnonzero(pend), P.transpose(2, 0, 1) if points else None
+    failed = nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps), X, _trig(kp, X),
+                                _factors(len(kp.codes), M, signs), T, C, S, fail, pend, hosts, kp.offs, P)
+    return KernelRun(C, S, fail, failed, pend, P.transpose(2, 0, 1) if points else None)

@@ -220,12 +220,13 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     if not kp.covers(steps):
         return None
     G = Poses(sp, X.shape[0])
-    C, S, fail, derived, P = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
+    kr = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
+    C, S, fail = kr.C, kr.S, kr.fail
     links = [i for k in steps for i in sp.steps[k].unknown]
-    G.adopt(links, C, S, derived)
+    G.adopt(links, C, S, kr.derived)
+    if not kr.failed:
+        return _Run(G, fail, {}, {}, kr.points)
     bad = np.flatnonzero(fail)
-    if not bad.size:
-        return _Run(G, fail, {}, {}, P)
     sub = _numpy_run(sp, X[bad], steps, {k: v[bad] if np.ndim(v) else v for k, v in signs.items()}, kernels)
     sub.G.angles()
     for k in links:
@@ -785,19 +786,19 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
         return None
     T = np.empty((m.n_links, 3, X.shape[0]))
     T[kp.frame] = 0.0
-    C, S, fail, derived, P = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
-    if fail.any():
+    kr = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
+    if kr.failed:
         return None
-    nj = m.n_joints
+    P, nj = kr.points, m.n_joints
     if select is not None:                   # as _finish and _points with outputs=
-        T[[k for k in derived if k not in select[2]], 2] = np.nan
+        T[[k for k in kr.derived if k not in select[2]], 2] = np.nan
         P[:, [i for i in range(nj) if i not in select[0]]] = np.nan
         P[:, [nj + i for i in range(len(m.points)) if i not in select[1]]] = np.nan
     Z = T.transpose(2, 0, 1)
     status = np.empty(X.shape[0], dtype=object)
     status.fill("ok")
     return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
-                          point_positions=P[:, nj:] if m.points else None, poses=Z, codes=fail)
+                          point_positions=P[:, nj:] if m.points else None, poses=Z, codes=kr.fail)
 
 
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:

@@ -51,8 +51,10 @@ def _raw_agree(m, X, signs=None):
     Zr = ref.G.to_Z()
     Pr = solve_mod._points(sp, ref.G, sp.joint_host, "joints")
     G = solve_mod.Poses(sp, X.shape[0])
-    C, S, fail, pending, P = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T, points=True)
-    G.adopt([i for k in steps for i in sp.steps[k].unknown], C, S, pending)
+    kr = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T, points=True)
+    fail, P = kr.fail, kr.points
+    assert kr.failed == np.count_nonzero(fail)
+    G.adopt([i for k in steps for i in sp.steps[k].unknown], kr.C, kr.S, kr.derived)
     G.unset_to_nan()
     Zk = G.to_Z()
     np.testing.assert_array_equal(fail, ref.code)
