@@ -744,18 +744,16 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     """
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(repr(x) for x in METHODS), got=repr(method)))
-    m = mechanism
-    sp = plan_of(m, plan)
+    m, sp = mechanism, plan_of(mechanism, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
     select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
-    if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps):
-        state = _compiled_motion(sp, X, select)
-        if state is not None:
-            return state
+    if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps) \
+            and (state := _compiled_motion(sp, X, select)) is not None:
+        return state                        # the compiled plan alone
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
