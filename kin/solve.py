@@ -789,14 +789,27 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
         return None
     P, nj = kr.points, m.n_joints
     if select is not None:                   # as _finish and _points with outputs=
-        T[[k for k in kr.derived if k not in select[2]], 2] = np.nan
-        P[:, [i for i in range(nj) if i not in select[0]]] = np.nan
-        P[:, [nj + i for i in range(len(m.points)) if i not in select[1]]] = np.nan
+        drop_links, drop_points = _cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
+        if drop_links.size:
+            T[drop_links, 2] = np.nan
+        if drop_points.size:
+            P.transpose(1, 2, 0)[drop_points] = np.nan  # (the points' own rows: contiguous)
     Z = T.transpose(2, 0, 1)
     status = np.empty(X.shape[0], dtype=object)
     status.fill("ok")
     return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
                           point_positions=P[:, nj:] if m.points else None, poses=Z, codes=kr.fail)
+
+
+def _dropped(sp: SolvePlan, arg) -> tuple[np.ndarray, np.ndarray]:
+    """The links whose derived angle and the joints and tracer points (their indices
+    among the kernel's points) that ``outputs=`` leaves NaN: ``arg`` = (selection,
+    derived links)."""
+    (joints, points, links), derived = arg
+    nj = sp.mechanism.n_joints
+    return (np.array([k for k in derived if k not in links], np.intp),
+            np.array([i for i in range(nj) if i not in joints] +
+                     [nj + i for i in range(len(sp.mechanism.points)) if i not in points], np.intp))
 
 
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
