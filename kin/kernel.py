@@ -42,6 +42,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import threading
 import warnings
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -216,9 +217,28 @@ def _factors(n_steps: int, M: int, signs: dict) -> np.ndarray:
     return F
 
 
+#: work arrays kept per thread between calls (fresh pages cost more than the kernel on a
+#: large batch), up to this many floats each
+SCRATCH_MAX = 1 << 22
+_SCRATCH = threading.local()
+
+
+def _scratch(name: str, shape: tuple) -> np.ndarray:
+    """A work array of ``shape`` (contents undefined) reused by this thread's later calls."""
+    n = int(np.prod(shape))
+    if n > SCRATCH_MAX:
+        return np.empty(shape)
+    buf = getattr(_SCRATCH, name, None)
+    if buf is None or buf.size < n:
+        buf = np.empty(n)
+        setattr(_SCRATCH, name, buf)
+    return buf[:n].reshape(shape)
+
+
 def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
-    """The table ``W`` (4 n_drivers, M): cos and sin of ±input (the rows asked for)."""
-    W = np.empty((4 * X.shape[1] if kp.trig else 0, X.shape[0]))
+    """The table ``W`` (4 n_drivers, M): cos and sin of ±input (the rows asked for), in
+    this thread's work array (it lives only during the kernel's call)."""
+    W = _scratch("W", (4 * X.shape[1] if kp.trig else 0, X.shape[0]))
     for d, sign in kp.trig:
         r = trig_row(d, sign)
         th = X[:, d] if sign > 0 else -X[:, d]
@@ -261,18 +281,20 @@ class KernelRun(NamedTuple):
 
 
 def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray,
-                  points: bool = False) -> KernelRun:
+                  points: bool = False, scratch: bool = False) -> KernelRun:
     """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
     branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
     (n_links, 3, M).  With ``points`` (every step solved) the joints and tracer points
-    too."""
+    too.  With ``scratch`` the cos and sin rows ``C``, ``S`` are this thread's work
+    arrays: valid only until its next call (for a caller that needs only ``T`` and the
+    points)."""
     nb = load()
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
         X = X.copy()
     M = X.shape[0]
     nl = T.shape[0]
-    C, S = np.empty((nl, M)), np.empty((nl, M))
+    C, S = (_scratch("C", (nl, M)), _scratch("S", (nl, M))) if scratch else (np.empty((nl, M)), np.empty((nl, M)))
     C[kp.frame], S[kp.frame] = 1.0, 0.0
     fail = np.zeros(M, np.int8)
     pend = np.zeros(nl, np.int8)

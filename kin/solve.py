@@ -784,7 +784,7 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
         return None
     T = np.empty((m.n_links, 3, X.shape[0]))
     T[kp.frame] = 0.0
-    kr = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True)
+    kr = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True, scratch=True)
     if kr.failed:
         return None
     P, nj = kr.points, m.n_joints
