@@ -11,6 +11,9 @@ names); the value types are re-exported.
   systems, the all-modes class III triad and its tracker, the class IV group, and the
   generic Newton group solver (``kin.groups.newton``).
 * ``kin.solve`` — :func:`solve` (whole mechanism along an Assur plan), ``compile_plan``.
+* ``kin.kernel`` — compiled plans: ``kernel_plan`` (a plan as flat arrays),
+  ``run_positions`` (one numba kernel over a batch), ``load``, ``using`` and the modes
+  (``MULTILOOP_KERNEL``: ``auto``, ``on``, ``off``).
 * ``kin.forces`` — :func:`forces` (kinetostatics group by group, virtual-power check),
   ``ForceResult``.
 * ``kin.figures`` — every figure: mechanism, analogues, animation, engine diagrams,

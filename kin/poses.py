@@ -69,7 +69,8 @@ def _origins_xy(sp) -> tuple:
 class Poses:
     """Working store of link poses: one preallocated ``(n_links, 3, *shape)`` array.
 
-    ``shape`` is ``(M,)`` for one design at M inputs, or ``(D, N)`` for D designs at N
+    ``store`` (optional) is the array to use, e.g. a transposed view of an ``(M, n_links,
+    3)`` pose array that the compiled kernel writes.  ``shape`` is ``(M,)`` for one design at M inputs, or ``(D, N)`` for D designs at N
     inputs each (a plan bound to designs by :mod:`kin.design`: the reference points of
     the links and of the steps are then arrays ``(D, 1)`` that broadcast over inputs).
 
@@ -82,13 +83,13 @@ class Poses:
     so the joints' positions reuse them.
     """
 
-    def __init__(self, sp, M):
+    def __init__(self, sp, M, store=None):
         self.shape = (M,) if isinstance(M, int) else tuple(int(v) for v in M)
         self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else int(np.prod(self.shape))
         self.reasons = len(self.shape) == 1          # per-position failure texts (one design)
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
-        self.T = np.empty((nl, 3, *self.shape))
+        self.T = np.empty((nl, 3, *self.shape)) if store is None else store
         self.x = [None] * nl
         self.y = [None] * nl
         self.th = [None] * nl
@@ -96,6 +97,7 @@ class Poses:
         self.s = [None] * nl
         self.points = [{} for _ in range(nl)]
         self.pending = set()                          # links whose angle row is not computed yet
+        self.derived = set()                          # links whose angle row the kernel derived from (c, s)
         self.org = _origins_xy(sp)
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
@@ -123,7 +125,7 @@ class Poses:
         self.angles()
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
-        out.shape, out.reasons, out.pending = (len(rows),), self.reasons, set()
+        out.shape, out.reasons, out.pending, out.derived = (len(rows),), self.reasons, set(), set(self.derived)
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
@@ -265,6 +267,19 @@ class Poses:
                     self.c[k], self.s[k] = np.where(bad, np.nan, self.c[k]), np.where(bad, np.nan, self.s[k])
                     self.points[k] = {key: (np.where(bad, np.nan, px), np.where(bad, np.nan, py))
                                       for key, (px, py) in self.points[k].items()}
+
+    def adopt(self, links, C, S, derived=()) -> None:
+        """Links ``links`` placed by the compiled kernel (:mod:`kin.kernel`): their rows of
+        ``T`` are written; their cos and sin are the rows of ``C``, ``S``.  The angle rows
+        of the links in ``derived`` came from their cos and sin (``arctan2``), as
+        :meth:`angle` computes a pending row: a caller that computes only the angles
+        asked for treats them as pending."""
+        for k in links:
+            self.pending.discard(k)
+            self.x[k], self.y[k], self.th[k] = self.T[k]
+            self.c[k], self.s[k] = C[k], S[k]
+            self.points[k] = {}
+        self.derived.update(int(k) for k in derived if k in set(links))
 
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:

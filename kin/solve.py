@@ -43,6 +43,7 @@ from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, 
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
 
+from . import kernel
 from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
@@ -168,6 +169,8 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
 def check_finite_inputs(m: Mechanism, x: np.ndarray, what: str = "inputs") -> None:
     """Refuse driver inputs ``x`` (..., n_drivers) with a NaN or an infinity, naming the
     first one's index and its driver."""
+    if np.isfinite(x).all():
+        return
     bad = np.argwhere(~np.isfinite(x))
     if bad.size:
         i = tuple(int(v) for v in bad[0])
@@ -193,11 +196,49 @@ class _Run:
     code: np.ndarray                  # (M,) int8 Status of the first failing group
     reason: dict                      # n -> text (the group's label and why)
     probes: dict                      # step index -> Probe (only when asked)
+    direct: np.ndarray | None = None  # (M, n_joints + n_points, 2) from the kernel, valid while every code is 0
 
 
 def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
     """Solve the steps ``steps`` at the inputs ``X`` (M, n_drivers), the closed-form dyads
-    on the branch ``reference sign × signs[k]`` (default 1)."""
+    on the branch ``reference sign × signs[k]`` (default 1): by the compiled kernel when
+    it covers them (:mod:`kin.kernel`), else by the NumPy path (:func:`_numpy_run`)."""
+    if kernels and not probe:
+        run = _compiled_run(sp, X, steps, signs, kernels)
+        if run is not None:
+            return run
+    return _numpy_run(sp, X, steps, signs, kernels, probe)
+
+
+def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> _Run | None:
+    """:func:`_run` by the compiled kernel, or None when it is not wanted for this batch
+    (:func:`kin.kernel.wanted`) or a step has no compiled form.  The rows that fail are
+    solved again by the NumPy path, which gives their statuses and reasons."""
+    if not kernel.wanted(X.shape[0]):
+        return None
+    kp = kernel.kernel_plan(sp)
+    if not kp.covers(steps):
+        return None
+    G = Poses(sp, X.shape[0])
+    kr = kernel.run_positions(kp, X, steps, signs, G.T, points=only_all(sp, steps))
+    C, S, fail = kr.C, kr.S, kr.fail
+    links = [i for k in steps for i in sp.steps[k].unknown]
+    G.adopt(links, C, S, kr.derived)
+    if not kr.failed:
+        return _Run(G, fail, {}, {}, kr.points)
+    bad = np.flatnonzero(fail)
+    sub = _numpy_run(sp, X[bad], steps, {k: v[bad] if np.ndim(v) else v for k, v in signs.items()}, kernels)
+    sub.G.angles()
+    for k in links:
+        G.T[k][:, bad] = sub.G.T[k]
+        C[k, bad], S[k, bad] = sub.G.c[k], sub.G.s[k]
+    fail[bad] = sub.code
+    return _Run(G, fail, {int(bad[i]): text for i, text in sub.reason.items()}, {})
+
+
+def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
+    """:func:`_run` by the NumPy kernels of the steps (each vectorised over the batch):
+    the compiled kernel's oracle, and the solver of every step it does not cover."""
     M = X.shape[0]
     G = Poses(sp, M)
     code = np.zeros(M, np.int8)
@@ -712,13 +753,16 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     """
     if method not in METHODS:
         raise InputError(explain("method", expected=" or ".join(repr(x) for x in METHODS), got=repr(method)))
-    m = mechanism
-    sp = plan_of(m, plan)
+    m, sp = mechanism, plan_of(mechanism, plan)
     X, single = _as_inputs(m, inputs)
     _check_range(sp, X)
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
+    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
+    if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps) \
+            and (state := _compiled_motion(sp, X, select)) is not None:
+        return state                        # the compiled plan alone
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
@@ -729,8 +773,52 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
     _mark_out_of_range(sp, X, run)
-    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
+
+
+def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicState | None:
+    """The whole answer from the compiled kernel alone, or None (the general path then
+    decides): one driver without a ``range`` whose cached chart puts every input on the
+    reference branch (a full turn, no flip, no crossing), every step compiled, and every
+    row assembled.  The state is the one :func:`_solve_chart` and :func:`_finish` give
+    then (with ``select``, the outputs asked for: the other points NaN, and the angles
+    computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
+    m = sp.mechanism
+    ch = sp.extra.get("chart")
+    if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
+            or not kernel.wanted(X.shape[0]):
+        return None
+    kp = kernel.kernel_plan(sp)
+    if not kp.complete:
+        return None
+    T = np.empty((m.n_links, 3, X.shape[0]))
+    T[kp.frame] = 0.0
+    kr = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True, scratch=True)
+    if kr.failed:
+        return None
+    P, nj = kr.points, m.n_joints
+    if select is not None:                   # as _finish and _points with outputs=
+        drop_links, drop_points = _cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
+        if drop_links.size:
+            T[drop_links, 2] = np.nan
+        if drop_points.size:
+            P.transpose(1, 2, 0)[drop_points] = np.nan  # (the points' own rows: contiguous)
+    Z = T.transpose(2, 0, 1)
+    status = np.empty(X.shape[0], dtype=object)
+    status.fill("ok")
+    return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
+                          point_positions=P[:, nj:] if m.points else None, poses=Z, codes=kr.fail)
+
+
+def _dropped(sp: SolvePlan, arg) -> tuple[np.ndarray, np.ndarray]:
+    """The links whose derived angle and the joints and tracer points (their indices
+    among the kernel's points) that ``outputs=`` leaves NaN: ``arg`` = (selection,
+    derived links)."""
+    (joints, points, links), derived = arg
+    nj = sp.mechanism.n_joints
+    return (np.array([k for k in derived if k not in links], np.intp),
+            np.array([i for i in range(nj) if i not in joints] +
+                     [nj + i for i in range(len(sp.mechanism.points)) if i not in points], np.intp))
 
 
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
@@ -829,7 +917,7 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
         for n in np.flatnonzero(~okm):
             status[n] = run.reason.get(int(n), MESSAGES[Status(int(code[n]))])
     if select is not None and not derivatives:       # only the links' angles asked for
-        for k in list(G.pending):
+        for k in list(G.pending | G.derived):
             if k in select[2]:
                 G.angle(k)
             else:
@@ -839,7 +927,8 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     Zd = Zdd = rates_in = None
     if derivatives:
         rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links)
-    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select)
+    direct = run.direct if all_ok and select is None else None      # the kernel's points, still valid
+    state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select, direct)
     if single and code[0] != 0:
         msg = f"input {_fmt_input(m, X[0])}: {status[0]}"
         if code[0] == Status.SINGULAR:
@@ -902,9 +991,11 @@ def needed_steps(sp: SolvePlan, only) -> list[int]:
 
 
 def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, code,
-           select=None) -> KinematicState:
+           select=None, direct=None) -> KinematicState:
     m = sp.mechanism
-    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0])
+    nj = m.n_joints
+    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0]) \
+        if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
     if Zd is not None:
         host = np.asarray(sp.joint_host)
@@ -913,7 +1004,8 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1])
+        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1]) \
+            if direct is None else direct[:, nj:]
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
     return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,

@@ -60,8 +60,7 @@ class KinematicState(BatchStatus):
     codes: np.ndarray | None = None         # (N,) int8 kin.result.Status per position
 
     def __post_init__(self) -> None:
-        for f in self.__dataclass_fields__:
-            v = getattr(self, f)
+        for f, v in list(self.__dict__.items()):
             if isinstance(v, np.ndarray) and v.flags.writeable:
                 v = v.view()
                 v.flags.writeable = False

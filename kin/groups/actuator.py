@@ -28,11 +28,13 @@ from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
 from ..rigid import perp
-from .base import length, margin_tol, num
-from .rrr import rrr_branch, rrr_rates, rrr_xy
-from .step import GroupStep, Outcome, dyad_outcome
+from multiloop.topo.assur import GroupKind
 
-__all__ = ["ActuatorStep"]
+from .base import carry, length, margin_tol, num, place, place_along
+from .rrr import rrr_branch, rrr_rates, rrr_xy, triangle_apex
+from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+
+__all__ = ["ActuatorStep", "actuator_place"]
 
 
 def _length_curvature(r, v):
@@ -40,6 +42,37 @@ def _length_curvature(r, v):
     n = np.sqrt(np.sum(r * r, axis=-1))
     rv = np.sum(r * v, axis=-1)
     return np.abs(np.sum(v * v, axis=-1) - rv * rv / (n * n)) / n
+
+
+def actuator_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """Actuated triangles at every position for the compiled kernel (:mod:`kin.kernel`),
+    as :meth:`ActuatorStep.positions` (Vasechkin et al. 2017, eqs. (1)-(3) with the
+    driven side ``L(s)``).
+
+    ``ip`` = (driver, known1, known2, near, far, link2); ``fp`` = (σ, d₀, u₀, A and C
+    relative to their links, lc, sign, near's, far's and link2's reference points
+    relative to A, B and C, the unit reference direction of C–B).
+    """
+    d, k1, k3, kn, kf, k2 = ip[0], ip[1], ip[2], ip[3], ip[4], ip[5]
+    sigma, d0, d1, u0, u1, a0, a1, c0, c1, lc, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], \
+        fp[8], fp[9], fp[10]
+    onx, ony, ofx, ofy, o2x, o2y, ec, es = fp[11], fp[12], fp[13], fp[14], fp[15], fp[16], fp[17], fp[18]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        s = sigma * X[n, d]
+        dx, dy = d0 + s * u0, d1 + s * u1
+        L = np.sqrt(dx * dx + dy * dy)
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        cx, cy = carry(k3, n, T, C, S, c0, c1)
+        bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, L, lc, sign * (F[n] if rows else F[0]))
+        rx, ry = bx - ax, by - ay
+        inv = 1.0 / (L * L)
+        c, sn = (dx * rx + dy * ry) * inv, (dx * ry - dy * rx) * inv
+        place(kn, n, T, C, S, ax, ay, onx, ony, c, sn)
+        place(kf, n, T, C, S, bx, by, ofx, ofy, c, sn)
+        place_along(k2, n, T, C, S, cx, cy, o2x, o2y, bx - cx, by - cy, ec, es)
+        out[n] = 1 if not ok else (0 if abs(det) > SINGULAR * (L * lc) else 2)
+    PP[kn] = PP[kf] = PP[k2] = 1
 
 
 class ActuatorStep(GroupStep):
@@ -89,6 +122,16 @@ class ActuatorStep(GroupStep):
         G.keep_point(self.kf, self.B, bx, by)
         G.keep_point(self.k2, self.B, bx, by)
         return dyad_outcome(ok, why, det, L * lc, False, pr, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`actuator_place`."""
+        if self.geo.batch:
+            return None
+        o = origins
+        f = (self.sigma, *self.d0.tolist(), *self.u0.tolist(), *self.rel(o, self.k1, self.A),
+             *self.rel(o, self.k3, self.C), self.lc, self.sign, *self.off(o, self.kn, self.A),
+             *self.off(o, self.kf, self.B), *self.off(o, self.k2, self.C), *unit(self.dir2).tolist())
+        return Lowered(GroupKind.ACTUATED, (self.layout.driver, self.k1, self.k3, self.kn, self.kf, self.k2), f)
 
     def _probe(self, G, a, c, b, L, ok, why: dict, probe: bool):
         """Reasons of the failed positions (into ``why``) and, when asked, the Probe: the

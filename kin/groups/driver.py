@@ -13,9 +13,10 @@ import numpy as np
 
 from ..continuation import Probe
 from ..rigid import perp
-from .step import GroupStep, Outcome
+from .base import angle, carry, place
+from .step import GroupStep, Lowered, Outcome, trig_row
 
-__all__ = ["DriverStepSolver", "is_closed_form"]
+__all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place"]
 
 
 def is_closed_form(group) -> bool:
@@ -29,6 +30,54 @@ def is_closed_form(group) -> bool:
     if drive[0].kind == "drive_R":
         return len(pins) == 1 and not sliders
     return len(sliders) == 1 and not pins and {drive[0].a, drive[0].b} == {sliders[0].a, sliders[0].b}
+
+
+def turn_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A turning driver at every position for the compiled kernel (:mod:`kin.kernel`).
+
+    ``ip`` = (driver, the known link of the joint, the link carrying the pin, the driven
+    link, whether the known link is the frame, the row of cos(sign × input) in ``W``);
+    ``fp`` = (sign, the pin relative to its link's reference point, the driven link's
+    reference point relative to the pin).  On the frame the angle is ``sign × input``
+    and its cos and sin come from ``W``; else the known link's angle is added.
+    """
+    d, o, h, k, frame, r = ip[0], ip[1], ip[2], ip[3], ip[4] != 0, ip[5]
+    sign, rx, ry, ox, oy = fp[0], fp[1], fp[2], fp[3], fp[4]
+    for n in range(X.shape[0]):
+        if frame:
+            th = sign * X[n, d]
+            c, s = W[r, n], W[r + 1, n]
+        else:
+            th = angle(o, n, T, C, S, PP) + sign * X[n, d]
+            c, s = np.cos(th), np.sin(th)
+        px, py = carry(h, n, T, C, S, rx, ry)
+        place(k, n, T, C, S, px, py, ox, oy, c, s)
+        T[k, 2, n] = th
+        out[n] = 0 if np.isfinite(c) else 1
+    PP[k] = 0
+    if not frame:
+        PP[o] = 0                         # its angle row computed above
+
+
+def slide_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A sliding driver at every position for the compiled kernel (:mod:`kin.kernel`).
+
+    ``ip`` = (driver, the guide's link, the driven link); ``fp`` = (sign, the joint
+    relative to the guide's reference point, the guide's direction, the driven link's
+    reference point relative to the joint).  The driven link turns with the guide.
+    """
+    d, o, k = ip[0], ip[1], ip[2]
+    sign, rx, ry, ux, uy, ox, oy = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6]
+    for n in range(X.shape[0]):
+        c, s = C[o, n], S[o, n]
+        t = sign * X[n, d]
+        px, py = carry(o, n, T, C, S, rx, ry)
+        px, py = px + t * (c * ux - s * uy), py + t * (s * ux + c * uy)
+        th = angle(o, n, T, C, S, PP)
+        place(k, n, T, C, S, px, py, ox, oy, c, s)
+        T[k, 2, n] = th
+        out[n] = 0 if np.isfinite(c) else 1
+    PP[k] = PP[o] = 0
 
 
 class DriverStepSolver(GroupStep):
@@ -61,6 +110,21 @@ class DriverStepSolver(GroupStep):
             G.place_cs(self.link, P, self.r, G.c[k], G.s[k], G.angle(k))
         ok = G.finite([G.idx[self.link]])
         return Outcome(ok, {}, Probe(ok) if probe else None)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`turn_place` or :func:`slide_place`."""
+        if self.geo.batch:
+            return None
+        k, o = self.link_index(self.link), self.link_index(self.other)
+        r = self.r.tolist()
+        if self.u is None:
+            h = self.link_index(self.host)
+            d, frame = self.drive.driver, o == self.link_index(self.mechanism.frame)
+            return Lowered("drive_R", (d, o, h, k, int(frame), trig_row(d, self.sign)),
+                           (self.sign, *self.rel(origins, h, r), *self.off(origins, k, r)),
+                           ((d, self.sign),) if frame else ())
+        return Lowered("drive_P", (self.drive.driver, o, k),
+                       (self.sign, *self.rel(origins, o, r), *self.u.tolist(), *self.off(origins, k, r)))
 
     def rates(self, R, input_rates) -> None:
         rate = input_rates[self.drive.driver]

@@ -21,11 +21,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import cramer, dot, is_singular, stack, xy, quiet
-from ..poses import known_on, normal
-from .step import GroupStep, Outcome, dyad_outcome
+from multiloop.topo.assur import GroupKind
 
-__all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates", "PRPStep"]
+from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned, xy, quiet
+from ..poses import known_on, normal
+from .step import PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
+
+__all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates", "PRPStep", "prp_place"]
 
 
 class PRPPosition(NamedTuple):
@@ -143,6 +145,36 @@ def prp_rates(B, P1, u1, P2, u2, vP1, omega1, vP2, omega2,
     return PRPRates(s1d, s2d, vB, s1dd, s2dd, aB, det, sing)
 
 
+def prp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """PRP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`PRPStep.positions` (Vasechkin et al. 2017, eqs. (23)-(25)).
+
+    ``ip`` = (guide link 1, guide link 2, link1, link2); ``fp`` = (P1, u1, h1, P2, u2,
+    h2 (points relative to their links), link1's and link2's reference points relative
+    to B).
+    """
+    k1, k2, l1, l2 = ip[0], ip[1], ip[2], ip[3]
+    p10, p11, v10, v11, h1, p20, p21, v20, v21, h2 = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], \
+        fp[8], fp[9]
+    o1x, o1y, o2x, o2y = fp[10], fp[11], fp[12], fp[13]
+    for n in range(X.shape[0]):
+        p1x, p1y = carry(k1, n, T, C, S, p10, p11)
+        u1x, u1y = turned(k1, n, C, S, v10, v11)
+        p2x, p2y = carry(k2, n, T, C, S, p20, p21)
+        u2x, u2y = turned(k2, n, C, S, v20, v21)
+        q1x, q1y = p1x - h1 * u1y, p1y + h1 * u1x
+        bx, by = (p2x - h2 * u2y) - q1x, (p2y + h2 * u2x) - q1y
+        det = u1x * -u2y - u1y * -u2x
+        ok = abs(det) > SINGULAR_RTOL * np.sqrt((u1x * u1x + u1y * u1y) * (u2x * u2x + u2y * u2y))
+        s1 = (bx * -u2y - by * -u2x) / det if ok else np.nan
+        bx, by = q1x + s1 * u1x, q1y + s1 * u1y
+        ok = ok and np.isfinite(bx) and np.isfinite(by)
+        place_like(l1, k1, n, T, C, S, bx, by, o1x, o1y, PP)
+        place_like(l2, k2, n, T, C, S, bx, by, o2x, o2y, PP)
+        out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
+    PP[l1] = PP[l2] = PP[k1] = PP[k2] = 0
+
+
 class PRPStep(GroupStep):
     """A PRP dyad of a plan: two sliders pinned together at B, each on the guide of a
     known link; compiled once."""
@@ -164,6 +196,16 @@ class PRPStep(GroupStep):
         G.place_like(lay.link1, r.B, self.B, self.k1)
         G.place_like(lay.link2, r.B, self.B, self.k2)
         return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`prp_place`."""
+        if self.geo.batch:
+            return None
+        lay, o = self.layout, origins
+        k1, k2, l1, l2 = (self.link_index(x) for x in (self.k1, self.k2, lay.link1, lay.link2))
+        f = (*self.rel(o, k1, self.P1), *self.u1.tolist(), self.h1, *self.rel(o, k2, self.P2), *self.u2.tolist(),
+             self.h2, *self.off(o, l1, self.B), *self.off(o, l2, self.B))
+        return Lowered(GroupKind.PRP, (k1, k2, l1, l2), f)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

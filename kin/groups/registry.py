@@ -1,5 +1,6 @@
 """Which compiled step solves which plan step: the one map from a group's kind to the
-adapter next to its kernel (see :mod:`kin.groups.step` for the protocol), and the
+adapter next to its kernel (see :mod:`kin.groups.step` for the protocol), the map from
+a lowered step to its scalar function for the compiled kernel (:mod:`kin.kernel`), and the
 per-kind facts the design check asks for (:mod:`kin.groups.facts`): the number of
 assembly modes and the transmission definition."""
 from __future__ import annotations
@@ -8,20 +9,20 @@ from typing import Callable, NamedTuple
 
 from multiloop.topo.assur import DriverStep, GroupKind
 
-from .actuator import ActuatorStep
+from .actuator import ActuatorStep, actuator_place
 from .class4 import Class4Step
-from .driver import DriverStepSolver, is_closed_form
+from .driver import DriverStepSolver, is_closed_form, slide_place, turn_place
 from . import facts as F
 from .newton import NewtonStep
-from .prp import PRPStep
-from .rpp import RPPStep
-from .rpr import RPRStep
-from .rrp import RRPStep
-from .rrr import RRRStep
+from .prp import PRPStep, prp_place
+from .rpp import RPPStep, rpp_place
+from .rpr import RPRStep, rpr_place
+from .rrp import RRPStep, rrp_place
+from .rrr import RRRStep, rrr_place
 from .step import GroupStep
 from .triad import TriadStep
 
-__all__ = ["CLOSED_FORM", "FACTS", "KindFacts", "closed_form_step", "newton_step", "has_closed_form",
+__all__ = ["CLOSED_FORM", "COMPILED", "FACTS", "KindFacts", "closed_form_step", "newton_step", "has_closed_form",
            "mode_count", "angle_defs"]
 
 #: group kind -> its closed-form step
@@ -31,6 +32,14 @@ CLOSED_FORM: dict[GroupKind, type[GroupStep]] = {
     GroupKind.CLASS_IV: Class4Step, GroupKind.ACTUATED: ActuatorStep,
 }
 
+
+#: a compiled step's key (:attr:`~kin.groups.step.Lowered.key`) -> its scalar function,
+#: which :mod:`kin.kernel` compiles with numba (a kind absent here: NumPy path)
+COMPILED: dict = {
+    "drive_R": turn_place, "drive_P": slide_place, GroupKind.RRR: rrr_place, GroupKind.RRP: rrp_place,
+    GroupKind.RPR: rpr_place, GroupKind.PRP: prp_place, GroupKind.RPP: rpp_place,
+    GroupKind.ACTUATED: actuator_place,
+}
 
 
 class KindFacts(NamedTuple):

@@ -21,11 +21,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import cramer, dot, is_singular, num, stack, xy, quiet
-from ..poses import angle_of, known_on, normal
-from .step import GroupStep, Outcome, dyad_outcome
+from multiloop.topo.assur import GroupKind
 
-__all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates", "RPPStep"]
+from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack, turned, xy, quiet
+from ..poses import angle_of, known_on, normal
+from .step import PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
+
+__all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates", "RPPStep", "rpp_place"]
 
 
 class RPPPosition(NamedTuple):
@@ -149,6 +151,33 @@ def rpp_rates(A, Q, P, u, alpha, vA, vP, omega, aA=None, aP=None, eps=None) -> R
     return RPPRates(s1d, s2d, vQ, s1dd, s2dd, aQ, det, sing)
 
 
+def rpp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RPP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`RPPStep.positions` (Vasechkin et al. 2017, eqs. (30)-(32)).
+
+    ``ip`` = (known1, the guide's link, link1, link2); ``fp`` = (A, Q relative to their
+    links, u, cos α, sin α, h, link2's and link1's reference points relative to Q and A).
+    """
+    k1, kq, l1, l2 = ip[0], ip[1], ip[2], ip[3]
+    a0, a1, q0, q1, v0, v1, ca, sa, h = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], fp[8]
+    o2x, o2y, o1x, o1y = fp[9], fp[10], fp[11], fp[12]
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        px, py = carry(kq, n, T, C, S, q0, q1)
+        ux, uy = turned(kq, n, C, S, v0, v1)
+        wx, wy = ca * ux - sa * uy, sa * ux + ca * uy
+        b1, b2 = ax - px + h * wy, ay - py - h * wx
+        det = ux * wy - uy * wx
+        ok = abs(det) > SINGULAR_RTOL * np.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy))
+        s1 = (b1 * wy - b2 * wx) / det if ok else np.nan
+        qx, qy = px + s1 * ux, py + s1 * uy
+        ok = ok and np.isfinite(qx) and np.isfinite(qy)
+        place_like(l2, kq, n, T, C, S, qx, qy, o2x, o2y, PP)
+        place_like(l1, kq, n, T, C, S, ax, ay, o1x, o1y, PP)
+        out[n] = 1 if not ok else (0 if abs(det) > PARALLEL_GUIDES else 2)
+    PP[l1] = PP[l2] = PP[kq] = 0
+
+
 class RPPStep(GroupStep):
     """An RPP dyad of a plan: link1 pinned at outer1 and sliding in the block link2,
     which slides on the guide of the known link at outer2; compiled once."""
@@ -170,6 +199,17 @@ class RPPStep(GroupStep):
         G.place_like(lay.link2, r.Q, self.Q, self.kq)
         G.place_like(lay.link1, A, self.A, self.kq)
         return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`rpp_place`."""
+        if self.geo.batch:
+            return None
+        lay, o = self.layout, origins
+        k1, kq, l1, l2 = (self.link_index(x) for x in (self.k1, self.kq, lay.link1, lay.link2))
+        f = (*self.rel(o, k1, self.A), *self.rel(o, kq, self.Q), *self.u.tolist(),
+             float(np.cos(self.alpha)), float(np.sin(self.alpha)), self.h,
+             *self.off(o, l2, self.Q), *self.off(o, l1, self.A))
+        return Lowered(GroupKind.RPP, (k1, kq, l1, l2), f)
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

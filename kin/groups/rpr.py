@@ -22,14 +22,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, dot, is_singular, num, sign_of, stack, xy,
+from multiloop.topo.assur import GroupKind
+
+from .base import (square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cramer, dot, is_singular, num,
+                   place, place_along, sign_of, stack, xy,
                    quiet)
 from ..continuation import Probe
-from ..poses import known_on, normal
+from ..poses import known_on, normal, unit
 from ..result import Status
-from .step import GroupStep, Outcome, dyad_outcome
+from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
 
-__all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates", "RPRStep"]
+__all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates", "RPRStep", "rpr_place"]
 
 
 class RPRPosition(NamedTuple):
@@ -150,6 +153,36 @@ def rpr_rates(A, C, u, vA, vC, aA=None, aC=None) -> RPRRates:
     return RPRRates(sd, w3, sdd, e3, det, sing)
 
 
+def rpr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RPR steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`RPRStep.positions` (Vasechkin et al. 2017, eqs. (15)-(18)).
+
+    ``ip`` = (the guide's pivot link, the block's pivot link, guide, block); ``fp`` =
+    (X, Y relative to their links, h, sign, the guide's unit reference direction, the
+    guide's and the block's reference points relative to X and Y, singular threshold).
+    """
+    kx, ky, g, b = ip[0], ip[1], ip[2], ip[3]
+    x0, x1, y0, y1, h, sign, dc, ds = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7]
+    ogx, ogy, obx, oby, thr = fp[8], fp[9], fp[10], fp[11], fp[12]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        xx, xy_ = carry(kx, n, T, C, S, x0, x1)
+        yx, yy = carry(ky, n, T, C, S, y0, y1)
+        dx, dy = yx - xx, yy - xy_
+        d2 = dx * dx + dy * dy
+        q = d2 - h * h
+        ok = q >= -REACH_RTOL * d2 and d2 > 0
+        s = np.sqrt(max(q, 0.0)) * (sign * (F[n] if rows else F[0])) if ok else np.nan
+        ux = (s * dx + h * dy) / d2
+        uy = (s * dy - h * dx) / d2
+        ok = ok and np.isfinite(ux) and np.isfinite(uy)
+        place_along(g, n, T, C, S, xx, xy_, ogx, ogy, ux, uy, dc, ds)
+        place(b, n, T, C, S, yx, yy, obx, oby, C[g, n], S[g, n])
+        T[g, 2, n] = T[b, 2, n] = arctan2(S[g, n], C[g, n])     # the block turns with the guide
+        out[n] = 1 if not ok else (0 if abs(s) > thr else 2)
+    PP[g] = PP[b] = 0
+
+
 class RPRStep(GroupStep):
     """An RPR dyad of a plan: the guide (the P joint's first link) pivoted at X, the
     block at Y; compiled once."""
@@ -186,6 +219,16 @@ class RPRStep(GroupStep):
         G.place_dir(self.guide, Xp, self.X, u, self.u)
         G.place_like(self.block, Yp, self.Y, self.guide)
         return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`rpr_place`."""
+        if self.geo.batch:
+            return None
+        o = origins
+        kx, ky, g, b = (self.link_index(x) for x in (self.kx, self.ky, self.guide, self.block))
+        f = (*self.rel(o, kx, self.X), *self.rel(o, ky, self.Y), self.h, self.sign, *unit(self.u).tolist(),
+             *self.off(o, g, self.X), *self.off(o, b, self.Y), SINGULAR * self.size)
+        return Lowered(GroupKind.RPR, (kx, ky, g, b), f)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (margin ``|XY|² − h²``)."""

@@ -23,13 +23,16 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import margin_tol, REACH_RTOL, cramer, dot, is_singular, length, num, sign_of, stack, xy, quiet
-from ..continuation import Probe
-from ..poses import known_on, normal
-from ..result import Status
-from .step import GroupStep, Outcome, dyad_outcome
+from multiloop.topo.assur import GroupKind
 
-__all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates", "RRPStep"]
+from .base import (margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, length, num, place_along, place_like,
+                   sign_of, stack, turned, xy, quiet)
+from ..continuation import Probe
+from ..poses import known_on, normal, unit
+from ..result import Status
+from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+
+__all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates", "RRPStep", "rrp_place"]
 
 
 class RRPPosition(NamedTuple):
@@ -174,6 +177,38 @@ def rrp_rates(A, B, P, u, vA, vP, omega, aA=None, aP=None, eps=None) -> RRPRates
     return RRPRates(w2, sd, vB, e2, sdd, aB, det, sing)
 
 
+def rrp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RRP steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`RRPStep.positions` (Vasechkin et al. 2017, eqs. (9)-(11)).
+
+    ``ip`` = (known1, the guide's link, link1, link2); ``fp`` = (A, P relative to their
+    links, u, h, l2, sign, unit B−A, link1's and link2's reference points relative to A
+    and B, singular threshold).
+    """
+    k1, kp, l1, l2 = ip[0], ip[1], ip[2], ip[3]
+    a0, a1, p0, p1, u0, u1, h, la, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6], fp[7], fp[8]
+    dc, ds, o1x, o1y, o2x, o2y, thr = fp[9], fp[10], fp[11], fp[12], fp[13], fp[14], fp[15]
+    rows = F.size > 1
+    l2s = la * la
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        px, py = carry(kp, n, T, C, S, p0, p1)
+        ux, uy = turned(kp, n, C, S, u0, u1)
+        rx, ry = ax - px, ay - py
+        dy = h - (ry * ux - rx * uy)
+        q = l2s - dy * dy
+        ok = q >= -REACH_RTOL * l2s
+        x2 = np.sqrt(max(q, 0.0)) * (sign * (F[n] if rows else F[0])) if ok else np.nan
+        s = (rx * ux + ry * uy) + x2
+        bx = px + s * ux - h * uy
+        by = py + s * uy + h * ux
+        ok = ok and np.isfinite(bx) and np.isfinite(by)
+        place_along(l1, n, T, C, S, ax, ay, o1x, o1y, bx - ax, by - ay, dc, ds)
+        place_like(l2, kp, n, T, C, S, bx, by, o2x, o2y, PP)
+        out[n] = 1 if not ok else (0 if abs(x2) > thr else 2)
+    PP[l1], PP[l2], PP[kp] = 1, 0, 0
+
+
 class RRPStep(GroupStep):
     """An RRP dyad of a plan (link1 pinned at outer1 and at the slider's pin, the slider
     link2 on the guide of the known link at outer2): compiled once."""
@@ -212,6 +247,17 @@ class RRPStep(GroupStep):
         G.place_dir(lay.link1, A, self.A, B - A, self.B - self.A)
         G.place_like(lay.link2, B, self.B, self.kp)
         return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`rrp_place`."""
+        if self.geo.batch:
+            return None
+        lay, o = self.layout, origins
+        k1, kp, l1, l2 = (self.link_index(x) for x in (self.known1, self.kp, lay.link1, lay.link2))
+        f = (*self.rel(o, k1, self.A), *self.rel(o, kp, self.P), *self.u.tolist(), self.h, self.la, self.sign,
+             *unit(self.B - self.A).tolist(), *self.off(o, l1, self.A), *self.off(o, l2, self.B),
+             SINGULAR * self.la)
+        return Lowered(GroupKind.RRP, (k1, kp, l1, l2), f)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R``: the margin is ``l − |y − h|`` with

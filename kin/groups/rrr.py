@@ -25,14 +25,17 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, cramer, is_singular, length, num, pair, sign_of,
-                   stack, xy, quiet)
+from multiloop.topo.assur import GroupKind
+
+from .base import (square_curvature, margin_tol, REACH_RTOL, carry, cramer, is_singular, length, num, pair, place,
+                   scalar, sign_of, stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
-from .step import GroupStep, Outcome, dyad_outcome
+from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
 
-__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep"]
+__all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep", "rrr_place",
+           "triangle_apex", "link_turn"]
 
 
 class RRRPosition(NamedTuple):
@@ -215,6 +218,72 @@ def _rotation(dx, dy, rot, d_ref, exact):
     return c, s
 
 
+@scalar
+def triangle_apex(ax, ay, cx, cy, l2, l3, sign):
+    """:func:`rrr_xy` at one position (scalars, compiled by :mod:`kin.kernel`): ``bx, by,
+    ok, det, exact``; the same operations in the same order, so the same floats."""
+    dx = cx - ax
+    dy = cy - ay
+    d2 = dx * dx + dy * dy
+    l2s = l2 * l2
+    inv = 1.0 / d2
+    r = l2s * inv
+    t = 0.5 + (0.5 * (l2s - l3 * l3)) * inv
+    q = r - t * t
+    exact = not q < 0.0
+    if exact:
+        k = np.sqrt(q)
+        ok = k == k
+        k = k * sign
+    else:
+        ok = q >= -REACH_RTOL * r
+        k = 0.0 * sign if ok else np.nan
+    return ax + t * dx - k * dy, ay + t * dy + k * dx, ok, -(k * d2), exact
+
+
+def rrr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """RRR steps at every position for the compiled kernel (:mod:`kin.kernel`), as
+    :meth:`RRRStep.positions` (Vasechkin et al. 2017, eqs. (1)-(3)): reads the known
+    links' poses from the pose store ``T`` (n_links, 3, M), ``C``, ``S`` (n_links, M),
+    writes its two links (their angles pending) and each position's
+    :class:`~kin.result.Status` into ``out`` (0, out of reach, singular); ``F`` the
+    branch factor (one, or one per position).
+
+    ``ip`` = (known1, known2, link1, link2); ``fp`` = (A and C relative to their known
+    links' reference points, la, lc, sign, rot1, rot2, unit B−A, unit B−C, link1's and
+    link2's reference points relative to their placing points, from_B1, from_B2,
+    singular threshold).
+    """
+    k1, k2, l1, l2 = ip[0], ip[1], ip[2], ip[3]
+    a0, a1, c0, c1, la, lc, sign = fp[0], fp[1], fp[2], fp[3], fp[4], fp[5], fp[6]
+    r1c, r1s, r2c, r2s, u1c, u1s, u2c, u2s = fp[7], fp[8], fp[9], fp[10], fp[11], fp[12], fp[13], fp[14]
+    o1x, o1y, o2x, o2y, at_b1, at_b2, thr = fp[15], fp[16], fp[17], fp[18], fp[19] != 0.0, fp[20] != 0.0, fp[21]
+    rows = F.size > 1
+    for n in range(X.shape[0]):
+        ax, ay = carry(k1, n, T, C, S, a0, a1)
+        cx, cy = carry(k2, n, T, C, S, c0, c1)
+        bx, by, ok, det, exact = triangle_apex(ax, ay, cx, cy, la, lc, sign * (F[n] if rows else F[0]))
+        c, s = link_turn(bx - ax, by - ay, exact, r1c, r1s, u1c, u1s)
+        place(l1, n, T, C, S, bx if at_b1 else ax, by if at_b1 else ay, o1x, o1y, c, s)
+        c, s = link_turn(bx - cx, by - cy, exact, r2c, r2s, u2c, u2s)
+        place(l2, n, T, C, S, bx if at_b2 else cx, by if at_b2 else cy, o2x, o2y, c, s)
+        out[n] = 1 if not ok else (0 if abs(det) > thr else 2)
+    PP[l1] = PP[l2] = 1
+
+
+@scalar
+def link_turn(dx, dy, exact, rc, rs, uc, us):
+    """(c, s) of a link of known length whose side is ``(dx, dy)``: by the compiled
+    rotation ``(rc, rs)`` (reference direction / length) where the length holds
+    (``exact``), else normalised against the unit reference ``(uc, us)``
+    (:func:`_rotation`)."""
+    if exact:
+        return dx * rc + dy * rs, dy * rc - dx * rs
+    inv = 1.0 / np.sqrt(dx * dx + dy * dy)
+    nx, ny = dx * inv, dy * inv
+    return nx * uc + ny * us, ny * uc - nx * us
+
+
 class RRRStep(GroupStep):
     """An RRR dyad of a plan: lengths, branch sign and reference directions compiled
     once; positions by :func:`rrr_position`, rates by :func:`rrr_rates`."""
@@ -267,6 +336,18 @@ class RRRStep(GroupStep):
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
         return dyad_outcome(ok, why, det, la * lc, False, pr, probe, G.reasons)
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`rrr_place`."""
+        if self.geo.batch:
+            return None
+        o = origins
+        at1, at2 = (self.B if self.from_B1 else self.A), (self.B if self.from_B2 else self.C)
+        f = (*self.rel(o, self.k1, self.A), *self.rel(o, self.k2, self.C), self.la, self.lc, self.sign,
+             *self.rot1, *self.rot2, *unit(self.dir1).tolist(), *unit(self.dir2).tolist(),
+             *self.off(o, self.l1, at1), *self.off(o, self.l2, at2),
+             float(self.from_B1), float(self.from_B2), SINGULAR * (self.la * self.lc))
+        return Lowered(GroupKind.RRR, (self.k1, self.k2, self.l1, self.l2), f)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (the reach margin of the probe is

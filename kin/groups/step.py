@@ -8,7 +8,13 @@ is compiled once into an object with
   on the branch ``reference sign × factor``; ``Outcome.why[n] = (Status, text)`` for
   each failed position, ``Outcome.probe`` a :class:`~kin.continuation.Probe` when asked;
 * ``rates(R, input_rates)``: velocities and accelerations of its links into
-  ``R`` (:class:`~kin.poses.PoseRates`).
+  ``R`` (:class:`~kin.poses.PoseRates`);
+* ``lower(origins) -> Lowered | None``: the step as flat numbers for the compiled
+  kernel (:mod:`kin.kernel`), or None for a kind without a compiled step.  A kind with
+  one keeps, next to its kernel, a scalar function ``*_place(ip, fp, X, n, W, factor,
+  T, C, S, PP) -> status`` (plain arithmetic that numba compiles: position ``n`` of
+  the inputs ``X`` in the pose store ``T``, ``C``, ``S``, see :mod:`kin.kernel`) and
+  names it in :data:`kin.groups.registry.COMPILED`.
 
 The closed-form kinds keep their adapter next to their kernel (``rrr.RRRStep`` …,
 ``triad.TriadStep``, ``class4.Class4Step``, ``driver.DriverStepSolver``);
@@ -26,13 +32,35 @@ from ..continuation import Probe
 from ..geometry import Geometry
 from ..result import Status
 
-__all__ = ["Outcome", "GroupStep", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES"]
+__all__ = ["Outcome", "GroupStep", "Lowered", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "trig_row"]
 
 #: relative determinant below which a position is singular
 SINGULAR = 1e-9
 #: PRP/RPP: |det| = |sin(angle between the unit guides)| below which the guides count as
 #: parallel; nearer than this the slider positions exceed 1e6 × the offsets (change point)
 PARALLEL_GUIDES = 1e-6
+
+
+class Lowered(NamedTuple):
+    """A compiled step as flat numbers (:meth:`GroupStep.lower`): ``key`` names its
+    scalar function in :data:`kin.groups.registry.COMPILED`; ``ints`` are link (and
+    driver) indices, ``floats`` its numbers; the layout is the scalar function's own.
+    Points of a link are given relative to the link's reference point (the pose
+    store's convention, :class:`~kin.poses.Poses`).  ``trig`` lists the (driver, sign)
+    whose cos and sin of ``sign × input`` the step reads from the kernel's table ``W``
+    (rows ``trig_row(driver, sign)``), computed by NumPy before the loop as the NumPy
+    path computes them."""
+
+    key: object
+    ints: tuple
+    floats: tuple
+    trig: tuple = ()
+
+
+def trig_row(driver: int, sign: float) -> int:
+    """The row of ``cos(sign × input[driver])`` in the kernel's table ``W`` (its sin is
+    the next row)."""
+    return 4 * driver + (2 if sign < 0 else 0)
 
 
 class Outcome(NamedTuple):
@@ -77,6 +105,29 @@ class GroupStep:
 
     def rates(self, R, input_rates: np.ndarray) -> None:
         raise NotImplementedError
+
+    def lower(self, origins) -> Lowered | None:
+        """The step as flat numbers for the compiled kernel (None: no compiled step;
+        a plan holding it is solved by the NumPy path).  ``origins`` (n_links, 2)
+        are the links' reference points."""
+        return None
+
+    def link_index(self, name: str) -> int:
+        """A link's index in the mechanism."""
+        return self.mechanism.link_names.index(name)
+
+    @staticmethod
+    def rel(origins, k: int, r) -> tuple[float, float]:
+        """Reference point ``r`` relative to link k's reference point (as the pose store
+        computes it: the same floats)."""
+        o = np.asarray(origins, float)[k].tolist()
+        return float(r[0]) - o[0], float(r[1]) - o[1]
+
+    @staticmethod
+    def off(origins, k: int, r) -> tuple[float, float]:
+        """Link k's reference point relative to its material point at ``r``."""
+        x, y = GroupStep.rel(origins, k, r)
+        return -x, -y
 
 
 def dyad_outcome(ok, why: dict, det, rdet: float, parallel: bool, probe_obj, probe: bool,

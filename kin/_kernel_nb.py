@@ -1,0 +1,127 @@
+"""The numba side of :mod:`kin.kernel`: every registered scalar step compiled, and the
+one kernel that runs a lowered plan over a batch of positions.
+
+Imported only by :func:`kin.kernel.load` (importing numba costs ~0.3 s).  The compiled
+code is cached on disk (``cache=True``, numba's ``__pycache__/*.nbi``/``*.nbc`` beside
+this file, or ``NUMBA_CACHE_DIR``).  numba keys the kernel's cache on *this* file's
+timestamp only, so on import a scalar step or helper edited after it
+(``kin/groups/*.py``) makes this file as new as that edit (:func:`_fresh_cache`): the
+cache is then rebuilt once.
+"""
+from __future__ import annotations
+
+import inspect
+import os
+
+import numba
+import numpy as np
+from numba.extending import register_jitable
+
+from .groups.base import SCALAR_HELPERS, arctan2
+from .groups.registry import COMPILED
+
+__all__ = ["solve_positions", "finish_rows", "SLOTS"]
+
+
+def _fresh_cache() -> None:
+    """Touch this file when a compiled step's source is newer (numba's cache would
+    otherwise keep the old code); a read-only install is left alone."""
+    sources = {inspect.getsourcefile(f) for f in (*COMPILED.values(), *SCALAR_HELPERS)}
+    newest = max(os.path.getmtime(f) for f in sources if f)
+    if newest > os.path.getmtime(__file__):
+        try:
+            os.utime(__file__, (newest, newest))
+        except OSError:
+            pass
+
+
+_fresh_cache()                             # before the decorators read the timestamp
+#: the number of scalar steps the kernel dispatches on (the registry's order)
+SLOTS = 8
+_JIT = dict(cache=True, error_model="numpy", nogil=True)
+
+
+def _unused(ip, fp, X, W, F, T, C, S, PP, out) -> None:  # pragma: no cover - a free slot
+    out[:] = 1
+
+
+for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
+    register_jitable(**_JIT)(_helper)
+if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
+    raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
+_s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7 = (numba.njit(**_JIT)(f) for f in
+                                          (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
+
+
+@numba.njit(**_JIT)
+def _step(c, ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """The steps of code ``c`` (its index in the registry) at every position."""
+    if c == 0:
+        _s0(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 1:
+        _s1(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 2:
+        _s2(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 3:
+        _s3(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 4:
+        _s4(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 5:
+        _s5(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 6:
+        _s6(ip, fp, X, W, F, T, C, S, PP, out)
+    else:
+        _s7(ip, fp, X, W, F, T, C, S, PP, out)
+
+
+@numba.njit(**_JIT)
+def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend, hosts, offs, P) -> int:
+    """Solve the steps ``steps`` of a lowered plan at every row of ``X`` (M, n_drivers),
+    step by step, each over all positions (its kind's loop: no dispatch per position).
+
+    Writes the steps' links into the pose store ``T`` (n_links, 3, M) (x, y, θ of each
+    link's reference point; the frame's row set by the caller) with their cos and sin
+    ``C``, ``S`` (n_links, M), ``fail`` (M,): the status of the first failing step (0
+    where every step assembles), and ``pend`` (n_links,): 1 for the links whose angle
+    row comes from their cos and sin (:func:`finish_rows` computes it, as the NumPy path's
+    pending rows).  ``W``
+    holds the cos and sin the steps asked for, ``F`` (n_steps, 1 or M) each step's
+    branch factor.  A failing step's links are NaN at that position, and so are the
+    links of the steps after it that read them, as in the NumPy path.  Then
+    :func:`finish_rows` (the derived angle rows, the points ``P`` of ``hosts``).
+    Returns the number of rows that failed.
+    """
+    out = np.empty(X.shape[0], np.int8)
+    failed = 0
+    for i in range(steps.size):
+        k = steps[i]
+        _step(codes[k], ints[k], floats[k], X, W, F[k], T, C, S, pend, out)
+        for n in range(X.shape[0]):
+            if out[n] != 0:
+                if fail[n] == 0:
+                    fail[n] = out[n]
+                    failed += 1
+                for j in range(unknown.shape[1]):
+                    u = unknown[k, j]
+                    if u >= 0:
+                        T[u, 0, n] = T[u, 1, n] = T[u, 2, n] = C[u, n] = S[u, n] = np.nan
+    finish_rows(T, C, S, pend, hosts, offs, P)
+    return failed
+
+
+@numba.njit(**_JIT)
+def finish_rows(T, C, S, pend, hosts, offs, P):
+    """After :func:`solve_positions`: the angle rows of the pending links (``arctan2(S,
+    C)``, fdlibm's: within 1 ulp of NumPy's and faster than the libm call) and the
+    points ``P`` (n_points, 2, M) of the joints and tracer points, each carried by its
+    host link ``hosts[i]`` from the offset ``offs[i]`` (:meth:`kin.poses.Poses.carry`)."""
+    M = T.shape[2]
+    for k in range(T.shape[0]):
+        if pend[k]:
+            for n in range(M):
+                T[k, 2, n] = arctan2(S[k, n], C[k, n])
+    for i in range(hosts.size):
+        h, ox, oy = hosts[i], offs[i, 0], offs[i, 1]
+        for n in range(M):
+            P[i, 0, n] = T[h, 0, n] + (C[h, n] * ox - S[h, n] * oy)
+            P[i, 1, n] = T[h, 1, n] + (S[h, n] * ox + C[h, n] * oy)

@@ -1,0 +1,305 @@
+"""Compiled plans: a mechanism's solving plan lowered to flat arrays and run by one
+compiled kernel over a whole batch of positions.
+
+:func:`kernel_plan` lowers a :class:`~kin.solve.SolvePlan` once: each compiled step
+gives its :class:`~kin.groups.step.Lowered` numbers (its kind's code in
+:data:`kin.groups.registry.COMPILED`, link indices, lengths, signs, reference
+directions).  :func:`run_positions` then runs one numba kernel (``kin._kernel_nb``)
+that takes the steps in order and, for each, calls the scalar closed form of its kind
+once, looping over all the positions: the five dyads (Vasechkin et al. 2017 [1]_, eqs.
+(1)-(3), (9)-(11), (15)-(18), (23)-(25), (30)-(32)), the two drivers and the actuated
+triangle.  Each does the NumPy kernel's operations in the same order (the floats agree
+to rounding) and gives the same statuses.  The drivers' cos and sin are NumPy's own,
+computed before the loop; the angle rows are fdlibm's ``atan2`` (Sun Microsystems 1993,
+within 1 ulp of NumPy's) in the kernel when every step is solved, else NumPy's, later.
+The NumPy path stays as the oracle (``tests/test_kernels.py``) and solves what the
+kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
+the continuation walk, velocities and accelerations, batches of designs
+(:mod:`kin.design`), and the reasons of the rows that fail.
+
+Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships
+wheels for Linux, macOS and Windows, and it caches compiled code on disk
+(``cache=True``), so a process after the first loads the kernel instead of compiling it.
+
+When: in a fresh process, importing numba and reading the cached kernel cost about
+1.5 s of CPU, most of it numba's own start-up (``benchmarks/bench_solve.py`` prints
+both).  That is more than one batch saves: the kernel saves well under a microsecond
+per position.  With
+``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when it is already loaded
+in the process (:func:`load`, or a batch before it), and loads it itself only for a
+batch of at least :data:`LAZY_MIN` positions; ``on`` always uses it (if numba is
+installed), ``off`` never.  The command line's batches never import numba, so its cold
+start does not grow.
+
+References
+----------
+.. [1] Vasechkin M.A., Matveeva E.V., Sidorenko A.S., Chertov E.D. Mathematical model
+   of kinematic calculation of flat lever mechanisms. Vestnik VGUIT 79(2) (2017) 73-79.
+   doi:10.20914/2310-1202-2017-2-73-79.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import threading
+import warnings
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .groups.registry import COMPILED
+from .groups.step import trig_row
+
+__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
+           "mode", "using", "MODES", "LAZY_MIN"]
+
+#: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
+MODES = ("auto", "on", "off")
+#: in mode "auto", a batch of at least this many positions loads numba itself
+LAZY_MIN = 2_000_000
+_MODE = [os.environ.get("MULTILOOP_KERNEL", "auto")]
+_CODES = {key: i for i, key in enumerate(COMPILED)}
+_NB = "multiloop.kin._kernel_nb"
+
+
+@dataclass(frozen=True, eq=False)
+class KernelPlan:
+    """A plan lowered to flat arrays (read-only): ``codes`` (n_steps,) the kind of each
+    step (its index in the registry; -1: no compiled step), ``ints`` / ``floats``
+    (n_steps, width) each step's numbers, ``unknown`` (n_steps, width) the links each
+    step places (-1 padded), ``frame`` the frame's link index, ``trig`` the (driver,
+    sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``,
+    ``hosts`` / ``offs`` the link carrying each joint and tracer point and the point's
+    offset from that link's reference point, ``complete`` whether every step has a
+    compiled step."""
+
+    codes: np.ndarray
+    ints: np.ndarray
+    floats: np.ndarray
+    unknown: np.ndarray
+    frame: int
+    trig: tuple = ()
+    hosts: np.ndarray | None = None
+    offs: np.ndarray | None = None
+    complete: bool = False
+
+    def covers(self, steps) -> bool:
+        """Whether every step of ``steps`` has a compiled step."""
+        if len(steps) == len(self.codes):
+            return self.complete
+        return bool(np.all(self.codes[np.asarray(list(steps), int)] >= 0))
+
+
+def _table(rows, dtype, fill) -> np.ndarray:
+    width = max((len(r) for r in rows), default=0) or 1
+    out = np.full((len(rows), width), fill, dtype)
+    for i, r in enumerate(rows):
+        out[i, :len(r)] = r
+    out.flags.writeable = False
+    return out
+
+
+def lower_plan(sp) -> KernelPlan:
+    """Lower the compiled plan ``sp`` (:class:`~kin.solve.SolvePlan`) to flat arrays."""
+    low = [st.closed.lower(sp.origins) if st.closed is not None else None for st in sp.steps]
+    codes = np.array([_CODES.get(lw.key, -1) if lw is not None else -1 for lw in low], np.int64)
+    codes.flags.writeable = False
+    return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
+                      _table([lw.floats if lw else () for lw in low], float, np.nan),
+                      _table([st.unknown for st in sp.steps], np.int64, -1),
+                      sp.mechanism.link_names.index(sp.mechanism.frame),
+                      tuple(sorted({t for lw in low if lw is not None for t in lw.trig})),
+                      *_hosts(sp), bool(np.all(codes >= 0)))
+
+
+def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
+    """Host link and offset of every joint, then every tracer point (``SolvePlan``)."""
+    m = sp.mechanism
+    hosts = np.array([*sp.joint_host, *sp.point_host], np.int64)
+    at = np.array([*(j.at for j in m.joints), *(p.at for p in m.points)], float).reshape(-1, 2)
+    offs = at - np.asarray(sp.origins, float)[hosts]
+    hosts.flags.writeable = offs.flags.writeable = False
+    return hosts, offs
+
+
+def kernel_plan(sp) -> KernelPlan:
+    """The lowered plan of ``sp``, kept on it (lowered on first use).
+
+    Examples
+    --------
+    >>> from multiloop.kin.solve import plan_of
+    >>> from multiloop.topo.model import MechanismBuilder
+    >>> b = MechanismBuilder()
+    >>> b.add_link("ground", frame=True)
+    >>> for n, lk, at in [("O", ("ground", "crank"), (0, 0)), ("A", ("crank", "rod"), (1, 0)),
+    ...                   ("B", ("rod", "rocker"), (3, 2)), ("C", ("rocker", "ground"), (4, 0))]:
+    ...     b.add_joint(n, "R", lk, at=at)
+    >>> b.add_driver("O")
+    >>> kp = kernel_plan(plan_of(b.build()))
+    >>> [list(COMPILED)[c] for c in kp.codes], kp.complete
+    (['drive_R', <GroupKind.RRR: 'RRR'>], True)
+    """
+    hit = sp.extra.get("kernel")
+    if hit is None:
+        hit = sp.extra["kernel"] = lower_plan(sp)
+    return hit
+
+
+def mode() -> str:
+    """The kernel's mode: ``"auto"``, ``"on"`` or ``"off"`` (see the module's notes)."""
+    return _MODE[0]
+
+
+@contextlib.contextmanager
+def using(m: str):
+    """Run a block with the kernel's mode ``m`` (one of :data:`MODES`)."""
+    if m not in MODES:
+        raise ValueError(f"kernel mode: expected one of {MODES}, got {m!r}")
+    old = _MODE[0]
+    _MODE[0] = m
+    try:
+        yield
+    finally:
+        _MODE[0] = old
+
+
+def is_loaded() -> bool:
+    """Whether the compiled kernel is loaded in this process."""
+    return _NB in sys.modules
+
+
+def load():
+    """Import numba and the kernel (compiled on first use, then read from the disk
+    cache); None when numba is not installed."""
+    if _LOADED:
+        return _LOADED[0]
+    try:
+        from . import _kernel_nb
+    except ImportError:
+        return None
+    except RuntimeError as e:               # numba found no writable cache directory
+        warnings.warn(f"compiled plans unavailable, the NumPy path solves: {e}", RuntimeWarning, stacklevel=2)
+        _MODE[0] = "off"
+        return None
+    _LOADED.append(_kernel_nb)
+    return _kernel_nb
+
+
+_LOADED: list = []
+
+
+def wanted(n_positions: int) -> bool:
+    """Whether a batch of ``n_positions`` is solved by the kernel in the current mode."""
+    m = _MODE[0]
+    if m == "off":
+        return False
+    if m == "on" or is_loaded() or n_positions >= LAZY_MIN:
+        return load() is not None
+    return False
+
+
+_ONES: dict = {}
+
+
+def _factors(n_steps: int, M: int, signs: dict) -> np.ndarray:
+    """Each step's branch factor: (n_steps, 1), or (n_steps, M) when one varies by row."""
+    if not signs:
+        hit = _ONES.get(n_steps)
+        if hit is None:
+            hit = _ONES[n_steps] = np.ones((n_steps, 1))    # (writable: one compiled signature)
+        return hit
+    per_row = any(np.ndim(v) for v in signs.values())
+    F = np.ones((n_steps, M if per_row else 1))
+    for k, v in signs.items():
+        F[k] = v
+    return F
+
+
+#: work arrays kept per thread between calls (fresh pages cost more than the kernel on a
+#: large batch), up to this many floats each
+SCRATCH_MAX = 1 << 22
+_SCRATCH = threading.local()
+
+
+def _scratch(name: str, shape: tuple) -> np.ndarray:
+    """A work array of ``shape`` (contents undefined) reused by this thread's later calls."""
+    n = int(np.prod(shape))
+    if n > SCRATCH_MAX:
+        return np.empty(shape)
+    buf = getattr(_SCRATCH, name, None)
+    if buf is None or buf.size < n:
+        buf = np.empty(n)
+        setattr(_SCRATCH, name, buf)
+    return buf[:n].reshape(shape)
+
+
+def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
+    """The table ``W`` (4 n_drivers, M): cos and sin of ±input (the rows asked for), in
+    this thread's work array (it lives only during the kernel's call)."""
+    W = _scratch("W", (4 * X.shape[1] if kp.trig else 0, X.shape[0]))
+    for d, sign in kp.trig:
+        r = trig_row(d, sign)
+        th = X[:, d] if sign > 0 else -X[:, d]
+        np.cos(th, out=W[r])
+        np.sin(th, out=W[r + 1])
+    return W
+
+
+def _steps(kp: KernelPlan, steps) -> np.ndarray:
+    """The steps to run as an array (every step's cached)."""
+    n = len(kp.codes)
+    if len(steps) == n:
+        hit = _ALL.get(n)
+        if hit is None:
+            hit = _ALL[n] = np.arange(n, dtype=np.int64)
+        return hit
+    return np.asarray(list(steps), np.int64)
+
+
+_ALL: dict = {}
+
+
+class KernelRun(NamedTuple):
+    """What :func:`run_positions` gives: the cos and sin rows ``C``, ``S`` (n_links, M),
+    ``fail`` (M,) int8 the status of each position's first failing step, ``failed`` the
+    number of such positions, ``pend`` (n_links,) 1 for the links whose angle rows were
+    derived from their cos and sin (``arctan2``, in the kernel), and ``points`` the
+    positions (M, n_joints + n_points, 2) of the joints and tracer points (or None)."""
+
+    C: np.ndarray
+    S: np.ndarray
+    fail: np.ndarray
+    failed: int
+    pend: np.ndarray
+    points: np.ndarray | None
+
+    @property
+    def derived(self) -> np.ndarray:
+        return np.flatnonzero(self.pend)
+
+
+def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarray,
+                  points: bool = False, scratch: bool = False) -> KernelRun:
+    """Run the kernel on the steps ``steps`` at the inputs ``X`` (M, n_drivers) with the
+    branch factors ``signs`` {step: factor or (M,) factors}; the poses go into ``T``
+    (n_links, 3, M).  With ``points`` (every step solved) the joints and tracer points
+    too.  With ``scratch`` the cos and sin rows ``C``, ``S`` are this thread's work
+    arrays: valid only until its next call (for a caller that needs only ``T`` and the
+    points)."""
+    nb = load()
+    X = np.ascontiguousarray(X, float)
+    if not X.flags.writeable:              # one compiled signature (numba types read-only arrays apart)
+        X = X.copy()
+    M = X.shape[0]
+    nl = T.shape[0]
+    C, S = (_scratch("C", (nl, M)), _scratch("S", (nl, M))) if scratch else (np.empty((nl, M)), np.empty((nl, M)))
+    C[kp.frame], S[kp.frame] = 1.0, 0.0
+    fail = np.zeros(M, np.int8)
+    pend = np.zeros(nl, np.int8)
+    hosts = kp.hosts if points else kp.hosts[:0]
+    P = np.empty((hosts.size, 2, M))
+    failed = nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps), X, _trig(kp, X),
+                                _factors(len(kp.codes), M, signs), T, C, S, fail, pend, hosts, kp.offs, P)
+    return KernelRun(C, S, fail, failed, pend, P.transpose(2, 0, 1) if points else None)

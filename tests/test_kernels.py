@@ -1,0 +1,221 @@
+"""The compiled plans (kin.kernel) against their oracle, the NumPy path.
+
+Every catalogue mechanism whose plan the kernel covers, and Hypothesis-generated dyad
+mechanisms (each dyad kind after a crank, dimensions perturbed, inputs over a turn and
+next to the motion's limits): positions within 1e-12 of the mechanism's size, the same
+statuses (the kernel's own codes, before any NumPy re-solve), the same NaN pattern.
+A plan the kernel does not cover (triad, class IV) falls back to the NumPy path.  The
+compiled code survives in numba's disk cache: a second process loads it without
+compiling (``dispatcher.stats``; no test reads a clock).
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+numba = pytest.importorskip("numba")
+
+from hypothesis import assume, given, strategies as st  # noqa: E402
+
+from multiloop.catalogue.named import load_named, names  # noqa: E402
+from multiloop.kin import kernel  # noqa: E402
+from multiloop.kin import solve as solve_mod  # noqa: E402
+from multiloop.kin.solve import motion_events, plan_of, solve  # noqa: E402
+from multiloop.topo.errors import LinkageError  # noqa: E402
+from multiloop.topo.formats import dumps_mechanism, loads_mechanism  # noqa: E402
+from multiloop.topo.model import JointKind  # noqa: E402
+
+DYADS = ("dyad_rrr", "dyad_rrp", "dyad_rpr", "dyad_prp", "dyad_rpp", "four_bar")
+
+
+def _inputs(m, sp, n=241):
+    """A sweep of every driver over ±1.5 turns (R) or ±1.5 sizes (P), drivers out of phase."""
+    t = np.linspace(-1.0, 1.0, n)
+    cols = [t * (3 * np.pi if m.joint(d.joint).kind is JointKind.R else 1.5 * sp.size) * (1 - 0.3 * k)
+            for k, d in enumerate(m.drivers)]
+    return np.stack(cols, axis=1)
+
+
+def _raw_agree(m, X, signs=None):
+    """The kernel's own poses and codes equal the NumPy path's (no re-solve)."""
+    sp = plan_of(m)
+    steps = list(range(len(sp.steps)))
+    ref = solve_mod._numpy_run(sp, X, steps, signs or {}, True)
+    ref.G.unset_to_nan()
+    Zr = ref.G.to_Z()
+    Pr = solve_mod._points(sp, ref.G, sp.joint_host, "joints")
+    G = solve_mod.Poses(sp, X.shape[0])
+    kr = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T, points=True)
+    fail, P = kr.fail, kr.points
+    assert kr.failed == np.count_nonzero(fail)
+    G.adopt([i for k in steps for i in sp.steps[k].unknown], kr.C, kr.S, kr.derived)
+    G.unset_to_nan()
+    Zk = G.to_Z()
+    np.testing.assert_array_equal(fail, ref.code)
+    np.testing.assert_array_equal(np.isnan(Zk), np.isnan(Zr))
+    ok = ~np.isnan(Zr)
+    scale = np.where(np.arange(3) < 2, sp.size, 1.0)
+    assert np.all(np.abs(Zk - Zr)[ok] <= 1e-12 * np.broadcast_to(scale, Zr.shape)[ok])
+    Pk = P[:, :m.n_joints]
+    np.testing.assert_array_equal(np.isnan(Pk), np.isnan(Pr))
+    assert np.nanmax(np.abs(Pk - Pr), initial=0.0) <= 1e-12 * sp.size
+
+
+def _same_states(m, X, **kw):
+    """``solve`` with and without the kernel: the same results."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with kernel.using("off"):
+            a = solve(m, X, **kw)
+        with kernel.using("on"):
+            b = solve(m, X, **kw)
+    size = plan_of(m).size
+    np.testing.assert_array_equal(a.codes, b.codes)
+    assert list(a.status) == list(b.status)
+    assert a.notes == b.notes
+    for u, v in ((a.positions, b.positions), (a.poses[..., :2], b.poses[..., :2])):
+        np.testing.assert_array_equal(np.isnan(u), np.isnan(v))
+        assert np.nanmax(np.abs(u - v), initial=0.0) <= 1e-12 * size
+    np.testing.assert_allclose(a.angles, b.angles, rtol=0, atol=1e-12)
+
+
+def _covered(m) -> bool:
+    sp = plan_of(m)
+    return kernel.kernel_plan(sp).covers(range(len(sp.steps)))
+
+
+def _catalogue():
+    out = []
+    for nm in names():
+        try:
+            m = load_named(nm)
+            plan_of(m)
+        except LinkageError:
+            continue
+        out.append(nm)
+    return out
+
+
+@pytest.mark.parametrize("name", _catalogue())
+def test_catalogue_against_numpy(name):
+    m = load_named(name)
+    sp = plan_of(m)
+    X = _inputs(m, sp)
+    if not _covered(m):                    # a triad or class IV group: the NumPy path solves it
+        assert kernel.kernel_plan(sp).codes.min() == -1
+        with kernel.using("on"):
+            assert solve_mod._compiled_run(sp, X, range(len(sp.steps)), {}, True) is None
+        return
+    _raw_agree(m, X)
+    x = X if len(m.drivers) > 1 else X[:, 0]
+    _same_states(m, x)
+    _same_states(m, x, assemble=True)
+    _same_states(m, x, outputs=[m.joint_names[-1], m.link_names[-1], *(p.name for p in m.points[:1])])
+
+
+def test_catalogue_coverage():
+    """Every catalogue mechanism of closed-form dyads, drivers and actuators is covered."""
+    covered = {nm: _covered(load_named(nm)) for nm in _catalogue()}
+    assert {nm for nm, c in covered.items() if not c} <= {"stephenson_3", "stephenson_3_triad"}
+    assert sum(covered.values()) >= 15
+
+
+def test_branch_factors_per_row():
+    """Per-row branch factors (the continuation's sign flips) reach each step."""
+    m = load_named("four_bar")
+    sp = plan_of(m)
+    X = _inputs(m, sp)
+    k = next(i for i, s in enumerate(sp.steps) if s.solver == "dyad")
+    _raw_agree(m, X, {k: np.where(np.arange(len(X)) % 3 == 0, -1.0, 1.0)})
+
+
+def _perturbed(base: str, moves, turns):
+    """The catalogue mechanism ``base`` with its joints moved by ``moves`` (× its size) and
+    its guides turned by ``turns`` (rad)."""
+    m = load_named(base)
+    doc = json.loads(dumps_mechanism(m, "x.json"))
+    size = plan_of(m).size
+    for j, (dx, dy), a in zip(doc["joint"], moves, turns):
+        if j["name"] != m.joint_names[0]:        # the driver's pivot stays
+            j["at"] = [j["at"][0] + dx * size, j["at"][1] + dy * size]
+        if "axis" in j:
+            c, s = np.cos(a), np.sin(a)
+            j["axis"] = [c * j["axis"][0] - s * j["axis"][1], s * j["axis"][0] + c * j["axis"][1]]
+    return loads_mechanism(json.dumps(doc), "x.json")
+
+
+_move = st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3))
+
+
+@given(st.sampled_from(DYADS), st.lists(_move, min_size=8, max_size=8),
+       st.lists(st.floats(-0.6, 0.6), min_size=8, max_size=8))
+def test_dyad_mechanisms_against_numpy(base, moves, turns):
+    try:
+        m = _perturbed(base, moves, turns)
+        sp = plan_of(m)
+    except LinkageError:                      # a singular or degenerate reference
+        assume(False)
+    X = _inputs(m, sp, 181)
+    _raw_agree(m, X)
+    _same_states(m, X[:, 0], assemble=True)
+    ev = motion_events(m)
+    ends = [v for v in (ev.lo, ev.hi) if np.isfinite(v)] if ev is not None else []
+    near = np.concatenate([e + s * np.array([0.0, 1e-13, 1e-10, 1e-7, 1e-4, 1e-2]) for e in ends
+                           for s in (-1.0, 1.0)]) if ends else np.zeros(1)
+    _raw_agree(m, near[:, None])              # next to the limits: in and out of reach
+    _same_states(m, near)
+
+
+def test_cache_survives_a_second_process(tmp_path):
+    """The second process loads the kernel from numba's disk cache, compiling nothing."""
+    code = ("import numpy as np; from multiloop.kin import kernel, _kernel_nb as nb;"
+            "from multiloop.kin.solve import solve; from multiloop.catalogue.named import load_named;"
+            "\nwith kernel.using('on'): solve(load_named('four_bar'), np.linspace(0, 6, 50))\n"
+            "s = nb.solve_positions.stats; print(sum(s.cache_hits.values()), sum(s.cache_misses.values()))")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+            for _ in range(2)]
+    first, second = ([int(v) for v in r.stdout.split()] for r in runs)
+    assert first == [0, 1]                    # compiled (and written to the cache)
+    assert second == [1, 0]                   # loaded from it
+    assert any(p.suffix == ".nbc" for p in tmp_path.rglob("*"))
+
+
+def test_kernel_not_loaded_for_small_batches():
+    """In mode "auto" a small batch in a fresh process does not import numba (the command
+    line's cold start)."""
+    code = ("import sys, numpy as np; from multiloop.kin.solve import solve;"
+            "from multiloop.catalogue.named import load_named;"
+            "solve(load_named('four_bar'), np.linspace(0, 6, 360)); print('numba' in sys.modules)")
+    env = {k: v for k, v in os.environ.items() if k != "MULTILOOP_KERNEL"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False"]
+
+
+def test_arctan2_within_one_ulp():
+    """The kernel's arctan2 (fdlibm's) against NumPy's, with the signed zeros."""
+    from multiloop.kin.groups.base import arctan2
+    rng = np.random.default_rng(3)
+    y, x = (rng.standard_normal(3000) * 10.0 ** rng.uniform(-6, 6, 3000) for _ in range(2))
+    ours = np.array([arctan2(a, b) for a, b in zip(y, x)])
+    ref = np.arctan2(y, x)
+    assert np.all(np.abs(ours - ref) <= np.spacing(np.abs(ref)))
+    for a, b in ((0.0, -1.0), (-0.0, -1.0), (0.0, 0.0), (-0.0, -0.0), (1.0, 0.0), (-2.0, -0.0), (1.0, -1.0)):
+        assert arctan2(a, b) == np.arctan2(a, b)
+    assert np.isnan(arctan2(np.nan, 1.0))
+
+
+def test_modes():
+    with pytest.raises(ValueError):
+        with kernel.using("fast"):
+            pass
+    with kernel.using("off"):
+        assert not kernel.wanted(10 ** 9)
+    with kernel.using("on"):
+        assert kernel.wanted(1)
