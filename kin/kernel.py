@@ -24,12 +24,15 @@ wheels for Linux, macOS and Windows, and it caches compiled code on disk
 When: in a fresh process, importing numba and reading the cached kernel cost about
 1.5 s of CPU, most of it numba's own start-up (``benchmarks/bench_solve.py`` prints
 both).  That is more than one batch saves: the kernel saves well under a microsecond
-per position.  With
-``MULTILOOP_KERNEL=auto`` (the default) a call uses the kernel when it is already loaded
-in the process (:func:`load`, or a batch before it), and loads it itself only for a
-batch of at least :data:`LAZY_MIN` positions; ``on`` always uses it (if numba is
-installed), ``off`` never.  The command line's batches never import numba, so its cold
-start does not grow.
+per position.  The
+kernel agrees with the NumPy path to rounding (a few units in the last place), not
+bit for bit, so it is opt-in: with ``MULTILOOP_KERNEL=off`` (the default) every result
+is the NumPy path's, whatever the process loaded before, so the command line, the
+library and the web page give the same bits for the same input.  ``on`` always uses
+the kernel (if numba is installed); ``auto`` uses it once it is loaded in the process
+(:func:`load`) and loads it itself for a batch of at least :data:`LAZY_MIN` positions.
+:func:`using` sets the mode for a block.  The command line's batches never import
+numba, so its cold start does not grow.
 
 References
 ----------
@@ -59,7 +62,7 @@ __all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_position
 MODES = ("auto", "on", "off")
 #: in mode "auto", a batch of at least this many positions loads numba itself
 LAZY_MIN = 2_000_000
-_MODE = [os.environ.get("MULTILOOP_KERNEL", "auto")]
+_MODE = [os.environ.get("MULTILOOP_KERNEL", "off")]
 _CODES = {key: i for i, key in enumerate(COMPILED)}
 _NB = "multiloop.kin._kernel_nb"
 
@@ -195,7 +198,7 @@ def wanted(n_positions: int) -> bool:
     m = _MODE[0]
     if m == "off":
         return False
-    if m == "on" or is_loaded() or n_positions >= LAZY_MIN:
+    if m == "on" or (m == "auto" and (is_loaded() or n_positions >= LAZY_MIN)):
         return load() is not None
     return False
 

@@ -219,3 +219,20 @@ def test_modes():
         assert not kernel.wanted(10 ** 9)
     with kernel.using("on"):
         assert kernel.wanted(1)
+
+
+def test_by_default_a_loaded_kernel_changes_no_bit():
+    """The kernel agrees with the NumPy path to rounding only, so it is opt-in: with it
+    loaded in the process, the default mode still gives the NumPy path's bits (the same
+    as a fresh process, the command line and the page)."""
+    assert kernel.load() is not None
+    m = load_named("four_bar")
+    x = np.radians(np.arange(0.0, 360.0, 0.5))
+    assert kernel.mode() == os.environ.get("MULTILOOP_KERNEL", "off") == "off"
+    default = solve(m, x)
+    with kernel.using("off"):
+        numpy_path = solve(m, x)
+    with kernel.using("on"):
+        compiled = solve(m, x)
+    assert np.array_equal(default.positions, numpy_path.positions, equal_nan=True)
+    np.testing.assert_allclose(compiled.positions, numpy_path.positions, rtol=0, atol=1e-12 * plan_of(m).size)
