@@ -441,12 +441,20 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
     _pick(page, "four_bar")
     page.get_by_text("Mechanism", exact=True).first.click()
     original = load_mechanism("four_bar")
+    page.evaluate(MOVE_JS, [90])                             # the player away from the reference
     sx, sy, x0, y0 = page.evaluate(HANDLE_JS, ["B"])
     assert (x0, y0) == tuple(original.joint("B").at)
     page.mouse.move(sx, sy)
     page.mouse.down()
     for k in range(1, 9):
         page.mouse.move(sx + 3 * k, sy + 2 * k)
+    # during the drag the drawing is at the reference frame and its joint B follows the handle
+    following = """() => { const doc = Bokeh.documents[0];
+      const h = doc.get_model_by_name('ml-handles'), j = doc.get_model_by_name('ml-joints');
+      const k = h.data.name.indexOf('B'), i = j.data.name.indexOf('B');
+      return h.data.x[k] != %r && j.data.x[i] == h.data.x[k] && j.data.y[i] == h.data.y[k]
+        && doc.get_model_by_name('ml-frame').value == h.tags[0]; }""" % x0
+    page.wait_for_function(following, timeout=60000)
     t0 = time.perf_counter()
     page.mouse.up()
     edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];

@@ -26,7 +26,32 @@ from .markup import Html, html
 from .menus import Menu
 from .scene import Scene, Sweep
 
-__all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
+__all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "readout_html"]
+
+#: a drag in the drawing (the point-draw tool active): at its start the player goes to
+#: the reference frame (``handles.tags[0]``, where the handles are); then the joints
+#: and links follow the handles (in the browser only: the server re-solves on the drop)
+FOLLOW_JS = """
+if (!drag.active || handles.data.name.length == 0) { return; }
+if (cb_obj.event_name == 'panstart') {
+  const ref = handles.tags[0];
+  if (ref != null && slider.value != ref) { slider.value = ref; }
+  return;
+}
+const names = joints.data.name, jx = Array.from(joints.data.x), jy = Array.from(joints.data.y);
+handles.data.name.forEach((n, k) => {
+  const j = names.indexOf(n);
+  if (j >= 0) { jx[j] = handles.data.x[k]; jy[j] = handles.data.y[k]; }
+});
+const xs = [], ys = [];
+for (const ix of links.data.idx) {
+  const cx = ix.map(j => jx[j]), cy = ix.map(j => jy[j]);
+  if (ix.length > 2) { cx.push(jx[ix[0]]); cy.push(jy[ix[0]]); }
+  xs.push(cx); ys.push(cy);
+}
+links.data.xs = xs; links.data.ys = ys; links.change.emit();
+joints.data.x = jx; joints.data.y = jy; joints.change.emit();
+"""
 
 #: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
 REDRAW_JS = """
@@ -102,10 +127,10 @@ class MechanismView:
         # fixed size: a new text then repaints the readout alone, not the whole layout
         self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
+        self.player = Player(interval=40, width=380)
         self.fig = self._figure()
         self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
         self.driver = self.drivers.select
-        self.player = Player(interval=40, width=380)
         self.player.slider.js_on_change("value", CustomJS(
             args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
                       cursors=self.cursors), code=REDRAW_JS))
@@ -135,6 +160,10 @@ class MechanismView:
                              description="Drag a joint or tracer point (moves it in the reference)")
         f.add_tools(drag)
         f.toolbar.active_multi = drag
+        follow = CustomJS(args=dict(drag=drag, handles=self.handles, joints=self.joints, links=self.links,
+                                    slider=self.player.slider), code=FOLLOW_JS)
+        for event in ("panstart", "pan", "panend"):
+            f.js_on_event(event, follow)
         return f
 
     # ------------------------------------------------------------------ dragging
@@ -185,6 +214,7 @@ class MechanismView:
             self.paths.data = dict(xs=[], ys=[])
             self.sweep.data = dict(nx=[], ny=[], input=[])
             self.player.disabled = True
+            self.handles.tags = []
             self._fit(scene.reference)
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
@@ -223,6 +253,7 @@ class MechanismView:
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
+        self.handles.tags = [i]                       # the frame of the handles (FOLLOW_JS)
         self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
                                 kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
                                 lo=float(sw.x.min()), hi=float(sw.x.max()), unit=sw.unit, n=len(sw.x))
