@@ -132,7 +132,8 @@ def test_a_server_side_redraw_of_the_handles_is_not_a_drag(wb):
     before = dumps_toml(wb.mechanism)
     wb.view._put_handles()
     wb.view.show(wb.view.scene, wb.view.sweeps, wb.mechanism_name)
-    wb.view.draw_frame(0) if wb.view.sweeps else None
+    if wb.view.sweeps:
+        wb.view.draw_frame(0)
     assert dumps_toml(wb.mechanism) == before and not wb.editor.history.can_undo
     assert "data-error" not in wb.message.text
 
