@@ -402,6 +402,7 @@ def test_share_by_name_opens_the_mechanism_in_a_fresh_browser_context(browser, s
 def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
     """Type B's coordinates, Apply: the drawing is the edited design at its reference;
     Ctrl-Z in the page gives the original back, Ctrl-Shift-Z the edit."""
+    page.get_by_text("Mechanism", exact=True).first.click()      # (an earlier test may have left another tab)
     _pick(page, "four_bar")
     original = load_mechanism("four_bar").joint("B").at
     page.locator(".ml-edit-point select").select_option("B")
@@ -419,3 +420,61 @@ def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
     page.wait_for_function(at_b, arg=list(original), timeout=60000)
     page.keyboard.press("Control+Shift+z")
     page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)
+
+
+#: the screen position (page pixels) of the drag handle of joint or tracer point NAME:
+#: its data position mapped by the drawing's scales, plus the canvas's place in the page
+HANDLE_JS = """([name]) => { const doc = Bokeh.documents[0];
+  const src = doc.get_model_by_name('ml-handles'), fig = doc.get_model_by_name('ml-mechanism');
+  const view = Bokeh.index.find_one(fig), i = src.data.name.indexOf(name);
+  if (view == null || i < 0) { return null; }
+  view.el.scrollIntoView({block: 'center'});
+  const r = view.canvas_view.el.getBoundingClientRect();
+  return [r.left + view.frame.x_scale.compute(src.data.x[i]), r.top + view.frame.y_scale.compute(src.data.y[i]),
+          src.data.x[i], src.data.y[i]]; }"""
+
+
+def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
+    """Drag B's handle with the mouse: the page opens the edited design, whose drawing
+    (at the reference frame) is the library's solve of ``moved(four_bar, B, new)``;
+    Ctrl-Z gives the original back."""
+    from multiloop.web.editing import moved
+    _pick(page, "four_bar")
+    page.get_by_text("Mechanism", exact=True).first.click()
+    original = load_mechanism("four_bar")
+    page.evaluate(MOVE_JS, [90])                             # the player away from the reference
+    sx, sy, x0, y0 = page.evaluate(HANDLE_JS, ["B"])
+    assert (x0, y0) == tuple(original.joint("B").at)
+    page.mouse.move(sx, sy)
+    page.mouse.down()
+    for k in range(1, 9):
+        page.mouse.move(sx + 3 * k, sy + 2 * k)
+    # during the drag the drawing is at the reference frame and its joint B follows the handle
+    following = """() => { const doc = Bokeh.documents[0];
+      const h = doc.get_model_by_name('ml-handles'), j = doc.get_model_by_name('ml-joints');
+      const k = h.data.name.indexOf('B'), i = j.data.name.indexOf('B');
+      return h.data.x[k] != %r && j.data.x[i] == h.data.x[k] && j.data.y[i] == h.data.y[k]
+        && doc.get_model_by_name('ml-frame').value == h.tags[0]; }""" % x0
+    page.wait_for_function(following, timeout=60000)
+    t0 = time.perf_counter()
+    page.mouse.up()
+    edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+        return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions'); }}"""
+    page.wait_for_function(edited, timeout=60000)
+    print(f"\ndrop to the re-solved drawing: {1000 * (time.perf_counter() - t0):.0f} ms")
+    _, _, x1, y1 = page.evaluate(HANDLE_JS, ["B"])        # the server's handles: the new reference
+    assert x1 > x0 and y1 < y0                              # right and down on the screen
+    r = _readout(page)
+    m = moved(original, "B", (x1, y1))
+    st = solve(m, [math.radians(r["input"])])
+    names = list(m.joint_names) + [p.name for p in m.points]
+    want = np.concatenate([st.positions[0], st.point_positions[0]]) if m.points else st.positions[0]
+    np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-12)
+    assert r["positions"]["B"] == pytest.approx([x1, y1], abs=1e-12)
+    page.mouse.click(5, 5)
+    page.keyboard.press("Control+z")
+    at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
+        if (!r || !r.getAttribute('data-positions')) return false;
+        const b = JSON.parse(r.getAttribute('data-positions'))['B'];
+        return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+    page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)

@@ -92,3 +92,63 @@ def test_history_drops_what_was_undone_after_a_new_edit():
     h = History.of("m0").edited("m1").edited("m2").undone().edited("m3")
     assert h.designs == ("m0", "m1", "m3") and h.current == "m3" and not h.can_redo
     assert History.of("m0").undone().at == 0 and History.of("m0").redone().at == 0
+
+
+def _drag(wb, name, x, y):
+    """The handles' data as the page's point-draw tool sends it at the end of a drag."""
+    data = {k: list(v) for k, v in wb.view.handles.data.items()}
+    i = data["name"].index(name)
+    data["x"][i], data["y"][i] = x, y
+    wb.view.handles.data = data
+
+
+def test_drag_of_one_handle_is_an_edit_with_undo(wb):
+    original = dumps_toml(wb.mechanism)
+    assert wb.view.handles.data["name"] == list(wb.view.scene.node_names)
+    _drag(wb, "B", 0.11, 0.075)
+    m = moved(load_mechanism("four_bar"), "B", (0.11, 0.075))
+    assert dumps_toml(wb.mechanism) == dumps_toml(m) and wb.mechanism_name == "edited: four_bar"
+    # the handles are the edited design's reference, the edit row shows the dragged point
+    i = wb.view.handles.data["name"].index("B")
+    assert (wb.view.handles.data["x"][i], wb.view.handles.data["y"][i]) == (0.11, 0.075)
+    assert wb.editor.point.value == "B" and float(wb.editor.x.value) == 0.11
+    _drag(wb, "O2", 0.001, -0.002)                              # a frame pivot too
+    assert wb.mechanism.joint("O2").at == (0.001, -0.002)
+    wb.editor.step(-1)
+    wb.editor.step(-1)
+    assert dumps_toml(wb.mechanism) == original
+
+
+def test_drag_of_a_tracer_point(wb):
+    wb.pick.value = "crank_slider"
+    points = [p.name for p in wb.mechanism.points]
+    if not points:
+        pytest.skip("crank_slider has no tracer point")
+    _drag(wb, points[0], 0.05, 0.03)
+    assert next(p.at for p in wb.mechanism.points if p.name == points[0]) == (0.05, 0.03)
+
+
+def test_a_server_side_redraw_of_the_handles_is_not_a_drag(wb):
+    before = dumps_toml(wb.mechanism)
+    wb.view._put_handles()
+    wb.view.show(wb.view.scene, wb.view.sweeps, wb.mechanism_name)
+    if wb.view.sweeps:
+        wb.view.draw_frame(0)
+    assert dumps_toml(wb.mechanism) == before and not wb.editor.history.can_undo
+    assert "data-error" not in wb.message.text
+
+
+def test_forged_handles_are_one_line_and_change_nothing(wb):
+    before = dumps_toml(wb.mechanism)
+    good = {k: list(v) for k, v in wb.view.handles.data.items()}
+    forged = [dict(good, name=["../../etc/passwd"] + good["name"][1:], x=[9.0] + good["x"][1:]),
+              dict(good, x=[float("nan")] + good["x"][1:]),
+              dict(good, x=["abc"] + good["x"][1:]),
+              dict(good, x=[v + 1 for v in good["x"]]),           # every handle at once
+              dict(good, x=good["x"][:-1], y=good["y"][:-1], name=good["name"][:-1])]
+    for data in forged:
+        wb.clear()
+        wb.view.handles.data = data
+        assert _message(wb).count("\n") == 0 and ": expected" in _message(wb), data
+        assert dumps_toml(wb.mechanism) == before and not wb.editor.history.can_undo
+        assert wb.view.handles.data == good                     # the handles went back

@@ -134,6 +134,15 @@ class Editor:
         self._refresh()
         self.show(new)
 
+    def drag(self, name: str, xy) -> None:
+        """A handle dragged to ``xy`` in the drawing: the same edit as typed, and the
+        edit row then shows that point."""
+        at = self.history.at
+        self.edit(name, xy)
+        if self.history.at != at:
+            self.point.set(value=name)
+            self._fill()
+
     def step(self, k: int) -> None:
         """Undo (``k = -1``) or redo (``+1``) one edit."""
         h = self.history.undone() if k < 0 else self.history.redone()

@@ -6,13 +6,19 @@ BokehJS glue, :data:`REDRAW_JS`), so no round trip to the server and no solving 
 per frame.  The glue also writes the displayed positions into the element
 ``#ml-positions`` (``data-index``, ``data-input``, ``data-positions`` as JSON), which
 the browser tests read.
+
+A ring (:attr:`MechanismView.handles`) marks each joint and tracer point at the
+design's reference configuration; Bokeh's point-draw tool (drag only, no adding) moves
+one with the mouse, the handle following the pointer, and once the drag ends the server
+gets the new position (:meth:`MechanismView._dragged`) and hands it to ``on_drag`` (the
+editor: the design re-solves on the drop).
 """
 from __future__ import annotations
 
 import json
 
 import numpy as np
-from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, Range1d, Row
+from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, PointDrawTool, Range1d, Row
 from bokeh.plotting import figure
 
 from .glue import Player, div
@@ -20,7 +26,32 @@ from .markup import Html, html
 from .menus import Menu
 from .scene import Scene, Sweep
 
-__all__ = ["MechanismView", "REDRAW_JS", "readout_html"]
+__all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "readout_html"]
+
+#: a drag in the drawing (the point-draw tool active): at its start the player goes to
+#: the reference frame (``handles.tags[0]``, where the handles are); then the joints
+#: and links follow the handles (in the browser only: the server re-solves on the drop)
+FOLLOW_JS = """
+if (!drag.active || handles.data.name.length == 0) { return; }
+if (cb_obj.event_name == 'panstart') {
+  const ref = handles.tags[0];
+  if (ref != null && slider.value != ref) { slider.value = ref; }
+  return;
+}
+const names = joints.data.name, jx = Array.from(joints.data.x), jy = Array.from(joints.data.y);
+handles.data.name.forEach((n, k) => {
+  const j = names.indexOf(n);
+  if (j >= 0) { jx[j] = handles.data.x[k]; jy[j] = handles.data.y[k]; }
+});
+const xs = [], ys = [];
+for (const ix of links.data.idx) {
+  const cx = ix.map(j => jx[j]), cy = ix.map(j => jy[j]);
+  if (ix.length > 2) { cx.push(jx[ix[0]]); cy.push(jy[ix[0]]); }
+  xs.push(cx); ys.push(cy);
+}
+links.data.xs = xs; links.data.ys = ys; links.change.emit();
+joints.data.x = jx; joints.data.y = jy; joints.change.emit();
+"""
 
 #: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
 REDRAW_JS = """
@@ -94,10 +125,16 @@ def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
 class MechanismView:
     """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it.
     ``say`` shows the page's one-line message; ``cursors`` are the input cursors of the
-    plots against the input."""
+    plots against the input; ``on_drag(name, (x, y))`` is called with a handle dragged
+    in the page (a joint or tracer point moved in the reference)."""
 
-    def __init__(self, say, cursors=()):
+    def __init__(self, say, cursors=(), on_drag=None):
         self.scene: Scene | None = None
+        self.say, self.on_drag = say, on_drag
+        #: the drag handles, at the reference; what the server set last (names, x, y)
+        self.handles = ColumnDataSource(dict(x=[], y=[], name=[]), name="ml-handles")
+        self.handles_set: tuple = ((), (), ())
+        self.handles.on_change("data", lambda attr, old, new: self._dragged(new))
         self.sweeps: list[Sweep] = []
         self.links = ColumnDataSource(dict(xs=[], ys=[], colour=[], name=[], group=[], idx=[]), name="ml-links")
         self.joints = ColumnDataSource(dict(x=[], y=[], name=[], fill=[], size=[], marker=[], links=[]), name="ml-joints")
@@ -107,10 +144,10 @@ class MechanismView:
         # fixed size: a new text then repaints the readout alone, not the whole layout
         self.readout = Div(text=html('<span id="ml-positions"></span>'), name="ml-readout", width=560, height=22)
         self.cursors = list(cursors)     # the input cursors of the plots against the input
+        self.player = Player(interval=40, width=380)
         self.fig = self._figure()
         self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
         self.driver = self.drivers.select
-        self.player = Player(interval=40, width=380)
         self.player.slider.js_on_change("value", CustomJS(
             args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
                       cursors=self.cursors), code=REDRAW_JS))
@@ -134,19 +171,67 @@ class MechanismView:
         f.scatter("x", "y", source=self.marks, marker="diamond", size=11, color="#d62728", alpha=0.8)
         f.text("x", "y", text="label", source=self.marks, text_font_size="9px", text_color="#d62728",
                x_offset=6, y_offset="dy")
+        h = f.scatter("x", "y", source=self.handles, size=17, fill_alpha=0.0, line_color="#1f77b4",
+                      line_alpha=0.6, line_width=1.5, line_dash="dotted", name="ml-handle-glyphs")
+        drag = PointDrawTool(renderers=[h], add=False, drag=True, name="ml-drag",
+                             description="Drag a joint or tracer point (moves it in the reference)")
+        f.add_tools(drag)
+        f.toolbar.active_multi = drag
+        follow = CustomJS(args=dict(drag=drag, handles=self.handles, joints=self.joints, links=self.links,
+                                    slider=self.player.slider), code=FOLLOW_JS)
+        for event in ("panstart", "pan", "panend"):
+            f.js_on_event(event, follow)
         return f
+
+    # ------------------------------------------------------------------ dragging
+    def _put_handles(self) -> None:
+        """The handles at the shown design's reference (those positions that are known)."""
+        sc = self.scene
+        keep = [] if sc is None else [i for i in range(len(sc.node_names)) if np.all(np.isfinite(sc.reference[i]))]
+        names = tuple(sc.node_names[i] for i in keep)
+        xs = tuple(float(sc.reference[i, 0]) for i in keep)
+        ys = tuple(float(sc.reference[i, 1]) for i in keep)
+        self.handles_set = (names, xs, ys)        # first: the change below is the server's own
+        self.handles.data = dict(x=list(xs), y=list(ys), name=list(names))
+
+    def _dragged(self, data) -> None:
+        """A change of the handles: the server's own is ignored; from the page, the one
+        handle moved goes to ``on_drag`` (anything else is the one-line message, and the
+        handles go back)."""
+        from multiloop.topo.errors import explain
+        names, xs, ys = self.handles_set
+        try:
+            got = (tuple(str(n) for n in data["name"]), tuple(float(v) for v in data["x"]),
+                   tuple(float(v) for v in data["y"]))
+        except (KeyError, TypeError, ValueError):
+            got = None
+        if got == (names, xs, ys):
+            return
+        moved = [] if got is None or got[0] != names or len(got[1]) != len(xs) or len(got[2]) != len(ys) else [
+            i for i in range(len(names)) if (got[1][i], got[2][i]) != (xs[i], ys[i])]
+        scene = self.scene
+        if len(moved) == 1 and self.on_drag is not None:
+            i = moved[0]
+            self.on_drag(names[i], (got[1][i], got[2][i]))
+        else:
+            self.say(explain("dragged handles", expected="one handle of the design moved",
+                             got=f"{len(moved)} moved" if got is not None and got[0] == names else "other handles"))
+        if self.scene is scene:            # nothing new shown: the handles go back
+            self._put_handles()
 
     # ------------------------------------------------------------------ content
     def show(self, scene: Scene, sweeps: list[Sweep], name: str = "") -> None:
         """Draw ``scene`` (named ``name`` on the page) and make its sweeps the player's
         frames (driver 0 first)."""
         self.scene, self.sweeps, self.name = scene, sweeps, name
+        self._put_handles()
         if not sweeps:
             self.readout.text = html('<span id="ml-positions" data-mechanism="{name}"></span>', name=name)
             self.marks.data = dict(x=[], y=[], label=[], dy=[])
             self.paths.data = dict(xs=[], ys=[])
             self.sweep.data = dict(nx=[], ny=[], input=[])
             self.player.disabled = True
+            self.handles.tags = []
             self._fit(scene.reference)
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
@@ -185,6 +270,7 @@ class MechanismView:
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
+        self.handles.tags = [i]                       # the frame of the handles (FOLLOW_JS)
         self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
                                 kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
                                 lo=float(sw.x.min()), hi=float(sw.x.max()), unit=sw.unit, n=len(sw.x))
