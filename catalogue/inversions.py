@@ -315,8 +315,9 @@ def mechanism_counts(atlas: Atlas, opts: SynthesisOptions, chains_run: int = 0,
                                  f"ORDER BY class", params).fetchall())
     closed = con.execute(f"SELECT count(*) FROM mechanisms WHERE {cond} AND closed_form = 1",
                          params).fetchone()[0]
-    return MechanismCounts(opts, n_chains, frames, drivers, tuple((int(c), int(k)) for c, k in by_class),
-                           closed, chains_run, seconds)
+    classes = tuple((sr.integer(atlas.path, "mechanisms", f"of class {c!r}", "class", c, 0, 100), int(k))
+                    for c, k in by_class)
+    return MechanismCounts(opts, n_chains, frames, drivers, classes, closed, chains_run, seconds)
 
 
 def iter_mechanisms(atlas: Atlas, opts: SynthesisOptions, where: str = "1",

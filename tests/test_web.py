@@ -406,6 +406,8 @@ def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
     _pick(page, "four_bar")
     original = load_mechanism("four_bar").joint("B").at
     page.locator(".ml-edit-point select").select_option("B")
+    # the server fills in B's coordinates: wait for them before typing over them
+    sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(repr(float(original[0])), timeout=60000)
     for css, v in ((".ml-edit-x input", "0.12"), (".ml-edit-y input", "0.08")):
         page.locator(css).fill(v)
         page.locator(css).press("Enter")
