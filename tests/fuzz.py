@@ -516,11 +516,14 @@ class _Timeout(BaseException):
     pass
 
 
-#: Newton solves one case may make (the count that bounds its work; the alarm below is
-#: only a safety net for the wall time)
+#: Newton solves one case may make (the count that bounds its work; the alarms below are
+#: only safety nets)
 MAX_NEWTON = 200_000
-#: seconds before a case is stopped as hung (a safety net: a loaded machine runs slower)
+#: CPU seconds of this process before a case is stopped as hung (CPU, not wall time: the
+#: verdict does not depend on the machine's load)
 ALARM = 300
+#: wall seconds before a case is stopped as hung whatever its CPU (a process that waits)
+WALL_ALARM = 1800
 _NEWTON = [0]
 
 
@@ -554,8 +557,10 @@ def run_case(rng: random.Random, seeds, index: int, top: Path) -> dict:
     cwd = os.getcwd()
     os.chdir(work)
     t0, c0 = time.perf_counter(), time.process_time()
-    signal.signal(signal.SIGALRM, lambda *a: (_ for _ in ()).throw(_Timeout()))
-    signal.alarm(ALARM)
+    for sig in (signal.SIGALRM, signal.SIGPROF):
+        signal.signal(sig, lambda *a: (_ for _ in ()).throw(_Timeout()))
+    signal.setitimer(signal.ITIMER_PROF, ALARM)
+    signal.alarm(WALL_ALARM)
     _NEWTON[0] = 0
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -567,6 +572,7 @@ def run_case(rng: random.Random, seeds, index: int, top: Path) -> dict:
     except BaseException as exc:     # noqa: BLE001 - recorded as a failure
         code = f"raised {type(exc).__name__}"
     finally:
+        signal.setitimer(signal.ITIMER_PROF, 0)
         signal.alarm(0)
         os.chdir(cwd)
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
