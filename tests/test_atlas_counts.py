@@ -43,8 +43,10 @@ def _stored(tmp_path, opts: SynthesisOptions) -> Counter:
         return Counter({(r.LA, r.MJA): r.chains for r in universal_table(opts, atlas.chains(opts)) if r.chains})
 
 
+# (n = 11, F = 2: 13 450 chains, 20 s here, is in `python benchmarks/bench_atlas_count.py`'s yardstick, which
+# checks the counter's count against genbg piped into a compiled filter)
 CASES = [SynthesisOptions(8, 1), SynthesisOptions(10, 1), SynthesisOptions(9, 2), SynthesisOptions(10, 3),
-         SynthesisOptions(11, 2), SynthesisOptions(10, 1, max_multiplicity=2),
+         SynthesisOptions(10, 1, max_multiplicity=2),
          SynthesisOptions(10, 1, simple_joints=True), SynthesisOptions(9, 2, max_link_degree=3)]
 
 
@@ -214,7 +216,7 @@ def test_the_committed_14_link_table_has_every_row_of_the_number_synthesis():
 
 
 @compiled
-@pytest.mark.parametrize("la, mja", [("14", "8-1"), ("13-1", "0-3-1"), ("14", "4-3")])
+@pytest.mark.parametrize("la, mja", [("14", "8-1"), ("14", "4-3")])
 def test_a_committed_14_link_row_recounts_alone_to_the_same_number(tmp_path, capsys, la, mja):
     """Any row of the committed table recounts by one command (``--la/--mja``: the
     enumeration restricted to the row) to its committed number."""

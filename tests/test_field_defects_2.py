@@ -400,6 +400,9 @@ _CORRUPTIONS = {
     # found by the fuzzing stage (MULTILOOP_FUZZ=5000, case 1851): the build's row gone, its tasks collide
     "builds-dropped": ("DROP TABLE builds", "build",
                        "expected an intact atlas, got IntegrityError: UNIQUE constraint failed: tasks.build_id"),
+    # found by the fuzzing stage (MULTILOOP_FUZZ=5000, case 4475): int('garbage') in the counts, exit 1
+    "mechanism-class": ("UPDATE mechanisms SET class = 'garbage' WHERE rowid = 1", "build",
+                        "table mechanisms row of class 'garbage': expected class: an integer from 0 to 100"),
 }
 
 
