@@ -209,7 +209,7 @@ def test_case_count():
 
 # --- the fuzzing stage ----------------------------------------------------------------------
 #: cases of the fuzzing stage: a few hundred in CI, thousands with MULTILOOP_FUZZ=5000
-FUZZ_CASES = int(os.environ.get("MULTILOOP_FUZZ", "300"))
+FUZZ_CASES = int(os.environ.get("MULTILOOP_FUZZ", "200"))
 FUZZ_SEED = int(os.environ.get("MULTILOOP_FUZZ_SEED", "22"))
 #: address-space cap of the child (MB): a runaway allocation fails there, not in CI
 FUZZ_MEMORY_MB = 3000
