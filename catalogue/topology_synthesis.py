@@ -357,7 +357,7 @@ def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[floa
 def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | None = None, top: int = 3,
                evaluations: int | None = None, budget: float | None = None, point: str = "P", tol: float = 1e-4,
                per_topology: int = 2, topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
-               progress=None) -> TopologySynthesis:
+               progress=None, build_progress: bool = False, say=None) -> TopologySynthesis:
     """Path synthesis that chooses the topology from the atlas (module docstring).
 
     Parameters
@@ -393,6 +393,9 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
         Called with the share of the budget spent (of the evaluations, else of the
         seconds), before every polish and during it; an exception it raises (a cancel)
         ends the run.
+    build_progress, say : optional
+        When the default atlas is built first: progress bars, and ``say(text)`` told
+        where and what it costs (after the target and the options are checked).
 
     Returns
     -------
@@ -412,7 +415,7 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
         return _with_start(start, target, closed, point, Budget.of(evaluations, budget), seed, t0)
     limits = Budget.of(evaluations, budget, default=DEFAULT_EVALUATIONS)
     check_top(top)
-    atlas = _atlas_file(atlas)
+    atlas = _atlas_file(atlas, build_progress, say)
     run = Meter.start(limits, None if limits.seconds is None else t0 + limits.seconds)
     tick = None if progress is None else (lambda: progress(run.fraction()))
     with one_blas_thread():                 # (one BLAS thread: the same sums on any machine, and faster)
@@ -433,12 +436,12 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
     return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0, run.used, limits, stopped)
 
 
-def _atlas_file(atlas) -> Path:
+def _atlas_file(atlas, progress: bool = False, say=None) -> Path:
     """The atlas to read: ``atlas``, which must be a file, or (None) the default atlas,
     built first if need be (:func:`.default_atlas.ensure_default_atlas`)."""
     if atlas is None:
         from .default_atlas import ensure_default_atlas
-        return ensure_default_atlas()
+        return ensure_default_atlas(progress=progress, say=say)
     if not Path(atlas).is_file():
         raise ParameterError(explain("atlas", expected="an atlas file with coupler curves", got=repr(str(atlas)),
                                      hint="build one (multiloop atlas --links 6 --dof 1 --mechanisms --curves 8), "

@@ -94,9 +94,7 @@ def add_arguments(p) -> None:
 
 def run_without_start(args, limits: dict) -> int:
     """The atlas chooses the topology (``catalogue.topology_synthesis``)."""
-    from multiloop.catalogue.dimensional.synthesise import check_tol
-    from multiloop.catalogue.topology_synthesis import (check_top, design_files, parse_links, read_target,
-                                                        synthesise as topo_synthesise)
+    from multiloop.catalogue.topology_synthesis import design_files, parse_links, synthesise as topo_synthesise
 
     if not args.path or args.function or args.motion:
         raise InputError(explain("START", expected="a start mechanism, or --path alone (the atlas chooses)",
@@ -107,16 +105,10 @@ def run_without_start(args, limits: dict) -> int:
     links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
-    # the target and the options first: a bad one is refused before the atlas is read or built
-    target, tol = read_target(args.path), check_tol(1e-4 if args.tol is None else args.tol)
-    check_top(args.top)
-    atlas = args.atlas
-    if atlas is None:
-        from multiloop.catalogue.default_atlas import ensure_default_atlas
-        atlas = ensure_default_atlas(progress=sys.stderr.isatty(),
-                                     say=lambda text: print(f"multiloop synthesise: {text}", file=sys.stderr, flush=True))
-    res = topo_synthesise(target, links=links, atlas=atlas, top=args.top, **limits, point=args.point or "P", tol=tol,
-                          seed=args.seed)
+    # (the library checks the target and the options before it reads or builds an atlas)
+    res = topo_synthesise(args.path, links=links, atlas=args.atlas, top=args.top, **limits, point=args.point or "P",
+                          tol=1e-4 if args.tol is None else args.tol, seed=args.seed, build_progress=sys.stderr.isatty(),
+                          say=lambda text: print(f"multiloop synthesise: {text}", file=sys.stderr, flush=True))
     if not res.designs:
         raise InputError(explain("--path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
