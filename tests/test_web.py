@@ -210,6 +210,8 @@ def test_slider_positions_are_those_of_solve(page, tmp_path_factory):
 def test_a_limited_motion_gets_its_own_slider_range(page):
     """dyad_prp's crank does not turn fully: the slider spans both sides of the reference."""
     _pick(page, "dyad_prp")
+    # the motion and the check have landed (a busy machine may bring them after the pick)
+    page.wait_for_selector("#ml-check-json[data-mechanism=dyad_prp]", state="attached", timeout=120000)
     n = int(page.evaluate(f"() => {SLIDER_JS}.end"))
     assert n + 1 == 201
     page.evaluate(MOVE_JS, [n])
