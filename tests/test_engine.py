@@ -355,10 +355,8 @@ def test_bad_engine_files_exit_2_naming_the_key(tmp_path, capsys, text, key):
 
 
 def test_engine_steps_capped_with_exit_2(capsys):
-    import time
-    t0 = time.perf_counter()
     assert main(["engine", "single_cylinder", "--steps", "100000000"]) == 2
-    assert "from 8 to 100000" in capsys.readouterr().err and time.perf_counter() - t0 < 10
+    assert "from 8 to 100000" in capsys.readouterr().err      # refused before any step is solved
     with pytest.raises(Exception, match="from 8 to 100000"):
         analyse_engine(single_cylinder_spec(), 10 ** 8)
 

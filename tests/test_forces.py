@@ -342,10 +342,7 @@ def test_force_result_arrays_are_read_only_and_as_dict_is_json():
 
 
 def test_forces_at_huge_angle_is_reduced_and_capped(capsys):
-    import time
-    t0 = time.perf_counter()
     assert main(["forces", "crank_slider_loaded", "--at", "1e9", "--json"]) == 0
-    assert time.perf_counter() - t0 < 20
     doc = json.loads(capsys.readouterr().out)
     assert doc["input"][0] == pytest.approx(1e9 % 720.0)       # the gas table spans 720 deg
     ref = forces(load(LOADED), np.radians([1e9 % 720.0]))

@@ -17,7 +17,7 @@ import pytest
 from multiloop.web.menus import QUOTED
 from tests.test_web import CHROMIUM, DEEP_JS, FORGE_JS, _pick, _wait_frames, sync_api, upload
 from tests.test_web import browser  # noqa: F401 - the fixture, one chromium per module
-from tests.common import six_bar_chain_atlas, start_serve, stop
+from tests.common import six_bar_chain_atlas, start_serve, stderr_of, stop
 
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
@@ -120,7 +120,7 @@ def _hover_every_joint(page) -> None:
     """The mouse over each joint: its tooltip names it, as text."""
     for name, x, y in page.evaluate(JOINTS_JS):
         page.mouse.move(x, y)
-        page.wait_for_function(f"() => ({TOOLTIPS_JS})().includes({json.dumps('joint: ' + name)})", timeout=10000)
+        page.wait_for_function(f"() => ({TOOLTIPS_JS})().includes({json.dumps('joint: ' + name)})", timeout=120000)
     page.mouse.move(5, 5)
 
 
@@ -163,11 +163,11 @@ def test_hostile_names_of_an_uploaded_file_stay_text(browser, served, files, tmp
         bad = tmp_path / f"{HOSTILE['img']}.toml"
         bad.write_text("x = [")
         upload(page, "ml-open", bad)
-        sync_api.expect(page.locator("#ml-message")).to_contain_text(f"{bad.name}: TOML syntax error", timeout=20000)
+        sync_api.expect(page.locator("#ml-message")).to_contain_text(f"{bad.name}: TOML syntax error", timeout=120000)
         mine = tmp_path / f"{HOSTILE['svg']}.json"
         mine.write_bytes(files[0].read_bytes())
         upload(page, "ml-open", mine)
-        sync_api.expect(page.locator(".ml-pick select")).to_have_value(f"upload: {mine.name}", timeout=20000)
+        sync_api.expect(page.locator(".ml-pick select")).to_have_value(f"upload: {mine.name}", timeout=120000)
         _names_are_text(page)
         _hover_every_joint(page)
         _assert_clean(page)
@@ -205,9 +205,9 @@ def test_forged_menu_values_open_no_file(browser, served, files):
                 page.evaluate(FORGE_JS, [title, "value", forged])
                 shown = forged if len(forged) <= QUOTED else forged[:QUOTED] + "…"
                 sync_api.expect(page.locator("#ml-message")).to_contain_text(
-                    f"{what}: expected one of its entries, got {shown!r}", timeout=20000)
+                    f"{what}: expected one of its entries, got {shown!r}", timeout=120000)
                 page.wait_for_function(f"() => ({VALUE_JS})({json.dumps(title)}) === {json.dumps(before)}",
-                                       timeout=20000)
+                                       timeout=120000)
         text = page.evaluate(f"() => ({DEEP_JS})('*').map(e => e.textContent).join(' ')")
         assert "SECRET-design" not in text and "root:" not in text
         _pick(page, "crank_slider")                                          # the page goes on
@@ -235,11 +235,22 @@ def _cpu_rates(pid: int, n: int, dt: float = 0.25) -> list[float]:
     return out
 
 
+def _wait_for_line(proc, text: str, net: float) -> str:
+    """The first line of the server's stderr that contains ``text`` (read until it comes)."""
+    end = time.monotonic() + net
+    while time.monotonic() < end:
+        hit = [ln for ln in stderr_of(proc).splitlines() if text in ln]
+        if hit:
+            return hit[0]
+        time.sleep(0.1)
+    raise AssertionError(f"the server never logged {text!r}: {stderr_of(proc)[-2000:]}")
+
+
 def test_a_tab_closed_during_a_synthesis_stops_it(browser, tmp_path):
     """Before: the session's clean-up raised under Bokeh 3.9 and came 15 s late: a
-    synthesis went on for a minute after its tab closed.  Now the server goes idle (the
-    share of a core over the last 0.5 s under 0.1) and stays idle; the test prints how
-    soon (about 0.75 s on an idle machine; the outcome does not depend on the time)."""
+    synthesis went on for a minute after its tab closed.  Now the job's thread ends (the
+    server logs "job synthesis: cancelled after … s") and the server stays idle (the share
+    of a core over the last 0.5 s under 0.2); the test waits on the log, not on a time."""
     url, proc = start_serve()
     csv = tmp_path / "target.csv"
     csv.write_text("x,y\n" + "\n".join(f"{0.05 + 0.03 * i / 20:.5f},{0.07 + 0.02 * (i % 5) / 5:.5f}"
@@ -249,23 +260,19 @@ def test_a_tab_closed_during_a_synthesis_stops_it(browser, tmp_path):
         page.get_by_text("Synthesis", exact=True).click()
         page.locator(".ml-start select").select_option("four_bar")
         upload(page, "ml-csv", csv)
-        sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("20 rows", timeout=20000)
+        sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("20 rows", timeout=120000)
         page.locator(".ml-budget input").fill("120")
         page.locator(".ml-budget input").press("Enter")
         page.get_by_role("button", name="Run").click()
-        page.wait_for_selector("#ml-synthesis-status[data-state=running]", state="attached", timeout=20000)
-        busy = _cpu_rates(proc.pid, 4)
-        assert max(busy) > 0.25, busy                         # the synthesis runs
+        page.wait_for_selector("#ml-synthesis-status[data-state=running]", state="attached", timeout=120000)
+        busy = _cpu_rates(proc.pid, 4)                      # printed: a loaded machine gives it less
         page.close()
-        # idle once the close is noticed: read until a reading under 0.1 (at most 60 readings
-        # of 0.5 s, a bound for a loaded machine; on an idle one the first few are idle)
-        after = []
-        while len(after) < 60 and (not after or min(after) >= 0.1):
-            after += _cpu_rates(proc.pid, 2)
-        assert min(after) < 0.1, (busy, after)
-        calm = after.index(min(after))
-        assert max(_cpu_rates(proc.pid, 4)) < 0.2, (busy, after)      # and stays idle
-        print(f"\nserver CPU, a core's share: running {busy}, after the close {after} (idle from reading {calm})")
+        # the job's thread ends once the close is noticed: the server's log says so (a net of
+        # 10 min for a loaded machine; on an idle one it comes within a second)
+        log = _wait_for_line(proc, "job synthesis: cancelled after", 600)
+        after = _cpu_rates(proc.pid, 4)
+        assert max(after) < 0.2, (busy, after, log)           # and the server stays idle
+        print(f"\nserver CPU, a core's share: running {busy}, after the close {after}; log: {log}")
     finally:
         if not page.is_closed():
             page.close()
@@ -290,7 +297,7 @@ def test_a_50_mb_upload_is_refused_in_the_page_and_nothing_is_lost(browser, serv
                 page.get_by_text("Synthesis", exact=True).click()
             upload(page, css, big)
             sync_api.expect(page.locator("#ml-message")).to_contain_text(
-                f"file '{name}': expected at most {MAX_UPLOAD >> 20} MiB, got {50 << 20} bytes", timeout=20000)
+                f"file '{name}': expected at most {MAX_UPLOAD >> 20} MiB, got {50 << 20} bytes", timeout=120000)
         page.get_by_text("Mechanism", exact=True).first.click()
         assert page.evaluate("() => window.__mlMark === Bokeh.documents[0]") and page.closed == []
         assert page.locator("#ml-check-json").text_content() == shown

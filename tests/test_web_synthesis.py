@@ -241,7 +241,7 @@ def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_pat
             sync_api = web.sync_api
             sync_api.expect(field).to_have_value(str(tiny_atlas))
             web.upload(page, "ml-csv", csv)
-            sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=20000)
+            sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("25 rows", timeout=120000)
             page.locator(".ml-budget input").fill("3")
             page.locator(".ml-budget input").press("Enter")
             _on_synthesis_tab(page, page.get_by_role("button", name="Run")).click()
@@ -259,7 +259,7 @@ def test_browser_no_start_runs_from_the_served_atlas(served, tiny_atlas, tmp_pat
             # an atlas the page was not given, set as a script in the page could: refused
             page.evaluate(web.FORGE_JS, ["ml-atlas", "value", str(tmp_path / "missing.sqlite")])
             sync_api.expect(page.locator("#ml-message")).to_contain_text("atlas menu: expected one of its entries",
-                                                                         timeout=20000)
+                                                                         timeout=120000)
             sync_api.expect(_on_synthesis_tab(page, field)).to_have_value(str(tiny_atlas))
             web._pick(page, "crank_slider")                       # the page goes on
             sync_api.expect(page.locator("#ml-message")).not_to_have_attribute("data-error", "1")

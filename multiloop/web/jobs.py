@@ -9,11 +9,15 @@ merely hidden).
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 import warnings
 
 __all__ = ["Job"]
+
+#: each job's start and end, one line each (``multiloop serve`` shows them on stderr)
+LOG = logging.getLogger("multiloop.web.jobs")
 
 
 class _Cancelled(Exception):
@@ -39,6 +43,7 @@ class Job:
         self._stop = threading.Event()
         self.started = time.perf_counter()
         self.thread = threading.Thread(target=self._run, name=f"multiloop-web-{name}", daemon=True)
+        LOG.info("job %s: started", name)
         self.thread.start()
 
     def _run(self) -> None:
@@ -54,6 +59,9 @@ class Job:
             self.error, self.state = str(exc), "failed"
         except Exception as exc:  # noqa: BLE001 - shown on the page, the server keeps serving
             self.error, self.state = f"internal error: {type(exc).__name__}: {exc}", "failed"
+        finally:
+            LOG.info("job %s: %s after %.1f s (its thread ends)", self.name, self.state,
+                     time.perf_counter() - self.started)
 
     def report(self, fraction: float, best: float = float("nan"), note: str = "") -> None:
         """Progress from the worker; raises ``_Cancelled`` once :meth:`cancel` was called."""
