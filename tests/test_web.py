@@ -479,3 +479,41 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
         const b = JSON.parse(r.getAttribute('data-positions'))['B'];
         return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
+
+
+def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
+    """Switch the page to mm and rad: the check's events shown are ``check --json``'s
+    (deg) in rad, the readout's input too, the edit row shows B's coordinates in mm, and
+    120, 80 typed in mm put B at (0.12, 0.08) m; back to m and deg afterwards."""
+    from multiloop.kin.check import check
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        page.locator(".ml-angle-unit select").select_option("rad")
+        page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=60000)
+        d = check(load_mechanism("four_bar")).as_dict()["drivers"]["O2"]
+        want = sorted([*d["limits"], *(x for xs in d["dead_centres"].values() for x in xs),
+                       *(a[k] for a in d["angles"].values() for k in ("at_min", "at_max"))])
+        shown = sorted(float(v) for v in page.locator("#ml-check-events tr[data-x]").evaluate_all(
+            "rows => rows.map(r => r.getAttribute('data-x'))"))
+        np.testing.assert_allclose(shown, np.radians(want), rtol=1e-12)
+        r = _readout(page)
+        assert page.locator("#ml-positions").text_content() == f"O2 = {math.radians(r['input']):.3f} rad"
+        page.locator(".ml-edit-point select").select_option("B")
+        b = load_mechanism("four_bar").joint("B").at
+        sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(format(1000 * b[0], ".12g"), timeout=60000)
+        sync_api.expect(page.locator(".ml-edit-y input")).to_have_value(format(1000 * b[1], ".12g"))
+        for css, v in ((".ml-edit-x input", "120"), (".ml-edit-y input", "80")):
+            page.locator(css).fill(v)
+            page.locator(css).press("Enter")
+        page.locator(".ml-edit-apply button").click()
+        at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
+            if (!r || !r.getAttribute('data-positions')) return false;
+            const b = JSON.parse(r.getAttribute('data-positions'))['B'];
+            return Math.abs(b[0] - x) < 1e-15 && Math.abs(b[1] - y) < 1e-15; }""" % DEEP_JS
+        page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
+        page.locator(".ml-angle-unit select").select_option("deg")

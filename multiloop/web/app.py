@@ -161,6 +161,7 @@ class Workbench:
         from .glue import Upload, div
         from .mechanism_view import MechanismView
         from .menus import Menu
+        from .units import UnitsBar
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
         self.threshold = threshold
@@ -181,6 +182,7 @@ class Workbench:
                              self.say, "ml-open")
         self.upload = self.opener.target
         self.exports = ExportBar(lambda: (self.mechanism, self.check_doc, self.threshold), self.say)
+        self.units = UnitsBar(self.say, self.use_units)
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
         self.menu.on_choice(self.open_name)
@@ -194,7 +196,7 @@ class Workbench:
             self._later[3] = lambda: self._atlas_view(list(atlases))
             tabs.append(("Atlas", div("…")))
         header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload,
-                     self.exports.menu.select, self.exports.download.button)
+                     self.exports.menu.select, self.exports.download.button, *self.units.widgets)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
@@ -353,6 +355,15 @@ class Workbench:
             events = self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
             if self.view.sweeps:
                 self.view.mark(events)
+
+    def use_units(self, units) -> None:
+        """Show (and read typed values) in ``units``: the edit row, the player's readout,
+        the check's events and plot (files and the check's JSON keep their own units)."""
+        self.editor.use_units(units)
+        self.view.use_units(units)
+        self.check.units = units
+        if self.check_doc is not None and self.view.sweeps:
+            self.view.mark(self.check.show(self.check_doc, self.view.current, self.threshold))
 
     def move_to(self, x) -> None:
         if x is not None and self.view.sweeps and np.isfinite(x):

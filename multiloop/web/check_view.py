@@ -17,23 +17,27 @@ from bokeh.plotting import figure
 from .glue import div
 from .markup import html, join
 from .scene import PALETTE, Sweep
+from .units import Units
 
 __all__ = ["CheckView", "events_of"]
 
 
-def events_of(doc: dict, joint: str) -> list[tuple[float, str]]:
+def events_of(doc: dict, joint: str, units: Units = Units()) -> list[tuple[float, str]]:
     """(driver value, label) of every event of driver ``joint`` in a check JSON document:
-    limits, branch (change) points, dead centres, transmission extremes."""
+    limits, branch (change) points, dead centres, transmission extremes (their angles
+    in the labels in the display ``units``; the values stay in the document's)."""
     d = doc["drivers"].get(joint)
     if d is None:
         return []
     ev = [(x, "limit") for x in d["limits"]]
     ev += [(b["at"], f"branch point {b['group']}") for b in d["branch_points"]]
     ev += [(x, f"dead centre {lk}") for lk, xs in d["dead_centres"].items() for x in xs]
+    def angle(v):
+        return f"{v:.1f}°" if units.angle == "deg" else f"{units.shown(v, 'deg'):.4g} {units.angle}"
     for name, a in d["angles"].items():
         if a.get("min") is not None:
-            ev.append((a["at_min"], f"{a['quantity']} {name} min {a['min']:.1f}°"))
-            ev.append((a["at_max"], f"{a['quantity']} {name} max {a['max']:.1f}°"))
+            ev.append((a["at_min"], f"{a['quantity']} {name} min {angle(a['min'])}"))
+            ev.append((a["at_max"], f"{a['quantity']} {name} max {angle(a['max'])}"))
     return ev
 
 
@@ -51,16 +55,18 @@ class CheckView:
 
     def __init__(self, move_to, cancel=None):
         self.move_to = move_to
+        self.units = Units()
+        self.scale = 1.0               # display units of the plot's input axis per the sweep's
         self.curves = ColumnDataSource(dict(xs=[], ys=[], name=[], colour=[]))
         self.events = ColumnDataSource(dict(x=[], label=[]))
         self.cursor = Span(location=0, dimension="height", line_color="#333", line_dash="dashed")
         self.fig = figure(width=620, height=260, tools="pan,wheel_zoom,reset,tap", toolbar_location="above",
                           x_range=Range1d(0, 360),
-                          x_axis_label="input", y_axis_label="angle (deg)", name="ml-angles")
+                          x_axis_label="input", y_axis_label="angle", name="ml-angles")
         self.fig.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2, legend_field="name")
         self.fig.scatter("x", 0, source=self.events, marker="inverted_triangle", size=10, color="#d62728")
         self.fig.add_layout(self.cursor)
-        self.fig.on_event(Tap, lambda e: self.move_to(e.x))
+        self.fig.on_event(Tap, lambda e: self.move_to(None if e.x is None else e.x / self.scale))
         self.verdict = div("", width=480)
         self.table = div("")
         self.json = div("")            # the JSON document, folded (<details>)
@@ -97,18 +103,29 @@ class CheckView:
                               text=json.dumps(doc, indent=1, allow_nan=False))
         if sw is None:
             return []
-        ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint)]
-        self.events.data = dict(x=[x for x, _ in ev], label=[lb for _, lb in ev])
-        # plain text: a name between $$ would otherwise be read as TeX
-        self.fig.xaxis.axis_label = PlainText(text=f"{sw.joint} ({sw.unit})")
-        lo, hi = float(sw.x.min()), float(sw.x.max())
-        self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
-        A = np.where(np.isfinite(sw.angles), sw.angles, np.nan)
-        self.curves.data = dict(xs=[sw.x.tolist()] * A.shape[1], ys=[A[:, c].tolist() for c in range(A.shape[1])],
-                                name=list(sw.angle_names),
-                                colour=[PALETTE[c % len(PALETTE)] for c in range(A.shape[1])])
-        rows = join(html("<tr><td>{x:.4g}</td><td>{label}</td></tr>", x=x, label=lb) for x, lb in sorted(ev))
-        self.table.text = html('<table id="ml-check-events"><tr><th>{joint} ({unit})</th><th>event</th></tr>'
-                               "{rows}</table><p>flagged below {lo:g}° (or above {hi:g}°)</p>",
-                               joint=sw.joint, unit=sw.unit, rows=rows, lo=threshold, hi=180 - threshold)
+        u = self.units
+        ev = [(on_axis(x, sw), label) for x, label in events_of(doc, sw.joint, u)]
+        self._plot(sw, ev)
+        # data-x: the value shown, unrounded (the browser tests compare it with check --json)
+        rows = join(html('<tr data-x="{x!r}"><td>{x:.4g}</td><td>{label}</td></tr>', x=u.shown(x, sw.unit), label=lb)
+                    for x, lb in sorted(ev))
+        self.table.text = html('<table id="ml-check-events" data-unit="{unit}"><tr><th>{joint} ({unit})</th>'
+                               "<th>event</th></tr>{rows}</table><p>flagged below {lo:.4g} {a} (or above {hi:.4g} {a})"
+                               "</p>", joint=sw.joint, unit=u.label(sw.unit), rows=rows, a=u.angle,
+                               lo=u.shown(threshold, "deg"), hi=u.shown(180 - threshold, "deg"))
         return ev
+
+    def _plot(self, sw: Sweep, ev) -> None:
+        """The angle plot of ``sw`` and its events ``ev``, in the display units."""
+        u = self.units
+        self.scale, sa = u.scale(sw.unit), u.scale("deg")
+        self.events.data = dict(x=[x * self.scale for x, _ in ev], label=[lb for _, lb in ev])
+        # plain text: a name between $$ would otherwise be read as TeX
+        self.fig.xaxis.axis_label = PlainText(text=f"{sw.joint} ({u.label(sw.unit)})")
+        self.fig.yaxis.axis_label = PlainText(text=f"angle ({u.angle})")
+        lo, hi = u.shown(sw.x.min(), sw.unit), u.shown(sw.x.max(), sw.unit)
+        self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
+        A = np.where(np.isfinite(sw.angles), sw.angles, np.nan) * sa
+        self.curves.data = dict(xs=[(sw.x * self.scale).tolist()] * A.shape[1],
+                                ys=[A[:, c].tolist() for c in range(A.shape[1])], name=list(sw.angle_names),
+                                colour=[PALETTE[c % len(PALETTE)] for c in range(A.shape[1])])

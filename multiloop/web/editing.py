@@ -90,14 +90,17 @@ document.addEventListener('keydown', (e) => {
 
 
 class Editor:
-    """The edit row of the mechanism tab: a point menu, x and y (m), Apply, Undo, Redo.
-    ``show(m)`` is called with each design the edits make (the page opens it)."""
+    """The edit row of the mechanism tab: a point menu, x and y (in the page's length
+    unit, :attr:`units`), Apply, Undo, Redo.  ``show(m)`` is called with each design the
+    edits make (the page opens it)."""
 
     def __init__(self, say, show):
         from bokeh.models import Button, CustomJS, Row, TextInput
 
         from .menus import Menu
+        from .units import Units
         self.say, self.show = say, show
+        self.units = Units()
         self.history = History()
         self.point = Menu("edited point", say, (), title="edit point", width=140, css_classes=["ml-edit-point"])
         self.x = TextInput(title="x (m)", width=110, css_classes=["ml-edit-x"])
@@ -105,7 +108,7 @@ class Editor:
         self.apply = Button(label="Apply", width=70, css_classes=["ml-edit-apply"])
         self.undo = Button(label="↶ Undo", width=80, disabled=True, css_classes=["ml-undo"], tags=[0, 0])
         self.redo = Button(label="↷ Redo", width=80, disabled=True, css_classes=["ml-redo"])
-        self.apply.on_click(lambda: self.edit(self.point.value, (self.x.value, self.y.value)))
+        self.apply.on_click(lambda: self.typed(self.point.value, (self.x.value, self.y.value)))
         self.undo.on_click(lambda: self.step(-1))
         self.redo.on_click(lambda: self.step(+1))
         self.point.on_choice(lambda name: self._fill())
@@ -133,6 +136,22 @@ class Editor:
         self.history = self.history.edited(new)
         self._refresh()
         self.show(new)
+
+    def typed(self, name: str, xy) -> None:
+        """The edit typed in the page: ``xy`` (text) in the display length unit."""
+        try:
+            at = tuple(self.units.typed(v, "m") for v in xy)
+        except InputError:
+            self.say(explain(f"position of {name}", expected=f"two finite numbers (x, y in {self.units.length})",
+                             got=repr(tuple(xy))))
+            return
+        self.edit(name, at)
+
+    def use_units(self, units) -> None:
+        """Show and read x and y in ``units`` (a :class:`~.units.Units`)."""
+        self.units = units
+        self.x.title, self.y.title = f"x ({units.length})", f"y ({units.length})"
+        self._fill()
 
     def drag(self, name: str, xy) -> None:
         """A handle dragged to ``xy`` in the drawing: the same edit as typed, and the
@@ -169,11 +188,16 @@ class Editor:
         self._fill()
 
     def _fill(self) -> None:
-        """x and y of the chosen point, as the design has them."""
+        """x and y of the chosen point, as the design has them (in the display unit: the
+        file's own digits in m, 12 significant digits in another unit)."""
         m, name = self.history.current, self.point.value
         at = None
         if m is not None and name in m.joint_names:
             at = m.joint(name).at
         elif m is not None:
             at = next((p.at for p in m.points if p.name == name), None)
-        self.x.value, self.y.value = ("", "") if at is None else (repr(float(at[0])), repr(float(at[1])))
+        self.x.value, self.y.value = ("", "") if at is None else (self._text(at[0]), self._text(at[1]))
+
+    def _text(self, v) -> str:
+        shown = self.units.shown(v, "m")
+        return repr(shown) if self.units.length == "m" else format(shown, ".12g")

@@ -25,6 +25,7 @@ from .glue import Player, div
 from .markup import Html, html
 from .menus import Menu
 from .scene import Scene, Sweep
+from .units import Units
 
 __all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "readout_html"]
 
@@ -67,8 +68,8 @@ for (const ix of idx) {
 // in place, then one change signal each: a redraw in the browser, no patch to the server
 links.data.xs = xs; links.data.ys = ys; links.change.emit();
 joints.data.x = nx.slice(0, nj); joints.data.y = ny.slice(0, nj); joints.change.emit();
-for (const c of cursors) { c.location = sweep.data.input[i]; }
-const [label, unit, names, mech] = readout.tags;
+const [label, unit, names, mech, scale] = readout.tags;
+for (const c of cursors) { c.location = sweep.data.input[i] * scale; }
 const pos = {};
 names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
 // the readout's element itself (a new Div text would re-lay out the whole page)
@@ -83,7 +84,7 @@ if (!el || !el.isConnected) {
 if (el) {
   el.setAttribute('data-mechanism', mech); el.setAttribute('data-index', i);
   el.setAttribute('data-input', sweep.data.input[i]); el.setAttribute('data-positions', JSON.stringify(pos));
-  el.textContent = label + ' = ' + sweep.data.input[i].toFixed(3) + ' ' + unit;
+  el.textContent = label + ' = ' + (sweep.data.input[i] * scale).toFixed(3) + ' ' + unit;
 }
 """
 
@@ -105,12 +106,14 @@ def stacked_offsets(xs, ys, near: float) -> list[float]:
     return out
 
 
-def readout_html(sw: Sweep, i: int, names, mech: str) -> Html:
-    """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes)."""
+def readout_html(sw: Sweep, i: int, names, mech: str, units: Units = Units()) -> Html:
+    """The readout element of frame ``i`` (the same text as :data:`REDRAW_JS` writes):
+    its data attributes in the command line's units, its text in the display ``units``."""
     pos = {n: [float(v) for v in sw.nodes[i, j]] for j, n in enumerate(names)}
     return html('<span id="ml-positions" data-mechanism="{mech}" data-index="{i}" data-input="{x}" '
                 'data-positions="{pos}">{joint} = {v:.3f} {unit}</span>', mech=mech, i=i,
-                x=repr(float(sw.x[i])), pos=json.dumps(pos), joint=sw.joint, v=float(sw.x[i]), unit=sw.unit)
+                x=repr(float(sw.x[i])), pos=json.dumps(pos), joint=sw.joint, v=units.shown(sw.x[i], sw.unit),
+                unit=units.label(sw.unit))
 
 
 def _frame_links(scene: Scene, nodes: np.ndarray) -> tuple[list, list]:
@@ -131,6 +134,7 @@ class MechanismView:
     def __init__(self, say, cursors=(), on_drag=None):
         self.scene: Scene | None = None
         self.say, self.on_drag = say, on_drag
+        self.units = Units()
         #: the drag handles, at the reference; what the server set last (names, x, y)
         self.handles = ColumnDataSource(dict(x=[], y=[], name=[]), name="ml-handles")
         self.handles_set: tuple = ((), (), ())
@@ -246,7 +250,7 @@ class MechanismView:
             fill=fill, size=[11 + 3 * (k - 2) if k > 2 else 9 for k in scene.multiplicity] + [10] * n_pts,
             marker=marker + ["x"] * n_pts,
             links=[", ".join(j.links) for j in m.joints] + [f"tracer point on {p.link}" for p in m.points])
-        labels = [f"{sw.joint} ({sw.unit})" for sw in sweeps]
+        labels = self._labels()
         self.drivers.set(labels, labels[0] if labels else "")
         self.driver.visible = len(labels) > 1
         if labels:
@@ -265,16 +269,35 @@ class MechanismView:
         n_pts = len(names) - self.scene.n_joints
         self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
                                ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
-        self.readout.tags = [sw.joint, sw.unit, names, self.name]
         self.player.disabled = False
         self._fit(sw.nodes)
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
         self.handles.tags = [i]                       # the frame of the handles (FOLLOW_JS)
+        self._unit_texts()
+        self.draw_frame(i)
+
+    def _labels(self) -> list[str]:
+        return [f"{sw.joint} ({self.units.label(sw.unit)})" for sw in self.sweeps]
+
+    def _unit_texts(self) -> None:
+        """The readout's glue arguments and the status line, in the display units."""
+        sw, u = self.current, self.units
+        self.readout.tags = [sw.joint, u.label(sw.unit), list(self.scene.node_names), self.name, u.scale(sw.unit)]
         self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
                                 kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
-                                lo=float(sw.x.min()), hi=float(sw.x.max()), unit=sw.unit, n=len(sw.x))
-        self.draw_frame(i)
+                                lo=u.shown(sw.x.min(), sw.unit), hi=u.shown(sw.x.max(), sw.unit),
+                                unit=u.label(sw.unit), n=len(sw.x))
+
+    def use_units(self, units: Units) -> None:
+        """Show the readout, status line and driver menu in ``units`` (the frames stay)."""
+        self.units = units
+        if not self.sweeps:
+            return
+        labels = self._labels()
+        self.drivers.set(labels, labels[min(self.current.k, len(labels) - 1)])
+        self._unit_texts()
+        self.draw_frame(int(self.player.slider.value))
 
     def _fit(self, nodes: np.ndarray) -> None:
         """Ranges around every finite position of ``nodes``, equal scales on both axes."""
@@ -294,8 +317,8 @@ class MechanismView:
         sw = self.current
         self._draw_nodes(sw.nodes[i])
         for c in self.cursors:
-            c.location = float(sw.x[i])
-        self.readout.text = readout_html(sw, i, self.scene.node_names, self.name)
+            c.location = self.units.shown(sw.x[i], sw.unit)
+        self.readout.text = readout_html(sw, i, self.scene.node_names, self.name, self.units)
 
     def _draw_nodes(self, nodes: np.ndarray) -> None:
         xs, ys = _frame_links(self.scene, nodes)

@@ -1,0 +1,67 @@
+"""The page's display units (``multiloop/web/units.py``): a frozen value, conversions
+both ways, and the workbench's edit row, readout and check table in mm and rad (no
+browser; ``tests/test_web.py::test_units_*`` drives the page)."""
+from __future__ import annotations
+
+import dataclasses
+import html
+import math
+import re
+
+import pytest
+
+pytest.importorskip("bokeh")
+
+from multiloop.topo.errors import InputError  # noqa: E402
+from multiloop.web.units import Units  # noqa: E402
+
+
+def test_units_are_frozen_hashable_and_checked():
+    u = Units("in", "rad")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        u.length = "m"
+    assert hash(u) == hash(Units("in", "rad")) and u != Units()
+    with pytest.raises(InputError, match="length unit: expected mm or m or in, got 'ft'"):
+        Units("ft")
+    with pytest.raises(InputError, match="angle unit"):
+        Units("m", "grad")
+
+
+def test_units_convert_shown_and_typed_values_both_ways():
+    u = Units("in", "rad")
+    assert u.shown(0.0254, "m") == pytest.approx(1.0) and u.typed("1", "m") == pytest.approx(0.0254)
+    assert u.shown(180.0, "deg") == pytest.approx(math.pi) and u.typed(str(math.pi), "deg") == pytest.approx(180)
+    assert Units().shown(0.12, "m") == 0.12 and Units("mm").typed("120", "m") == 0.12
+    for bad in ("abc", "nan", "inf", None):
+        with pytest.raises(InputError, match=r"expected a finite number \(in in\)"):
+            u.typed(bad, "m")
+
+
+def test_units_reach_the_edit_row_readout_and_check_table():
+    import time
+
+    from multiloop.inputs import load_mechanism
+    from multiloop.web.app import Workbench
+    wb = Workbench(requested="four_bar")
+    try:
+        t = time.monotonic()
+        while wb.check_doc is None and time.monotonic() - t < 120:   # a bound on a hang only
+            wb.poll()
+            time.sleep(0.05)
+        wb.units.lengths.select.value = "mm"          # as the page's menus set them
+        wb.units.angles.select.value = "rad"
+        wb.editor.point.select.value = "B"
+        b = load_mechanism("four_bar").joint("B").at
+        assert (wb.editor.x.title, wb.editor.x.value) == ("x (mm)", format(1000 * b[0], ".12g"))
+        assert wb.view.readout.text.endswith(" rad</span>") and "rad" in wb.view.status.text
+        table = html.unescape(re.sub(r"<[^>]+>", " ", wb.check.table.text))
+        assert "O2 (rad)" in table and "flagged below 0.6981 rad" in table
+        wb.editor.typed("B", ("120", "80"))
+        assert wb.mechanism.joint("B").at == (0.12, 0.08)
+        wb.editor.typed("B", ("12o", "80"))
+        assert "position of B: expected two finite numbers (x, y in mm), got ('12o', '80')" in html.unescape(
+            wb.message.text)
+        wb.units.lengths.select.value = "km"                # forged: the menu refuses it
+        assert wb.units.units.length == "mm" and "length unit menu: expected one of its entries" in wb.message.text
+    finally:
+        wb.close()
