@@ -517,3 +517,54 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
     finally:
         page.locator(".ml-length-unit select").select_option("m")
         page.locator(".ml-angle-unit select").select_option("deg")
+
+
+def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(page, browser, server):
+    """After an edit the address holds ``?design=CODE`` beside the unchanged token; that
+    address in a fresh context (no cookie) shows the edited design; a damaged code is the
+    one-line message over the default mechanism, and the page keeps working."""
+    from urllib.parse import parse_qs, urlsplit
+    url = server[0]
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    page.wait_for_function("() => location.search.includes('mechanism=four_bar')", timeout=60000)
+    page.locator(".ml-edit-point select").select_option("B")
+    sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(
+        repr(float(load_mechanism("four_bar").joint("B").at[0])), timeout=60000)
+    for css, v in ((".ml-edit-x input", "0.12"), (".ml-edit-y input", "0.08")):
+        page.locator(css).fill(v)
+        page.locator(css).press("Enter")
+    page.locator(".ml-edit-apply button").click()
+    page.wait_for_function("() => location.search.includes('design=')", timeout=60000)
+    shared = page.url
+    token = parse_qs(urlsplit(url).query).get("token")
+    assert parse_qs(urlsplit(shared).query).get("token") == token        # the token as it was
+    assert "mechanism=" not in shared
+    ctx = browser.new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        fresh = ctx.new_page()
+        fresh.goto(shared)
+        fresh.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+            return r && r.getAttribute('data-mechanism') == 'shared: four_bar' && r.getAttribute('data-positions'); }}""",
+                                timeout=60000)
+        r = _readout(fresh)
+        m = load_mechanism("four_bar")
+        st = solve(_edited_four_bar(), [math.radians(r["input"])])
+        np.testing.assert_allclose(r["positions"]["B"], st.positions[0][list(m.joint_names).index("B")], atol=1e-12)
+        assert r["positions"]["B"] == pytest.approx([0.12, 0.08], abs=1e-15)
+        code = parse_qs(urlsplit(shared).query)["design"][0]
+        fresh.goto(shared.replace(code, code[:-20]))
+        fresh.wait_for_selector("#ml-message[data-error]", state="attached", timeout=60000)
+        text = fresh.locator("#ml-message").text_content()
+        assert text.startswith("design (the address's ?design=): expected a design code") and "cut-off" in text
+        _wait_frames(fresh)
+        _pick(fresh, "crank_slider")                                       # the page goes on
+        fresh.wait_for_function("() => location.search.includes('mechanism=crank_slider')", timeout=60000)
+        assert parse_qs(urlsplit(fresh.url).query).get("token") == token
+    finally:
+        ctx.close()
+
+
+def _edited_four_bar():
+    from multiloop.web.editing import moved
+    return moved(load_mechanism("four_bar"), "B", (0.12, 0.08))

@@ -148,11 +148,13 @@ class Workbench:
     """Every widget and result of one browser session."""
 
     def __init__(self, files: dict | None = None, atlases=(), threshold: float = 40.0, later: bool = False,
-                 requested: str | None = None):
+                 requested: str | None = None, shared: str | None = None):
         """``later``: the check panel joins the page at :meth:`show_rest` (the first
         render then carries the drawing and its player alone); ``requested``: the menu
         entry the page's address names (``?mechanism=NAME``), opened first (anything but
-        an entry is the one-line message, over the default mechanism)."""
+        an entry is the one-line message, over the default mechanism); ``shared``: the
+        address's design code (``?design=CODE``, :mod:`.share`), opened before all (a bad
+        code is the one-line message)."""
         from bokeh.models import Column, Row, TabPanel, Tabs
 
         from .check_view import CheckView
@@ -161,6 +163,7 @@ class Workbench:
         from .glue import Upload, div
         from .mechanism_view import MechanismView
         from .menus import Menu
+        from .share import Address, shared_design
         from .units import UnitsBar
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
@@ -183,6 +186,7 @@ class Workbench:
         self.upload = self.opener.target
         self.exports = ExportBar(lambda: (self.mechanism, self.check_doc, self.threshold), self.say)
         self.units = UnitsBar(self.say, self.use_units)
+        self.address = Address()
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
         self.menu.on_choice(self.open_name)
@@ -199,9 +203,15 @@ class Workbench:
                      self.exports.menu.select, self.exports.download.button, *self.units.widgets)
         self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
         self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
-        self.panel = Column(header, self.message, self.tabs, sizing_mode="stretch_width")
-        self.open_name(first)
-        if requested is not None and requested != first:
+        self.panel = Column(header, self.message, self.tabs, self.address.model, sizing_mode="stretch_width")
+        design, fault = shared_design(shared)
+        if design is not None:
+            self.open_design(design, f"shared: {design.name or 'design'}")
+        if self.mechanism is None:
+            self.open_name(first)
+        if fault is not None:
+            self.say(fault)
+        elif requested is not None and requested != first:
             from .menus import refusal
             self.say(refusal("mechanism (the address's ?mechanism=)", requested, MENU_HINT))
 
@@ -312,6 +322,7 @@ class Workbench:
         if key is None:
             self.designs[self.mechanism_name] = m
         self._follow()
+        self.address.follow(m, key)
         self.scene = scene
         self.structure.text = structure
         ready = _SWEEPS.get(key) if key is not None else None
@@ -436,7 +447,9 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
-        wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc))
+        from .share import requested_design
+        wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc),
+                       shared=requested_design(doc))
         doc.add_periodic_callback(wb.poll, 150)
 
         def rest(_event):               # a second message, after the drawing's
