@@ -568,3 +568,30 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
 def _edited_four_bar():
     from multiloop.web.editing import moved
     return moved(load_mechanism("four_bar"), "B", (0.12, 0.08))
+
+
+def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
+    """Atlas tab: chain #1's first mechanism opens with the library's generic dimensions;
+    the drawing is the library's solve of the design in the page's address, and the
+    same card then becomes the synthesis's start (its traced path in the target figure)."""
+    from urllib.parse import parse_qs, urlsplit
+
+    from multiloop.web.share import design_from_code
+    page.get_by_text("Atlas", exact=True).click()
+    page.wait_for_selector("#ml-atlas-count", state="attached", timeout=60000)
+    sync_api.expect(page.locator(".ml-atlas-mechanism select")).to_have_value(re.compile(r"^1\. "), timeout=60000)
+    page.locator(".ml-atlas-open button").click()
+    page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+        return r && r.getAttribute('data-mechanism').startsWith('atlas: #1 1.') && r.getAttribute('data-positions')
+          && location.search.includes('design='); }}""", timeout=120000)
+    m = design_from_code(parse_qs(urlsplit(page.url).query)["design"][0])
+    r = _readout(page)
+    st = solve(m, [math.radians(r["input"])])
+    want = np.concatenate([st.positions[0], st.point_positions[0]])
+    names = list(m.joint_names) + [p.name for p in m.points]
+    np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-12)
+    page.get_by_text("Atlas", exact=True).click()
+    page.locator(".ml-atlas-start button").click()
+    page.wait_for_function(TARGET_READY_JS, timeout=120000)
+    sync_api.expect(page.locator(".ml-start select")).to_have_value("(open mechanism)", timeout=60000)
+    page.get_by_text("Mechanism", exact=True).first.click()

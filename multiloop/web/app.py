@@ -223,7 +223,7 @@ class Workbench:
 
     def _atlas_view(self, atlases):
         from .atlas_view import AtlasView
-        self.atlas = AtlasView(atlases, self.say)
+        self.atlas = AtlasView(atlases, self.say, self.open_candidate, self.start_synthesis)
         return self.atlas.panel
 
     def _show_tab(self, i: int) -> None:
@@ -293,6 +293,14 @@ class Workbench:
         if self.mechanism is m:
             self.tabs.active = 0
 
+    def start_synthesis(self, m, name: str) -> None:
+        """Open ``m`` and make it the synthesis's start (the Synthesis tab shown)."""
+        self.open_design(m, name)
+        if self.mechanism is m:
+            self._show_tab(2)
+            self.synthesis.choose_start("(open mechanism)")
+            self.tabs.active = 2
+
     def _show_edit(self, m) -> None:
         """Show a design the editor made (an edit, an undo or a redo)."""
         self.open_design(m, f"edited: {self.edit_base}", edited=True)
@@ -346,6 +354,8 @@ class Workbench:
         """The session's periodic callback: results of the background jobs."""
         if self.synthesis is not None:
             self.synthesis.poll()
+        if self.atlas is not None:
+            self.atlas.opener.poll()
         job = self.job
         if job is None:
             return

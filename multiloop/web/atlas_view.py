@@ -1,6 +1,7 @@
 """The atlas browser: the chains of a stored atlas (SQLite, opened read-only) as the
 gallery's cards (:func:`multiloop.catalogue.html.chain_card`), filtered by the query
-language of ``multiloop atlas --query``."""
+language of ``multiloop atlas --query``; a card shown opens as a design with generic
+dimensions, or as the start of a synthesis (:mod:`.atlas_design`)."""
 from __future__ import annotations
 
 from bokeh.models import Button, Column, NumericInput, Row, TextInput
@@ -20,8 +21,10 @@ __all__ = ["AtlasView"]
 class AtlasView:
     """Browse the atlases given to ``multiloop serve --atlas`` (one connection per session)."""
 
-    def __init__(self, paths: list[str], say):
+    def __init__(self, paths: list[str], say, open_design=None, start=None):
+        from .atlas_design import AtlasOpener
         self.say = say
+        self.opener = AtlasOpener(say, open_design or (lambda m, name: None), start or (lambda m, name: None))
         self.atlases = {p: Atlas(p, readonly=True) for p in paths}
         paths = list(self.atlases)
         self.files = Menu("atlas menu", say, paths, title="atlas", width=260)
@@ -35,7 +38,8 @@ class AtlasView:
         self.button.on_click(lambda: self.show())
         self.pairs.on_choice(lambda pair: self.show())
         self.query.on_change("value", lambda attr, old, new: self.show())
-        self.panel = Column(Row(self.file, self.pair, self.query, self.limit, self.button), self.cards)
+        self.panel = Column(Row(self.file, self.pair, self.query, self.limit, self.button), self.opener.panel,
+                            self.cards)
         self._pairs()
 
     def _pairs(self) -> None:
@@ -56,10 +60,12 @@ class AtlasView:
         try:
             opts = SynthesisOptions(n, F)
             total = a.count(opts, q)
-            cards = [chain_card(i, r) for i, r in enumerate(a.chains(opts, q, limit=int(self.limit.value or 60)), 1)]
+            records = list(a.chains(opts, q, limit=int(self.limit.value or 60)))
+            cards = [chain_card(i, r) for i, r in enumerate(records, 1)]
         except LinkageError as exc:
             self.say(str(exc))
             return
+        self.opener.set_chains(records)
         # the gallery's style and cards come from catalogue.html, which escapes what it shows
         self.cards.text = html("<style>{css}</style><p id='ml-atlas-count'>{total} chains with n = {n}, F = {F}"
                                "{matching}; {shown} shown</p><div class='grid'>{cards}</div>",
@@ -67,5 +73,6 @@ class AtlasView:
                                shown=len(cards), cards=Html("".join(cards)))
 
     def close(self) -> None:
+        self.opener.cancel()
         for a in self.atlases.values():
             a.close()

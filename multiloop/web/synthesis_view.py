@@ -228,6 +228,11 @@ class SynthesisView:
         f.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2)
         return f
 
+    def choose_start(self, name: str) -> None:
+        """The server's choice of the start ``name`` (an entry of the start menu)."""
+        self.menus["start"].set(value=name)
+        self._start_changed()
+
     def _start_changed(self) -> None:
         none = self.menus["start"].value == NO_START
         self.atlas_box.visible = none
