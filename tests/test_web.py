@@ -595,3 +595,71 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
     page.wait_for_function(TARGET_READY_JS, timeout=120000)
     sync_api.expect(page.locator(".ml-start select")).to_have_value("(open mechanism)", timeout=60000)
     page.get_by_text("Mechanism", exact=True).first.click()
+
+
+#: the screen position of target point K and its data position (as HANDLE_JS)
+TARGET_POINT_JS = """([k]) => { const doc = Bokeh.documents[0];
+  const src = doc.get_model_by_name('ml-target-points'), fig = doc.get_model_by_name('ml-target');
+  const view = Bokeh.index.find_one(fig);
+  if (view == null || src.data.x.length <= k) { return null; }
+  view.el.scrollIntoView({block: 'center'});
+  const r = view.canvas_view.el.getBoundingClientRect();
+  return [r.left + view.frame.x_scale.compute(src.data.x[k]), r.top + view.frame.y_scale.compute(src.data.y[k]),
+          src.data.x[k], src.data.y[k], src.data.x.length]; }"""
+
+
+def _stroke_in(page, box, t0, t1):
+    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
+    page.mouse.move(cx + 1.4 * r * math.cos(t0), cy + r * math.sin(t0))
+    page.mouse.down()
+    for t in np.linspace(t0, t1, 20):
+        page.mouse.move(cx + 1.4 * r * math.cos(t), cy + r * math.sin(t))
+    page.mouse.up()
+
+
+def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
+    """Draw two strokes, undo one, make the target closed (the library reads it as
+    closed), drag a target point with the mouse and undo the drag, then run with a
+    prescribed timing: one candidate."""
+    from multiloop.catalogue.curves import is_closed
+    page.get_by_text("Synthesis", exact=True).click()
+    page.locator(".ml-start select").select_option("four_bar", timeout=120000)
+    page.wait_for_function(TARGET_READY_JS, timeout=120000)
+    n0 = page.evaluate(STROKES_JS)
+    canvas = page.locator(".bk-Canvas").last
+    sync_api.expect(canvas).to_be_visible(timeout=120000)
+    _stroke_in(page, canvas.bounding_box(), 0.0, 2.0)
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=60000)
+    _stroke_in(page, canvas.bounding_box(), 2.2, 4.5)
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=60000)
+    page.locator(".ml-target-undo button").click()
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=60000)
+    page.locator(".ml-target-shape select").select_option("closed")
+    points = "() => { const d = Bokeh.documents[0].get_model_by_name('ml-target-points').data; return [d.x, d.y]; }"
+    page.wait_for_function("""([x0]) => Bokeh.documents[0].get_model_by_name('ml-target-points').data.x[1] != x0""",
+                           arg=[page.evaluate(points)[0][1]], timeout=60000)
+    x, y = page.evaluate(points)
+    assert len(x) == 24 and is_closed(np.column_stack([x, y]))
+    page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-target-drag').active = true; }")
+    sx, sy, x0, y0, _ = page.evaluate(TARGET_POINT_JS, [5])
+    page.mouse.move(sx, sy)
+    page.mouse.down()
+    for k in range(1, 7):
+        page.mouse.move(sx + 4 * k, sy)
+    page.mouse.up()
+    page.wait_for_function(f"() => ({points})()[0][5] > {x0!r}", timeout=60000)
+    page.locator(".ml-target-undo button").click()                  # the server undoes the drag
+    page.wait_for_function(f"() => ({points})()[0][5] == {x0!r}", timeout=60000)
+    page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
+    page.locator(".ml-timing select").select_option("prescribed")
+    sync_api.expect(page.locator(".ml-timing-first input")).to_be_visible(timeout=60000)
+    for css, v in ((".ml-budget input", "2"), (".ml-seed input", "7")):       # seed 7: this run's row
+        page.locator(css).fill(v)
+        page.locator(css).press("Enter")
+    page.get_by_role("button", name="Run").click()
+    page.wait_for_function(f"""() => {{ const rows = ({DEEP_JS})('#ml-candidates tr[data-candidate]');
+        const s = ({DEEP_JS})('#ml-synthesis-status')[0];
+        return rows.length == 1 && rows[0].children[5].textContent == '7' && s.getAttribute('data-state') == 'done'; }}""",
+                           timeout=300000)
+    page.locator(".ml-timing select").select_option("free")
+    page.get_by_text("Mechanism", exact=True).first.click()

@@ -49,7 +49,7 @@ def test_atlas_card_opens_in_the_mechanism_view_and_as_a_synthesis_start(atlas_d
     from multiloop.web.app import Workbench
     wb = Workbench({}, [str(atlas_db)], 40.0)
     try:
-        wb._show_tab(3)
+        wb.pages.build(3)
         opener = wb.atlas.opener
         assert opener.chains.choices and opener.mechanisms.choices
         opener.make(wb.open_candidate)

@@ -155,15 +155,16 @@ class Workbench:
         an entry is the one-line message, over the default mechanism); ``shared``: the
         address's design code (``?design=CODE``, :mod:`.share`), opened before all (a bad
         code is the one-line message)."""
-        from bokeh.models import Column, Row, TabPanel, Tabs
+        from bokeh.models import Column, Row
 
         from .check_view import CheckView
         from .editing import Editor
         from .exports import ExportBar
         from .glue import Upload, div
+        from .later_tabs import LaterTabs
         from .mechanism_view import MechanismView
         from .menus import Menu
-        from .share import Address, shared_design
+        from .share import Address, open_first
         from .units import UnitsBar
 
         self.files = dict(files or {})          # name -> Mechanism (read at start-up)
@@ -185,35 +186,22 @@ class Workbench:
                              self.say, "ml-open")
         self.upload = self.opener.target
         self.exports = ExportBar(lambda: (self.mechanism, self.check_doc, self.threshold), self.say)
-        self.units = UnitsBar(self.say, self.use_units)
+        self.units = UnitsBar(self.say, (self.editor, self.view, self.check))
+        self.check.mark = self.view.mark
         self.address = Address()
         self.structure = div("")
         self.designs: dict = {}                 # menu entry -> an uploaded or synthesised design
         self.menu.on_choice(self.open_name)
         self.synthesis, self.atlas = None, None
-        # the tabs behind the first are built when first shown: the first page then
-        # carries (and the browser renders) the mechanism tab alone
-        self._later = {2: lambda: self._synthesis_view(choices, atlases)}
         self.mechanism_tab = Row(Column(self.editor.panel, self.view.panel), *([] if later else [self.check.panel]))
-        tabs = [("Mechanism", self.mechanism_tab), ("Structure", self.structure), ("Synthesis", div("…"))]
-        if atlases:
-            self._later[3] = lambda: self._atlas_view(list(atlases))
-            tabs.append(("Atlas", div("…")))
+        self.pages = LaterTabs([("Mechanism", self.mechanism_tab), ("Structure", self.structure),
+                                ("Synthesis", lambda: self._synthesis_view(choices, atlases))]
+                               + ([("Atlas", lambda: self._atlas_view(list(atlases)))] if atlases else []))
+        self.tabs = self.pages.tabs
         header = Row(div(html("<b>multiloop workbench</b>"), width=200), self.pick, self.opener.button, self.upload,
                      self.exports.menu.select, self.exports.download.button, *self.units.widgets)
-        self.tabs = Tabs(tabs=[TabPanel(title=t, child=c) for t, c in tabs])
-        self.tabs.on_change("active", lambda attr, old, new: self._show_tab(new))
         self.panel = Column(header, self.message, self.tabs, self.address.model, sizing_mode="stretch_width")
-        design, fault = shared_design(shared)
-        if design is not None:
-            self.open_design(design, f"shared: {design.name or 'design'}")
-        if self.mechanism is None:
-            self.open_name(first)
-        if fault is not None:
-            self.say(fault)
-        elif requested is not None and requested != first:
-            from .menus import refusal
-            self.say(refusal("mechanism (the address's ?mechanism=)", requested, MENU_HINT))
+        open_first(self, first, requested, shared, MENU_HINT)
 
     def _synthesis_view(self, choices, atlases):
         from .synthesis_view import SynthesisView
@@ -225,15 +213,6 @@ class Workbench:
         from .atlas_view import AtlasView
         self.atlas = AtlasView(atlases, self.say, self.open_candidate, self.start_synthesis)
         return self.atlas.panel
-
-    def _show_tab(self, i: int) -> None:
-        """Build tab ``i`` the first time it is shown."""
-        build = self._later.pop(i, None)
-        if build is not None:               # a new panel: BokehJS 3.9 redraws a tab on a new list
-            from bokeh.models import TabPanel
-            tabs = list(self.tabs.tabs)
-            tabs[i] = TabPanel(title=tabs[i].title, child=build())
-            self.tabs.tabs = tabs
 
     # ------------------------------------------------------------------ messages
     def say(self, text: str) -> None:
@@ -297,7 +276,7 @@ class Workbench:
         """Open ``m`` and make it the synthesis's start (the Synthesis tab shown)."""
         self.open_design(m, name)
         if self.mechanism is m:
-            self._show_tab(2)
+            self.pages.build(2)
             self.synthesis.choose_start("(open mechanism)")
             self.tabs.active = 2
 
@@ -373,18 +352,7 @@ class Workbench:
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
             self.check_doc = job.result
-            events = self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
-            if self.view.sweeps:
-                self.view.mark(events)
-
-    def use_units(self, units) -> None:
-        """Show (and read typed values) in ``units``: the edit row, the player's readout,
-        the check's events and plot (files and the check's JSON keep their own units)."""
-        self.editor.use_units(units)
-        self.view.use_units(units)
-        self.check.units = units
-        if self.check_doc is not None and self.view.sweeps:
-            self.view.mark(self.check.show(self.check_doc, self.view.current, self.threshold))
+            self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
 
     def move_to(self, x) -> None:
         if x is not None and self.view.sweeps and np.isfinite(x):

@@ -55,6 +55,8 @@ class CheckView:
 
     def __init__(self, move_to, cancel=None):
         self.move_to = move_to
+        self.mark = None               # mark(events) on the drawing, once a report is shown
+        self.shown: tuple | None = None    # (doc, sweep, threshold) of the report shown
         self.units = Units()
         self.scale = 1.0               # display units of the plot's input axis per the sweep's
         self.curves = ColumnDataSource(dict(xs=[], ys=[], name=[], colour=[]))
@@ -80,16 +82,24 @@ class CheckView:
 
     def busy(self, text: str, running: bool = False) -> None:
         """A status line instead of a report; ``running``: a job computes it (Cancel enabled)."""
+        self.shown = None
         self.stop.disabled = not running
         self.verdict.text = html('<p id="ml-check-status">{text}</p>', text=text)
         self.json.text = self.table.text = html("")
         self.events.data = dict(x=[], label=[])
         self.curves.data = dict(xs=[], ys=[], name=[], colour=[])
 
+    def use_units(self, units: Units) -> None:
+        """Show the report shown (if any) again in ``units``."""
+        self.units = units
+        if self.shown is not None:
+            self.show(*self.shown)
+
     def show(self, doc: dict | None, sw: Sweep | None, threshold: float) -> list[tuple[float, str]]:
         """Fill the panel from a check JSON document (None: nothing to check); returns the
-        events of the current driver on its axis."""
+        events of the current driver on its axis (also given to :attr:`mark`)."""
         self.doc = doc
+        self.shown = (doc, sw, threshold) if sw is not None else None
         self.stop.disabled = True
         if doc is None:
             self.busy("no check: the mechanism has no drivers")
@@ -113,6 +123,8 @@ class CheckView:
                                "<th>event</th></tr>{rows}</table><p>flagged below {lo:.4g} {a} (or above {hi:.4g} {a})"
                                "</p>", joint=sw.joint, unit=u.label(sw.unit), rows=rows, a=u.angle,
                                lo=u.shown(threshold, "deg"), hi=u.shown(180 - threshold, "deg"))
+        if self.mark is not None:
+            self.mark(ev)
         return ev
 
     def _plot(self, sw: Sweep, ev) -> None:

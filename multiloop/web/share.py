@@ -31,8 +31,8 @@ import zlib
 
 from multiloop.topo.errors import InputError, LinkageError, explain
 
-__all__ = ["design_code", "design_from_code", "requested_design", "shared_design", "Address", "ADDRESS_JS",
-           "MAX_CODE", "MAX_TEXT"]
+__all__ = ["design_code", "design_from_code", "requested_design", "shared_design", "open_first", "Address",
+           "ADDRESS_JS", "MAX_CODE", "MAX_TEXT"]
 
 #: longest code put in (and read from) the address, in characters (browsers and servers
 #: take addresses of 8 KiB and more)
@@ -127,6 +127,23 @@ def shared_design(code: str | None) -> tuple:
         return design_from_code(code), None
     except LinkageError as exc:
         return None, str(exc)
+
+
+def open_first(page, first: str, requested: str | None, shared: str | None, hint: str) -> None:
+    """The first design of a ``page`` (a :class:`~.app.Workbench`): the address's design
+    code ``shared`` when it reads, else the menu entry ``first``; then the one-line
+    message for a bad code, or for a ``requested`` name (``?mechanism=``) that is not
+    ``first`` (not an entry of the menu; ``hint``: the menu's hint)."""
+    design, fault = shared_design(shared)
+    if design is not None:
+        page.open_design(design, f"shared: {design.name or 'design'}")
+    if page.mechanism is None:
+        page.open_name(first)
+    if fault is not None:
+        page.say(fault)
+    elif requested is not None and requested != first:
+        from .menus import refusal
+        page.say(refusal("mechanism (the address's ?mechanism=)", requested, hint))
 
 
 class Address:

@@ -13,8 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, FreehandDrawTool,
-                          NumericInput, Row, TextInput)
+from bokeh.models import Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, NumericInput, Row, TextInput
 from bokeh.plotting import figure
 
 from multiloop.catalogue.dimensional.optimise import METHODS
@@ -24,13 +23,12 @@ from .glue import Download, Upload, div, progress_html
 from .jobs import Job
 from .markup import Html, html, join
 from .menus import Menu, refusal
+from .target_drawing import TargetDrawing
 
 #: what a target upload is, in the hint of its size refusal
 TARGET_UPLOAD = "upload a target table of x, y rows (a few hundred points are plenty)"
 
-__all__ = ["SynthesisView", "AtlasDesign", "resample", "run_candidates", "run_atlas", "NO_START"]
-
-TARGET_POINTS = 24      # points of a freehand target after resampling
+__all__ = ["SynthesisView", "AtlasDesign", "run_candidates", "run_atlas", "NO_START"]
 #: the start menu's entry for synthesis without a start
 NO_START = "none: the atlas chooses the topology"
 
@@ -58,20 +56,6 @@ def traced(m) -> np.ndarray:
     P = np.array(sw.nodes[:, len(m.joints):len(m.joints) + len(m.points)], float).transpose(1, 0, 2)
     P[:, ~np.asarray(sw.ok, bool)] = np.nan
     return P
-
-
-def resample(xs, ys, n: int = TARGET_POINTS) -> np.ndarray:
-    """``n`` points equally spaced along a drawn stroke (arc length), (n, 2)."""
-    P = np.column_stack([np.asarray(xs, float), np.asarray(ys, float)])
-    P = P[np.all(np.isfinite(P), axis=1)]
-    if len(P) < 2:
-        raise InputError(explain("drawn target", expected="a stroke of at least 2 points", got=f"{len(P)}",
-                                 hint="drag the mouse over the plot with the freehand tool"))
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(P, axis=0).T))])
-    if s[-1] <= 0:
-        raise InputError(explain("drawn target", expected="a stroke of some length", got="a dot"))
-    t = np.linspace(0.0, s[-1], n)
-    return np.column_stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])])
 
 
 def run_candidates(job: Job, start, target: np.ndarray, n: int, options: dict) -> list:
@@ -144,7 +128,7 @@ def _widgets() -> dict:
     def number(title, value, mode="float", width=100, **kw):
         return NumericInput(title=title, value=value, mode=mode, width=width, **kw)
     return dict(
-        seed=number("seed", 0, "int", 90),
+        seed=number("seed", 0, "int", 90, css_classes=["ml-seed"]),
         budget=number("budget (s)", 4.0, low=0.1, css_classes=["ml-budget"]),
         tol=number("tol", 1e-6),
         candidates=number("candidates", 1, "int", low=1, high=8),
@@ -191,11 +175,11 @@ class SynthesisView:
         self.target = None
         self.job: Job | None = None
         self.results: list = []
-        self.strokes = ColumnDataSource(dict(xs=[], ys=[]), name="ml-strokes")
         self.uploaded = ColumnDataSource(dict(x=[], y=[]))
         self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
+        self.drawing = TargetDrawing(self.fig, say)
         self.menus["start"].on_choice(lambda name: self._start_changed())
         self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
         w["run"].on_click(lambda: self.run())
@@ -214,16 +198,13 @@ class SynthesisView:
                    Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
                    Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
                    Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
+            Column(*self.drawing.widgets, width=130),
             Column(self.fig, self.table, Row(w["pick"], w["open"]), Row(*(d.button for d in self.downloads))))
 
     def _figure(self):
         f = figure(width=560, height=440, match_aspect=True, tools="pan,wheel_zoom,reset", name="ml-target",
                    toolbar_location="above", title="draw the target path (freehand tool)")
         f.multi_line("xs", "ys", source=self.start_src, line_color="#bbbbbb", line_dash="dotted")
-        r = f.multi_line("xs", "ys", source=self.strokes, line_color="black", line_width=3)
-        tool = FreehandDrawTool(renderers=[r], num_objects=1)
-        f.add_tools(tool)
-        f.toolbar.active_drag = tool
         f.scatter("x", "y", source=self.uploaded, size=7, color="black")
         f.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2)
         return f
@@ -263,18 +244,18 @@ class SynthesisView:
             return
         self.target = a
         self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
-        self.strokes.data = dict(xs=[], ys=[])
+        self.drawing.clear()
         self.status.text = status_html(f"target: {name}, {len(a)} rows")
 
     def _clear(self) -> None:
         self.target = None
         self.uploaded.data = dict(x=[], y=[])
-        self.strokes.data = dict(xs=[], ys=[])
+        self.drawing.clear()
 
     def _target(self) -> np.ndarray:
-        xs, ys = self.strokes.data.get("xs", []), self.strokes.data.get("ys", [])
-        if len(xs):
-            return resample(xs[-1], ys[-1])
+        drawn = self.drawing.target()
+        if drawn is not None:
+            return drawn
         if self.target is not None:
             return self.target
         raise InputError(explain("target path", expected="a drawn stroke or an uploaded CSV", got="none"))

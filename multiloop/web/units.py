@@ -79,20 +79,22 @@ class Units:
 
 
 class UnitsBar:
-    """The header's two unit menus; ``changed(units)`` is called with each new choice."""
+    """The header's two unit menus; each new choice goes to ``views`` (their
+    ``use_units(units)``)."""
 
-    def __init__(self, say, changed):
+    def __init__(self, say, views):
         from .menus import Menu
         self.units = Units()
         self.lengths = Menu("length unit menu", say, list(LENGTHS), "m", title="length", width=70,
                             css_classes=["ml-length-unit"])
         self.angles = Menu("angle unit menu", say, list(ANGLES), "deg", title="angle", width=70,
                            css_classes=["ml-angle-unit"])
-        self.changed = changed
+        self.views = tuple(views)
         self.lengths.on_choice(lambda v: self._set())
         self.angles.on_choice(lambda v: self._set())
         self.widgets = (self.lengths.select, self.angles.select)
 
     def _set(self) -> None:
         self.units = Units(self.lengths.value, self.angles.value)
-        self.changed(self.units)
+        for v in self.views:
+            v.use_units(self.units)
