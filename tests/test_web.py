@@ -663,3 +663,27 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
                            timeout=300000)
     page.locator(".ml-timing select").select_option("free")
     page.get_by_text("Mechanism", exact=True).first.click()
+
+
+def test_structure_add_a_dyad_then_remove_the_last_group(page):
+    """Add a dyad at four_bar's tracer point P: the drawing is the library's solve of
+    ``with_dyad(four_bar, P)``; Remove last group gives four_bar's joints back."""
+    from multiloop.web.structure_edits import with_dyad
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    page.locator(".ml-dyad-at select").select_option("P")
+    page.locator(".ml-add-dyad button").click()
+    has = """([name, want]) => { const r = (%s)('#ml-positions')[0];
+        return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions')
+          && (name in JSON.parse(r.getAttribute('data-positions'))) == want; }""" % DEEP_JS
+    page.wait_for_function(has, arg=["dyad1_M", True], timeout=60000)
+    m = with_dyad(load_mechanism("four_bar"), "P")
+    r = _readout(page)
+    st = solve(m, [math.radians(r["input"])])
+    names = list(m.joint_names) + [p.name for p in m.points]
+    want = np.concatenate([st.positions[0], st.point_positions[0]])
+    np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-9)
+    page.locator(".ml-remove-group button").click()
+    page.wait_for_function(has, arg=["dyad1_M", False], timeout=60000)
+    assert set(_readout(page)["positions"]) == set(load_mechanism("four_bar").joint_names) | {"P"}

@@ -175,7 +175,7 @@ class Workbench:
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
-        self.editor = Editor(self.say, self._show_edit)
+        self.editor = Editor(self.say, self._show_edit, self.view.sweeps_of)
         self.edit_base = ""                      # the name of the design the edits start from
         choices = list(self.files) + catalogue_names()
         first = requested if requested in choices else _first_choice(self.files)

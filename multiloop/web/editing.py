@@ -1,6 +1,6 @@
 """Editing the open design by hand: a joint's or a tracer point's reference coordinates
-typed in, and undo / redo over every edit (buttons, and Ctrl-Z / Ctrl-Shift-Z in the
-page).
+typed in, a dyad added or the last group removed (:mod:`.structure_edits`), and undo /
+redo over every edit (buttons, and Ctrl-Z / Ctrl-Shift-Z in the page).
 
 An edit makes a new :class:`~multiloop.topo.model.Mechanism` (frozen: nothing is
 changed in place) with the point moved in the reference configuration; the link
@@ -92,12 +92,14 @@ document.addEventListener('keydown', (e) => {
 class Editor:
     """The edit row of the mechanism tab: a point menu, x and y (in the page's length
     unit, :attr:`units`), Apply, Undo, Redo.  ``show(m)`` is called with each design the
-    edits make (the page opens it)."""
+    edits make (the page opens it); ``sweeps_of(m)``: the page's sweeps of design ``m``
+    when it has them (:class:`~.structure_edits.StructureBar`)."""
 
-    def __init__(self, say, show):
-        from bokeh.models import Button, CustomJS, Row, TextInput
+    def __init__(self, say, show, sweeps_of=None):
+        from bokeh.models import Button, Column, CustomJS, Row, TextInput
 
         from .menus import Menu
+        from .structure_edits import StructureBar
         from .units import Units
         self.say, self.show = say, show
         self.units = Units()
@@ -115,7 +117,10 @@ class Editor:
         self.undo.on_change("tags", lambda attr, old, new: self._key(new))
         #: the page's key listener (added by the page on DocumentReady)
         self.keys = CustomJS(args=dict(undo=self.undo), code=UNDO_KEYS_JS)
-        self.panel = Row(self.point.select, self.x, self.y, self.apply, self.undo, self.redo)
+        #: the structure edits (a dyad added, the last group removed), edits of this history
+        self.structure = StructureBar(say, self.push, sweeps_of)
+        self.panel = Column(Row(self.point.select, self.x, self.y, self.apply, self.undo, self.redo),
+                            self.structure.panel)
 
     def reset(self, m) -> None:
         """A design opened (not edited): its history starts with it."""
@@ -133,6 +138,10 @@ class Editor:
         except InputError as exc:
             self.say(str(exc))
             return
+        self.push(new)
+
+    def push(self, new) -> None:
+        """``new`` (made from the current design) is the next edit: shown, undoable."""
         self.history = self.history.edited(new)
         self._refresh()
         self.show(new)
@@ -185,6 +194,7 @@ class Editor:
         names = [] if m is None else list(m.joint_names) + [p.name for p in m.points]
         self.point.set(names, self.point.value if self.point.value in names else (names[0] if names else ""))
         self.undo.disabled, self.redo.disabled = not self.history.can_undo, not self.history.can_redo
+        self.structure.refresh(m)
         self._fill()
 
     def _fill(self) -> None:

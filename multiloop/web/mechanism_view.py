@@ -258,6 +258,10 @@ class MechanismView:
         else:
             self._draw_nodes(scene.reference)
 
+    def sweeps_of(self, m) -> list[Sweep] | None:
+        """The sweeps shown when they are design ``m``'s motion, else None."""
+        return self.sweeps if self.sweeps and self.scene is not None and self.scene.mechanism is m else None
+
     def use_driver(self, k: int) -> None:
         """Make driver ``k``'s sweep the player's frames and draw its reference frame."""
         if not self.sweeps:
