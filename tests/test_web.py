@@ -501,6 +501,9 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
         np.testing.assert_allclose(shown, np.radians(want), rtol=1e-12)
         r = _readout(page)
         assert page.locator("#ml-positions").text_content() == f"O2 = {math.radians(r['input']):.3f} rad"
+        axis = page.evaluate("""() => { const f = Bokeh.documents[0].get_model_by_name('ml-mechanism');
+            const a = f.below[0]; return [a.axis_label, a.formatter.args.scale]; }""")
+        assert axis == ["x (mm)", 1000.0]
         page.locator(".ml-edit-point select").select_option("B")
         b = load_mechanism("four_bar").joint("B").at
         sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(format(1000 * b[0], ".12g"), timeout=60000)

@@ -54,6 +54,7 @@ def test_units_reach_the_edit_row_readout_and_check_table():
         b = load_mechanism("four_bar").joint("B").at
         assert (wb.editor.x.title, wb.editor.x.value) == ("x (mm)", format(1000 * b[0], ".12g"))
         assert wb.view.readout.text.endswith(" rad</span>") and "rad" in wb.view.status.text
+        assert wb.view.ticks.args == {"scale": 1000.0} and wb.view.fig.xaxis[0].axis_label == "x (mm)"
         table = html.unescape(re.sub(r"<[^>]+>", " ", wb.check.table.text))
         assert "O2 (rad)" in table and "flagged below 0.6981 rad" in table
         wb.editor.typed("B", ("120", "80"))

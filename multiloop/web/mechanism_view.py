@@ -18,7 +18,8 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from bokeh.models import Column, ColumnDataSource, CustomJS, Div, HoverTool, PointDrawTool, Range1d, Row
+from bokeh.models import (Column, ColumnDataSource, CustomJS, CustomJSTickFormatter, Div, HoverTool, PointDrawTool,
+                          Range1d, Row)
 from bokeh.plotting import figure
 
 from .glue import Player, div
@@ -27,7 +28,10 @@ from .menus import Menu
 from .scene import Scene, Sweep
 from .units import Units
 
-__all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "readout_html"]
+__all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "TICKS_JS", "readout_html"]
+
+#: the drawing's tick labels in the display length unit (``scale`` per metre)
+TICKS_JS = "return String(Number((tick * scale).toPrecision(6)));"
 
 #: a drag in the drawing (the point-draw tool active): at its start the player goes to
 #: the reference frame (``handles.tags[0]``, where the handles are); then the joints
@@ -181,6 +185,9 @@ class MechanismView:
                              description="Drag a joint or tracer point (moves it in the reference)")
         f.add_tools(drag)
         f.toolbar.active_multi = drag
+        self.ticks = CustomJSTickFormatter(args=dict(scale=1.0), code=TICKS_JS)
+        f.xaxis.formatter = f.yaxis.formatter = self.ticks
+        f.xaxis.axis_label, f.yaxis.axis_label = "x (m)", "y (m)"
         follow = CustomJS(args=dict(drag=drag, handles=self.handles, joints=self.joints, links=self.links,
                                     slider=self.player.slider), code=FOLLOW_JS)
         for event in ("panstart", "pan", "panend"):
@@ -294,8 +301,11 @@ class MechanismView:
                                 unit=u.label(sw.unit), n=len(sw.x))
 
     def use_units(self, units: Units) -> None:
-        """Show the readout, status line and driver menu in ``units`` (the frames stay)."""
+        """Show the drawing's axes, the readout, status line and driver menu in ``units``
+        (the frames stay)."""
         self.units = units
+        self.ticks.args = dict(scale=units.scale("m"))
+        self.fig.xaxis.axis_label, self.fig.yaxis.axis_label = f"x ({units.length})", f"y ({units.length})"
         if not self.sweeps:
             return
         labels = self._labels()
