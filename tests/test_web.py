@@ -574,7 +574,8 @@ def _edited_four_bar():
 
 
 def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
-    """Atlas tab: chain #1's first mechanism opens with the library's generic dimensions;
+    """Atlas tab: a click on a card chooses its chain; chain #1's first mechanism opens
+    with the library's generic dimensions;
     the drawing is the library's solve of the design in the page's address, and the
     same card then becomes the synthesis's start (its traced path in the target figure)."""
     from urllib.parse import parse_qs, urlsplit
@@ -582,6 +583,10 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
     from multiloop.web.share import design_from_code
     page.get_by_text("Atlas", exact=True).click()
     page.wait_for_selector("#ml-atlas-count", state="attached", timeout=60000)
+    chain = page.locator(".ml-atlas-chain select")
+    for k in (2, 1):                                       # a click on a card chooses its chain
+        page.locator(".card[data-search]").nth(k - 1).click()
+        sync_api.expect(chain).to_have_value(re.compile(rf"^#{k} "), timeout=60000)
     sync_api.expect(page.locator(".ml-atlas-mechanism select")).to_have_value(re.compile(r"^1\. "), timeout=60000)
     page.locator(".ml-atlas-open button").click()
     page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];

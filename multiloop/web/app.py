@@ -422,6 +422,9 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     ``warm``; the check panel follows once the browser shows the drawing (``shown``).
     Its jobs stop once the tab's connection is lost (``watch``, a :class:`~.tabs.TabWatch`)."""
     from bokeh.events import DocumentReady
+    from bokeh.models import CustomJS
+
+    from .atlas_design import CARD_CLICK_JS
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
@@ -435,6 +438,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
             shown.set()
         doc.on_event(DocumentReady, rest)
         doc.js_on_event(DocumentReady, wb.editor.keys)
+        doc.js_on_event(DocumentReady, CustomJS(code=CARD_CLICK_JS))
         watch.add(doc.session_context.id, wb.stop_jobs)
 
         def closed(ctx):                # the session's callbacks are removed by Bokeh itself

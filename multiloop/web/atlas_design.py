@@ -18,10 +18,28 @@ from multiloop.topo.errors import InputError, explain
 
 from .markup import html
 
-__all__ = ["mechanisms_of", "mechanism_label", "generic_design", "AtlasOpener", "SEED"]
+__all__ = ["mechanisms_of", "mechanism_label", "generic_design", "AtlasOpener", "SEED", "CARD_CLICK_JS"]
 
 #: the seed of the realisation (the same design every time a card is opened)
 SEED = 0
+
+#: a click on an atlas card chooses its chain in the chain menu (model ``ml-atlas-chain``),
+#: whose entries start with the cards' numbers; one listener a page, installed when the
+#: page is ready (the atlas tab is built later: the menu is looked up at the click)
+CARD_CLICK_JS = """
+if (window.__mlCardClick) { return; }
+window.__mlCardClick = true;
+document.addEventListener('click', (e) => {
+  const card = e.composedPath().find(el => el.classList && el.classList.contains('card') && el.dataset
+    && el.dataset.search !== undefined);
+  const chain = card && Bokeh.documents[0].get_model_by_name('ml-atlas-chain');
+  const head = card && card.querySelector('.code');
+  const num = head && /^#(\\d+) /.exec(head.textContent);
+  if (!chain || !num) { return; }
+  const entry = chain.options.find(o => String(o).startsWith('#' + num[1] + ' '));
+  if (entry !== undefined && chain.value !== entry) { chain.value = entry; }
+});
+"""
 
 
 def mechanisms_of(rec) -> list:
@@ -75,7 +93,8 @@ class AtlasOpener:
         self.say, self.open_design, self.start = say, open_design, start
         self.records: dict = {}                  # chain menu entry -> ChainRecord
         self.inversions: list = []
-        self.chains = Menu("chain menu", say, title="chain", width=200, css_classes=["ml-atlas-chain"])
+        self.chains = Menu("chain menu", say, title="chain (or click a card)", width=200,
+                           css_classes=["ml-atlas-chain"], name="ml-atlas-chain")
         self.mechanisms = Menu("atlas mechanism menu", say, title="mechanism (frame, driver)", width=360,
                                css_classes=["ml-atlas-mechanism"])
         self.open_button = Button(label="Open in mechanism view", width=180, css_classes=["ml-atlas-open"])
