@@ -76,3 +76,18 @@ def test_share_requested_design_reads_text_only():
     assert requested_design(Doc({"token": [b"t"]})) is None
     assert len(requested_design(Doc({"design": [b"\xff" * 9000]}))) == MAX_CODE + 1
     assert requested_design(object()) is None
+
+
+def test_share_a_hostile_design_name_stays_text():
+    from dataclasses import replace
+
+    from multiloop.web.app import Workbench
+    evil = "<img src=x onerror=alert(1)>'\"&"
+    code = design_code(replace(load_mechanism("four_bar"), name=evil))
+    wb = Workbench(shared=code)
+    try:
+        assert wb.mechanism_name == f"shared: {evil}" and wb.mechanism.name == evil
+        assert "<img" not in wb.view.readout.text and "&lt;img src=x onerror=alert(1)&gt;" in wb.view.readout.text
+        assert wb.address.model.tags[0] == code
+    finally:
+        wb.close()
