@@ -4,6 +4,12 @@ One page per browser session: a mechanism moved by a player, its structural repo
 its design check marked on the input axis and the drawing, dimensional synthesis from a
 drawn or uploaded target, and a browser of stored atlases.  Everything shown comes from
 the library's own functions (:mod:`.scene` solves the motions once; the rest are views).
+
+The designer's edits each have a module: :mod:`.editing` (typed and dragged points,
+undo / redo), :mod:`.structure_edits` (a dyad added, the last group removed),
+:mod:`.units` (display units), :mod:`.share` (the design in the address),
+:mod:`.atlas_design` (an atlas card as a design) and :mod:`.target_drawing` (the
+synthesis's drawn target).
 """
 from __future__ import annotations
 
