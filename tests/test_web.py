@@ -288,6 +288,8 @@ def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory
     page.wait_for_function(TARGET_READY_JS, timeout=120000)
     page.locator(".ml-budget input").fill("3")            # budget (s)
     page.locator(".ml-budget input").press("Enter")
+    page.get_by_role("button", name="Clear target").click()
+    page.wait_for_function(f"() => ({STROKES_JS})() == 0", timeout=120000)
     canvas = page.locator(".bk-Canvas").last
     sync_api.expect(canvas).to_be_visible(timeout=120000)
     box = canvas.bounding_box()
@@ -488,11 +490,11 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
     from multiloop.kin.check import check
     page.get_by_text("Mechanism", exact=True).first.click()
     _pick(page, "four_bar")
-    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
     try:
         page.locator(".ml-length-unit select").select_option("mm")
         page.locator(".ml-angle-unit select").select_option("rad")
-        page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=60000)
+        page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=120000)
         d = check(load_mechanism("four_bar")).as_dict()["drivers"]["O2"]
         want = sorted([*d["limits"], *(x for xs in d["dead_centres"].values() for x in xs),
                        *(a[k] for a in d["angles"].values() for k in ("at_min", "at_max"))])
@@ -506,7 +508,7 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
         assert axis == ["x (mm)", 1000.0]
         page.locator(".ml-edit-point select").select_option("B")
         b = load_mechanism("four_bar").joint("B").at
-        sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(format(1000 * b[0], ".12g"), timeout=60000)
+        sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(format(1000 * b[0], ".12g"), timeout=120000)
         sync_api.expect(page.locator(".ml-edit-y input")).to_have_value(format(1000 * b[1], ".12g"))
         for css, v in ((".ml-edit-x input", "120"), (".ml-edit-y input", "80")):
             page.locator(css).fill(v)
@@ -516,7 +518,7 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
             if (!r || !r.getAttribute('data-positions')) return false;
             const b = JSON.parse(r.getAttribute('data-positions'))['B'];
             return Math.abs(b[0] - x) < 1e-15 && Math.abs(b[1] - y) < 1e-15; }""" % DEEP_JS
-        page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)
+        page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=120000)
     finally:
         page.locator(".ml-length-unit select").select_option("m")
         page.locator(".ml-angle-unit select").select_option("deg")
@@ -530,15 +532,15 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
     url = server[0]
     page.get_by_text("Mechanism", exact=True).first.click()
     _pick(page, "four_bar")
-    page.wait_for_function("() => location.search.includes('mechanism=four_bar')", timeout=60000)
+    page.wait_for_function("() => location.search.includes('mechanism=four_bar')", timeout=120000)
     page.locator(".ml-edit-point select").select_option("B")
     sync_api.expect(page.locator(".ml-edit-x input")).to_have_value(
-        repr(float(load_mechanism("four_bar").joint("B").at[0])), timeout=60000)
+        repr(float(load_mechanism("four_bar").joint("B").at[0])), timeout=120000)
     for css, v in ((".ml-edit-x input", "0.12"), (".ml-edit-y input", "0.08")):
         page.locator(css).fill(v)
         page.locator(css).press("Enter")
     page.locator(".ml-edit-apply button").click()
-    page.wait_for_function("() => location.search.includes('design=')", timeout=60000)
+    page.wait_for_function("() => location.search.includes('design=')", timeout=120000)
     shared = page.url
     token = parse_qs(urlsplit(url).query).get("token")
     assert parse_qs(urlsplit(shared).query).get("token") == token        # the token as it was
@@ -549,7 +551,7 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
         fresh.goto(shared)
         fresh.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
             return r && r.getAttribute('data-mechanism') == 'shared: four_bar' && r.getAttribute('data-positions'); }}""",
-                                timeout=60000)
+                                timeout=120000)
         r = _readout(fresh)
         m = load_mechanism("four_bar")
         st = solve(_edited_four_bar(), [math.radians(r["input"])])
@@ -557,12 +559,12 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
         assert r["positions"]["B"] == pytest.approx([0.12, 0.08], abs=1e-15)
         code = parse_qs(urlsplit(shared).query)["design"][0]
         fresh.goto(shared.replace(code, code[:-20]))
-        fresh.wait_for_selector("#ml-message[data-error]", state="attached", timeout=60000)
+        fresh.wait_for_selector("#ml-message[data-error]", state="attached", timeout=120000)
         text = fresh.locator("#ml-message").text_content()
         assert text.startswith("design (the address's ?design=): expected a design code") and "cut-off" in text
         _wait_frames(fresh)
         _pick(fresh, "crank_slider")                                       # the page goes on
-        fresh.wait_for_function("() => location.search.includes('mechanism=crank_slider')", timeout=60000)
+        fresh.wait_for_function("() => location.search.includes('mechanism=crank_slider')", timeout=120000)
         assert parse_qs(urlsplit(fresh.url).query).get("token") == token
     finally:
         ctx.close()
@@ -582,12 +584,12 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
 
     from multiloop.web.share import design_from_code
     page.get_by_text("Atlas", exact=True).click()
-    page.wait_for_selector("#ml-atlas-count", state="attached", timeout=60000)
+    page.wait_for_selector("#ml-atlas-count", state="attached", timeout=120000)
     chain = page.locator(".ml-atlas-chain select")
     for k in (2, 1):                                       # a click on a card chooses its chain
         page.locator(".card[data-search]").nth(k - 1).click()
-        sync_api.expect(chain).to_have_value(re.compile(rf"^#{k} "), timeout=60000)
-    sync_api.expect(page.locator(".ml-atlas-mechanism select")).to_have_value(re.compile(r"^1\. "), timeout=60000)
+        sync_api.expect(chain).to_have_value(re.compile(rf"^#{k} "), timeout=120000)
+    sync_api.expect(page.locator(".ml-atlas-mechanism select")).to_have_value(re.compile(r"^1\. "), timeout=120000)
     page.locator(".ml-atlas-open button").click()
     page.wait_for_function(f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
         return r && r.getAttribute('data-mechanism').startsWith('atlas: #1 1.') && r.getAttribute('data-positions')
@@ -601,7 +603,7 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
     page.get_by_text("Atlas", exact=True).click()
     page.locator(".ml-atlas-start button").click()
     page.wait_for_function(TARGET_READY_JS, timeout=120000)
-    sync_api.expect(page.locator(".ml-start select")).to_have_value("(open mechanism)", timeout=60000)
+    sync_api.expect(page.locator(".ml-start select")).to_have_value("(open mechanism)", timeout=120000)
     page.get_by_text("Mechanism", exact=True).first.click()
 
 
@@ -637,15 +639,15 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
     canvas = page.locator(".bk-Canvas").last
     sync_api.expect(canvas).to_be_visible(timeout=120000)
     _stroke_in(page, canvas.bounding_box(), 0.0, 2.0)
-    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=60000)
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
     _stroke_in(page, canvas.bounding_box(), 2.2, 4.5)
-    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=60000)
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=120000)
     page.locator(".ml-target-undo button").click()
-    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=60000)
+    page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
     page.locator(".ml-target-shape select").select_option("closed")
     points = "() => { const d = Bokeh.documents[0].get_model_by_name('ml-target-points').data; return [d.x, d.y]; }"
     page.wait_for_function("""([x0]) => Bokeh.documents[0].get_model_by_name('ml-target-points').data.x[1] != x0""",
-                           arg=[page.evaluate(points)[0][1]], timeout=60000)
+                           arg=[page.evaluate(points)[0][1]], timeout=120000)
     x, y = page.evaluate(points)
     assert len(x) == 24 and is_closed(np.column_stack([x, y]))
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-target-drag').active = true; }")
@@ -655,12 +657,12 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
     for k in range(1, 7):
         page.mouse.move(sx + 4 * k, sy)
     page.mouse.up()
-    page.wait_for_function(f"() => ({points})()[0][5] > {x0!r}", timeout=60000)
+    page.wait_for_function(f"() => ({points})()[0][5] > {x0!r}", timeout=120000)
     page.locator(".ml-target-undo button").click()                  # the server undoes the drag
-    page.wait_for_function(f"() => ({points})()[0][5] == {x0!r}", timeout=60000)
+    page.wait_for_function(f"() => ({points})()[0][5] == {x0!r}", timeout=120000)
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
     page.locator(".ml-timing select").select_option("prescribed")
-    sync_api.expect(page.locator(".ml-timing-first input")).to_be_visible(timeout=60000)
+    sync_api.expect(page.locator(".ml-timing-first input")).to_be_visible(timeout=120000)
     for css, v in ((".ml-budget input", "2"), (".ml-seed input", "7")):       # seed 7: this run's row
         page.locator(css).fill(v)
         page.locator(css).press("Enter")
@@ -669,7 +671,10 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
         const s = ({DEEP_JS})('#ml-synthesis-status')[0];
         return rows.length == 1 && rows[0].children[5].textContent == '7' && s.getAttribute('data-state') == 'done'; }}""",
                            timeout=300000)
-    page.locator(".ml-timing select").select_option("free")
+    page.locator(".ml-timing select").select_option("free")         # as the other tests expect it
+    page.locator(".ml-target-shape select").select_option("open")
+    page.get_by_role("button", name="Clear target").click()
+    page.wait_for_function(f"() => ({STROKES_JS})() == 0", timeout=120000)
     page.get_by_text("Mechanism", exact=True).first.click()
 
 
@@ -679,13 +684,13 @@ def test_structure_add_a_dyad_then_remove_the_last_group(page):
     from multiloop.web.structure_edits import with_dyad
     page.get_by_text("Mechanism", exact=True).first.click()
     _pick(page, "four_bar")
-    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=60000)
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
     page.locator(".ml-dyad-at select").select_option("P")
     page.locator(".ml-add-dyad button").click()
     has = """([name, want]) => { const r = (%s)('#ml-positions')[0];
         return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions')
           && (name in JSON.parse(r.getAttribute('data-positions'))) == want; }""" % DEEP_JS
-    page.wait_for_function(has, arg=["dyad1_M", True], timeout=60000)
+    page.wait_for_function(has, arg=["dyad1_M", True], timeout=120000)
     m = with_dyad(load_mechanism("four_bar"), "P")
     r = _readout(page)
     st = solve(m, [math.radians(r["input"])])
@@ -693,5 +698,5 @@ def test_structure_add_a_dyad_then_remove_the_last_group(page):
     want = np.concatenate([st.positions[0], st.point_positions[0]])
     np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-9)
     page.locator(".ml-remove-group button").click()
-    page.wait_for_function(has, arg=["dyad1_M", False], timeout=60000)
+    page.wait_for_function(has, arg=["dyad1_M", False], timeout=120000)
     assert set(_readout(page)["positions"]) == set(load_mechanism("four_bar").joint_names) | {"P"}
