@@ -233,7 +233,6 @@ class SynthesisView:
             P = traced(m)
             self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
 
-
     def _upload(self, name: str, data: bytes) -> None:
         from multiloop.catalogue.dimensional.targets import parse_table
         from multiloop.inputs import upload_text
@@ -343,7 +342,6 @@ class SynthesisView:
         if job.state == "failed":
             self.say(job.error)
         self.status.text = status_html(f"{job.state}: {len(self.results)} candidate(s)", job.state)
-
 
     def _list(self) -> None:
         from multiloop.topo.assur import decompose
