@@ -52,7 +52,9 @@ def test_structure_refusals_are_one_line():
         with pytest.raises(InputError, match="dyad place: expected a moving joint or tracer point"):
             with_dyad(m, bad)
     bare = without_last_group(m)
-    assert bare.n_links == 2 and bare.points == ()
+    assert bare.n_links == 2 and bare.points == () and attach_places(bare) == []
+    with pytest.raises(InputError, match="got a design without one"):
+        with_dyad(bare, "")
     with pytest.raises(InputError, match="got only driver links"):
         without_last_group(bare)
     with pytest.raises(InputError, match="got a driven group"):

@@ -85,9 +85,10 @@ def with_dyad(m, place: str, reach: float | None = None):
         decompose (the library's message).
     """
     from multiloop.topo.model import JointKind, MechanismBuilder
-    if place not in attach_places(m):
+    places = attach_places(m)
+    if place not in places:
         raise InputError(explain("dyad place", expected="a moving joint or tracer point of the design",
-                                 got=repr(place)))
+                                 got=repr(place) if places else "a design without one"))
     b = MechanismBuilder.from_mechanism(m)
     stem = _fresh(m, "dyad")
     a, c = f"{stem}_a", f"{stem}_b"
