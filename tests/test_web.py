@@ -700,3 +700,27 @@ def test_structure_add_a_dyad_then_remove_the_last_group(page):
     page.locator(".ml-remove-group button").click()
     page.wait_for_function(has, arg=["dyad1_M", False], timeout=120000)
     assert set(_readout(page)["positions"]) == set(load_mechanism("four_bar").joint_names) | {"P"}
+
+
+def test_units_mm_show_a_slider_drivers_check_json_in_mm(page):
+    """A cylinder-driven crane in mm: every event of its first driver shown equals
+    ``check --json``'s (m) times 1000, and the readout's input is in mm."""
+    from multiloop.kin.check import check
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "knuckle_boom_crane", timeout=300000)
+    page.wait_for_selector("#ml-check-json[data-mechanism=knuckle_boom_crane]", state="attached", timeout=300000)
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        page.wait_for_selector("#ml-check-events[data-unit=mm]", state="attached", timeout=120000)
+        m = load_mechanism("knuckle_boom_crane")
+        d = check(m).as_dict()["drivers"][m.drivers[0].joint]
+        want = sorted([*d["limits"], *(b["at"] for b in d["branch_points"]),
+                       *(x for xs in d["dead_centres"].values() for x in xs),
+                       *(a[k] for a in d["angles"].values() if a.get("min") is not None for k in ("at_min", "at_max"))])
+        shown = sorted(float(v) for v in page.locator("#ml-check-events tr[data-x]").evaluate_all(
+            "rows => rows.map(r => r.getAttribute('data-x'))"))
+        np.testing.assert_allclose(shown, 1000 * np.array(want), rtol=1e-12)
+        r = _readout(page)
+        assert page.locator("#ml-positions").text_content() == f"{m.drivers[0].joint} = {1000 * r['input']:.3f} mm"
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
