@@ -3,15 +3,18 @@
 :func:`synthesise` normalises the target as the atlas's curves are normalised
 (:mod:`.curves`), retrieves the nearest stored coupler curves in both traversal
 directions (:class:`.curve_atlas.CurveIndex`), ranks them by the aligned distance
-(closed targets; open ones by the descriptor of the retraced curve), reads the first
+(closed targets; open ones by their nearest sub-arcs, :mod:`.open_targets`), reads the first
 retrieved realisations with their best tracer points (:mod:`.tracers`), carries the
 best few mechanisms of each topology onto the target by the similarity that aligns
 their curves, screens each by the dimensional synthesiser's local polish
 (:func:`.dimensional.synthesise` with ``method="local"``, which frees every joint and
 the tracer point) and polishes the best few again on more target points.
 A design is returned only when :func:`kin.check.check` reaches every target input
-on one continuous branch (``positions``).  Designs are ordered by RMS error, fewer
-links first when their errors agree within ``tol``.
+on one continuous branch (``positions``); an open target's design is written over its
+input interval (the driver's ``range``).  Designs are ordered by RMS error, fewer
+links first when their errors agree within ``tol``.  While the best error is above
+``tol``, further rounds of retrieved starts are screened until the limits are spent
+(:func:`_screen_and_refine`).
 
 The run's limits are a :class:`.dimensional.budget.Budget`: its evaluations (the
 designs every polish scores) or its seconds are shared out as the polishes' own limits,

@@ -105,7 +105,7 @@ def test_partial_motion_is_recovered_over_its_interval(tiny_atlas, tmp_path, cap
     assert best["error_max"] < 1e-3 and best["deviation_max"] < 1e-3 and best["stopped"] in STOPS
     design = load_mechanism(best["file"])
     lo, hi = design.drivers[0].range
-    assert np.degrees(hi - lo) == pytest.approx(ARC_DEG[1] - ARC_DEG[0], abs=1.0)
+    assert lo == 0.0 or hi == 0.0              # the reference is the stroke's first point
     assert best["input_range"] == pytest.approx(np.degrees([lo, hi]).tolist())
     # over its range the design traces the target's part, end to end, and no more
     traced = solve(design, np.linspace(lo, hi, 400)).point_positions[:, 0]
