@@ -119,6 +119,33 @@ def test_partial_motion_is_recovered_over_its_interval(tiny_atlas, tmp_path, cap
     assert dc.driver_range == pytest.approx((lo, hi)) and dc.usable == pytest.approx((lo, hi), abs=1e-9)
 
 
+def test_a_rockers_stroke_is_recovered(tiny_atlas):
+    """The same four-bar driven at its rocker (no full rotation), traced over the middle
+    70 % of its certified range: a design (crank-driven) traces that stroke over its
+    written range, and the range lies in its certified motion."""
+    from multiloop.catalogue.topology_synthesis import synthesise
+    from multiloop.kin.check import check
+    from multiloop.topo.model import MechanismBuilder
+    m = _four_bar(tiny_atlas)
+    pivot = next(j for j in m.joints if m.frame in j.links and j.name != m.drivers[0].joint)
+    b = MechanismBuilder.from_mechanism(m)
+    b.drivers = [(pivot.name, (m.frame, next(k for k in pivot.links if k != m.frame)), None, None, None)]
+    rocker = b.build()
+    dc = check(rocker, min_transmission=0.0).drivers[0]
+    assert not dc.full_rotation
+    lo, hi = dc.usable
+    target = solve(rocker, np.linspace(lo + 0.15 * (hi - lo), hi - 0.15 * (hi - lo), 50)).point_positions[:, 0]
+    r = synthesise(target, links=(4,), atlas=tiny_atlas, evaluations=20000, top=1)
+    d = r.designs[0]
+    assert not r.closed and d.error_max < 1e-3 and d.deviation_max < 1e-3 and r.evaluations <= 20000
+    a, b_ = d.interval
+    traced = solve(d.mechanism, np.linspace(a, b_, 300)).point_positions[:, 0]
+    size = np.ptp(target, axis=0).max()
+    assert polyline_distance(traced, target).max() < 1e-3 * size
+    dc = check(d.mechanism, min_transmission=0.0).drivers[0]
+    assert dc.usable == pytest.approx((a, b_), abs=1e-9)
+
+
 def test_open_and_closed_need_no_start(tmp_path, capsys):
     csv = tmp_path / "t.csv"
     np.savetxt(csv, _curve(np.linspace(0, 3, 30)), delimiter=",")
