@@ -45,7 +45,7 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
                      polyline_distance, similarity_to)
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
-from .dimensional.budget import Budget, Meter
+from .dimensional.budget import LIMITS, Budget, Meter
 from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
@@ -76,6 +76,9 @@ MIN_SHARE = 0.1
 #: polish: a larger budget screens more starts (:func:`_screen_and_refine`)
 SCREEN_EACH = 3000
 REFINE_EACH = 6000
+#: a finalist whose refine improved its RMS error by less than this fraction is not
+#: refined again
+STALL = 0.01
 #: a screened design this close (relative to the target's size) ends the screen when no
 #: start has fewer links
 EXACT = 1e-9
@@ -513,31 +516,37 @@ def _screen_and_refine(rounds: _Rounds, target: np.ndarray, closed: bool, point:
                        tol: float, finalists: int, tick=None) -> tuple[list[tuple], str]:
     """Screen (:func:`_screen`) and refine (:func:`_refine`) until the best RMS error
     is at most ``tol``, the run's limits are spent, or every retrieved start was
-    screened.  The first screen has :data:`SCREEN_SHARE` of the run; every later one
-    half of what is left (the other half refines its finalists).  Returns
+    screened and the best ``finalists`` are polished to convergence.  The first screen
+    has :data:`SCREEN_SHARE` of the run; every later one half of what is left.  After
+    each screen the best ``finalists`` of all so far are refined, unless their last
+    polish converged or improved the RMS error by less than :data:`STALL` (a finalist
+    cut by its share while improving is polished further).  Returns
     ``(result, retrieval distance, seconds, evaluations)``, best first, and why the run
     stopped (one of :data:`.dimensional.budget.STOPS`)."""
     key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
     tick = tick or (lambda: None)
-    done, stops, screen = [], [], run.until(SCREEN_SHARE)
+    done, stops, settled, screen = [], [], set(), run.until(SCREEN_SHARE)
     while True:
         spent = run.used
         screened, more = _screen(rounds, target, closed, point, seed, screen, run, tol, tick, stops, first=not done)
-        ranked = _order(screened, tol, key)
-        done = _order(done + _refine(ranked[:finalists], target, closed, point, seed, run, tick, stops)
-                      + ranked[finalists:], tol, key)
+        pool = _order(done + screened, tol, key)
+        again = [e for e in pool[:finalists] if id(e[0]) not in settled]
+        refined = _refine(again, target, closed, point, seed, run, tick, stops)
+        settled |= {id(e[0]) for e, was in zip(refined, again)       # converged, or improved by < 1 %
+                    if e[0].stopped not in LIMITS or e[0].error_rms > (1.0 - STALL) * was[0].error_rms}
+        done = _order([e for e in pool if all(e is not g for g in again)] + refined, tol, key)
         if "exact" in stops or (done and done[0][0].error_rms <= tol):
             return done, "tolerance"
         if run.stop() or run.portion(1, smallest=MIN_POLISH) is None or run.used == spent:
             return done, run.stop() or run.binding()
-        if not more:
+        if not more and all(id(e[0]) in settled for e in done[:finalists]):
             return done, "exhausted"
         screen = run.share(SCREEN_SHARE)
 
 
 def _refine(best: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter, tick,
             stops: list) -> list[tuple]:
-    """The screen's best polished again on :data:`REFINE_POINTS`, sharing what is left
+    """The best results polished again on :data:`REFINE_POINTS`, sharing what is left
     of the run's evaluations and of its seconds but :data:`ASSESS_SHARE` (kept for the
     checks), at most :data:`REFINE_EACH` evaluations each; the polishes' stops are
     appended to ``stops``."""
