@@ -9,7 +9,7 @@ not a closed curve, and a design need not turn its driver fully to trace it:
   nearest first, each with the similarity that carries its window onto the target.
 * **The input interval.**  The polish gives every target point its own driver value
   (free timing); the design's input interval ``[a, b]`` is the span of those values.
-  :func:`interval_is_certified` asks :func:`kin.check.check` that the interval lies in
+  :func:`is_within_motion` asks :func:`kin.check.check` that the interval lies in
   the driver's certified range of motion, and :func:`on_interval` writes the design
   with its reference configuration at the first target point and its driver's
   ``range`` over the interval only, so ``solve`` and ``check`` move it over that part.
@@ -21,15 +21,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder, TracerPoint
-from multiloop.topo.model import Driver
+from multiloop.topo.model import Driver, JointKind, Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.solve import solve
 
 from .atlas import Atlas
 from .curve_atlas import CurveIndex, stored_curve
 from .curves import normalise_open, similarity_to, window_distances
 
-__all__ = ["ranked_windows", "on_interval", "interval_is_certified"]
+__all__ = ["ranked_windows", "on_interval", "is_within_motion"]
 
 
 def ranked_windows(atlas: Atlas, index: CurveIndex, target: np.ndarray,
@@ -51,7 +50,7 @@ def ranked_windows(atlas: Atlas, index: CurveIndex, target: np.ndarray,
     return out
 
 
-def interval_is_certified(driver_check, inputs) -> bool:
+def is_within_motion(driver_check, inputs) -> bool:
     """Whether the inputs' span lies in the certified range of motion of
     :func:`kin.check.check`'s ``driver_check`` (a full rotation contains any span;
     else its usable range, to 1e-9 rad or m)."""

@@ -50,7 +50,7 @@ from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
-from .open_targets import interval_is_certified, on_interval, ranked_windows
+from .open_targets import is_within_motion, on_interval, ranked_windows
 from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
@@ -267,13 +267,13 @@ def _subset(target: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
 def _passes_check(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> bool:
     """The check reaches every target input on the design's branch (no circuit defect);
     for an open target, the inputs' span lies in the driver's certified range of motion
-    too (:func:`.open_targets.interval_is_certified`)."""
+    too (:func:`.open_targets.is_within_motion`)."""
     try:
         rep = check(m, min_transmission=0.0, positions={m.drivers[0].joint: [float(x) for x in inputs]})
     except (LinkageError, ValueError, FloatingPointError):
         return False
     dc = rep.drivers[0]
-    return not dc.unreachable and (closed or interval_is_certified(dc, inputs))
+    return not dc.unreachable and (closed or is_within_motion(dc, inputs))
 
 
 def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:

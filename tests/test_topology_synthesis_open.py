@@ -179,3 +179,22 @@ def test_what_stopped_the_run(tiny_atlas):
     few = synthesise(ellipse[:15], evaluations=200_000, candidates=1, per_topology=1, **kw)
     assert few.stopped == "exhausted" and few.evaluations < 200_000
     assert "stopped: exhausted" in few.to_text()
+
+
+# ---------------------------------------------------------------------------------
+# 4. the written interval
+def test_on_interval_moves_the_reference_to_the_first_input():
+    """An all-R design is re-referenced at the first input (same motion, shifted input);
+    a design with a P joint keeps its reference and its range holds it."""
+    from multiloop.catalogue.named import load_named
+    from multiloop.catalogue.open_targets import on_interval
+    m = load_named("four_bar")
+    x = np.radians([30.0, 50.0, 90.0])
+    moved, rng = on_interval(m, x)
+    assert rng == pytest.approx((0.0, np.radians(60.0))) and moved.drivers[0].range == pytest.approx(rng)
+    a = solve(m, x).point_positions
+    b = solve(moved, x - x[0]).point_positions
+    np.testing.assert_allclose(a, b, atol=1e-9)
+    slider = load_named("crank_slider")
+    kept, rng = on_interval(slider, [0.3, 0.5, 1.0])
+    assert rng == (0.0, 1.0) and [j.at for j in kept.joints] == [j.at for j in slider.joints]
