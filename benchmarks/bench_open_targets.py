@@ -10,7 +10,7 @@ error (the synthesiser's, over the target's size), its deviation (the largest di
 of a target point from the traced curve over the design's input range), the span of
 that range against the target's 120°, evaluations, stop and wall time.
 
-    python benchmarks/bench_open_targets.py --db ATLAS.sqlite --evaluations 30000 [--json out.json]
+    python benchmarks/bench_open_targets.py --db ATLAS.sqlite --evaluations 30000 [--arc 40 160] [--json out.json]
 """
 from __future__ import annotations
 
@@ -28,17 +28,18 @@ TARGETS = ("four_bar", "watt_1", "stephenson_3")
 ARC_DEG = (40.0, 160.0)
 
 
-def stroke(name: str, n: int = 60) -> np.ndarray:
+def stroke(name: str, n: int = 60, arc=ARC_DEG) -> np.ndarray:
     m = load_named(name)
-    st = solve(m, np.radians(np.linspace(*ARC_DEG, n)))
+    st = solve(m, np.radians(np.linspace(*arc, n)))
     return st.point_positions[:, st.point_index("P")]
 
 
-def run(name: str, db: str, evaluations: int, closed: bool, links) -> dict:
-    target = stroke(name)
+def run(name: str, db: str, evaluations: int, closed: bool, links, arc=ARC_DEG) -> dict:
+    target = stroke(name, arc=arc)
     t0 = time.perf_counter()
     r = synthesise(target, links=links, atlas=db, evaluations=evaluations, top=1, closed=closed)
-    row = {"target": name, "mode": "closed" if closed else "open", "seconds": round(time.perf_counter() - t0, 1),
+    row = {"target": name, "arc_deg": list(arc), "mode": "closed" if closed else "open",
+           "seconds": round(time.perf_counter() - t0, 1),
            "evaluations": r.evaluations, "stopped": r.stopped, "polished": r.polished}
     if r.designs:
         d = r.designs[0]
@@ -54,13 +55,15 @@ def main() -> None:
     p.add_argument("--links", default="4,6,8")
     p.add_argument("--targets", nargs="+", default=list(TARGETS))
     p.add_argument("--modes", nargs="+", default=["open", "closed"])
+    p.add_argument("--arc", type=float, nargs=2, default=list(ARC_DEG), metavar=("FROM", "TO"),
+                   help="the crank's part, degrees past the reference (default 40 160)")
     p.add_argument("--json", default=None)
     a = p.parse_args()
     links = tuple(int(v) for v in a.links.split(","))
     rows = []
     for name in a.targets:
         for mode in a.modes:
-            rows.append(run(name, a.db, a.evaluations, mode == "closed", links))
+            rows.append(run(name, a.db, a.evaluations, mode == "closed", links, tuple(a.arc)))
             print(json.dumps(rows[-1]), flush=True)
     if a.json:
         with open(a.json, "w") as f:

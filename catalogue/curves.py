@@ -35,8 +35,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["resample", "is_closed", "normalise", "normalise_closed", "descriptor", "reversed_descriptor",
-           "aligned_distance", "aligned_distances", "normalise_open", "window_distances", "WINDOW_FRACTIONS", "similarity_to", "chamfer_score", "polyline_distance", "DESCRIPTOR_HARMONICS",
-           "CURVE_POINTS"]
+           "aligned_distance", "aligned_distances", "normalise_open", "window_distances", "WINDOW_FRACTIONS",
+           "similarity_to", "chamfer_score", "polyline_distance", "DESCRIPTOR_HARMONICS", "CURVE_POINTS"]
 
 #: harmonics per sign in a descriptor (its length is twice this)
 DESCRIPTOR_HARMONICS = 16

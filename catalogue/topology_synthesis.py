@@ -94,7 +94,9 @@ class Design:
     number of links, structure formula, LInK's chamfer score of its traced curve
     against the target, and ``deviation_max``: the largest distance from any target
     point to the traced curve (the polyline of 2000 driver steps,
-    :func:`.curves.polyline_distance`), over the target's size."""
+    :func:`.curves.polyline_distance`), over the target's size.  ``interval``: an open
+    target's input interval as written in the design's driver ``range`` (rad or m from
+    its reference; :attr:`input_range` in deg or m), None for a closed target."""
 
     mechanism: Mechanism
     error_max: float
@@ -150,7 +152,8 @@ class TopologySynthesis:
         for d in self.as_list(files):
             rng = "" if d["input_range"] is None else "  input range [{:.6g}, {:.6g}]".format(*d["input_range"])
             lines.append(f"  {d['links']} links  rms {d['error_rms']:.3g}  max {d['error_max']:.3g}  "
-                         f"chamfer {d['chamfer']:.3g}  {d['structure']}{rng}" + (f"  -> {d['file']}" if d["file"] else ""))
+                         f"chamfer {d['chamfer']:.3g}  {d['structure']}{rng}"
+                         + (f"  -> {d['file']}" if d["file"] else ""))
         return "\n".join(lines)
 
 
