@@ -198,3 +198,22 @@ def test_on_interval_moves_the_reference_to_the_first_input():
     slider = load_named("crank_slider")
     kept, rng = on_interval(slider, [0.3, 0.5, 1.0])
     assert rng == (0.0, 1.0) and [j.at for j in kept.joints] == [j.at for j in slider.joints]
+
+
+def test_an_open_run_is_the_seeds_alone(tiny_atlas, monkeypatch):
+    """Under an evaluation budget the open route gives the same designs when the clock
+    jumps an hour at every reading (no decision reads it)."""
+    import time
+    from multiloop.catalogue.topology_synthesis import synthesise
+    target = _stroke(_four_bar(tiny_atlas))
+    kw = dict(links=(4,), atlas=tiny_atlas, evaluations=4000, top=2, seed=2)
+    a = synthesise(target, **kw)
+    t = [time.perf_counter()]
+
+    def jumping():
+        t[0] += 3600.0
+        return t[0]
+    monkeypatch.setattr(time, "perf_counter", jumping)
+    b = synthesise(target, **kw)
+    assert a.designs and [d.mechanism for d in a.designs] == [d.mechanism for d in b.designs]
+    assert (a.evaluations, a.stopped, a.polished) == (b.evaluations, b.stopped, b.polished)
