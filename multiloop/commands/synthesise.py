@@ -67,7 +67,8 @@ def add_arguments(p) -> None:
                    help="global search (default de); local: polish the start only")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
-                        "errors within it tie and fewer links win (default 1e-4)")
+                        "errors within it tie and fewer links win, and the search stops once the best is within it "
+                        "(default 1e-4)")
     p.add_argument("--db", dest="atlas", default=None,
                    help="without START: the atlas with coupler curves (default: the default atlas, built into the "
                         "user cache on first use)")
