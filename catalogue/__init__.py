@@ -13,4 +13,9 @@ API index:
 * ``catalogue.atlas`` — the SQLite atlas store (resumable builds, safe queries).
 * ``catalogue.distributed`` — local processes or a Dask cluster.
 * ``catalogue.drawing`` / ``catalogue.html`` — chain drawings (SVG) and the HTML gallery.
+* ``catalogue.curves`` / ``catalogue.curve_atlas`` — coupler-curve descriptors, the
+  aligned and windowed distances, the stored curves and their index;
+  ``catalogue.topology_synthesis`` — path synthesis without a start (the atlas chooses
+  the topology); ``catalogue.open_targets`` — its open targets (sub-arc retrieval, the
+  driver's input interval).
 """

@@ -241,6 +241,18 @@ def _rows(atlas: Atlas, n: int) -> tuple[np.ndarray, np.ndarray]:
     return ids, vectors
 
 
+def _shapes(atlas: Atlas, n: int) -> np.ndarray:
+    """Normalised shapes (complex, ``(K, CURVE_POINTS)``) of the curves of ``n``-link
+    mechanisms, in row-id order (each a BLOB of finite complex64 values, checked)."""
+    rows = atlas.con.execute(f"SELECT c.id, c.shape {_OF_N} ORDER BY c.id", (int(n),)).fetchall()
+    data = b"".join(sr.blob(atlas.path, "curves", i, "shape", z, 8 * CURVE_POINTS) for i, z in rows)
+    shapes = np.frombuffer(data, dtype=np.complex64).reshape(-1, CURVE_POINTS).astype(complex)
+    bad = np.flatnonzero(~np.all(np.isfinite(shapes), axis=1))
+    if bad.size:
+        raise sr.corrupt(atlas.path, "curves", int(rows[bad[0]][0]), "shape: finite numbers", "NaN or infinity")
+    return shapes
+
+
 def _count(atlas: Atlas, n: int) -> int:
     return atlas.con.execute(f"SELECT count(*) {_OF_N}", (int(n),)).fetchone()[0]
 
@@ -344,6 +356,14 @@ class CurveIndex:
     def vectors(self) -> np.ndarray:
         """Descriptors of the indexed curves, in :attr:`ids` order."""
         return self._table[1]
+
+    @cached_property
+    def shapes(self) -> np.ndarray:
+        """Normalised shapes of the indexed curves (complex, ``(len, CURVE_POINTS)``), in
+        :attr:`ids` order: what an open target's windows are matched against
+        (:func:`.curves.window_distances`)."""
+        parts = [_shapes(self.atlas, n) for n in self._links]
+        return np.concatenate(parts) if parts else np.zeros((0, CURVE_POINTS), complex)
 
     def _search(self, q: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Curve ids and squared distances of the ``k`` nearest in every part."""

@@ -20,6 +20,12 @@ A planar curve is read as complex numbers ``z_i = x_i + i y_i``.
   for all shifts at once by an FFT cross-correlation: for a shift ``s``,
   ``min_φ Σ|a_i − e^{iφ} b_{i+s}|² = Σ|a|² + Σ|b|² − 2 |Σ conj(a_i) b_{i+s}|``
   (Procrustes with a fixed correspondence; Kendall 1984).
+* **Windows** (open targets): an open target is compared with sub-arcs of the stored
+  closed curves: windows of each stored shape of several lengths (fractions of its
+  arc length), at every start sample, in both directions, each resampled to the
+  target's number of points, centred and scaled to unit RMS radius like the target;
+  the distance is the RMS distance after the best rotation with the points in order
+  (arc-length correspondence, both ends fixed: free timing along the arc).
 * **Chamfer score** (Nobari et al. 2024, LInK, its evaluation): both curves resampled
   to 200 points, centred, scaled to unit RMS radius, the best of 360 rotations, and
   ``mean_a min_b |a − b| + mean_b min_a |a − b|``.
@@ -29,13 +35,18 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["resample", "is_closed", "normalise", "normalise_closed", "descriptor", "reversed_descriptor",
-           "aligned_distance", "aligned_distances", "similarity_to", "chamfer_score", "polyline_distance", "DESCRIPTOR_HARMONICS",
-           "CURVE_POINTS"]
+           "aligned_distance", "aligned_distances", "normalise_open", "window_distances", "WINDOW_FRACTIONS",
+           "similarity_to", "chamfer_score", "polyline_distance", "DESCRIPTOR_HARMONICS", "CURVE_POINTS"]
 
 #: harmonics per sign in a descriptor (its length is twice this)
 DESCRIPTOR_HARMONICS = 16
 #: points of a stored normalised curve
 CURVE_POINTS = 64
+#: window lengths, as fractions of a stored closed curve's arc length, that an open
+#: target is compared with (:func:`window_distances`)
+WINDOW_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 0.95)
+#: points of an open target and of every window in that comparison
+WINDOW_POINTS = 32
 
 
 def _as_points(path) -> np.ndarray:
@@ -100,6 +111,76 @@ def normalise(path, m: int = CURVE_POINTS, closed: bool = True) -> tuple[np.ndar
     if r[0] <= 0:
         raise ValueError("a curve of zero size")
     return zn[0], complex(c[0]), float(r[0])
+
+
+def normalise_open(path, m: int = WINDOW_POINTS) -> tuple[np.ndarray, complex, float]:
+    """An open curve resampled at ``m`` points by arc length (both ends kept, not
+    retraced), centred and of unit RMS radius, with the centre and radius it had."""
+    R = resample(path, m, closed=False)
+    zn, c, r = _centred((R[:, 0] + 1j * R[:, 1])[None])
+    if r[0] <= 0:
+        raise ValueError("a curve of zero size")
+    return zn[0], complex(c[0]), float(r[0])
+
+
+def _window_maps(a: np.ndarray, n: int, fraction: float) -> tuple[np.ndarray, ...]:
+    """Linear maps from a closed curve's ``n`` samples (equally spaced by arc length) to
+    its windows of ``fraction`` of the arc, one per start sample, each of ``len(a)``
+    points interpolated linearly between the samples: ``(n, n)`` matrices whose column
+    ``s`` gives, for the window starting at sample ``s``, the sum ``Σ conj(a_j) w_j`` and
+    the same with ``a`` reversed (``G``, ``Gr``), the mean ``Σ w_j / m`` (``C``), and the
+    mean square ``Σ |w_j|² / m`` as ``|B_k|² @ U + Re(conj(B_k) B_{k+1}) @ V``."""
+    m = len(a)
+    t = np.arange(n)[:, None] + fraction * n * np.linspace(0.0, 1.0, m)[None, :]     # (starts, m)
+    i0 = np.floor(t).astype(int)
+    w = t - i0
+    i0, i1, s = i0 % n, (i0 + 1) % n, np.broadcast_to(np.arange(n)[:, None], t.shape)
+    out = []
+    for coef in (np.conj(a), np.conj(a[::-1]), np.full(m, 1.0 / m)):
+        M = np.zeros((n, n), complex)
+        np.add.at(M, (i0, s), (1.0 - w) * coef[None, :])
+        np.add.at(M, (i1, s), w * coef[None, :])
+        out.append(M)
+    U, V = np.zeros((n, n)), np.zeros((n, n))
+    np.add.at(U, (i0, s), (1.0 - w) ** 2 / m)
+    np.add.at(U, (i1, s), w ** 2 / m)
+    np.add.at(V, (i0, s), 2.0 * (1.0 - w) * w / m)     # (i1 = i0 + 1: the pair's cross term)
+    return (*out, U, V)
+
+
+def window_distances(a: np.ndarray, B: np.ndarray, fractions=WINDOW_FRACTIONS) -> dict[str, np.ndarray]:
+    """The window of each stored closed shape (rows of ``B``, (K, n), complex) nearest
+    to the open target ``a`` (centred, unit RMS radius, e.g. from
+    :func:`normalise_open`, (m,)), over the window lengths ``fractions``, the start
+    samples and both directions (module docstring).  A window is linear in the samples,
+    so every start of a length is one matrix product (:func:`_window_maps`).
+
+    Returns a dict of (K,) arrays: ``distance`` (RMS after the best rotation, in units
+    of the normalised target), ``rotation`` (``a ≈ rotation · (w − centre) / radius``),
+    ``centre`` and ``radius`` of the window in the stored shape's coordinates,
+    ``fraction``, ``start`` and ``reversed``.  Cost: 2 K n² per length and direction.
+    """
+    a, B = np.asarray(a, complex), np.atleast_2d(np.asarray(B, complex))
+    m, n, k = len(a), B.shape[1], np.arange(len(B))
+    sq, cross = np.abs(B) ** 2, np.real(np.conj(B) * np.roll(B, -1, axis=1))
+    best = {"distance": np.full(len(B), np.inf)}
+    for f in fractions:
+        G, Gr, C, U, V = _window_maps(a, n, f)
+        c = B @ C
+        r = np.sqrt(np.maximum(sq @ U + cross @ V - np.abs(c) ** 2, 0.0))
+        ok = r > 1e-9
+        for rev, g in ((0.0, G), (1.0, Gr)):
+            top = (B @ g - c * np.sum(g, axis=0)) / np.where(ok, r, 1.0)     # Σ conj(a_j)(w_j − c) / r
+            d = np.where(ok, np.sqrt(np.maximum(2.0 - 2.0 * np.abs(top) / m, 0.0)), np.inf)
+            s = np.argmin(d, axis=1)
+            better = d[k, s] < best["distance"]
+            t = top[k, s]
+            found = {"distance": d[k, s], "rotation": np.conj(t) / np.maximum(np.abs(t), 1e-300), "centre": c[k, s],
+                     "radius": r[k, s], "fraction": np.full(len(B), f), "start": s.astype(float),
+                     "reversed": np.full(len(B), rev)}
+            best = {key: np.where(better, v, best[key]) if key in best else np.where(better, v, np.nan * v)
+                    for key, v in found.items()}
+    return best
 
 
 def _centred(z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -3,15 +3,18 @@
 :func:`synthesise` normalises the target as the atlas's curves are normalised
 (:mod:`.curves`), retrieves the nearest stored coupler curves in both traversal
 directions (:class:`.curve_atlas.CurveIndex`), ranks them by the aligned distance
-(closed targets; open ones by the descriptor of the retraced curve), reads the first
+(closed targets; open ones by their nearest sub-arcs, :mod:`.open_targets`), reads the first
 retrieved realisations with their best tracer points (:mod:`.tracers`), carries the
 best few mechanisms of each topology onto the target by the similarity that aligns
 their curves, screens each by the dimensional synthesiser's local polish
 (:func:`.dimensional.synthesise` with ``method="local"``, which frees every joint and
 the tracer point) and polishes the best few again on more target points.
 A design is returned only when :func:`kin.check.check` reaches every target input
-on one continuous branch (``positions``).  Designs are ordered by RMS error, fewer
-links first when their errors agree within ``tol``.
+on one continuous branch (``positions``); an open target's design is written over its
+input interval (the driver's ``range``).  Designs are ordered by RMS error, fewer
+links first when their errors agree within ``tol``.  While the best error is above
+``tol``, further rounds of retrieved starts are screened until the limits are spent
+(:func:`_screen_and_refine`).
 
 The run's limits are a :class:`.dimensional.budget.Budget`: its evaluations (the
 designs every polish scores) or its seconds are shared out as the polishes' own limits,
@@ -33,7 +36,7 @@ import numpy as np
 
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, LinkageError, ParameterError, explain
-from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
+from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.check import check
 from multiloop.kin.solve import solve
 
@@ -47,6 +50,7 @@ from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
+from .open_targets import is_within_motion, on_interval, ranked_windows
 from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
@@ -68,6 +72,13 @@ SCREEN_SHARE = 0.5
 ASSESS_SHARE = 0.15
 #: the nearest start's least share of the budget, however long the retrieval took
 MIN_SHARE = 0.1
+#: the most evaluations of one start's screening polish, and of one finalist's second
+#: polish: a larger budget screens more starts (:func:`_screen_and_refine`)
+SCREEN_EACH = 3000
+REFINE_EACH = 6000
+#: a finalist whose refine improved its RMS error by less than this fraction is not
+#: refined again
+STALL = 0.01
 #: a screened design this close (relative to the target's size) ends the screen when no
 #: start has fewer links
 EXACT = 1e-9
@@ -83,7 +94,9 @@ class Design:
     number of links, structure formula, LInK's chamfer score of its traced curve
     against the target, and ``deviation_max``: the largest distance from any target
     point to the traced curve (the polyline of 2000 driver steps,
-    :func:`.curves.polyline_distance`), over the target's size."""
+    :func:`.curves.polyline_distance`), over the target's size.  ``interval``: an open
+    target's input interval as written in the design's driver ``range`` (rad or m from
+    its reference; :attr:`input_range` in deg or m), None for a closed target."""
 
     mechanism: Mechanism
     error_max: float
@@ -95,12 +108,22 @@ class Design:
     seconds: float
     deviation_max: float = float("nan")
     evaluations: int = 0
+    interval: tuple[float, float] | None = None
+
+    @property
+    def input_range(self) -> list[float] | None:
+        """The driver's ``range`` written with an open target's design (deg for an R
+        driver, m for a P driver, from the written reference), else None."""
+        if self.interval is None:
+            return None
+        rotary = self.mechanism.joint(self.mechanism.drivers[0].joint).kind is JointKind.R
+        return [float(np.degrees(v)) if rotary else float(v) for v in self.interval]
 
     def as_dict(self, file: str | None = None) -> dict:
         return {"error_max": self.error_max, "error_rms": self.error_rms, "links": self.links,
                 "structure": self.structure, "file": file, "chamfer": self.chamfer,
                 "deviation_max": self.deviation_max, "retrieval_distance": self.retrieved,
-                "evaluations": self.evaluations, "seconds": round(self.seconds, 3)}
+                "evaluations": self.evaluations, "seconds": round(self.seconds, 3), "input_range": self.input_range}
 
 
 @dataclass(frozen=True)
@@ -127,8 +150,10 @@ class TopologySynthesis:
                  f"{self.polished} polished, {self.evaluations} evaluations in {self.seconds:.1f} s; "
                  f"limits: {limits_text(self.limits.as_dict())}; stopped: {self.stopped})"]
         for d in self.as_list(files):
+            rng = "" if d["input_range"] is None else "  input range [{:.6g}, {:.6g}]".format(*d["input_range"])
             lines.append(f"  {d['links']} links  rms {d['error_rms']:.3g}  max {d['error_max']:.3g}  "
-                         f"chamfer {d['chamfer']:.3g}  {d['structure']}" + (f"  -> {d['file']}" if d["file"] else ""))
+                         f"chamfer {d['chamfer']:.3g}  {d['structure']}{rng}"
+                         + (f"  -> {d['file']}" if d["file"] else ""))
         return "\n".join(lines)
 
 
@@ -199,14 +224,11 @@ def _ranked(atlas: Atlas, target: np.ndarray, closed: bool, links, candidates: i
         raise InputError(explain("atlas curves", expected=f"stored coupler curves of {links}-link mechanisms",
                                  got=f"none in {atlas.path!r}",
                                  hint="build them: multiloop atlas --links 6 --dof 1 --mechanisms --curves 8"))
+    if not closed:
+        return ranked_windows(atlas, index, target, candidates)
     zt, ct, rt = normalise(target, CURVE_POINTS, closed)
     hits = index.query(descriptor(target, closed=closed), candidates)
-    curves = [stored_curve(atlas, hit.curve) for hit in hits]
-    if closed:
-        out = _refit(curves, zt, ct, rt)
-    else:
-        out = [(hit.distance, c, similarity_to(ct, rt, c["centre"], c["radius"], _open_rotation(target, c)))
-               for hit, c in zip(hits, curves)]
+    out = _refit([stored_curve(atlas, hit.curve) for hit in hits], zt, ct, rt)
     return sorted(out, key=lambda t: t[0])
 
 
@@ -234,35 +256,27 @@ def _refit(curves: list[dict], zt: np.ndarray, ct: complex, rt: float) -> list[t
     return out
 
 
-def _open_rotation(target: np.ndarray, curve: dict) -> complex:
-    """Rotation of a stored curve best matching an open target: the direction between
-    the target's end points against the nearest chord of the same relative length."""
-    zt, _, _ = normalise(target, CURVE_POINTS, False)
-    z = curve["shape"]
-    chord = zt[CURVE_POINTS - 1] - zt[0]
-    d = z[None, :] - z[:, None]
-    i, j = np.unravel_index(np.argmin(np.abs(np.abs(d) - abs(chord))), d.shape)
-    v = d[i, j]
-    return complex(chord / v / abs(chord / v)) if abs(v) > 0 else 1.0 + 0j
-
-
-def _subset(target: np.ndarray, n: int) -> np.ndarray:
+def _subset(target: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
     """At most ``n`` of the target's own points, evenly spaced by arc length (points on
-    the target, not on its chords)."""
+    the target, not on its chords); an open target's last point is one of them (the
+    stroke's end bounds the input interval)."""
     if len(target) <= n:
         return target
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(target, axis=0), axis=1))])
-    idx = np.unique(np.searchsorted(s, np.linspace(0.0, s[-1], n, endpoint=False)))
+    idx = np.unique(np.searchsorted(s, np.linspace(0.0, s[-1], n, endpoint=not closed)))
     return target[np.minimum(idx, len(target) - 1)]
 
 
-def _passes_check(m: Mechanism, inputs: np.ndarray) -> bool:
-    """The check reaches every target input on the design's branch (no circuit defect)."""
+def _passes_check(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> bool:
+    """The check reaches every target input on the design's branch (no circuit defect);
+    for an open target, the inputs' span lies in the driver's certified range of motion
+    too (:func:`.open_targets.is_within_motion`)."""
     try:
         rep = check(m, min_transmission=0.0, positions={m.drivers[0].joint: [float(x) for x in inputs]})
     except (LinkageError, ValueError, FloatingPointError):
         return False
-    return not rep.drivers[0].unreachable
+    dc = rep.drivers[0]
+    return not dc.unreachable and (closed or is_within_motion(dc, inputs))
 
 
 def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
@@ -281,7 +295,7 @@ def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, limit
     ``method="local"``: no global search) on at most ``points`` target points, within
     ``limits``; ``tick()`` is called at its progress reports."""
     try:
-        res = dimensional_synthesise(start, path=_subset(target, points), point=point, **limits.keywords(),
+        res = dimensional_synthesise(start, path=_subset(target, points, closed), point=point, **limits.keywords(),
                                      seed=seed, tol=tol, full_rotation=closed, method=method,
                                      progress=None if tick is None else (lambda f, b: tick()))
     except LinkageError:
@@ -292,18 +306,25 @@ def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, limit
 def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, seconds: float,
             target: np.ndarray, evaluations: int = 0) -> Design | None:
     """A :class:`Design` of a polished result, when :func:`kin.check.check` reaches every
-    target input on one branch; with LInK's chamfer score and the dense deviation."""
-    m = res.mechanism
-    if not _passes_check(m, res.inputs):
+    target input on one branch (an open target: within the certified range of motion,
+    and the design is written over that interval, :func:`.open_targets.on_interval`);
+    with LInK's chamfer score and the dense deviation."""
+    m, inputs, interval = res.mechanism, np.asarray(res.inputs, float), None
+    if not _passes_check(m, inputs, closed):
         return None
-    curve = _traced(m, point, res.inputs, closed)
+    if not closed:
+        try:
+            m, interval = on_interval(m, inputs)
+        except (LinkageError, ValueError):
+            return None
+    curve = _traced(m, point, np.asarray(interval if interval else inputs), closed)
     if len(curve) < 3:
         return None
     size = float(np.max(np.ptp(target, axis=0)))
     gaps = polyline_distance(target, curve)
     return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
                   chamfer_score(target, curve, closed=closed), float(retrieved), seconds, float(gaps.max() / size),
-                  int(evaluations))
+                  int(evaluations), interval)
 
 
 def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,
@@ -357,14 +378,13 @@ def _choose(ranked: list, per_topology: int, topologies: int) -> list[tuple[floa
 def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | None = None, top: int = 3,
                evaluations: int | None = None, budget: float | None = None, point: str = "P", tol: float = 1e-4,
                per_topology: int = 2, topologies: int = 4, candidates: int = 200, finalists: int = 3, seed: int = 0,
-               progress=None, build_progress: bool = False, say=None) -> TopologySynthesis:
+               progress=None, build_progress: bool = False, say=None, closed: bool | None = None) -> TopologySynthesis:
     """Path synthesis that chooses the topology from the atlas (module docstring).
 
     Parameters
     ----------
     path : array (N, 2) or CSV path
-        The target points in order (an open or closed curve; closed when its ends
-        meet, :func:`.curves.is_closed`).
+        The target points in order (an open or closed curve, see ``closed``).
     start : Mechanism, optional
         Given a start, this is the dimensional synthesiser on that start (the
         topology is fixed); without one the atlas chooses.
@@ -396,6 +416,11 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
     build_progress, say : optional
         When the default atlas is built first: progress bars, and ``say(text)`` told
         where and what it costs (after the target and the options are checked).
+    closed : bool, optional
+        Whether the target is a closed curve (traced over whole turns of the driver) or
+        an open one (a stroke over part of the driver's motion, :mod:`.open_targets`).
+        Default: closed when the gap from its last point to its first is at most 1.1
+        times its longest step (:func:`.curves.is_closed`).
 
     Returns
     -------
@@ -409,7 +434,7 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
     """
     t0 = time.perf_counter()
     target = read_target(path)
-    closed = is_closed(target)
+    closed = is_closed(target) if closed is None else bool(closed)
     tol = check_tol(tol)
     if start is not None:
         return _with_start(start, target, closed, point, Budget.of(evaluations, budget), seed, t0)
@@ -420,20 +445,27 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
     tick = None if progress is None else (lambda: progress(run.fraction()))
     with one_blas_thread():                 # (one BLAS thread: the same sums on any machine, and faster)
         with Atlas(atlas, readonly=True) as a:
-            chosen = _choose(_ranked(a, target, closed, tuple(links), candidates), per_topology, topologies)
-            starts = [(dist, candidate_mechanism(c, tf, point)) for dist, c, tf in chosen]
-        polished, stopped = _screen_and_refine(starts, target, closed, point, seed, run, tol, max(top, finalists),
+            ranked = _ranked(a, target, closed, tuple(links), candidates)
+        rounds = _Rounds(ranked, per_topology, topologies, point)
+        polished, stopped = _screen_and_refine(rounds, target, closed, point, seed, run, tol, max(top, finalists),
                                                tick)
-        designs = []
-        for res, dist, seconds, n in polished:
-            if tick is not None:
-                tick()
-            d = _design(res, closed, point, dist, seconds, target, n)
-            if d is not None:
-                designs.append(d)
-                if len(designs) == top:
-                    break
-    return TopologySynthesis(tuple(designs), closed, len(starts), time.perf_counter() - t0, run.used, limits, stopped)
+        designs = _checked_designs(polished, target, closed, point, top, tick)
+    return TopologySynthesis(tuple(designs), closed, rounds.taken, time.perf_counter() - t0, run.used, limits, stopped)
+
+
+def _checked_designs(polished: list, target: np.ndarray, closed: bool, point: str, top: int, tick=None) -> list:
+    """The first ``top`` polished results, in order, that make a :class:`Design`
+    (:func:`_design`: they pass the check)."""
+    designs = []
+    for res, dist, seconds, n in polished:
+        if tick is not None:
+            tick()
+        d = _design(res, closed, point, dist, seconds, target, n)
+        if d is not None:
+            designs.append(d)
+            if len(designs) == top:
+                break
+    return designs
 
 
 def _atlas_file(atlas, progress: bool = False, say=None) -> Path:
@@ -465,23 +497,66 @@ def _with_start(start, target: np.ndarray, closed: bool, point: str, limits: Bud
                              0 if res is None else res.evaluations, limits, "converged" if res is None else res.stopped)
 
 
-def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
+class _Rounds:
+    """The retrieved starts in rounds: each round is :func:`_choose` of the curves not
+    yet taken (the nearest ``per_topology`` curves of the nearest ``topologies``
+    mechanisms per link count), as mechanisms carried onto the target; ``taken``
+    counts the starts handed out."""
+
+    def __init__(self, ranked: list, per_topology: int, topologies: int, point: str):
+        self.rest, self.per_topology, self.topologies, self.point = list(ranked), per_topology, topologies, point
+        self.taken = 0
+
+    def next(self) -> list[tuple[float, Mechanism]]:
+        chosen = _choose(self.rest, self.per_topology, self.topologies)
+        ids = {id(c) for _, c, _ in chosen}                 # (each ranked curve is its own dict)
+        self.rest = [t for t in self.rest if id(t[1]) not in ids]
+        self.taken += len(chosen)
+        return [(dist, candidate_mechanism(c, tf, self.point)) for dist, c, tf in chosen]
+
+
+def _screen_and_refine(rounds: _Rounds, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
                        tol: float, finalists: int, tick=None) -> tuple[list[tuple], str]:
-    """The screen (:func:`_screen`), then the best ``finalists`` (in :func:`_order`)
-    polished again on :data:`REFINE_POINTS`, sharing what is left of the run's
-    evaluations and of its seconds but :data:`ASSESS_SHARE` (kept for the checks).
-    Returns ``(result, retrieval distance, seconds, evaluations)``, best first, and why
-    the run stopped (one of :data:`.dimensional.budget.STOPS`).  ``tick()`` (progress)
-    is called before every polish and at the polish's own reports."""
+    """Screen (:func:`_screen`) and refine (:func:`_refine`) until the best RMS error
+    is at most ``tol``, the run's limits are spent, or every retrieved start was
+    screened and the best ``finalists`` are polished to convergence.  The first screen
+    has :data:`SCREEN_SHARE` of the run; every later one half of what is left.  After
+    each screen the best ``finalists`` of all so far are refined, unless their last
+    polish converged or improved the RMS error by less than :data:`STALL` (a finalist
+    cut by its share while improving is polished further).  Returns
+    ``(result, retrieval distance, seconds, evaluations)``, best first, and why the run
+    stopped (one of :data:`.dimensional.budget.STOPS`)."""
     key = lambda r: (r[0].error_rms, r[0].mechanism.n_links)     # noqa: E731
     tick = tick or (lambda: None)
-    screened, stops = _screen(starts, target, closed, point, seed, run, tick)
-    ranked = _order(screened, tol, key)
-    best, rest = ranked[:finalists], ranked[finalists:]
+    done, stops, settled, screen = [], [], set(), run.until(SCREEN_SHARE)
+    while True:
+        spent = run.used
+        screened, more = _screen(rounds, target, closed, point, seed, screen, run, tol, tick, stops, first=not done)
+        pool = _order(done + screened, tol, key)
+        again = [e for e in pool[:finalists] if id(e[0]) not in settled]
+        refined = _refine(again, target, closed, point, seed, run, tick, stops)
+        settled |= {id(e[0]) for e, was in zip(refined, again)       # converged, or improved by < 1 %
+                    if e[0].stopped not in LIMITS or e[0].error_rms > (1.0 - STALL) * was[0].error_rms}
+        done = _order([e for e in pool if all(e is not g for g in again)] + refined, tol, key)
+        if "exact" in stops or (done and done[0][0].error_rms <= tol):
+            return done, "tolerance"
+        if run.stop() or run.portion(1, smallest=MIN_POLISH) is None or run.used == spent:
+            return done, run.stop() or run.binding()
+        if not more and all(id(e[0]) in settled for e in done[:finalists]):
+            return done, "exhausted"
+        screen = run.share(SCREEN_SHARE)
+
+
+def _refine(best: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter, tick,
+            stops: list) -> list[tuple]:
+    """The best results polished again on :data:`REFINE_POINTS`, sharing what is left
+    of the run's evaluations and of its seconds but :data:`ASSESS_SHARE` (kept for the
+    checks), at most :data:`REFINE_EACH` evaluations each; the polishes' stops are
+    appended to ``stops``."""
     refine = run.until(1.0, 1.0 - ASSESS_SHARE)
     refined = []
     for k, (res, dist, secs, n) in enumerate(best):
-        share = refine.portion(len(best) - k, smallest=MIN_POLISH)
+        share = _capped(refine.portion(len(best) - k, smallest=MIN_POLISH), REFINE_EACH)
         t = time.perf_counter()
         tick()
         again = None if share is None else _local(res.mechanism, target, closed, point, share, seed, REFINE_POINTS,
@@ -492,42 +567,48 @@ def _screen_and_refine(starts: list, target: np.ndarray, closed: bool, point: st
         used = time.perf_counter() - t
         refined.append((res if again is None else again, dist, secs + used,
                         n + (0 if again is None else again.evaluations)))       # (errors at more points)
-    return _order(refined, tol, key) + rest, _run_stopped(stops)
+    return refined
 
 
-def _screen(starts: list, target: np.ndarray, closed: bool, point: str, seed: int, run: Meter,
-            tick) -> tuple[list[tuple], list[str]]:
-    """Every start, in retrieval order, polished locally on :data:`POLISH_POINTS` target
-    points with an equal share of what is left of :data:`SCREEN_SHARE` of the run's
-    limits (the first at least :data:`MIN_SHARE` of them), until a share is below
-    :data:`MIN_POLISH` or a design is exact with the fewest links.  Returns
-    ``(result, retrieval distance, seconds, evaluations)`` and the polishes' stops."""
-    screen = run.until(SCREEN_SHARE)
-    fewest = min((m.n_links for _, m in starts), default=0)
-    screened, stops = [], []
-    for k, (dist, m) in enumerate(starts):
-        t = time.perf_counter()
-        # (what one start overran, the next ones lose; the nearest start is always polished)
-        each = screen.portion(len(starts) - k, run.scaled(MIN_SHARE)) if k == 0 else \
-            screen.portion(len(starts) - k, smallest=MIN_POLISH)
-        if each is None:
-            stops.append(screen.binding())
-            break
-        tick()
-        res = _local(m, target, closed, point, each, seed, tick=tick)
-        if res is not None:
-            screen.spend(res.evaluations)
-            screened.append((res, dist, time.perf_counter() - t, res.evaluations))
-            stops.append(res.stopped)
-            if res.error_max <= EXACT and m.n_links == fewest:
-                stops.append("exact")
-                break                                      # exact with the fewest links: nothing to beat
-    return screened, stops
+def _capped(share: Budget | None, most: int) -> Budget | None:
+    """``share`` with at most ``most`` evaluations (so that the budget screens more
+    starts instead of polishing a few for longer)."""
+    if share is None:
+        return None
+    return Budget(most if share.evaluations is None else min(share.evaluations, most), share.seconds)
 
 
-def _run_stopped(stops: list[str]) -> str:
-    """Why a run without a start stopped: ``"tolerance"`` when the screen ended on an
-    exact design, else the first limit that cut a polish, else ``"converged"``."""
-    if "exact" in stops:
-        return "tolerance"
-    return next((s for s in stops if s in LIMITS), "converged")
+def _screen(rounds: _Rounds, target: np.ndarray, closed: bool, point: str, seed: int, screen: Meter, run: Meter,
+            tol: float, tick, stops: list, first: bool = True) -> tuple[list[tuple], bool]:
+    """Rounds of starts (:class:`_Rounds`), each start polished locally on
+    :data:`POLISH_POINTS` target points with an equal share of what is left of
+    ``screen`` (the run's very first start at least :data:`MIN_SHARE` of the run), at
+    most :data:`SCREEN_EACH` evaluations, until a share is below :data:`MIN_POLISH`, a
+    round ends with an RMS error at most ``tol``, or a design is exact with the fewest
+    links of its round.  Returns ``(result, retrieval distance, seconds, evaluations)``
+    and whether starts are left; the polishes' stops are appended to ``stops``."""
+    screened = []
+    while True:
+        starts = rounds.next()
+        if not starts:
+            return screened, False
+        fewest = min(m.n_links for _, m in starts)
+        for k, (dist, m) in enumerate(starts):
+            t = time.perf_counter()
+            # (what one start overran, the next ones lose; the nearest start is always polished)
+            each = _capped(screen.portion(len(starts) - k, run.scaled(MIN_SHARE)) if first and k == 0 else
+                           screen.portion(len(starts) - k, smallest=MIN_POLISH), SCREEN_EACH)
+            if each is None:
+                stops.append(screen.binding())
+                return screened, True
+            tick()
+            res = _local(m, target, closed, point, each, seed, tick=tick)
+            if res is not None:
+                screen.spend(res.evaluations)
+                screened.append((res, dist, time.perf_counter() - t, res.evaluations))
+                stops.append(res.stopped)
+                if res.error_max <= EXACT and m.n_links == fewest:
+                    stops.append("exact")
+                    return screened, True               # exact with the fewest links: nothing to beat
+        if min((r[0].error_rms for r in screened), default=np.inf) <= tol:
+            return screened, True

@@ -39,8 +39,9 @@ MAX_EVALUATIONS = 10 ** 12
 #: the longest wall-time cap accepted (s): a day
 MAX_SECONDS = 86_400.0
 #: why a run stopped: the error met ``tol``; the evaluations or the seconds ran out; the
-#: search ended on its own (a local polish converged, every start was polished)
-STOPS = ("tolerance", "evaluations", "budget", "converged")
+#: search ended on its own (a local polish converged); every retrieved start was screened
+#: (the synthesis without a start, with limits left)
+STOPS = ("tolerance", "evaluations", "budget", "converged", "exhausted")
 #: the stops that are a limit reached
 LIMITS = ("evaluations", "budget")
 

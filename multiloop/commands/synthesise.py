@@ -17,6 +17,8 @@ Tables are CSV with an optional header line:
 Without ``START`` (``--path`` only), the atlas chooses the topology
 (``catalogue.topology_synthesis``): ``--db ATLAS`` with stored coupler curves,
 ``--links 4,6,8``, ``--top K`` designs written as ``OUT.toml``, ``OUT-2.toml``, …;
+``--open`` / ``--closed`` say what the target is (default: detected); an open target's
+designs are written with their driver's ``range`` over the target's part of the motion;
 ``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``;
 ``--plot`` is refused there (exit 2): draw a design with ``multiloop solve OUT.toml --plot``.
 
@@ -65,12 +67,19 @@ def add_arguments(p) -> None:
                    help="global search (default de); local: polish the start only")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
-                        "errors within it tie and fewer links win (default 1e-4)")
+                        "errors within it tie and fewer links win, and the search stops once the best is within it "
+                        "(default 1e-4)")
     p.add_argument("--db", dest="atlas", default=None,
                    help="without START: the atlas with coupler curves (default: the default atlas, built into the "
                         "user cache on first use)")
     p.add_argument("--links", default="4,6,8", help="without START: numbers of links to try (default 4,6,8)")
     p.add_argument("--top", type=int, default=3, metavar="K", help="without START: designs returned (default 3)")
+    shape = p.add_mutually_exclusive_group()
+    shape.add_argument("--open", dest="closed", action="store_const", const=False, default=None,
+                       help="without START: the target is an open stroke over part of the driver's motion (default: "
+                            "open when its end-to-start gap exceeds 1.1 times its longest step)")
+    shape.add_argument("--closed", dest="closed", action="store_const", const=True,
+                       help="without START: the target is a closed curve traced over whole turns")
     p.add_argument("--full-rotation", action="store_true", help="require a fully rotating driver")
     p.add_argument("--min-transmission", type=float, default=None, metavar="DEG",
                    help="minimum transmission angle of every RRR dyad")
@@ -107,6 +116,7 @@ def run_without_start(args, limits: dict) -> int:
     outs.target(args.out, "--out", formats=("toml", "json"))
     # (the library checks the target and the options before it reads or builds an atlas)
     res = topo_synthesise(args.path, links=links, atlas=args.atlas, top=args.top, **limits, point=args.point or "P",
+                          closed=args.closed,
                           tol=1e-4 if args.tol is None else args.tol, seed=args.seed, build_progress=sys.stderr.isatty(),
                           say=lambda text: print(f"multiloop synthesise: {text}", file=sys.stderr, flush=True))
     if not res.designs:
@@ -128,6 +138,9 @@ def run(args) -> int:
     limits = Budget.of(args.evaluations, args.budget, default=None, names=("--evaluations", "--budget")).keywords()
     if args.start is None:
         return run_without_start(args, limits)
+    if args.closed is not None:     # refused, not ignored: a start's motion is --full-rotation's
+        raise InputError(explain("--open/--closed", expected="no START (the atlas route)", got="a START",
+                                 hint="with a start, --full-rotation asks for a closed curve over whole turns"))
     if args.tol is None:
         args.tol = 1e-6
     m = load(args.start)
