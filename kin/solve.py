@@ -33,7 +33,8 @@ Conventions
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -48,6 +49,7 @@ from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
 from .groups.step import SINGULAR
+from .memo import cached, memo_of
 from .poses import PoseRates, Poses
 from .result import MESSAGES, Status
 from .rigid import transport
@@ -75,7 +77,12 @@ class StepPlan:
 
 @dataclass(frozen=True, eq=False)
 class SolvePlan:
-    """A mechanism's Assur plan compiled for the solvers (build once, reuse)."""
+    """A mechanism's Assur plan compiled for the solvers (build once, reuse).
+
+    Every field is set by :func:`compile_plan` and never changes (``origins`` is a
+    read-only array).  Values derived on demand (the chart of the driver's motion, the
+    kernel plan, the steps an output needs) are kept beside the plan by :mod:`kin.memo`.
+    """
 
     mechanism: Mechanism
     assur: AssurPlan
@@ -85,7 +92,9 @@ class SolvePlan:
     joint_step: tuple[int, ...]       # step index solving that link (-1 frame)
     size: float                       # mechanism size (m), for tolerances
     point_host: tuple[int, ...] = ()
-    extra: dict = field(default_factory=dict)
+    origins_xy: tuple = ()            # the link reference points as Python floats (the pose store's)
+    joint_offsets: tuple = ()         # each joint's point from its host link's reference point
+    point_offsets: tuple = ()         # the same for each tracer point
 
 
 def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePlan:
@@ -147,7 +156,16 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         host.append(idx[cand[0]])
         hstep.append(solved.get(cand[0], -1))
     pts = tuple(idx[p.link] for p in m.points)
-    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), size, pts)
+    origins.flags.writeable = False
+    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), size, pts,
+                     tuple(map(tuple, origins.tolist())), _offsets(m.joints, host, origins),
+                     _offsets(m.points, pts, origins))
+
+
+def _offsets(items, hosts, origins: np.ndarray) -> tuple:
+    """Each item's point (``at``) from its host link's reference point, as Python floats."""
+    r = np.array([j.at for j in items], float).reshape(-1, 2) - origins[list(hosts)]
+    return tuple(map(tuple, r.tolist()))
 
 
 # ---------------------------------------------------------------------------------
@@ -331,10 +349,12 @@ class _Chart:
     lo: float
     hi: float
     period: float | None
-    flips: dict
+    flips: MappingProxyType
     crossings: tuple
-    limits: dict
+    limits: MappingProxyType
     is_r: bool
+    lo_req: float                     # the P driver's inputs the chart was built for (±inf: R)
+    hi_req: float
 
     @property
     def one_branch(self) -> bool:
@@ -415,16 +435,15 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
         for k, f in dn.flips.items():
             flips.setdefault(k, []).extend(-x * scale for x in f)
         crossings += [(-x * scale, k) for x, k in dn.crossings]
-    ch = _Chart(lo, hi, period, {k: tuple(sorted(f)) for k, f in flips.items()},
-                tuple(sorted(crossings)), limits, is_r)
-    object.__setattr__(ch, "lo_req", lo_req if not is_r else -np.inf)
-    object.__setattr__(ch, "hi_req", hi_req if not is_r else np.inf)
-    return ch
+    return _Chart(lo, hi, period, MappingProxyType({k: tuple(sorted(f)) for k, f in flips.items()}),
+                  tuple(sorted(crossings)), MappingProxyType(limits), is_r,
+                  lo_req if not is_r else -np.inf, hi_req if not is_r else np.inf)
 
 
 def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     """The cached chart of ``sp`` covering the inputs ``x`` (built on first use)."""
-    ch = sp.extra.get("chart")
+    memo = memo_of(sp)
+    ch = memo.get("chart")
     if ch is not None and ch.covers(x):
         return ch
     if not ch or ch.is_r:
@@ -432,8 +451,7 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     else:
         lo_req = min(ch.lo_req, float(x.min(initial=0.0)))
         hi_req = max(ch.hi_req, float(x.max(initial=0.0)))
-    ch = _build_chart(sp, kernels, lo_req, hi_req)
-    sp.extra["chart"] = ch
+    ch = memo["chart"] = _build_chart(sp, kernels, lo_req, hi_req)
     return ch
 
 
@@ -450,7 +468,7 @@ class MotionEvents:
     hi: float
     period: float | None
     crossings: tuple[tuple[float, str], ...]
-    limits: dict
+    limits: MappingProxyType
 
 
 def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> MotionEvents | None:
@@ -464,7 +482,7 @@ def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) 
     span = sp.size if extent is None else float(extent)
     ch = _chart(sp, True, np.array([-span, span]))
     return MotionEvents(ch.lo, ch.hi, ch.period, tuple((c, sp.steps[k].label) for c, k in ch.crossings),
-                        {side: sp.steps[k].label for side, k in ch.limits.items()})
+                        MappingProxyType({side: sp.steps[k].label for side, k in ch.limits.items()}))
 
 
 def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
@@ -758,8 +776,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     _check_range(sp, X)
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
-    needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
-    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
+    needed = list(range(len(sp.steps))) if not wanted else cached(sp, ("needed", wanted), needed_steps, wanted)
+    select = None if outputs is None else cached(sp, ("select", wanted), _selection, outputs)
     if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps) \
             and (state := _compiled_motion(sp, X, select)) is not None:
         return state                        # the compiled plan alone
@@ -784,7 +802,7 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     then (with ``select``, the outputs asked for: the other points NaN, and the angles
     computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
     m = sp.mechanism
-    ch = sp.extra.get("chart")
+    ch = memo_of(sp).get("chart")
     if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
             or not kernel.wanted(X.shape[0]):
         return None
@@ -798,7 +816,7 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
         return None
     P, nj = kr.points, m.n_joints
     if select is not None:                   # as _finish and _points with outputs=
-        drop_links, drop_points = _cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
+        drop_links, drop_points = cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
         if drop_links.size:
             T[drop_links, 2] = np.nan
         if drop_points.size:
@@ -875,17 +893,6 @@ def plan_of(mechanism: Mechanism, plan=None) -> SolvePlan:
 #: compiled plans of the last mechanisms solved, by identity (Mechanism is frozen)
 _PLANS: dict = {}
 _PLANS_KEPT = 64
-
-
-def _cached(sp: SolvePlan, key, f, arg):
-    """``f(sp, arg)`` kept on the plan under ``key`` (the last 32 keys)."""
-    hit = sp.extra.get(key)
-    if hit is None:
-        if len(sp.extra) > 64:
-            for k in [k for k in sp.extra if isinstance(k, tuple) and k[0] in ("needed", "select")][:32]:
-                del sp.extra[k]
-        hit = sp.extra[key] = f(sp, arg)
-    return hit
 
 
 def _selection(sp: SolvePlan, outputs) -> tuple:
@@ -994,7 +1001,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
            select=None, direct=None) -> KinematicState:
     m = sp.mechanism
     nj = m.n_joints
-    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0]) \
+    pos = _points(sp, G, "joints", None if select is None else select[0]) \
         if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
     if Zd is not None:
@@ -1004,7 +1011,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1]) \
+        ppos = _points(sp, G, "points", None if select is None else select[1]) \
             if direct is None else direct[:, nj:]
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
@@ -1014,18 +1021,11 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
 
 
-def _points(sp: SolvePlan, G: "Poses", hosts, which: str, chosen=None) -> np.ndarray:
+def _points(sp: SolvePlan, G: "Poses", which: str, chosen=None) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
     carried by its host link's pose (:meth:`Poses.carry`), written point-major into one
     array and returned transposed."""
-    key = ("points", which)
-    hit = sp.extra.get(key)
-    if hit is None:
-        items = sp.mechanism.joints if which == "joints" else sp.mechanism.points
-        h = tuple(hosts)
-        r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
-        hit = sp.extra[key] = (h, tuple(map(tuple, r.tolist())))
-    h, r = hit
+    h, r = (sp.joint_host, sp.joint_offsets) if which == "joints" else (sp.point_host, sp.point_offsets)
     if chosen is None:
         out = np.empty((len(h), 2, G.M))
         chosen = range(len(h))

@@ -323,6 +323,35 @@ def test_plan_reuse_and_lead_in():
     assert np.allclose(a.positions[0], b.positions[-1], atol=1e-12)
 
 
+
+def test_a_solved_plan_stays_as_compiled():
+    """Solving never writes into the frozen plan: its fields are the same objects, its
+    arrays read-only, and what it derived on demand (the chart of the motion, the
+    kernel plan) is kept beside it (kin.memo) with read-only mappings."""
+    import dataclasses
+    from types import MappingProxyType
+
+    from multiloop.kin import kernel
+    from multiloop.kin.memo import memo_of
+    from multiloop.kin.solve import motion_events
+    m = knitting_needle()
+    plan = compile_plan(m)
+    before = {f.name: getattr(plan, f.name) for f in dataclasses.fields(plan)}
+    assert not any(isinstance(v, (dict, list, set)) for v in before.values())
+    solve(m, np.linspace(-7.0, 7.0, 50), plan=plan, derivatives=True)
+    solve(m, np.linspace(0.0, 1.0, 5), plan=plan, outputs=("B",))
+    kernel.kernel_plan(plan)
+    ev = motion_events(m, plan)
+    assert all(getattr(plan, k) is v for k, v in before.items())
+    assert not plan.origins.flags.writeable
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plan.size = 2.0
+    chart = memo_of(plan)["chart"]
+    assert isinstance(chart.limits, MappingProxyType) and isinstance(chart.flips, MappingProxyType)
+    assert isinstance(ev.limits, MappingProxyType)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        chart.lo_req = 0.0
+
 # ---------------------------------------------------------------- the catalogue
 _CAT = sorted((__import__("pathlib").Path(__file__).resolve().parents[1] / "catalogue" / "mechanisms").glob("*.toml"))
 
