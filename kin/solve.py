@@ -283,7 +283,7 @@ def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe:
 def _scale(sp: SolvePlan) -> np.ndarray:
     """Input units per scaled unit: 1 (rad) for R drivers, the size (m) for P drivers."""
     m = sp.mechanism
-    return np.array([1.0 if m.joint(d.joint).kind is JointKind.R else sp.size for d in m.drivers])
+    return np.array([1.0 if m.is_rotary(d) else sp.size for d in m.drivers])
 
 
 def _fill(nodes: np.ndarray, max_step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -404,7 +404,7 @@ def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
 
 def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart:
     """Walk up and down from the reference (one driver; scaled inputs)."""
-    is_r = sp.mechanism.joint(sp.mechanism.drivers[0].joint).kind is JointKind.R
+    is_r = sp.mechanism.is_rotary(0)
     scale = _scale(sp)[0]
     flips: dict = {}
     crossings, limits = [], {}
@@ -487,7 +487,7 @@ def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) 
 
 def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
     m = sp.mechanism
-    if m.joint(m.drivers[k].joint).kind is JointKind.R:
+    if m.is_rotary(k):
         return f"{np.degrees(v):.6g}°"
     return f"{v:.6g} m"
 
@@ -848,7 +848,7 @@ def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
     for k, d in enumerate(m.drivers):
         if d.range is None:
             continue
-        rotary = m.joint(d.joint).kind is JointKind.R
+        rotary = m.is_rotary(d)
         tol = 1e-12 * (1.0 if rotary else sp.size) + 4 * np.spacing(np.abs(np.asarray(d.range, float)))
         out = (X[:, k] < d.range[0] - tol[0]) | (X[:, k] > d.range[1] + tol[1])
         if not out.any():
@@ -865,7 +865,7 @@ def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
 def _check_range(sp: SolvePlan, X: np.ndarray) -> None:
     m = sp.mechanism
     for k, d in enumerate(m.drivers):
-        if m.joint(d.joint).kind is JointKind.P and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
+        if not m.is_rotary(d) and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
             raise InputError(explain(f"input of the P driver {d.joint}",
                                      expected=f"a slide of at most {MAX_SLIDE:g} × the mechanism's size "
                                               f"({MAX_SLIDE * sp.size:.6g} m)",
@@ -968,7 +968,7 @@ def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
 def _fmt_input(m: Mechanism, x) -> str:
     parts = []
     for d, v in zip(m.drivers, np.atleast_1d(x)):
-        if m.joint(d.joint).kind is JointKind.R:
+        if m.is_rotary(d):
             parts.append(f"{d.joint} = {np.degrees(v):.6g}°")
         else:
             parts.append(f"{d.joint} = {v:.6g} m")

@@ -495,7 +495,7 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
             if d.acceleration is not None:
                 t["acceleration"] = d.acceleration
             if d.range is not None:
-                rotary = m.joint(d.joint).kind is JointKind.R
+                rotary = m.is_rotary(d)
                 t["range"] = [math.degrees(v) if rotary else v for v in d.range]
             doc["driver"].append(t)
     if m.points:

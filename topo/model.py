@@ -213,6 +213,24 @@ class Mechanism:
         in x and y (at least 1e-12; 1.0 with fewer than two positioned joints)."""
         return _extent([j.at for j in self.joints if j.at is not None])
 
+    def is_rotary(self, driver: "Driver | int") -> bool:
+        """True when ``driver`` (a :class:`Driver` or its index in ``drivers``) turns its
+        links about an R joint (input in rad, read and shown in degrees); False when it
+        slides them along a P joint (input in m).
+
+        >>> b = MechanismBuilder()
+        >>> b.add_link("ground", frame=True)
+        >>> b.add_link("crank"); b.add_link("slider")
+        >>> b.add_joint("O", "R", ("ground", "crank"), at=(0, 0))
+        >>> b.add_joint("S", "P", ("crank", "slider"), at=(1, 0), axis=(1, 0))
+        >>> b.add_driver("O"); b.add_driver("S")
+        >>> m = b.build()
+        >>> m.is_rotary(0), m.is_rotary(m.drivers[1])
+        (True, False)
+        """
+        d = driver if isinstance(driver, Driver) else self.drivers[driver]
+        return self.joint(d.joint).kind is JointKind.R
+
     def link(self, name: str) -> Link:
         for lk in self.links:
             if lk.name == name:

@@ -110,7 +110,7 @@ class Problem:
         m = ev.mechanism
         if len(m.drivers) != 1:
             raise InputError(explain(f"mechanism '{m.name or ''}'", expected="one driver", got=f"{len(m.drivers)}"))
-        self.rotary = m.joint(m.drivers[0].joint).kind is JointKind.R
+        self.rotary = m.is_rotary(0)
         sp = ev.space
         self.nx = sp.size
         names, x0, lo, hi = list(sp.names), list(sp.x0), list(sp.lower), list(sp.upper)

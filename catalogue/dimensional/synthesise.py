@@ -57,7 +57,7 @@ class SynthesisResult:
     def inputs_cli(self) -> np.ndarray:
         """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
         m = self.mechanism
-        rot = m.joint(m.drivers[0].joint).kind is JointKind.R
+        rot = m.is_rotary(0)
         return np.degrees(self.inputs) if rot else np.asarray(self.inputs, float)
 
     def as_dict(self) -> dict:
@@ -84,10 +84,6 @@ def _table(value, cols, what):
     return check_rows(a, what, f"{what} target"), f"a {what} table of {len(a)} rows"
 
 
-def _driver_is_rotary(m: Mechanism) -> bool:
-    return m.joint(m.drivers[0].joint).kind is JointKind.R
-
-
 def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timing: str = "reference") -> PathTarget:
     """A :class:`PathTarget` from an (N, 2|3) array or CSV file (third column: driver
     value in degrees, or m for a slider input, measured as ``timing`` says: from the
@@ -103,7 +99,7 @@ def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timi
                                  got="no such point", hint=f"points: {', '.join(names) or 'none'}"))
     values = None
     if a.shape[1] == 3:
-        values = np.radians(a[:, 2]) if _driver_is_rotary(m) else a[:, 2].copy()
+        values = np.radians(a[:, 2]) if m.is_rotary(0) else a[:, 2].copy()
     elif timing != "reference":
         raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path table with a third column",
                                  got=f"{src} with two columns", hint="free timing needs no --timing"))
@@ -121,7 +117,7 @@ def function_target(m: Mechanism, function, output: str) -> FunctionTarget:
     if output not in m.joint_names:
         raise InputError(explain(f"output joint {output!r}", expected="a joint of the start mechanism",
                                  got="no such joint", hint=f"joints: {', '.join(m.joint_names)}"))
-    x = np.radians(a[:, 0]) if _driver_is_rotary(m) else a[:, 0]
+    x = np.radians(a[:, 0]) if m.is_rotary(0) else a[:, 0]
     y = np.radians(a[:, 1]) if m.joint(output).kind is JointKind.R else a[:, 1]
     if np.ptp(y) == 0:
         raise InputError(explain(src, expected="output values that vary", got="a constant output"))

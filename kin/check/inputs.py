@@ -16,13 +16,13 @@ import math
 import numpy as np
 
 from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 __all__ = ["check_options", "instant_at", "positions", "output_point"]
 
 
 def _to_api(m: Mechanism, v: float, k: int = 0) -> float:
-    return math.radians(v) if m.joint(m.drivers[k].joint).kind is JointKind.R else v
+    return math.radians(v) if m.is_rotary(k) else v
 
 
 def _finite(v: float, what: str) -> float:

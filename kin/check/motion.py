@@ -16,7 +16,7 @@ import numpy as np
 
 from multiloop.kin.groups.registry import has_closed_form
 from multiloop.topo.errors import AssemblyError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 from multiloop.kin.solve import motion_events
 
@@ -145,7 +145,7 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
     ``range`` on that side at the same spacing (a range end at the reference: that value).
     An R range wider than the turn is sampled over the turn: the motion repeats beyond it,
     and a turn without a limit runs to the range's end (:func:`_bounded`)."""
-    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    rotary = m.is_rotary(k)
     if rotary:
         h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
     else:
@@ -178,7 +178,7 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     its usable range is the intersection of the range and the assembly limits, and each
     segment says which of the two binds.  ``cancel()`` is called before every solve of
     the sides (:attr:`Side.cancel`)."""
-    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    rotary = m.is_rotary(k)
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
     # millisecond per position: its mechanism gets a coarser P grid, fewer samples per

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from multiloop.kin.solve import solve
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 __all__ = ["Side", "XTOL", "mechanism_size"]
 
@@ -72,7 +72,7 @@ class Side:
 
     @property
     def is_rotary(self) -> bool:
-        return self.mechanism.joint(self.mechanism.drivers[self.k].joint).kind is JointKind.R
+        return self.mechanism.is_rotary(self.k)
 
     @property
     def xtol(self) -> float:

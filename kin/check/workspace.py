@@ -44,7 +44,6 @@ from multiloop.kin.solve import solve
 
 from .envelope import edge_fractions, envelope
 from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind
 
 __all__ = ["Workspace", "workspace", "alpha_outline"]
 
@@ -249,7 +248,7 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     else:
         boundary, area = alpha_outline(Pg)
         arcs = ()
-    rotary = tuple(m.joint(d.joint).kind is JointKind.R for d in m.drivers)
+    rotary = tuple(m.is_rotary(d) for d in m.drivers)
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,

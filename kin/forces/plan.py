@@ -113,7 +113,7 @@ def _columns(m: Mechanism, pairs: list[Pair]) -> list[Column]:
         kinds = ("Rx", "Ry") if p.kind == "R" else ("PN", "PM")
         cols += [Column(k, i, p.a, p.b, p.joint) for k in kinds]
     for i, d in enumerate(m.drivers):
-        kind = "DP" if m.joint(d.joint).kind is JointKind.P else "DR"
+        kind = "DR" if m.is_rotary(d) else "DP"
         cols.append(Column(kind, i, d.links[0], d.links[1], d.joint))
     return cols
 

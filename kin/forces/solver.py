@@ -383,7 +383,7 @@ def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
     size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
     for k, d in enumerate(m.drivers):
         col = q[:, k]
-        if m.joint(d.joint).kind is JointKind.R:
+        if m.is_rotary(d):
             if np.any(np.abs(col) > limit):
                 big = np.max(np.abs(col)) * (1.0 if degrees else 180.0 / np.pi)
                 raise InputError(explain(f"input of driver {d.joint!r}", expected=f"at most {MAX_ANGLE_DEG:g} deg in magnitude",

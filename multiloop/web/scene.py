@@ -150,7 +150,7 @@ def sweep_driver(m: Mechanism, k: int, cancel=None) -> Sweep:
     from multiloop.kin.check import driver_angles
 
     joint = m.drivers[k].joint
-    rotary = m.joint(joint).kind is JointKind.R
+    rotary = m.is_rotary(k)
     if rotary:
         x = np.linspace(0.0, 2 * np.pi, R_FRAMES)
         st = _solve(m, k, x, cancel)
