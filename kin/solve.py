@@ -122,8 +122,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
     org = link_origins(m)
     origins = np.array([org[x] for x in names])
     steps = []
-    xy = np.array([j.at for j in m.joints], float)
-    size = max(float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0, 1e-12)
+    size = m.size
     Z0 = np.zeros((1, len(names), 3))
     Z0[0, :, :2] = origins
     for k, s in enumerate(ap.steps):

@@ -51,8 +51,7 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
     if (start is None) != (stop is None):
         raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
     rotary = {m.is_rotary(d) for d in m.drivers}
-    xy = np.array([j.at for j in m.joints if j.at is not None], float).reshape(-1, 2)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    size = m.size
     limit = min(MAX_ANGLE_DEG if True in rotary else np.inf,
                 MAX_SLIDE_SIZES * size if False in rotary else np.inf)
     for name, v in (("--from", start), ("--to", stop)):
@@ -158,8 +157,7 @@ def driver_sweep(m: Mechanism, k: int, steps: int = 72) -> np.ndarray:
     if not 1 <= steps <= MAX_CYCLE_STEPS:
         raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
     d = m.drivers[k]
-    xy = np.array([j.at for j in m.joints if j.at is not None], float).reshape(-1, 2)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    size = m.size
     col = _default_column(m, d, steps, size)
     q = np.zeros((steps, len(m.drivers)))
     q[:, k] = np.radians(col) if m.is_rotary(d) else col

@@ -367,6 +367,24 @@ def _cycle_for(m):
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
 
 
+def test_the_size_is_the_mechanism_s_and_the_plan_s():
+    """One size: ``Mechanism.size`` (the larger spread of the joints in x and y), which
+    the compiled plan carries; no other module of the library computes it again."""
+    import pathlib
+    import re
+
+    from multiloop.topo.io import load
+    for path in _CAT:
+        m = load(path)
+        xy = np.array([j.at for j in m.joints], float)
+        assert compile_plan(m).size == m.size == max(float(np.max(np.ptp(xy, axis=0))), 1e-12)
+    root = pathlib.Path(__file__).resolve().parents[1]
+    again = re.compile(r"ptp\(.*j\.at|j\.at for j in m\.joints.*\n.*ptp|def mechanism_size")
+    found = [str(p.relative_to(root)) for pkg in ("topo", "kin", "catalogue", "multiloop")
+             for p in sorted((root / pkg).rglob("*.py")) if again.search(p.read_text())]
+    assert found == []
+
+
 @pytest.mark.parametrize("path", _CAT, ids=[p.stem for p in _CAT])
 def test_every_catalogue_mechanism_decomposes_and_solves_or_reports_its_limit(path):
     from multiloop.topo.assur import decompose

@@ -114,8 +114,7 @@ class Problem:
         sp = ev.space
         self.nx = sp.size
         names, x0, lo, hi = list(sp.names), list(sp.x0), list(sp.lower), list(sp.upper)
-        size = float(np.max(np.ptp(np.array([j.at for j in m.joints]), axis=0))) or 1.0
-        self.mech_size = size
+        size = self.mech_size = m.size
         if isinstance(target, MotionTarget):
             lk = target.link
             if lk not in ev.links:

@@ -26,7 +26,6 @@ from .motion import driver_motion
 from .singular_values import exact_extremes
 from .report import AngleResult, CheckReport, DriverAngles, DriverCheck
 from .transmission import angle_specs, angle_values, guide_direction
-from .sweep import mechanism_size
 from .verdict import verdict
 from .workspace import workspace as workspace_of
 
@@ -209,7 +208,7 @@ def usable_box(m: Mechanism, dcs) -> tuple[tuple[float, float], ...]:
     without a limit."""
     out = []
     for dc in dcs:
-        far = np.pi if dc.rotary else mechanism_size(m)
+        far = np.pi if dc.rotary else m.size
         if dc.full_rotation:
             out.append((0.0, 2 * np.pi))
         elif len(dc.limits) == 2:

@@ -20,7 +20,7 @@ from multiloop.topo.model import Mechanism
 
 from multiloop.kin.solve import motion_events
 
-from .sweep import XTOL, Side, mechanism_size
+from .sweep import XTOL, Side
 
 __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
@@ -150,7 +150,7 @@ def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stri
         h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
     else:
         n = P_STEPS // 4 if heavy else P_STEPS
-        h = mechanism_size(m) / n
+        h = m.size / n
     rng = m.drivers[k].range
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
     if rotary:
@@ -188,14 +188,14 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     samples, stride = (8, 4) if heavy else (32, 1)
     chunk = 8 if heavy else None
     # the certified walk searches ± the size, or to the ends of the range when it is wider
-    extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])
+    extent = None if rotary or rng is None else max(m.size, -rng[0], rng[1])
     ev = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else None
     hi, lo = (ev.hi, ev.lo) if ev is not None and ev.period is None else (None, None)
     seg_f = _segment(_side(m, plan, k, +1, heavy, samples, stride, branch, cancel), chunk, hi)
     if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
-        periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
+        periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * m.size)
         return Motion(m, k, True, True, (seg_f,), periodic, ev)
     seg_b = _segment(_side(m, plan, k, -1, heavy, samples, stride, branch, cancel), chunk, lo)
     return Motion(m, k, rotary, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False, ev)

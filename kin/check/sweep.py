@@ -23,19 +23,13 @@ import numpy as np
 from multiloop.kin.solve import solve
 from multiloop.topo.model import Mechanism
 
-__all__ = ["Side", "XTOL", "mechanism_size"]
+__all__ = ["Side", "XTOL"]
 
 #: bracket width at which a refinement stops (rad, or fraction of the size for P drivers)
 XTOL = 1e-10
 _GOLD = 0.5 * (np.sqrt(5.0) - 1.0)
 #: every 4th grid value (2° or 1 % of the size): the solver's own lead-in step
 _STRIDE = 4
-
-
-def mechanism_size(m: Mechanism) -> float:
-    """Largest extent of the reference joint positions (m)."""
-    xy = np.array([j.at for j in m.joints if j.at is not None], float)
-    return float(max(np.max(np.ptp(xy, axis=0)), 1e-12)) if len(xy) > 1 else 1.0
 
 
 @dataclass(frozen=True)
@@ -76,7 +70,7 @@ class Side:
 
     @property
     def xtol(self) -> float:
-        return XTOL if self.is_rotary else XTOL * mechanism_size(self.mechanism)
+        return XTOL if self.is_rotary else XTOL * self.mechanism.size
 
     def inputs(self, x) -> np.ndarray:
         x = np.asarray(x, float).reshape(-1)

@@ -379,8 +379,7 @@ def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
     check_finite_inputs(m, q, "driver inputs")
     period = table_period(m) if degrees else np.radians(table_period(m))
     limit = MAX_ANGLE_DEG if degrees else np.radians(MAX_ANGLE_DEG)
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    size = m.size
     for k, d in enumerate(m.drivers):
         col = q[:, k]
         if m.is_rotary(d):
