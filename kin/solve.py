@@ -58,6 +58,7 @@ from .state import KinematicState
 __all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
            "motion_events", "check_finite_inputs"]
 
+#: the solvers of the groups (the first is the default): closed forms where a kind has one, or Newton
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = SINGULAR       # relative determinant below which a position is singular
 
