@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import ParameterError, explain
 from multiloop.topo.model import Mechanism
 
 from .forces import forces, reduce_inputs, table_period
@@ -47,21 +47,21 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
         (1e9 deg for an R driver, 100 × the mechanism's size for a P driver).
     """
     if steps is not None and not 1 <= steps <= MAX_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)), "steps")
     if (start is None) != (stop is None):
-        raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
+        raise ParameterError(explain("start/stop", expected="both or neither", got="only one"), "start", "stop")
     rotary = {m.is_rotary(d) for d in m.drivers}
     size = m.size
     limit = min(MAX_ANGLE_DEG if True in rotary else np.inf,
                 MAX_SLIDE_SIZES * size if False in rotary else np.inf)
-    for name, v in (("--from", start), ("--to", stop)):
+    for name, v in (("start", start), ("stop", stop)):
         if v is not None and not np.isfinite(v):
-            raise InputError(explain(name, expected="a finite number", got=str(v)))
+            raise ParameterError(explain(name, expected="a finite number", got=str(v)), name)
         if v is not None and abs(v) > limit:
-            raise InputError(explain(name, expected=f"a magnitude of at most {limit:.6g}"
-                                     + (" deg" if True in rotary and limit == MAX_ANGLE_DEG else
-                                        f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
-                                     got=f"{v:g}"))
+            raise ParameterError(explain(name, expected=f"a magnitude of at most {limit:.6g}"
+                                         + (" deg" if True in rotary and limit == MAX_ANGLE_DEG else
+                                            f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
+                                         got=f"{v:g}"), name)
     n = steps if steps is not None else 36
     if start is None and any(d.range is not None for d in m.drivers):
         return _ranged_default(m, n, size)
@@ -75,8 +75,8 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
         return np.arange(n) * (360.0 / n)
     if rotary == {False}:
         return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
-    raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",
-                             got="no range"))
+    raise ParameterError(explain("drivers", expected="'start' and 'stop' when R and P drivers are mixed",
+                                 got="no range"), "drivers", "start", "stop")
 
 
 def _default_column(m: Mechanism, d, n: int, size: float) -> np.ndarray:
@@ -129,13 +129,14 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
         try:
             vals = [float(x) for x in str(at).split(",")]
         except ValueError:
-            raise InputError(explain("--at", expected="a number (deg or m) per driver, comma-separated",
-                                     got=repr(at))) from None
+            raise ParameterError(explain("at", expected="a number (deg or m) per driver, comma-separated",
+                                         got=repr(at)), "at") from None
         if len(vals) != nd:
-            raise InputError(explain("--at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"))
+            raise ParameterError(explain("at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"), "at")
         return reduce_inputs(m, [vals], degrees=True)
     if not 1 <= steps <= MAX_CYCLE_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)),
+                             "steps")
     q = np.zeros((steps, nd))
     if any(d.range is not None for d in m.drivers):   # a driver's range is its default sweep
         return si_inputs(m, input_range(m, steps)).reshape(steps, nd)
@@ -145,8 +146,8 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
         x = input_range(m, steps)               # the solve command's default stroke
         q[:] = x if x.ndim == 2 else x[:, None]
     else:
-        raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
-                                 got="no default sweep"))
+        raise ParameterError(explain("drivers", expected="'at' when the first driver is a P joint and others are R",
+                                     got="no default sweep"), "drivers", "at")
     return q
 
 
@@ -155,7 +156,8 @@ def driver_sweep(m: Mechanism, k: int, steps: int = 72) -> np.ndarray:
     (its ``range``, else a turn or 10 % of the size, :func:`input_range`), the others at
     the reference."""
     if not 1 <= steps <= MAX_CYCLE_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)),
+                             "steps")
     d = m.drivers[k]
     size = m.size
     col = _default_column(m, d, steps, size)

@@ -582,12 +582,12 @@ def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
     if lo > 0.0 or hi < 0.0:
         return explain(where, expected=f"a range that contains the reference, low <= 0 <= high ({unit})",
                        got=got, hint="the range is measured from the joint's reference position, "
-                                     "like --from and --to")
+                                     "like every driver input")
     bound = driver_bound(kind, size)
     if max(-lo, hi) > bound:
         limit = f"{MAX_ANGLE_DEG:g} deg" if rotary else f"{bound:.6g} m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"
         return explain(where, expected=f"ends of magnitude at most {limit}", got=got,
-                       hint="the bound of every driver input (solve --from/--to, forces --at)")
+                       hint="the bound of every driver input (solve, forces, check)")
     return None
 
 

@@ -89,7 +89,7 @@ def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timi
     value in degrees, or m for a slider input, measured as ``timing`` says: from the
     reference, absolute, or only its steps; see :data:`~.targets.TIMINGS`)."""
     if timing not in TIMINGS:
-        raise InputError(explain("timing (--timing)", expected=" or ".join(TIMINGS), got=repr(timing)))
+        raise ParameterError(explain("timing", expected=" or ".join(TIMINGS), got=repr(timing)), "timing")
     a, src = _table(path, (2, 3), "path")
     names = [p.name for p in m.points]
     if point is None and len(names) == 1:
@@ -101,12 +101,12 @@ def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timi
     if a.shape[1] == 3:
         values = np.radians(a[:, 2]) if m.is_rotary(0) else a[:, 2].copy()
     elif timing != "reference":
-        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path table with a third column",
-                                 got=f"{src} with two columns", hint="free timing needs no --timing"))
+        raise ParameterError(explain(f"timing {timing!r}", expected="a path table with a third column",
+                                     got=f"{src} with two columns", hint="free timing needs no 'timing'"), "timing")
     if timing == "absolute" and m.frame not in m.joint(m.drivers[0].joint).links:
-        raise InputError(explain("timing 'absolute' (--timing)", expected="a driver on the frame",
-                                 got=f"driver joint {m.drivers[0].joint!r} between moving links",
-                                 hint="use --timing reference or step"))
+        raise ParameterError(explain("timing 'absolute'", expected="a driver on the frame",
+                                     got=f"driver joint {m.drivers[0].joint!r} between moving links",
+                                     hint="set 'timing' to 'reference' or 'step'"), "timing")
     return PathTarget(a[:, :2].copy(), point, values, shape_only, src, timing)
 
 
@@ -171,9 +171,10 @@ def _checked(task: str, target, direction: str):
     rows.  Returns the target and a note or None."""
     if isinstance(target, PathTarget) and target.timing is not None and target.timing_mode != "step" \
             and direction != "any":
-        raise InputError(explain(f"direction {direction!r} (--direction)", expected="'any' with --timing "
-                                 f"{target.timing_mode}", got=repr(direction),
-                                 hint="the third column fixes the direction; free it with --timing step"))
+        raise ParameterError(explain(f"direction {direction!r}", expected=f"'any' with 'timing' {target.timing_mode!r}",
+                                     got=repr(direction),
+                                     hint="the third column fixes the direction; free it with 'timing' 'step'"),
+                             "direction", "timing")
     n = len(target.target_points())
     if n <= MAX_ROWS:
         return target, None
@@ -197,14 +198,16 @@ def _target(m, path, point, shape_only, function, output, motion, link, timing="
     if path is not None:
         return "path", path_target(m, path, point, shape_only=shape_only, timing=timing)
     if timing != "reference":
-        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path target with a third column",
-                                 got="function generation" if function is not None else "motion generation"))
+        raise ParameterError(explain(f"timing {timing!r}", expected="a path target with a third column",
+                                     got="function generation" if function is not None else "motion generation"),
+                             "timing")
     if function is not None:
         if output is None:
-            raise InputError(explain("function generation", expected="an output joint (--output JOINT)", got="none"))
+            raise ParameterError(explain("function generation", expected="an output joint ('output')", got="none"),
+                                 "output")
         return "function", function_target(m, function, output)
     if link is None:
-        raise InputError(explain("motion generation", expected="a link (--link NAME)", got="none"))
+        raise ParameterError(explain("motion generation", expected="a link ('link')", got="none"), "link")
     return "motion", motion_target(m, motion, link)
 
 

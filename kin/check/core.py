@@ -15,7 +15,7 @@ import numpy as np
 
 from multiloop.kin.solve import compile_plan, solve
 from multiloop.topo.assur import decompose
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .circuits import group_circuits
@@ -100,8 +100,8 @@ def _output(m: Mechanism, w, output, driver_link):
         return (output, "R", None)
     if output in tuple(p.name for p in m.points):
         return (output, "point", None)
-    raise InputError(explain("--output", expected="a link or tracer point name of the mechanism",
-                             got=repr(output), hint="links: " + ", ".join(m.link_names)))
+    raise ParameterError(explain("output", expected="a link or tracer point name of the mechanism",
+                                 got=repr(output), hint="links: " + ", ".join(m.link_names)), "output")
 
 
 def _ratio(state, out) -> np.ndarray:
@@ -317,8 +317,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     if not m.drivers:
         raise InputError(explain("mechanism", expected="at least one driver", got="none"))
     if not 0.0 <= float(min_transmission) <= 90.0:
-        raise InputError(explain("min_transmission", expected="degrees in [0, 90]",
-                                 got=repr(min_transmission)))
+        raise ParameterError(explain("min_transmission", expected="degrees in [0, 90]",
+                                     got=repr(min_transmission)), "min_transmission")
     ap = decompose(m)
     plan = compile_plan(m, ap)
     specs = angle_specs(ap)
@@ -326,7 +326,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     positions = positions or {}
     unknown = set(positions) - {d.joint for d in m.drivers}
     if unknown:
-        raise InputError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))))
+        raise ParameterError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))),
+                             "positions")
     dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
                 for k, d in enumerate(m.drivers))
     if cancel is not None:                  # before the workspace and the last solve

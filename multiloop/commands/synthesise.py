@@ -125,7 +125,7 @@ def run_without_start(args, limits: dict) -> int:
 def run(args) -> int:
     from multiloop.catalogue.dimensional import synthesise
 
-    limits = Budget.of(args.evaluations, args.budget, default=None, names=("--evaluations", "--budget")).keywords()
+    limits = Budget.of(args.evaluations, args.budget, default=None).keywords()
     if args.start is None:
         return run_without_start(args, limits)
     if args.tol is None:
