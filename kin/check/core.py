@@ -133,7 +133,7 @@ def _angles(mo, specs) -> tuple[AngleResult, ...]:
 def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
-    rotary = dj.kind is JointKind.R
+    rotary = m.is_rotary(k)
     groups, D, mo = _motion(m, ap, plan, k, cancel)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     ev = mo.events
