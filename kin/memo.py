@@ -7,8 +7,9 @@ kernel, the steps needed for a set of outputs) is kept here, keyed by the plan's
 identity, and goes away with the plan (a weak reference), as :func:`functools.cache`
 keeps a function's results beside its arguments.
 
->>> from types import SimpleNamespace
->>> owner = SimpleNamespace()
+>>> class Plan:
+...     pass
+>>> owner = Plan()
 >>> cached(owner, "twice", lambda o, a: 2 * a, 21)
 42
 >>> cached(owner, "twice", lambda o, a: 0, 21)     # kept: not computed again
