@@ -50,12 +50,13 @@ from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
 from .groups.step import SINGULAR
 from .memo import cached, memo_of
+from .motion import DriverMotion
 from .poses import PoseRates, Poses
 from .result import MESSAGES, Status
 from .rigid import transport
 from .state import KinematicState
 
-__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
+__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH",
            "motion_events", "check_finite_inputs"]
 
 #: the solvers of the groups (the first is the default): closed forms where a kind has one, or Newton
@@ -455,33 +456,19 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     return ch
 
 
-@dataclass(frozen=True)
-class MotionEvents:
-    """The certified motion of a one-driver mechanism from its reference (rad or m):
-    ``lo`` ≤ input ≤ ``hi`` (±inf when the driver turns without limit, ``period`` 2π or
-    4π then), ``crossings`` (input, group label) where two assembly branches of a group
-    meet, ``limits`` {"lo"/"hi": group label} of the groups that stop the motion.  An end
-    absent from ``limits`` is not a limit: ``lo``/``hi`` is then the end of the searched
-    extent of a P driver (the motion goes on beyond it)."""
-
-    lo: float
-    hi: float
-    period: float | None
-    crossings: tuple[tuple[float, str], ...]
-    limits: MappingProxyType
-
-
-def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> MotionEvents | None:
-    """The events of a one-driver mechanism's motion found by the certified walk
-    (:mod:`kin.continuation`): every crossing and both limits, none read off a grid.
-    ``extent`` (m) bounds the search of a P driver (default: the mechanism's size).
-    None for a mechanism with several drivers."""
+def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> DriverMotion | None:
+    """The certified motion of a one-driver mechanism (:class:`~kin.motion.DriverMotion`):
+    its ends, whether it turns fully, every crossing and the groups at its limits, found
+    by the certified walk (:mod:`kin.continuation`), none read off a grid.  ``extent``
+    (m) bounds the search of a P driver (default: the mechanism's size).  None for a
+    mechanism with several drivers."""
     sp = plan_of(mechanism, plan)
     if len(sp.mechanism.drivers) != 1:
         return None
     span = sp.size if extent is None else float(extent)
     ch = _chart(sp, True, np.array([-span, span]))
-    return MotionEvents(ch.lo, ch.hi, ch.period, tuple((c, sp.steps[k].label) for c, k in ch.crossings),
+    return DriverMotion(sp.mechanism, 0, ch.lo, ch.hi, ch.period,
+                        tuple((c, sp.steps[k].label) for c, k in ch.crossings),
                         MappingProxyType({side: sp.steps[k].label for side, k in ch.limits.items()}))
 
 

@@ -17,6 +17,7 @@ from multiloop.topo.model import Mechanism
 
 from .forces import forces, reduce_inputs, table_period
 from .forces.solver import MAX_ANGLE_DEG, MAX_SLIDE_SIZES
+from .motion import DriverMotion
 
 __all__ = ["MAX_STEPS", "MAX_CYCLE_STEPS", "input_range", "si_inputs", "cycle_inputs", "driver_sweep",
            "driver_forces", "DriverForces"]
@@ -158,12 +159,9 @@ def driver_sweep(m: Mechanism, k: int, steps: int = 72) -> np.ndarray:
     if not 1 <= steps <= MAX_CYCLE_STEPS:
         raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)),
                              "steps")
-    d = m.drivers[k]
-    size = m.size
-    col = _default_column(m, d, steps, size)
-    q = np.zeros((steps, len(m.drivers)))
-    q[:, k] = np.radians(col) if m.is_rotary(d) else col
-    return q
+    motion = DriverMotion.held(m, k)
+    col = _default_column(m, m.drivers[k], steps, m.size)
+    return motion.inputs(np.radians(col) if motion.rotary else col)
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from multiloop.kin.motion import DriverMotion
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import Mechanism
 
@@ -51,9 +52,7 @@ def instant_at(m: Mechanism, at: float | None) -> np.ndarray | None:
     """``at`` in deg or m of the first driver as the ``at`` of :func:`~kin.check.check`."""
     if at is None or not m.drivers:
         return None
-    x = np.zeros(len(m.drivers))
-    x[0] = _to_api(m, _finite(at, "at"))
-    return x
+    return DriverMotion.held(m, 0).inputs([_to_api(m, _finite(at, "at"))])[0]
 
 
 def output_point(m: Mechanism, name: str | None) -> tuple[Mechanism, str | None]:

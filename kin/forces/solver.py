@@ -18,6 +18,7 @@ import numpy as np
 from multiloop.topo.errors import InputError, SingularityWarning, explain
 from multiloop.topo.model import MAX_ANGLE_DEG, MAX_SLIDE_SIZES, JointKind, Mechanism
 
+from ..motion import DriverMotion
 from ..solve import check_finite_inputs
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
@@ -416,9 +417,7 @@ def _solve_state(m: Mechanism, inputs, speeds, accelerations) -> KinematicState:
     for k in range(len(m.drivers)):
         if e[k] == 0.0:
             continue
-        unit = np.zeros(len(m.drivers))
-        unit[k] = 1.0
-        s1 = solve(m, q, derivatives=True, input_rates=unit)
+        s1 = solve(m, q, derivatives=True, input_rates=DriverMotion.held(m, k).rates())
         acc += s1.velocities * e[k]
         eps += s1.omegas * e[k]
     return dataclasses.replace(st, accelerations=acc, epsilons=eps)   # every other field kept
