@@ -50,12 +50,22 @@ class Segment:
 @dataclass(frozen=True)
 class Motion:
     """The sampled motion of a driver (``driver``) from the reference: one segment
-    (full rotation) or two."""
+    (full rotation) or two.  ``rotary`` and ``events`` (the driver's certified motion,
+    or None without one) are the driver's, copied when the motion is built: every
+    refinement reads them."""
 
     driver: DriverMotion
+    rotary: bool
     full_rotation: bool
     segments: tuple[Segment, ...]
     periodic: bool
+    events: DriverMotion | None
+
+    @classmethod
+    def of(cls, driver: DriverMotion, full_rotation: bool, segments: tuple[Segment, ...],
+           periodic: bool) -> "Motion":
+        return cls(driver, driver.rotary, full_rotation, segments, periodic,
+                   driver if driver.certified else None)
 
     @property
     def mechanism(self) -> Mechanism:
@@ -64,15 +74,6 @@ class Motion:
     @property
     def k(self) -> int:
         return self.driver.k
-
-    @property
-    def rotary(self) -> bool:
-        return self.driver.rotary
-
-    @property
-    def events(self) -> DriverMotion | None:
-        """The driver's certified motion (one driver), else None."""
-        return self.driver if self.driver.certified else None
 
     @property
     def binds(self) -> tuple[str, ...]:
@@ -211,6 +212,6 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * m.size)
-        return Motion(dm, True, (seg_f,), periodic)
+        return Motion.of(dm, True, (seg_f,), periodic)
     seg_b = _segment(_side(dm, plan, -1, heavy, samples, stride, branch, cancel), chunk, lo)
-    return Motion(dm, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False)
+    return Motion.of(dm, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False)
