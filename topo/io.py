@@ -406,7 +406,7 @@ def _read_range(label: str, value: Any, joints, jn: str) -> tuple[float, float]:
     for a P joint), returned in rad or m; the builder checks low < high and that it
     contains the reference."""
     kind = next((j.kind for j in joints if j.name == jn), None)
-    rotary = kind is not None and JointKind(kind) is JointKind.R
+    rotary = kind is not None and JointKind(kind).is_rotary
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise InputError(explain(f"{label} range", expected="[low, high] (" + ("deg" if rotary else "m")
                                  + ", from the reference)", got=repr(value)[:60]))

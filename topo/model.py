@@ -50,6 +50,12 @@ class JointKind(str, enum.Enum):
     R = "R"
     P = "P"
 
+    @property
+    def is_rotary(self) -> bool:
+        """An R joint turns (a driver on it takes radians, read and shown in degrees); a P
+        joint slides (metres).  :meth:`Mechanism.is_rotary` asks it of a driver's joint."""
+        return self is JointKind.R
+
 
 @dataclass(frozen=True, slots=True)
 class Link:
@@ -229,7 +235,7 @@ class Mechanism:
         (True, False)
         """
         d = driver if isinstance(driver, Driver) else self.drivers[driver]
-        return self.joint(d.joint).kind is JointKind.R
+        return self.joint(d.joint).kind.is_rotary
 
     def link(self, name: str) -> Link:
         for lk in self.links:
@@ -556,7 +562,7 @@ def _extent(points: Sequence) -> float:
 def driver_bound(kind, size: float) -> float:
     """The largest magnitude of a driver's input (rad for an R joint, m for a P joint of a
     mechanism of ``size`` m): :data:`MAX_ANGLE_DEG`, or :data:`MAX_SLIDE_SIZES` × the size."""
-    return math.radians(MAX_ANGLE_DEG) if JointKind(kind) is JointKind.R else MAX_SLIDE_SIZES * size
+    return math.radians(MAX_ANGLE_DEG) if JointKind(kind).is_rotary else MAX_SLIDE_SIZES * size
 
 
 def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
@@ -565,7 +571,7 @@ def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
     (the mechanism's ``size`` for a P joint)."""
     if rng is None:
         return None
-    rotary = JointKind(kind) is JointKind.R
+    rotary = JointKind(kind).is_rotary
     unit = "deg" if rotary else "m"
     where = f"[[driver]] on joint '{jn}' range"
     try:

@@ -322,8 +322,7 @@ class Problem:
         inv = (1.0 / size)[:, None, None]
         if isinstance(self.target, MotionTarget):
             return np.concatenate([D[..., :2] * inv, _wrap(D[..., 2:])], axis=-1)
-        if isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(
-                self.target.joint).kind is JointKind.R:
+        if isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(self.target.joint).kind.is_rotary:
             return _wrap(D) * inv
         return D * inv
 
@@ -332,7 +331,7 @@ class Problem:
         targets ``T`` (P, N, c), column by column (no (P, N, K, c) array)."""
         ang = isinstance(self.target, MotionTarget) or (
             isinstance(self.target, FunctionTarget)
-            and self.ev.mechanism.joint(self.target.joint).kind is JointKind.R)
+            and self.ev.mechanism.joint(self.target.joint).kind.is_rotary)
         c = F.shape[-1]
         inv = (1.0 / size)[:, None, None]
         out = None

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.topo.errors import InputError, ParameterError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
@@ -118,7 +118,7 @@ def function_target(m: Mechanism, function, output: str) -> FunctionTarget:
         raise InputError(explain(f"output joint {output!r}", expected="a joint of the start mechanism",
                                  got="no such joint", hint=f"joints: {', '.join(m.joint_names)}"))
     x = np.radians(a[:, 0]) if m.is_rotary(0) else a[:, 0]
-    y = np.radians(a[:, 1]) if m.joint(output).kind is JointKind.R else a[:, 1]
+    y = np.radians(a[:, 1]) if m.joint(output).kind.is_rotary else a[:, 1]
     if np.ptp(y) == 0:
         raise InputError(explain(src, expected="output values that vary", got="a constant output"))
     return FunctionTarget(x, y, output, src)
@@ -548,7 +548,7 @@ def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndar
     if isinstance(t, MotionTarget):
         return np.column_stack([F[:, :2], np.degrees(F[:, 2])]), np.column_stack([T[:, :2], np.degrees(T[:, 2])])
     if isinstance(t, FunctionTarget):
-        rot = problem.ev.mechanism.joint(t.joint).kind is JointKind.R
+        rot = problem.ev.mechanism.joint(t.joint).kind.is_rotary
         y = F[:, 0] + t.outputs[0]
         return (np.degrees(y), np.degrees(t.outputs)) if rot else (y, t.outputs.copy())
     return F, np.asarray(T)
