@@ -202,7 +202,7 @@ def main(argv=None) -> int:
                   flush=True)
     if args.sample14:
         sample14(args.sample14)
-    if args.routes and not routes(args.routes, parse_assortment(args.la, "--la"), parse_assortment(args.mja, "--mja"),
+    if args.routes and not routes(args.routes, parse_assortment(args.la, "la"), parse_assortment(args.mja, "mja"),
                                   None if args.joints is None else {int(j) for j in args.joints.split(",")},
                                   tuple(args.route_names.split(",")), args.against):
         return 1

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator, Sequence
 
-from multiloop.topo.errors import InputError, OutputError, explain
+from multiloop.topo.errors import InputError, OutputError, ParameterError, explain
 
 from . import stored_rows as sr
 from .synthesis import ChainRecord, SynthesisOptions, plan_tasks
@@ -119,8 +119,8 @@ def _tokens(text: str) -> list[tuple[str, str]]:
     while pos < len(text):
         mt = _TOKEN.match(text, pos)
         if not mt or mt.end() == pos:
-            raise InputError(explain("--query", expected="column op value terms joined by AND/OR/NOT",
-                                     got=f"unexpected text at {text[pos:pos + 12]!r}"))
+            raise ParameterError(explain("query", expected="column op value terms joined by AND/OR/NOT",
+                                         got=f"unexpected text at {text[pos:pos + 12]!r}"), "query")
         kind = mt.lastgroup
         out.append((kind, mt.group(kind)))
         pos = mt.end()
@@ -148,9 +148,9 @@ def _check_size(toks: list[tuple[str, str]]) -> None:
         deepest = max(deepest, depth)
     terms = sum(1 for kind, _ in toks if kind == "op")
     if deepest > MAX_QUERY_DEPTH or terms > MAX_QUERY_TERMS:
-        raise InputError(explain("--query", expected=f"at most {MAX_QUERY_DEPTH} nested parentheses and "
-                                 f"{MAX_QUERY_TERMS} comparisons",
-                                 got=f"{deepest} nested, {terms} comparisons"))
+        raise ParameterError(explain("query", expected=f"at most {MAX_QUERY_DEPTH} nested parentheses and "
+                                     f"{MAX_QUERY_TERMS} comparisons",
+                                     got=f"{deepest} nested, {terms} comparisons"), "query")
 
 
 def parse_query(text: str) -> tuple[str, list]:
@@ -179,8 +179,8 @@ def parse_query(text: str) -> tuple[str, list]:
     try:
         text.encode("utf-8")
     except UnicodeEncodeError as exc:          # a byte of the command line that is not UTF-8
-        raise InputError(explain("--query", expected="UTF-8 text", got=f"an undecodable byte at {exc.start}",
-                                 hint="write the query in UTF-8")) from None
+        raise ParameterError(explain("query", expected="UTF-8 text", got=f"an undecodable byte at {exc.start}",
+                                     hint="write the query in UTF-8"), "query") from None
     toks = _tokens(text)
     _check_size(toks)
     if not toks:
@@ -204,8 +204,8 @@ class _QueryParser:
 
     def bad(self, what: str):
         kind, val = self.peek()
-        raise InputError(explain("--query", expected=what, got=repr(val) if kind else "end of text",
-                                 hint="columns: " + ", ".join(QUERY_COLUMNS)))
+        raise ParameterError(explain("query", expected=what, got=repr(val) if kind else "end of text",
+                                     hint="columns: " + ", ".join(QUERY_COLUMNS)), "query")
 
     def _joined(self, word: str, part) -> str:
         parts = [part()]
@@ -290,7 +290,7 @@ class Atlas:
     def __init__(self, path: str | Path = "atlas.sqlite", readonly: bool = False):
         self.path = str(path)
         if self.path != ":memory:" and Path(self.path).is_dir():
-            raise InputError(explain("--db", expected="an atlas file (SQLite)", got=f"the directory {self.path!r}"))
+            raise InputError(explain(f"atlas {self.path!r}", expected="an atlas file (SQLite)", got="a directory"))
         self.created = False             # this Atlas made the file: a run that fails removes it
         if readonly:
             self._open_readonly()
@@ -306,9 +306,8 @@ class Atlas:
             self.con.commit()
         except sqlite3.DatabaseError as exc:   # not a database, unreadable, read-only place, a full disk
             self._remove_created()
-            raise InputError(explain("--db", expected="an atlas file (SQLite) or a new file name",
-                                     got=f"{self.path!r}: {exc}",
-                                     hint="give another --db path")) from None
+            raise InputError(explain(f"atlas {self.path!r}", expected="an atlas file (SQLite) or a new file name",
+                                     got=str(exc), hint="give another file name")) from None
 
     def _open_readonly(self) -> None:
         """Open an existing atlas for reading only: no journal, no lock file, nothing
@@ -365,7 +364,7 @@ class Atlas:
         except sqlite3.OperationalError as exc:
             self._rollback()
             if "full" in str(exc):     # SQLITE_FULL: "database or disk is full"
-                raise OutputError(explain(f"--db {self.path!r}", expected="room to store the atlas",
+                raise OutputError(explain(f"atlas {self.path!r}", expected="room to store the atlas",
                                           got="disk full", hint="free some space and run again: the "
                                           "build resumes from the tasks already stored")) from None
             raise

@@ -10,57 +10,57 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import ParameterError, explain
 
 from .atlas import Atlas, BuildResult, parse_query
 from .synthesis import SynthesisOptions
 
 __all__ = ["INT_RANGES", "STORED_UP_TO", "atlas_request", "build_atlas", "counts_only", "parse_assortment"]
 
-#: with ``--table``, chains of more links are counted by row, not stored (14 links:
+#: with ``table``, chains of more links are counted by row, not stored (14 links:
 #: tens of millions of chains)
 STORED_UP_TO = 12
 
-#: the integer options, their names in the request and their ranges (SQLite and C ints
-#: stop at 2**63 and 2**31)
-INT_RANGES = {"--dof": ("dof", 1, 2 ** 31 - 1),
-              "--max-multiplicity": ("max_multiplicity", 1, 2 ** 31 - 1),
-              "--max-link-degree": ("max_link_degree", 2, 2 ** 31 - 1),
-              "--workers": ("workers", 1, 1024), "--limit": ("limit", 0, 2 ** 63 - 1),
-              "--curves": ("curves", 1, 10 ** 6),
-              "--html-limit": ("html_limit", 1, 2 ** 63 - 1)}
+#: the integer options by their names in the request, and their ranges (SQLite and C
+#: ints stop at 2**63 and 2**31)
+INT_RANGES = {"dof": (1, 2 ** 31 - 1), "max_multiplicity": (1, 2 ** 31 - 1), "max_link_degree": (2, 2 ** 31 - 1),
+              "workers": (1, 1024), "limit": (0, 2 ** 63 - 1), "curves": (1, 10 ** 6),
+              "html_limit": (1, 2 ** 63 - 1)}
 
 
 def _check_options(req: Mapping) -> None:
     """Every integer option within its range, the query well formed."""
-    for flag, (key, lo, hi) in INT_RANGES.items():
+    for key, (lo, hi) in INT_RANGES.items():
         value = req[key]
         if value is not None and not lo <= value <= hi:
             got = str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"
-            raise InputError(explain(flag, expected=f"an integer from {lo} to {hi}", got=got))
+            raise ParameterError(explain(key, expected=f"an integer from {lo} to {hi}", got=got), key)
     if req["query"] is not None:
         parse_query(req["query"])
     if req["table"] and req["links"] is None:
-        raise InputError(explain("--table", expected="--links N --dof F", got="no --links"))
+        raise ParameterError(explain("table", expected="'links' N and 'dof' F", got="no 'links'"),
+                             "table", "links", "dof")
     if req["curves"] is not None and not (req["mechanisms"] and req["links"] is not None and req["dof"] == 1):
-        raise InputError(explain("--curves", expected="--links N --dof 1 --mechanisms",
-                                 got="--curves without them", hint="the curves belong to the stored mechanisms"))
+        raise ParameterError(explain("curves", expected="'links' N, 'dof' 1 and 'mechanisms'",
+                                     got="'curves' without them", hint="the curves belong to the stored mechanisms"),
+                             "curves", "links", "dof", "mechanisms")
 
 
-def parse_assortment(text: str | None, flag: str) -> tuple[int, ...] | None:
-    """``"8-1-1"`` (or ``"8,1,1"``, ``"[8, 1, 1]"``) as counts; None for None."""
+def parse_assortment(text: str | None, name: str) -> tuple[int, ...] | None:
+    """``"8-1-1"`` (or ``"8,1,1"``, ``"[8, 1, 1]"``) as counts; None for None; ``name``
+    is the parameter it was given as (``la``, ``mja``)."""
     if text is None:
         return None
     body = text.strip().strip("[]").replace(",", "-").replace(" ", "")
     words = body.split("-") if body else []
     if len(text) > 200 or not all(w.isdigit() and len(w) <= 3 for w in words):
-        raise InputError(explain(flag, expected="counts joined by '-' (e.g. 8-1-1; 0 for none)",
-                                 got=repr(text[:40])))
+        raise ParameterError(explain(name, expected="counts joined by '-' (e.g. 8-1-1; 0 for none)",
+                                     got=repr(text[:40])), name)
     return tuple(int(w) for w in words)
 
 
 def counts_only(opts: SynthesisOptions | None, table: bool) -> bool:
-    """True when the request is counted by row without storing chains: ``--table`` beyond
+    """True when the request is counted by row without storing chains: ``table`` beyond
     :data:`STORED_UP_TO` links."""
     return opts is not None and table and opts.n > STORED_UP_TO
 
@@ -73,14 +73,14 @@ def atlas_request(req: Mapping) -> SynthesisOptions | None:
     Raises
     ------
     InputError
-        An option out of range, a malformed query, ``--table`` or ``--curves`` without
+        An option out of range, a malformed query, ``table`` or ``curves`` without
         what they need, a missing atlas, no Dask or an unreachable scheduler.
     """
     _check_options(req)
     db, scheduler = req["db"], req["scheduler"]
     if req["links"] is None and not Path(db).exists():
-        raise InputError(explain("--db", expected="an existing atlas file (or --links N to build one)",
-                                 got=repr(db)))
+        raise ParameterError(explain("db", expected="an existing atlas file (or 'links' N to build one)",
+                                     got=repr(db)), "db", "links")
     if scheduler is not None:
         from .distributed import require_dask
         require_dask()
@@ -90,11 +90,12 @@ def atlas_request(req: Mapping) -> SynthesisOptions | None:
                             max_multiplicity=req["max_multiplicity"],
                             max_link_degree=req["max_link_degree"], planar=req["planar"],
                             no_fractionated=req["no_fractionated"],
-                            la=parse_assortment(req.get("la"), "--la"), mja=parse_assortment(req.get("mja"), "--mja"))
+                            la=parse_assortment(req.get("la"), "la"), mja=parse_assortment(req.get("mja"), "mja"))
     if counts_only(opts, req["table"]) and (opts.planar or opts.no_fractionated):
-        raise InputError(explain("--table", expected=f"no --planar or --no-fractionated beyond {STORED_UP_TO} links",
-                                 got=f"{opts.n} links with a per-chain filter",
-                                 hint="the rows are counted inside the generator, chain records are not built"))
+        raise ParameterError(explain("table", expected=f"no 'planar' or 'no_fractionated' beyond {STORED_UP_TO} links",
+                                     got=f"{opts.n} links with a per-chain filter",
+                                     hint="the rows are counted inside the generator, chain records are not built"),
+                             "table", "planar", "no_fractionated")
     if scheduler is not None and not Path(db).exists():
         from .distributed import connect_scheduler   # fail before a file is created
         connect_scheduler(scheduler).close()

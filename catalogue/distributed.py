@@ -29,7 +29,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterator, Sequence
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import ParameterError, explain
 
 from .synthesis import ChainRecord, SynthesisOptions, Task, iter_chains, plan_tasks, run_task
 
@@ -149,10 +149,10 @@ def require_dask() -> None:
     import importlib.util
 
     if importlib.util.find_spec("distributed") is None:
-        raise InputError(explain("--scheduler", expected="Dask's distributed package",
-                                 got="it is not installed",
-                                 hint="pip install 'multiloop[dask]' (the [dask] extra), "
-                                      "or drop --scheduler to use local processes"))
+        raise ParameterError(explain("scheduler", expected="Dask's distributed package",
+                                     got="it is not installed",
+                                     hint="pip install 'multiloop[dask]' (the [dask] extra), "
+                                          "or drop 'scheduler' to use local processes"), "scheduler")
 
 
 def _dask(fn, calls, scheduler):
@@ -177,10 +177,10 @@ def connect_scheduler(address: str):
     try:
         return Client(address, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
-        raise InputError(explain("--scheduler", expected="a reachable Dask scheduler (tcp://host:8786)",
-                                 got=f"{address!r}: {type(exc).__name__}: {exc}"[:200],
-                                 hint=f"start one with `dask scheduler`; connect timeout "
-                                      f"{SCHEDULER_TIMEOUT:g} s")) from None
+        raise ParameterError(explain("scheduler", expected="a reachable Dask scheduler (tcp://host:8786)",
+                                     got=f"{address!r}: {type(exc).__name__}: {exc}"[:200],
+                                     hint=f"start one with `dask scheduler`; connect timeout "
+                                          f"{SCHEDULER_TIMEOUT:g} s"), "scheduler") from None
 
 
 def type_synthesis(opts: SynthesisOptions, loops: bool = True, workers: int | None = 1,

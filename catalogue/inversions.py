@@ -276,11 +276,11 @@ def build_mechanisms(atlas: Atlas, opts: SynthesisOptions, progress: bool = Fals
     chains first); chains already done are skipped (resume).  1-DOF chains only: a
     mechanism here has one driver.
     """
-    from multiloop.topo.errors import InputError, explain
+    from multiloop.topo.errors import ParameterError, explain
 
     if opts.F != 1:
-        raise InputError(explain("--mechanisms", expected="--dof 1 (one driver per mechanism)",
-                                 got=f"--dof {opts.F}"))
+        raise ParameterError(explain("mechanisms", expected="'dof' 1 (one driver per mechanism)",
+                                     got=f"'dof' {opts.F}"), "mechanisms", "dof")
     _ensure(atlas)
     done = {r[0] for r in atlas.con.execute("SELECT chain FROM mechanism_chains")}
     todo = [r for r in atlas.chains(opts) if r.canonical not in done]

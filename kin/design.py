@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -45,11 +45,12 @@ __all__ = ["DesignPoses", "solve_designs", "design_names", "design_mechanism", "
 @dataclass(frozen=True, eq=False)
 class _BoundPlan:
     """What the pose store reads from a plan: the links' reference points ``origins`` (one
-    design), or, for a batch, their per-design arrays in ``extra["origins_xy"]``."""
+    design; None for a batch) and ``origins_xy``, the same as Python floats (one design)
+    or per-design arrays ``(D, 1)`` (a batch)."""
 
     mechanism: Mechanism
     origins: np.ndarray | None
-    extra: dict = field(default_factory=dict)
+    origins_xy: tuple
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,7 +192,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
-    G = Poses(_BoundPlan(mechanism, None, {"origins_xy": geo.origins_xy()}), shape)
+    G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape)
     for k, step in zip(steps, bound):
         okk = step.positions(G, X).ok
         G.invalidate(sp.steps[k].unknown, ~okk)
@@ -233,7 +234,7 @@ def _one_design(sp: SolvePlan, md: Mechanism, steps, X) -> np.ndarray:
     """Poses ``(n_links, 3, N)`` of one design ``md`` by the plan's closed-form steps."""
     geo = Geometry(md)
     origins = np.stack([geo.origin(x) for x in md.link_names])
-    G = Poses(_BoundPlan(md, origins), X.shape[0])
+    G = Poses(_BoundPlan(md, origins, tuple(map(tuple, np.asarray(origins, float).tolist()))), X.shape[0])
     for k in steps:
         st = sp.steps[k]
         okk = type(st.closed)(md, st, sp.size, geo).positions(G, X).ok
@@ -247,7 +248,7 @@ def _per_design(sp: SolvePlan, geo: Geometry, X, shape, outputs, deadline) -> De
     """The fallback for plans with a step that has no batched form: each design alone
     (no design after ``deadline``)."""
     m = sp.mechanism
-    G = Poses(_BoundPlan(m, None, {"origins_xy": geo.origins_xy()}), shape)
+    G = Poses(_BoundPlan(m, None, geo.origins_xy()), shape)
     T = np.full(G.T.shape, np.nan)
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     closed = all(sp.steps[k].closed is not None for k in steps)

@@ -54,6 +54,7 @@ import numpy as np
 
 from .groups.registry import COMPILED
 from .groups.step import trig_row
+from .memo import cached
 
 __all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
@@ -144,10 +145,7 @@ def kernel_plan(sp) -> KernelPlan:
     >>> [list(COMPILED)[c] for c in kp.codes], kp.complete
     (['drive_R', <GroupKind.RRR: 'RRR'>], True)
     """
-    hit = sp.extra.get("kernel")
-    if hit is None:
-        hit = sp.extra["kernel"] = lower_plan(sp)
-    return hit
+    return cached(sp, "kernel", lambda sp, _: lower_plan(sp))
 
 
 def mode() -> str:

@@ -4,8 +4,9 @@
 (with cos and sin) as contiguous arrays over the batch; a step reads the material points
 of known links from it and places its own links.  :class:`PoseRates` does the same for
 velocities and accelerations on the ``(N, n_links, 3)`` pose arrays.  Both take the
-compiled plan (anything with ``mechanism`` and ``origins``, the links' reference
-points).
+compiled plan (anything with ``mechanism`` and ``origins_xy``, the links' reference
+points as Python floats, or for a plan bound to a batch of designs (:mod:`kin.design`)
+arrays ``(D, 1)``).
 """
 from __future__ import annotations
 
@@ -57,15 +58,6 @@ def known_on(group, joint: str) -> str:
     raise KeyError(joint)  # pragma: no cover
 
 
-def _origins_xy(sp) -> tuple:
-    """The links' reference points as Python floats, kept on the plan (``sp.extra``);
-    a plan bound to a batch of designs (:mod:`kin.design`) keeps arrays ``(D, 1)``."""
-    hit = sp.extra.get("origins_xy")
-    if hit is None:
-        hit = sp.extra["origins_xy"] = tuple(map(tuple, np.asarray(sp.origins, float).tolist()))
-    return hit
-
-
 class Poses:
     """Working store of link poses: one preallocated ``(n_links, 3, *shape)`` array.
 
@@ -98,7 +90,7 @@ class Poses:
         self.points = [{} for _ in range(nl)]
         self.pending = set()                          # links whose angle row is not computed yet
         self.derived = set()                          # links whose angle row the kernel derived from (c, s)
-        self.org = _origins_xy(sp)
+        self.org = sp.origins_xy
         self.frame_k = f = self.idx[self.m.frame]
         self.T[f] = 0.0
         self.x[f], self.y[f], self.th[f] = self.T[f]

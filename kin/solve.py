@@ -33,7 +33,8 @@ Conventions
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
+from types import MappingProxyType
 
 import numpy as np
 
@@ -48,14 +49,17 @@ from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
 from .groups.registry import closed_form_step, newton_step
 from .groups.step import SINGULAR
+from .memo import cached, memo_of
+from .motion import DriverMotion
 from .poses import PoseRates, Poses
 from .result import MESSAGES, Status
 from .rigid import transport
 from .state import KinematicState
 
-__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH", "MotionEvents",
+__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH",
            "motion_events", "check_finite_inputs"]
 
+#: the solvers of the groups (the first is the default): closed forms where a kind has one, or Newton
 METHODS = ("auto", "closed_form", "newton")
 _SINGULAR = SINGULAR       # relative determinant below which a position is singular
 
@@ -75,7 +79,12 @@ class StepPlan:
 
 @dataclass(frozen=True, eq=False)
 class SolvePlan:
-    """A mechanism's Assur plan compiled for the solvers (build once, reuse)."""
+    """A mechanism's Assur plan compiled for the solvers (build once, reuse).
+
+    Every field is set by :func:`compile_plan` and never changes (``origins`` is a
+    read-only array).  Values derived on demand (the chart of the driver's motion, the
+    kernel plan, the steps an output needs) are kept beside the plan by :mod:`kin.memo`.
+    """
 
     mechanism: Mechanism
     assur: AssurPlan
@@ -85,7 +94,9 @@ class SolvePlan:
     joint_step: tuple[int, ...]       # step index solving that link (-1 frame)
     size: float                       # mechanism size (m), for tolerances
     point_host: tuple[int, ...] = ()
-    extra: dict = field(default_factory=dict)
+    origins_xy: tuple = ()            # the link reference points as Python floats (the pose store's)
+    joint_offsets: tuple = ()         # each joint's point from its host link's reference point
+    point_offsets: tuple = ()         # the same for each tracer point
 
 
 def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePlan:
@@ -113,8 +124,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
     org = link_origins(m)
     origins = np.array([org[x] for x in names])
     steps = []
-    xy = np.array([j.at for j in m.joints], float)
-    size = max(float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0, 1e-12)
+    size = m.size
     Z0 = np.zeros((1, len(names), 3))
     Z0[0, :, :2] = origins
     for k, s in enumerate(ap.steps):
@@ -147,7 +157,16 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         host.append(idx[cand[0]])
         hstep.append(solved.get(cand[0], -1))
     pts = tuple(idx[p.link] for p in m.points)
-    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), size, pts)
+    origins.flags.writeable = False
+    return SolvePlan(m, ap, tuple(steps), origins, tuple(host), tuple(hstep), size, pts,
+                     tuple(map(tuple, origins.tolist())), _offsets(m.joints, host, origins),
+                     _offsets(m.points, pts, origins))
+
+
+def _offsets(items, hosts, origins: np.ndarray) -> tuple:
+    """Each item's point (``at``) from its host link's reference point, as Python floats."""
+    r = np.array([j.at for j in items], float).reshape(-1, 2) - origins[list(hosts)]
+    return tuple(map(tuple, r.tolist()))
 
 
 # ---------------------------------------------------------------------------------
@@ -265,7 +284,7 @@ def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe:
 def _scale(sp: SolvePlan) -> np.ndarray:
     """Input units per scaled unit: 1 (rad) for R drivers, the size (m) for P drivers."""
     m = sp.mechanism
-    return np.array([1.0 if m.joint(d.joint).kind is JointKind.R else sp.size for d in m.drivers])
+    return np.array([1.0 if m.is_rotary(d) else sp.size for d in m.drivers])
 
 
 def _fill(nodes: np.ndarray, max_step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -331,10 +350,12 @@ class _Chart:
     lo: float
     hi: float
     period: float | None
-    flips: dict
+    flips: MappingProxyType
     crossings: tuple
-    limits: dict
+    limits: MappingProxyType
     is_r: bool
+    lo_req: float                     # the P driver's inputs the chart was built for (±inf: R)
+    hi_req: float
 
     @property
     def one_branch(self) -> bool:
@@ -384,7 +405,7 @@ def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
 
 def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart:
     """Walk up and down from the reference (one driver; scaled inputs)."""
-    is_r = sp.mechanism.joint(sp.mechanism.drivers[0].joint).kind is JointKind.R
+    is_r = sp.mechanism.is_rotary(0)
     scale = _scale(sp)[0]
     flips: dict = {}
     crossings, limits = [], {}
@@ -415,16 +436,15 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
         for k, f in dn.flips.items():
             flips.setdefault(k, []).extend(-x * scale for x in f)
         crossings += [(-x * scale, k) for x, k in dn.crossings]
-    ch = _Chart(lo, hi, period, {k: tuple(sorted(f)) for k, f in flips.items()},
-                tuple(sorted(crossings)), limits, is_r)
-    object.__setattr__(ch, "lo_req", lo_req if not is_r else -np.inf)
-    object.__setattr__(ch, "hi_req", hi_req if not is_r else np.inf)
-    return ch
+    return _Chart(lo, hi, period, MappingProxyType({k: tuple(sorted(f)) for k, f in flips.items()}),
+                  tuple(sorted(crossings)), MappingProxyType(limits), is_r,
+                  lo_req if not is_r else -np.inf, hi_req if not is_r else np.inf)
 
 
 def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     """The cached chart of ``sp`` covering the inputs ``x`` (built on first use)."""
-    ch = sp.extra.get("chart")
+    memo = memo_of(sp)
+    ch = memo.get("chart")
     if ch is not None and ch.covers(x):
         return ch
     if not ch or ch.is_r:
@@ -432,44 +452,29 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     else:
         lo_req = min(ch.lo_req, float(x.min(initial=0.0)))
         hi_req = max(ch.hi_req, float(x.max(initial=0.0)))
-    ch = _build_chart(sp, kernels, lo_req, hi_req)
-    sp.extra["chart"] = ch
+    ch = memo["chart"] = _build_chart(sp, kernels, lo_req, hi_req)
     return ch
 
 
-@dataclass(frozen=True)
-class MotionEvents:
-    """The certified motion of a one-driver mechanism from its reference (rad or m):
-    ``lo`` ≤ input ≤ ``hi`` (±inf when the driver turns without limit, ``period`` 2π or
-    4π then), ``crossings`` (input, group label) where two assembly branches of a group
-    meet, ``limits`` {"lo"/"hi": group label} of the groups that stop the motion.  An end
-    absent from ``limits`` is not a limit: ``lo``/``hi`` is then the end of the searched
-    extent of a P driver (the motion goes on beyond it)."""
-
-    lo: float
-    hi: float
-    period: float | None
-    crossings: tuple[tuple[float, str], ...]
-    limits: dict
-
-
-def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> MotionEvents | None:
-    """The events of a one-driver mechanism's motion found by the certified walk
-    (:mod:`kin.continuation`): every crossing and both limits, none read off a grid.
-    ``extent`` (m) bounds the search of a P driver (default: the mechanism's size).
-    None for a mechanism with several drivers."""
+def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> DriverMotion | None:
+    """The certified motion of a one-driver mechanism (:class:`~kin.motion.DriverMotion`):
+    its ends, whether it turns fully, every crossing and the groups at its limits, found
+    by the certified walk (:mod:`kin.continuation`), none read off a grid.  ``extent``
+    (m) bounds the search of a P driver (default: the mechanism's size).  None for a
+    mechanism with several drivers."""
     sp = plan_of(mechanism, plan)
     if len(sp.mechanism.drivers) != 1:
         return None
     span = sp.size if extent is None else float(extent)
     ch = _chart(sp, True, np.array([-span, span]))
-    return MotionEvents(ch.lo, ch.hi, ch.period, tuple((c, sp.steps[k].label) for c, k in ch.crossings),
-                        {side: sp.steps[k].label for side, k in ch.limits.items()})
+    return DriverMotion(sp.mechanism, 0, ch.lo, ch.hi, ch.period,
+                        tuple((c, sp.steps[k].label) for c, k in ch.crossings),
+                        MappingProxyType({side: sp.steps[k].label for side, k in ch.limits.items()}))
 
 
 def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
     m = sp.mechanism
-    if m.joint(m.drivers[k].joint).kind is JointKind.R:
+    if m.is_rotary(k):
         return f"{np.degrees(v):.6g}°"
     return f"{v:.6g} m"
 
@@ -758,8 +763,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     _check_range(sp, X)
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
-    needed = list(range(len(sp.steps))) if not wanted else _cached(sp, ("needed", wanted), needed_steps, wanted)
-    select = None if outputs is None else _cached(sp, ("select", wanted), _selection, outputs)
+    needed = list(range(len(sp.steps))) if not wanted else cached(sp, ("needed", wanted), needed_steps, wanted)
+    select = None if outputs is None else cached(sp, ("select", wanted), _selection, outputs)
     if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps) \
             and (state := _compiled_motion(sp, X, select)) is not None:
         return state                        # the compiled plan alone
@@ -784,7 +789,7 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     then (with ``select``, the outputs asked for: the other points NaN, and the angles
     computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
     m = sp.mechanism
-    ch = sp.extra.get("chart")
+    ch = memo_of(sp).get("chart")
     if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
             or not kernel.wanted(X.shape[0]):
         return None
@@ -798,7 +803,7 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
         return None
     P, nj = kr.points, m.n_joints
     if select is not None:                   # as _finish and _points with outputs=
-        drop_links, drop_points = _cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
+        drop_links, drop_points = cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
         if drop_links.size:
             T[drop_links, 2] = np.nan
         if drop_points.size:
@@ -830,7 +835,7 @@ def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
     for k, d in enumerate(m.drivers):
         if d.range is None:
             continue
-        rotary = m.joint(d.joint).kind is JointKind.R
+        rotary = m.is_rotary(d)
         tol = 1e-12 * (1.0 if rotary else sp.size) + 4 * np.spacing(np.abs(np.asarray(d.range, float)))
         out = (X[:, k] < d.range[0] - tol[0]) | (X[:, k] > d.range[1] + tol[1])
         if not out.any():
@@ -847,7 +852,7 @@ def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
 def _check_range(sp: SolvePlan, X: np.ndarray) -> None:
     m = sp.mechanism
     for k, d in enumerate(m.drivers):
-        if m.joint(d.joint).kind is JointKind.P and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
+        if not m.is_rotary(d) and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
             raise InputError(explain(f"input of the P driver {d.joint}",
                                      expected=f"a slide of at most {MAX_SLIDE:g} × the mechanism's size "
                                               f"({MAX_SLIDE * sp.size:.6g} m)",
@@ -875,17 +880,6 @@ def plan_of(mechanism: Mechanism, plan=None) -> SolvePlan:
 #: compiled plans of the last mechanisms solved, by identity (Mechanism is frozen)
 _PLANS: dict = {}
 _PLANS_KEPT = 64
-
-
-def _cached(sp: SolvePlan, key, f, arg):
-    """``f(sp, arg)`` kept on the plan under ``key`` (the last 32 keys)."""
-    hit = sp.extra.get(key)
-    if hit is None:
-        if len(sp.extra) > 64:
-            for k in [k for k in sp.extra if isinstance(k, tuple) and k[0] in ("needed", "select")][:32]:
-                del sp.extra[k]
-        hit = sp.extra[key] = f(sp, arg)
-    return hit
 
 
 def _selection(sp: SolvePlan, outputs) -> tuple:
@@ -961,7 +955,7 @@ def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
 def _fmt_input(m: Mechanism, x) -> str:
     parts = []
     for d, v in zip(m.drivers, np.atleast_1d(x)):
-        if m.joint(d.joint).kind is JointKind.R:
+        if m.is_rotary(d):
             parts.append(f"{d.joint} = {np.degrees(v):.6g}°")
         else:
             parts.append(f"{d.joint} = {v:.6g} m")
@@ -994,7 +988,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
            select=None, direct=None) -> KinematicState:
     m = sp.mechanism
     nj = m.n_joints
-    pos = _points(sp, G, sp.joint_host, "joints", None if select is None else select[0]) \
+    pos = _points(sp, G, "joints", None if select is None else select[0]) \
         if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
     if Zd is not None:
@@ -1004,7 +998,7 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
-        ppos = _points(sp, G, sp.point_host, "points", None if select is None else select[1]) \
+        ppos = _points(sp, G, "points", None if select is None else select[1]) \
             if direct is None else direct[:, nj:]
         if Zd is not None:
             pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
@@ -1014,18 +1008,11 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
                           notes=notes, poses=Z, pose_rates=Zd, pose_accelerations=Zdd, codes=code)
 
 
-def _points(sp: SolvePlan, G: "Poses", hosts, which: str, chosen=None) -> np.ndarray:
+def _points(sp: SolvePlan, G: "Poses", which: str, chosen=None) -> np.ndarray:
     """Positions ``(N, n, 2)`` of the joints' (or tracer points') material points, each
     carried by its host link's pose (:meth:`Poses.carry`), written point-major into one
     array and returned transposed."""
-    key = ("points", which)
-    hit = sp.extra.get(key)
-    if hit is None:
-        items = sp.mechanism.joints if which == "joints" else sp.mechanism.points
-        h = tuple(hosts)
-        r = np.array([j.at for j in items], float).reshape(-1, 2) - sp.origins[list(h)]
-        hit = sp.extra[key] = (h, tuple(map(tuple, r.tolist())))
-    h, r = hit
+    h, r = (sp.joint_host, sp.joint_offsets) if which == "joints" else (sp.point_host, sp.point_offsets)
     if chosen is None:
         out = np.empty((len(h), 2, G.M))
         chosen = range(len(h))

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 from .result import BatchStatus, inputs_json, json_ready
 from .rigid import move_point
@@ -135,7 +135,7 @@ def _state_dict(state, formula=None, inputs_cli=None, derivatives=None) -> dict:
     drivers = []
     inp = []
     for k, d in enumerate(m.drivers):
-        is_r = m.joint(d.joint).kind is JointKind.R
+        is_r = m.is_rotary(d)
         drivers.append({"joint": d.joint, "kind": "R" if is_r else "P", "unit": "deg" if is_r else "m"})
         if inputs_cli is not None:
             x = np.asarray(inputs_cli, float)

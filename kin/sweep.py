@@ -12,11 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.errors import ParameterError, explain
+from multiloop.topo.model import Mechanism
 
 from .forces import forces, reduce_inputs, table_period
 from .forces.solver import MAX_ANGLE_DEG, MAX_SLIDE_SIZES
+from .motion import DriverMotion
 
 __all__ = ["MAX_STEPS", "MAX_CYCLE_STEPS", "input_range", "si_inputs", "cycle_inputs", "driver_sweep",
            "driver_forces", "DriverForces"]
@@ -47,22 +48,21 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
         (1e9 deg for an R driver, 100 × the mechanism's size for a P driver).
     """
     if steps is not None and not 1 <= steps <= MAX_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)))
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_STEPS}", got=str(steps)), "steps")
     if (start is None) != (stop is None):
-        raise InputError(explain("--from/--to", expected="both or neither", got="only one"))
-    kinds = {m.joint(d.joint).kind for d in m.drivers}
-    xy = np.array([j.at for j in m.joints if j.at is not None], float).reshape(-1, 2)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
-    limit = min(MAX_ANGLE_DEG if JointKind.R in kinds else np.inf,
-                MAX_SLIDE_SIZES * size if JointKind.P in kinds else np.inf)
-    for name, v in (("--from", start), ("--to", stop)):
+        raise ParameterError(explain("start/stop", expected="both or neither", got="only one"), "start", "stop")
+    rotary = {m.is_rotary(d) for d in m.drivers}
+    size = m.size
+    limit = min(MAX_ANGLE_DEG if True in rotary else np.inf,
+                MAX_SLIDE_SIZES * size if False in rotary else np.inf)
+    for name, v in (("start", start), ("stop", stop)):
         if v is not None and not np.isfinite(v):
-            raise InputError(explain(name, expected="a finite number", got=str(v)))
+            raise ParameterError(explain(name, expected="a finite number", got=str(v)), name)
         if v is not None and abs(v) > limit:
-            raise InputError(explain(name, expected=f"a magnitude of at most {limit:.6g}"
-                                     + (" deg" if JointKind.R in kinds and limit == MAX_ANGLE_DEG else
-                                        f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
-                                     got=f"{v:g}"))
+            raise ParameterError(explain(name, expected=f"a magnitude of at most {limit:.6g}"
+                                         + (" deg" if True in rotary and limit == MAX_ANGLE_DEG else
+                                            f" m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"),
+                                         got=f"{v:g}"), name)
     n = steps if steps is not None else 36
     if start is None and any(d.range is not None for d in m.drivers):
         return _ranged_default(m, n, size)
@@ -72,18 +72,18 @@ def input_range(m: Mechanism, steps: int | None = None, start: float | None = No
         out = start + np.arange(n) * ((stop - start) / (n - 1))
         out[-1] = stop
         return out
-    if kinds == {JointKind.R}:
+    if rotary == {True}:
         return np.arange(n) * (360.0 / n)
-    if kinds == {JointKind.P}:
+    if rotary == {False}:
         return np.linspace(0.0, 0.1 * size, n) if n > 1 else np.zeros(1)
-    raise InputError(explain("drivers", expected="--from/--to when R and P drivers are mixed",
-                             got="no range"))
+    raise ParameterError(explain("drivers", expected="'start' and 'stop' when R and P drivers are mixed",
+                                 got="no range"), "drivers", "start", "stop")
 
 
 def _default_column(m: Mechanism, d, n: int, size: float) -> np.ndarray:
     """Driver ``d``'s default sweep in user units: its ``range`` (low to high), else a
     turn from the reference (R) or 0 to 10 % of the size (P)."""
-    rotary = m.joint(d.joint).kind is JointKind.R
+    rotary = m.is_rotary(d)
     if d.range is not None:
         lo, hi = np.degrees(d.range) if rotary else d.range
         return np.linspace(lo, hi, n) if n > 1 else np.zeros(1)
@@ -107,7 +107,7 @@ def si_inputs(m: Mechanism, x_user: np.ndarray) -> np.ndarray:
     cols = []
     for k, d in enumerate(m.drivers):
         x = x_user[:, k] if x_user.ndim == 2 else x_user
-        cols.append(np.radians(x) if m.joint(d.joint).kind is JointKind.R else x)
+        cols.append(np.radians(x) if m.is_rotary(d) else x)
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
 
 
@@ -126,29 +126,29 @@ def cycle_inputs(m: Mechanism, at: str | None = None, steps: int = 72) -> np.nda
     (each such driver over its range).
     """
     nd = len(m.drivers)
-    kinds = [m.joint(d.joint).kind for d in m.drivers]
     if at is not None:
         try:
             vals = [float(x) for x in str(at).split(",")]
         except ValueError:
-            raise InputError(explain("--at", expected="a number (deg or m) per driver, comma-separated",
-                                     got=repr(at))) from None
+            raise ParameterError(explain("at", expected="a number (deg or m) per driver, comma-separated",
+                                         got=repr(at)), "at") from None
         if len(vals) != nd:
-            raise InputError(explain("--at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"))
+            raise ParameterError(explain("at", expected=f"{nd} value(s), one per driver", got=f"{len(vals)}"), "at")
         return reduce_inputs(m, [vals], degrees=True)
     if not 1 <= steps <= MAX_CYCLE_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)),
+                             "steps")
     q = np.zeros((steps, nd))
     if any(d.range is not None for d in m.drivers):   # a driver's range is its default sweep
         return si_inputs(m, input_range(m, steps)).reshape(steps, nd)
-    if kinds[0] is JointKind.R:
+    if m.is_rotary(0):
         q[:, 0] = np.radians(np.arange(steps) * table_period(m) / steps)
-    elif set(kinds) == {JointKind.P}:
+    elif not any(m.is_rotary(d) for d in m.drivers):
         x = input_range(m, steps)               # the solve command's default stroke
         q[:] = x if x.ndim == 2 else x[:, None]
     else:
-        raise InputError(explain("drivers", expected="--at when the first driver is a P joint and others are R",
-                                 got="no default sweep"))
+        raise ParameterError(explain("drivers", expected="'at' when the first driver is a P joint and others are R",
+                                     got="no default sweep"), "drivers", "at")
     return q
 
 
@@ -157,14 +157,11 @@ def driver_sweep(m: Mechanism, k: int, steps: int = 72) -> np.ndarray:
     (its ``range``, else a turn or 10 % of the size, :func:`input_range`), the others at
     the reference."""
     if not 1 <= steps <= MAX_CYCLE_STEPS:
-        raise InputError(explain("--steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)))
-    d = m.drivers[k]
-    xy = np.array([j.at for j in m.joints if j.at is not None], float).reshape(-1, 2)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
-    col = _default_column(m, d, steps, size)
-    q = np.zeros((steps, len(m.drivers)))
-    q[:, k] = np.radians(col) if m.joint(d.joint).kind is JointKind.R else col
-    return q
+        raise ParameterError(explain("steps", expected=f"an integer from 1 to {MAX_CYCLE_STEPS}", got=repr(steps)),
+                             "steps")
+    motion = DriverMotion.held(m, k)
+    col = _default_column(m, m.drivers[k], steps, m.size)
+    return motion.inputs(np.radians(col) if motion.rotary else col)
 
 
 @dataclass(frozen=True)
@@ -180,7 +177,7 @@ class DriverForces:
         """``{joint: {"unit", "input", "balancing", "min", "max", "status"}}`` (user units)."""
         out = {}
         for k, (d, fr) in enumerate(zip(self.mechanism.drivers, self.results)):
-            rotary = self.mechanism.joint(d.joint).kind is JointKind.R
+            rotary = self.mechanism.is_rotary(d)
             b = fr.balancing[:, k]
             ok = fr.ok & np.isfinite(b)
             out[d.joint] = {"unit": "N m" if rotary else "N", "input_unit": "deg" if rotary else "m",

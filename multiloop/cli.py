@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 
 from multiloop.topo.errors import (AssemblyError, DecompositionError, LinkageError, MobilityError, ParameterError,
@@ -67,20 +68,42 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 
 
 def _flags(p: argparse.ArgumentParser) -> dict[str, str]:
-    """A command's options by the parameter they set: ``{"tol": "--tol", "start": "--from"}``."""
-    return {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings}
+    """A command's options by the parameter they set, each by its long flag:
+    ``{"tol": "--tol", "start": "--from", "links": "--links"}`` (not ``-n``)."""
+    return {a.dest: next((o for o in a.option_strings if o.startswith("--")), a.option_strings[-1])
+            for a in p._actions if a.option_strings}
 
 
 #: errors about the mechanism a command read: their message names the file
 _OF_THE_MECHANISM = (TopologyError, MobilityError, DecompositionError, AssemblyError, SingularityError)
 
 
+def flagged(text: str, parameters, flags: dict[str, str]) -> str:
+    """A :class:`~topo.errors.ParameterError`'s ``text`` in the command's terms: each of
+    its ``parameters`` that is an option of the command becomes the option's flag
+    (``flags``, from :func:`_flags`), where the library names it: in the subject (the
+    text before the first ``": "``) by its name, elsewhere quoted (``'start'``).
+
+    >>> flagged("start/stop: expected both or neither, got only one", ("start", "stop"),
+    ...         {"start": "--from", "stop": "--to"})
+    '--from/--to: expected both or neither, got only one'
+    >>> flagged("drivers: expected 'at' when the first driver is a P joint", ("drivers", "at"), {"at": "--at"})
+    'drivers: expected --at when the first driver is a P joint'
+    """
+    head, sep, rest = text.partition(": ")
+    for p in parameters:
+        if p in flags:
+            head = re.sub(rf"(?<![\w'-]){re.escape(p)}(?![\w'-])", lambda _, f=flags[p]: f, head)
+            rest = rest.replace(f"'{p}'", flags[p])
+    return head + sep + rest
+
+
 def _message(exc: LinkageError, args) -> str:
-    """The error's message; a library parameter it starts with becomes the option's flag,
-    and a fault of the mechanism names the file it came from."""
+    """The error's message; the library parameters it names become the options' flags
+    (:func:`flagged`), and a fault of the mechanism names the file it came from."""
     text = str(exc)
-    if isinstance(exc, ParameterError) and exc.parameter in args._flags and text.startswith(exc.parameter):
-        text = args._flags[exc.parameter] + text[len(exc.parameter):]
+    if isinstance(exc, ParameterError):
+        text = flagged(text, exc.parameters, args._flags)
     source = getattr(args, "file", None) or getattr(args, "input", None) or getattr(args, "start", None)
     if isinstance(exc, _OF_THE_MECHANISM) and isinstance(source, str) and source not in text:
         text = f"{source}: {text}"

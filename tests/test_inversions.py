@@ -99,7 +99,7 @@ def test_only_one_dof():
     from multiloop.topo.errors import InputError
 
     with Atlas(":memory:") as atlas:
-        with pytest.raises(InputError, match="--dof 1"):
+        with pytest.raises(InputError, match="^mechanisms: expected .dof. 1"):
             build_mechanisms(atlas, SynthesisOptions(7, 2))
 
 

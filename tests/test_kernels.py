@@ -49,7 +49,7 @@ def _raw_agree(m, X, signs=None):
     ref = solve_mod._numpy_run(sp, X, steps, signs or {}, True)
     ref.G.unset_to_nan()
     Zr = ref.G.to_Z()
-    Pr = solve_mod._points(sp, ref.G, sp.joint_host, "joints")
+    Pr = solve_mod._points(sp, ref.G, "joints")
     G = solve_mod.Poses(sp, X.shape[0])
     kr = kernel.run_positions(kernel.kernel_plan(sp), X, steps, signs or {}, G.T, points=True)
     fail, P = kr.fail, kr.points

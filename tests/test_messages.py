@@ -66,3 +66,41 @@ def test_one_exception_tree_in_topo_errors():
         obj = getattr(errors, name)
         if isinstance(obj, type):
             assert issubclass(obj, (errors.LinkageError, UserWarning)), name
+
+
+def test_library_messages_name_parameters_and_the_command_line_names_flags(capsys):
+    """A library error names the parameter (``steps``, ``'start'``); the command line puts
+    the option's flag in its place, in one function (``multiloop.cli.flagged``).  The
+    library's messages name no flag but in a recipe that names its command."""
+    import ast
+    import pathlib
+    import re
+
+    from multiloop.catalogue.named import load_named
+    from multiloop.kin.sweep import cycle_inputs, input_range
+    from multiloop.topo.errors import ParameterError
+    m = load_named("four_bar")
+    with pytest.raises(ParameterError, match=r"^start/stop: expected both or neither") as e:
+        input_range(m, 4, start=1.0)
+    assert e.value.parameters == ("start", "stop")
+    with pytest.raises(ParameterError, match=r"^at: expected 1 value"):
+        cycle_inputs(m, at="1,2")
+    code, err = _run(capsys, "solve", "four_bar", "--from", "1")
+    assert code == 2 and "error: --from/--to: expected both or neither" in err
+    code, err = _run(capsys, "forces", "four_bar", "--at", "1,2")
+    assert code == 2 and "error: --at: expected 1 value" in err
+    code, err = _run(capsys, "atlas", "--table", "--db", "none.sqlite")
+    assert code == 2 and "error: --table: expected --links N and --dof F, got no --links" in err
+    flag = re.compile(r"(?<![\w-])--[a-z]")
+    root = pathlib.Path(__file__).resolve().parents[1]
+    named = []
+    for pkg in ("topo", "kin", "catalogue"):
+        for p in sorted((root / pkg).rglob("*.py")):
+            for node in ast.walk(ast.parse(p.read_text())):
+                f = getattr(node, "func", None)
+                name = getattr(f, "id", None) or getattr(f, "attr", "")
+                if isinstance(node, ast.Call) and (name == "explain" or name.endswith("Error")):
+                    texts = [c.value for c in ast.walk(node) if isinstance(c, ast.Constant) and isinstance(c.value, str)]
+                    if any(flag.search(t) and "multiloop atlas" not in t for t in texts):
+                        named.append(f"{p.relative_to(root)}:{node.lineno}")
+    assert named == []

@@ -206,3 +206,30 @@ def test_every_position_at_a_closed_stroke_range_end_solves(factor, rng):
     assert x[0] == lo and x[-1] == hi
     assert solve(m, si_inputs(m, x)).ok.all()
     assert check(m).drivers[0].usable == (lo, hi)
+
+
+def test_whether_a_driver_turns_is_asked_of_the_mechanism():
+    """``Mechanism.is_rotary`` is the one test of an R (turning) or P (sliding) driver, by
+    index or by driver, and ``JointKind.is_rotary`` the one test of a kind; no library
+    module reads a driver's joint kind itself."""
+    import pathlib
+    import re
+
+    from multiloop.topo.model import JointKind
+    m = loads(BOOM.replace("RANGE", ""), "toml")
+    assert [m.is_rotary(k) for k in range(len(m.drivers))] == [m.is_rotary(d) for d in m.drivers] == [False]
+    b = MechanismBuilder()
+    b.add_link("ground", frame=True)
+    for n, lk, at in [("O", ("ground", "crank"), (0, 0)), ("A", ("crank", "rod"), (1, 0)),
+                      ("B", ("rod", "rocker"), (3, 2)), ("C", ("rocker", "ground"), (4, 0))]:
+        b.add_joint(n, "R", lk, at=at)
+    b.add_driver("O")
+    assert b.build().is_rotary(0)
+    assert JointKind.R.is_rotary and not JointKind.P.is_rotary and JointKind("R").is_rotary
+    root = pathlib.Path(__file__).resolve().parents[1]
+    hand = re.compile(r"joint\(([\w.]*drivers\[[^\]]+\]|d|drv|driver)\.joint\)\.kind (is|==)|_driver_is_rotary"
+                      r"|is JointKind\.R\)?$|JointKind\(kind\) is")
+    found = [f"{p.relative_to(root)}:{i}" for pkg in ("topo", "kin", "catalogue", "multiloop")
+             for p in sorted((root / pkg).rglob("*.py"))
+             for i, line in enumerate(p.read_text().splitlines(), 1) if hand.search(line)]
+    assert [f.split(":")[0] for f in found] == ["topo/model.py"]      # JointKind.is_rotary itself

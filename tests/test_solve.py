@@ -323,6 +323,35 @@ def test_plan_reuse_and_lead_in():
     assert np.allclose(a.positions[0], b.positions[-1], atol=1e-12)
 
 
+
+def test_a_solved_plan_stays_as_compiled():
+    """Solving never writes into the frozen plan: its fields are the same objects, its
+    arrays read-only, and what it derived on demand (the chart of the motion, the
+    kernel plan) is kept beside it (kin.memo) with read-only mappings."""
+    import dataclasses
+    from types import MappingProxyType
+
+    from multiloop.kin import kernel
+    from multiloop.kin.memo import memo_of
+    from multiloop.kin.solve import motion_events
+    m = knitting_needle()
+    plan = compile_plan(m)
+    before = {f.name: getattr(plan, f.name) for f in dataclasses.fields(plan)}
+    assert not any(isinstance(v, (dict, list, set)) for v in before.values())
+    solve(m, np.linspace(-7.0, 7.0, 50), plan=plan, derivatives=True)
+    solve(m, np.linspace(0.0, 1.0, 5), plan=plan, outputs=("B",))
+    kernel.kernel_plan(plan)
+    ev = motion_events(m, plan)
+    assert all(getattr(plan, k) is v for k, v in before.items())
+    assert not plan.origins.flags.writeable
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plan.size = 2.0
+    chart = memo_of(plan)["chart"]
+    assert isinstance(chart.limits, MappingProxyType) and isinstance(chart.flips, MappingProxyType)
+    assert isinstance(ev.limits, MappingProxyType)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        chart.lo_req = 0.0
+
 # ---------------------------------------------------------------- the catalogue
 _CAT = sorted((__import__("pathlib").Path(__file__).resolve().parents[1] / "catalogue" / "mechanisms").glob("*.toml"))
 
@@ -336,6 +365,24 @@ def _cycle_for(m):
     cols = [t * (0.3 if m.joint(d.joint).kind.value == "R" else 0.05 * size) for d in m.drivers]
     cols = [c if d.range is None else np.clip(c, *d.range) for c, d in zip(cols, m.drivers)]  # its stroke
     return np.stack(cols, axis=1) if len(cols) > 1 else cols[0]
+
+
+def test_the_size_is_the_mechanism_s_and_the_plan_s():
+    """One size: ``Mechanism.size`` (the larger spread of the joints in x and y), which
+    the compiled plan carries; no other module of the library computes it again."""
+    import pathlib
+    import re
+
+    from multiloop.topo.io import load
+    for path in _CAT:
+        m = load(path)
+        xy = np.array([j.at for j in m.joints], float)
+        assert compile_plan(m).size == m.size == max(float(np.max(np.ptp(xy, axis=0))), 1e-12)
+    root = pathlib.Path(__file__).resolve().parents[1]
+    again = re.compile(r"ptp\(.*j\.at|j\.at for j in m\.joints.*\n.*ptp|def mechanism_size")
+    found = [str(p.relative_to(root)) for pkg in ("topo", "kin", "catalogue", "multiloop")
+             for p in sorted((root / pkg).rglob("*.py")) if again.search(p.read_text())]
+    assert found == []
 
 
 @pytest.mark.parametrize("path", _CAT, ids=[p.stem for p in _CAT])

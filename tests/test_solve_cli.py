@@ -101,3 +101,20 @@ def test_degrees_on_the_cli_radians_in_the_api(files, capsys):
     d = json.loads(capsys.readouterr().out)
     st = solve(four_bar(), math.radians(30))
     assert np.allclose([d["joints"]["B"]["x"][0], d["joints"]["B"]["y"][0]], st.positions[0, 2], atol=1e-14)
+
+
+def test_the_commands_offer_the_library_s_methods():
+    """Every --method (and --modes) list is the library's own tuple, its first the default:
+    the command line types none of them again (the page's synthesis menu imports it too)."""
+    import argparse
+
+    from multiloop.catalogue.dimensional import optimise
+    from multiloop.cli import build_parser
+    from multiloop.kin import forces, solve as solve_mod
+    from multiloop.kin.spatial import platform
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    for command, flag, names in [("solve", "--method", solve_mod.METHODS), ("forces", "--method", forces.METHODS),
+                                 ("synthesise", "--method", optimise.METHODS),
+                                 ("platform", "--modes", platform.NORMALISATIONS)]:
+        action = next(a for a in sub.choices[command]._actions if flag in a.option_strings)
+        assert action.choices is names and action.default == names[0], command

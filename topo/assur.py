@@ -457,7 +457,7 @@ def _incidence(m: Mechanism) -> _Incidence:
             rows += [tuple(lc(g, (2,)) + lc(sl, (2,))), tuple(lc(g, (0, 1, 2)) + lc(sl, (0, 1, 2)))]
             info += [("P", j.name, sl)] * 2
     for i, d in enumerate(m.drivers):
-        which = (2,) if m.joint(d.joint).kind is JointKind.R else (0, 1, 2)
+        which = (2,) if m.is_rotary(d) else (0, 1, 2)
         rows.append(tuple(lc(d.links[0], which) + lc(d.links[1], which)))
         info.append(("D", d.joint, i))
     return _Incidence(tuple(columns), tuple(rows), tuple(info))
@@ -675,7 +675,7 @@ def _pair_constraints(m: Mechanism, links: list[str], known: set[str]) -> list[C
     for i, d in enumerate(m.drivers):
         a, b = d.links
         if (a in B or b in B) and all(x in B or x in known for x in (a, b)):
-            kind = "drive_R" if m.joint(d.joint).kind is JointKind.R else "drive_P"
+            kind = "drive_R" if m.is_rotary(d) else "drive_P"
             out.append(Constraint(kind, d.joint, a, b, i))
     return out
 

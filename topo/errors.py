@@ -167,19 +167,27 @@ class ScrewPairingError(LinkageError, TypeError):
 
 class ParameterError(InputError):
     """An argument of a library function lies outside its domain (a NaN tolerance, a
-    negative count).  The message starts with the parameter's name, ``parameter``; the
-    command line puts the option's flag in its place (``tol`` → ``--tol``).
+    negative count), or arguments do not go together.  The message names parameters,
+    never a command's options: it starts with the parameter at fault, ``parameter``
+    (``start/stop: ...`` names two), and quotes any other it names (``'at'``).
+    ``parameters`` lists every parameter it names, ``parameter`` first; the command line
+    puts each option's flag in its place (``tol`` → ``--tol``, ``'start'`` → ``--from``).
 
     Examples
     --------
     >>> e = ParameterError(explain("tol", expected="a finite number >= 0", got="nan"), "tol")
-    >>> e.parameter, str(e)
-    ('tol', 'tol: expected a finite number >= 0, got nan')
+    >>> e.parameter, e.parameters, str(e)
+    ('tol', ('tol',), 'tol: expected a finite number >= 0, got nan')
+    >>> e = ParameterError(explain("drivers", expected="'start' and 'stop' when R and P drivers are mixed",
+    ...                            got="neither"), "drivers", "start", "stop")
+    >>> e.parameters
+    ('drivers', 'start', 'stop')
     """
 
-    def __init__(self, message: str, parameter: str):
+    def __init__(self, message: str, parameter: str, *others: str):
         super().__init__(message)
         self.parameter = parameter
+        self.parameters = (parameter, *others)
 
 
 class OutputError(InputError):

@@ -406,7 +406,7 @@ def _read_range(label: str, value: Any, joints, jn: str) -> tuple[float, float]:
     for a P joint), returned in rad or m; the builder checks low < high and that it
     contains the reference."""
     kind = next((j.kind for j in joints if j.name == jn), None)
-    rotary = kind is not None and JointKind(kind) is JointKind.R
+    rotary = kind is not None and JointKind(kind).is_rotary
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise InputError(explain(f"{label} range", expected="[low, high] (" + ("deg" if rotary else "m")
                                  + ", from the reference)", got=repr(value)[:60]))
@@ -495,7 +495,7 @@ def mechanism_to_dict(m: Mechanism) -> dict[str, Any]:
             if d.acceleration is not None:
                 t["acceleration"] = d.acceleration
             if d.range is not None:
-                rotary = m.joint(d.joint).kind is JointKind.R
+                rotary = m.is_rotary(d)
                 t["range"] = [math.degrees(v) if rotary else v for v in d.range]
             doc["driver"].append(t)
     if m.points:

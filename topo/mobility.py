@@ -75,9 +75,7 @@ def _dimensionless_jacobian(m: Mechanism, cons: list[Constraint], moving: list[s
     which leaves the rank unchanged but makes the rank tolerance independent of the
     units (a four-bar in metres, nanometres or kilometres has the same rank).
     """
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 0.0
-    size = size if size > 0 else 1.0
+    size = m.size
     at = {j.name: np.asarray(j.at, float) / size for j in m.joints}
     org = {x: c / size for x, c in link_origins(m).items()}
     axis = {j.name: np.asarray(j.axis, float) for j in m.joints if j.axis is not None}

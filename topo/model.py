@@ -50,6 +50,12 @@ class JointKind(str, enum.Enum):
     R = "R"
     P = "P"
 
+    @property
+    def is_rotary(self) -> bool:
+        """An R joint turns (a driver on it takes radians, read and shown in degrees); a P
+        joint slides (metres).  :meth:`Mechanism.is_rotary` asks it of a driver's joint."""
+        return self is JointKind.R
+
 
 @dataclass(frozen=True, slots=True)
 class Link:
@@ -212,6 +218,24 @@ class Mechanism:
         """The mechanism's size (m): the larger spread of its joints' reference positions
         in x and y (at least 1e-12; 1.0 with fewer than two positioned joints)."""
         return _extent([j.at for j in self.joints if j.at is not None])
+
+    def is_rotary(self, driver: "Driver | int") -> bool:
+        """True when ``driver`` (a :class:`Driver` or its index in ``drivers``) turns its
+        links about an R joint (input in rad, read and shown in degrees); False when it
+        slides them along a P joint (input in m).
+
+        >>> b = MechanismBuilder()
+        >>> b.add_link("ground", frame=True)
+        >>> b.add_link("crank"); b.add_link("slider")
+        >>> b.add_joint("O", "R", ("ground", "crank"), at=(0, 0))
+        >>> b.add_joint("S", "P", ("crank", "slider"), at=(1, 0), axis=(1, 0))
+        >>> b.add_driver("O"); b.add_driver("S")
+        >>> m = b.build()
+        >>> m.is_rotary(0), m.is_rotary(m.drivers[1])
+        (True, False)
+        """
+        d = driver if isinstance(driver, Driver) else self.drivers[driver]
+        return self.joint(d.joint).kind.is_rotary
 
     def link(self, name: str) -> Link:
         for lk in self.links:
@@ -538,7 +562,7 @@ def _extent(points: Sequence) -> float:
 def driver_bound(kind, size: float) -> float:
     """The largest magnitude of a driver's input (rad for an R joint, m for a P joint of a
     mechanism of ``size`` m): :data:`MAX_ANGLE_DEG`, or :data:`MAX_SLIDE_SIZES` × the size."""
-    return math.radians(MAX_ANGLE_DEG) if JointKind(kind) is JointKind.R else MAX_SLIDE_SIZES * size
+    return math.radians(MAX_ANGLE_DEG) if JointKind(kind).is_rotary else MAX_SLIDE_SIZES * size
 
 
 def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
@@ -547,7 +571,7 @@ def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
     (the mechanism's ``size`` for a P joint)."""
     if rng is None:
         return None
-    rotary = JointKind(kind) is JointKind.R
+    rotary = JointKind(kind).is_rotary
     unit = "deg" if rotary else "m"
     where = f"[[driver]] on joint '{jn}' range"
     try:
@@ -564,12 +588,12 @@ def _range_problem(jn: str, kind, rng, size: float = 1.0) -> str | None:
     if lo > 0.0 or hi < 0.0:
         return explain(where, expected=f"a range that contains the reference, low <= 0 <= high ({unit})",
                        got=got, hint="the range is measured from the joint's reference position, "
-                                     "like --from and --to")
+                                     "like every driver input")
     bound = driver_bound(kind, size)
     if max(-lo, hi) > bound:
         limit = f"{MAX_ANGLE_DEG:g} deg" if rotary else f"{bound:.6g} m ({MAX_SLIDE_SIZES:g} × the mechanism's size)"
         return explain(where, expected=f"ends of magnitude at most {limit}", got=got,
-                       hint="the bound of every driver input (solve --from/--to, forces --at)")
+                       hint="the bound of every driver input (solve, forces, check)")
     return None
 
 

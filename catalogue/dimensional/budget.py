@@ -85,8 +85,7 @@ class Budget:
     seconds: float | None = None
 
     @classmethod
-    def of(cls, evaluations=None, seconds=None, *, default: int | None = DEFAULT_EVALUATIONS,
-           names: tuple[str, str] = ("evaluations", "budget")) -> Budget:
+    def of(cls, evaluations=None, seconds=None, *, default: int | None = DEFAULT_EVALUATIONS) -> Budget:
         """The checked limits; ``default`` evaluations when neither is given.
 
         Parameters
@@ -97,14 +96,13 @@ class Budget:
             A positive, finite number of seconds.
         default : int or None
             The evaluations when neither is given (None: no limit is filled in).
-        names : (str, str)
-            How messages name the two limits (the command line passes its flags).
 
         Raises
         ------
         ParameterError
             A limit out of range, not a number, or (evaluations) not a whole number; the
-            message starts with the limit's name from ``names``.
+            message starts with the synthesisers' parameter, ``evaluations`` or ``budget``
+            (the command line shows its flag in its place).
 
         Examples
         --------
@@ -115,7 +113,7 @@ class Budget:
         >>> Budget.of(seconds=2.5)
         Budget(evaluations=None, seconds=2.5)
         """
-        n, s = _evaluations(evaluations, names[0]), _seconds(seconds, names[1])
+        n, s = _evaluations(evaluations, "evaluations"), _seconds(seconds, "budget")
         if n is None and s is None and default is not None:
             n = default
         return cls(n, s)

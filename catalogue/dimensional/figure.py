@@ -25,7 +25,7 @@ def plot_synthesis(res):
     m = res.mechanism
     phi = np.asarray(res.inputs, float)
     lo, hi = min(0.0, phi.min()), max(0.0, phi.max())
-    if m.joint(m.drivers[0].joint).kind.value == "R" and hi - lo < 2 * np.pi:
+    if m.is_rotary(0) and hi - lo < 2 * np.pi:
         pad = 0.05 * (hi - lo)
         lo, hi = lo - pad, hi + pad
     with warnings.catch_warnings():

@@ -24,7 +24,7 @@ import numpy as np
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.topo.assur import GroupKind
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind
 
 from .evaluator import Evaluator, four_bar_roles
@@ -56,18 +56,19 @@ class Constraints:
     def __post_init__(self):
         for name, allowed in (("grashof", GRASHOF), ("mode", MODES), ("direction", DIRECTIONS)):
             if getattr(self, name) not in allowed:
-                raise InputError(explain(f"{name} (--{name})", expected=" or ".join(allowed),
-                                         got=repr(getattr(self, name))))
+                raise ParameterError(explain(name, expected=" or ".join(allowed),
+                                             got=repr(getattr(self, name))), name)
         mt = self.min_transmission
         if mt is not None and not (np.isfinite(mt) and 0 <= mt <= 90):
-            raise InputError(explain("min_transmission (--min-transmission)", expected="an angle in [0, 90] degrees",
-                                     got=str(mt), hint="a folded transmission angle is at most 90°"))
+            raise ParameterError(explain("min_transmission", expected="an angle in [0, 90] degrees",
+                                         got=str(mt), hint="a folded transmission angle is at most 90°"),
+                                 "min_transmission")
         lb = self.length_bounds
         if lb is not None and not (len(lb) == 2 and np.all(np.isfinite(lb)) and 0 < lb[0] < lb[1]):
-            raise InputError(explain("length_bounds (--length-bounds)", expected="two lengths 0 < LOW < HIGH (m)",
-                                     got=str(tuple(lb))))
+            raise ParameterError(explain("length_bounds", expected="two lengths 0 < LOW < HIGH (m)",
+                                         got=str(tuple(lb))), "length_bounds")
         if self.max_ratio is not None and not (np.isfinite(self.max_ratio) and self.max_ratio >= 1):
-            raise InputError(explain("max_ratio (--max-ratio)", expected="a number >= 1", got=str(self.max_ratio)))
+            raise ParameterError(explain("max_ratio", expected="a number >= 1", got=str(self.max_ratio)), "max_ratio")
 
 
 def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.ndarray:
@@ -110,12 +111,11 @@ class Problem:
         m = ev.mechanism
         if len(m.drivers) != 1:
             raise InputError(explain(f"mechanism '{m.name or ''}'", expected="one driver", got=f"{len(m.drivers)}"))
-        self.rotary = m.joint(m.drivers[0].joint).kind is JointKind.R
+        self.rotary = m.is_rotary(0)
         sp = ev.space
         self.nx = sp.size
         names, x0, lo, hi = list(sp.names), list(sp.x0), list(sp.lower), list(sp.upper)
-        size = float(np.max(np.ptp(np.array([j.at for j in m.joints]), axis=0))) or 1.0
-        self.mech_size = size
+        size = self.mech_size = m.size
         if isinstance(target, MotionTarget):
             lk = target.link
             if lk not in ev.links:
@@ -150,10 +150,10 @@ class Problem:
         self.start_branches = ev.branches(self.x0[None, :self.nx])
         self.roles = four_bar_roles(m)
         if constraints.grashof != "any" and self.roles is None:
-            raise InputError(explain(f"grashof {constraints.grashof!r} (--grashof)",
-                                     expected="a four-bar start (four R joints, driven on the frame)",
-                                     got=f"mechanism '{m.name or ''}' with {m.n_links} links",
-                                     hint="use --grashof any"))
+            raise ParameterError(explain(f"grashof {constraints.grashof!r}",
+                                         expected="a four-bar start (four R joints, driven on the frame)",
+                                         got=f"mechanism '{m.name or ''}' with {m.n_links} links",
+                                         hint="leave 'grashof' at 'any'"), "grashof")
         self.M = int(grid)
         if self.rotary:
             self.delta = 2.0 * np.pi / self.M
@@ -322,8 +322,7 @@ class Problem:
         inv = (1.0 / size)[:, None, None]
         if isinstance(self.target, MotionTarget):
             return np.concatenate([D[..., :2] * inv, _wrap(D[..., 2:])], axis=-1)
-        if isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(
-                self.target.joint).kind is JointKind.R:
+        if isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(self.target.joint).kind.is_rotary:
             return _wrap(D) * inv
         return D * inv
 
@@ -332,7 +331,7 @@ class Problem:
         targets ``T`` (P, N, c), column by column (no (P, N, K, c) array)."""
         ang = isinstance(self.target, MotionTarget) or (
             isinstance(self.target, FunctionTarget)
-            and self.ev.mechanism.joint(self.target.joint).kind is JointKind.R)
+            and self.ev.mechanism.joint(self.target.joint).kind.is_rotary)
         c = F.shape[-1]
         inv = (1.0 / size)[:, None, None]
         out = None

@@ -34,6 +34,7 @@ from .objective import Problem
 
 __all__ = ["SearchResult", "global_search", "polish", "METHODS"]
 
+#: the search methods (the first is the default): differential evolution, CMA-ES, local polish only
 METHODS = ("de", "cmaes", "local")
 
 #: how many distinct good designs the probe polishes during the search

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import ParameterError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
@@ -102,10 +102,10 @@ def parse_bounds(items) -> dict | None:
         except ValueError:
             a = b = float("nan")
         if not (eq and colon and name and math.isfinite(a) and math.isfinite(b) and abs(a) <= 1e9 and abs(b) <= 1e9):
-            raise InputError(explain(f"--bounds {it[:80]!r}", expected="NAME=LOW:HIGH with finite numbers "
-                                     "of magnitude at most 1e9", got=repr(it[:80]), hint="e.g. O2.x=-1:1"))
+            raise ParameterError(explain(f"bounds {it[:80]!r}", expected="NAME=LOW:HIGH with finite numbers "
+                                         "of magnitude at most 1e9", got=repr(it[:80]), hint="e.g. O2.x=-1:1"), "bounds")
         if name in out:
-            raise InputError(explain(f"--bounds {name!r}", expected="each variable once", got="twice"))
+            raise ParameterError(explain(f"bounds {name!r}", expected="each variable once", got="twice"), "bounds")
         out[name] = (a, b)
     return out
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from multiloop.topo.errors import InputError, ParameterError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
@@ -57,7 +57,7 @@ class SynthesisResult:
     def inputs_cli(self) -> np.ndarray:
         """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
         m = self.mechanism
-        rot = m.joint(m.drivers[0].joint).kind is JointKind.R
+        rot = m.is_rotary(0)
         return np.degrees(self.inputs) if rot else np.asarray(self.inputs, float)
 
     def as_dict(self) -> dict:
@@ -84,16 +84,12 @@ def _table(value, cols, what):
     return check_rows(a, what, f"{what} target"), f"a {what} table of {len(a)} rows"
 
 
-def _driver_is_rotary(m: Mechanism) -> bool:
-    return m.joint(m.drivers[0].joint).kind is JointKind.R
-
-
 def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timing: str = "reference") -> PathTarget:
     """A :class:`PathTarget` from an (N, 2|3) array or CSV file (third column: driver
     value in degrees, or m for a slider input, measured as ``timing`` says: from the
     reference, absolute, or only its steps; see :data:`~.targets.TIMINGS`)."""
     if timing not in TIMINGS:
-        raise InputError(explain("timing (--timing)", expected=" or ".join(TIMINGS), got=repr(timing)))
+        raise ParameterError(explain("timing", expected=" or ".join(TIMINGS), got=repr(timing)), "timing")
     a, src = _table(path, (2, 3), "path")
     names = [p.name for p in m.points]
     if point is None and len(names) == 1:
@@ -103,14 +99,14 @@ def path_target(m: Mechanism, path, point: str | None, *, shape_only=False, timi
                                  got="no such point", hint=f"points: {', '.join(names) or 'none'}"))
     values = None
     if a.shape[1] == 3:
-        values = np.radians(a[:, 2]) if _driver_is_rotary(m) else a[:, 2].copy()
+        values = np.radians(a[:, 2]) if m.is_rotary(0) else a[:, 2].copy()
     elif timing != "reference":
-        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path table with a third column",
-                                 got=f"{src} with two columns", hint="free timing needs no --timing"))
+        raise ParameterError(explain(f"timing {timing!r}", expected="a path table with a third column",
+                                     got=f"{src} with two columns", hint="free timing needs no 'timing'"), "timing")
     if timing == "absolute" and m.frame not in m.joint(m.drivers[0].joint).links:
-        raise InputError(explain("timing 'absolute' (--timing)", expected="a driver on the frame",
-                                 got=f"driver joint {m.drivers[0].joint!r} between moving links",
-                                 hint="use --timing reference or step"))
+        raise ParameterError(explain("timing 'absolute'", expected="a driver on the frame",
+                                     got=f"driver joint {m.drivers[0].joint!r} between moving links",
+                                     hint="set 'timing' to 'reference' or 'step'"), "timing")
     return PathTarget(a[:, :2].copy(), point, values, shape_only, src, timing)
 
 
@@ -121,8 +117,8 @@ def function_target(m: Mechanism, function, output: str) -> FunctionTarget:
     if output not in m.joint_names:
         raise InputError(explain(f"output joint {output!r}", expected="a joint of the start mechanism",
                                  got="no such joint", hint=f"joints: {', '.join(m.joint_names)}"))
-    x = np.radians(a[:, 0]) if _driver_is_rotary(m) else a[:, 0]
-    y = np.radians(a[:, 1]) if m.joint(output).kind is JointKind.R else a[:, 1]
+    x = np.radians(a[:, 0]) if m.is_rotary(0) else a[:, 0]
+    y = np.radians(a[:, 1]) if m.joint(output).kind.is_rotary else a[:, 1]
     if np.ptp(y) == 0:
         raise InputError(explain(src, expected="output values that vary", got="a constant output"))
     return FunctionTarget(x, y, output, src)
@@ -175,9 +171,10 @@ def _checked(task: str, target, direction: str):
     rows.  Returns the target and a note or None."""
     if isinstance(target, PathTarget) and target.timing is not None and target.timing_mode != "step" \
             and direction != "any":
-        raise InputError(explain(f"direction {direction!r} (--direction)", expected="'any' with --timing "
-                                 f"{target.timing_mode}", got=repr(direction),
-                                 hint="the third column fixes the direction; free it with --timing step"))
+        raise ParameterError(explain(f"direction {direction!r}", expected=f"'any' with 'timing' {target.timing_mode!r}",
+                                     got=repr(direction),
+                                     hint="the third column fixes the direction; free it with 'timing' 'step'"),
+                             "direction", "timing")
     n = len(target.target_points())
     if n <= MAX_ROWS:
         return target, None
@@ -201,14 +198,16 @@ def _target(m, path, point, shape_only, function, output, motion, link, timing="
     if path is not None:
         return "path", path_target(m, path, point, shape_only=shape_only, timing=timing)
     if timing != "reference":
-        raise InputError(explain(f"timing {timing!r} (--timing)", expected="a path target with a third column",
-                                 got="function generation" if function is not None else "motion generation"))
+        raise ParameterError(explain(f"timing {timing!r}", expected="a path target with a third column",
+                                     got="function generation" if function is not None else "motion generation"),
+                             "timing")
     if function is not None:
         if output is None:
-            raise InputError(explain("function generation", expected="an output joint (--output JOINT)", got="none"))
+            raise ParameterError(explain("function generation", expected="an output joint ('output')", got="none"),
+                                 "output")
         return "function", function_target(m, function, output)
     if link is None:
-        raise InputError(explain("motion generation", expected="a link (--link NAME)", got="none"))
+        raise ParameterError(explain("motion generation", expected="a link ('link')", got="none"), "link")
     return "motion", motion_target(m, motion, link)
 
 
@@ -549,7 +548,7 @@ def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndar
     if isinstance(t, MotionTarget):
         return np.column_stack([F[:, :2], np.degrees(F[:, 2])]), np.column_stack([T[:, :2], np.degrees(T[:, 2])])
     if isinstance(t, FunctionTarget):
-        rot = problem.ev.mechanism.joint(t.joint).kind is JointKind.R
+        rot = problem.ev.mechanism.joint(t.joint).kind.is_rotary
         y = F[:, 0] + t.outputs[0]
         return (np.degrees(y), np.degrees(t.outputs)) if rot else (y, t.outputs.copy())
     return F, np.asarray(T)

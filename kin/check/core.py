@@ -15,7 +15,7 @@ import numpy as np
 
 from multiloop.kin.solve import compile_plan, solve
 from multiloop.topo.assur import decompose
-from multiloop.topo.errors import InputError, explain
+from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .circuits import group_circuits
@@ -26,7 +26,6 @@ from .motion import driver_motion
 from .singular_values import exact_extremes
 from .report import AngleResult, CheckReport, DriverAngles, DriverCheck
 from .transmission import angle_specs, angle_values, guide_direction
-from .sweep import mechanism_size
 from .verdict import verdict
 from .workspace import workspace as workspace_of
 
@@ -101,8 +100,8 @@ def _output(m: Mechanism, w, output, driver_link):
         return (output, "R", None)
     if output in tuple(p.name for p in m.points):
         return (output, "point", None)
-    raise InputError(explain("--output", expected="a link or tracer point name of the mechanism",
-                             got=repr(output), hint="links: " + ", ".join(m.link_names)))
+    raise ParameterError(explain("output", expected="a link or tracer point name of the mechanism",
+                                 got=repr(output), hint="links: " + ", ".join(m.link_names)), "output")
 
 
 def _ratio(state, out) -> np.ndarray:
@@ -134,7 +133,7 @@ def _angles(mo, specs) -> tuple[AngleResult, ...]:
 def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
-    rotary = dj.kind is JointKind.R
+    rotary = m.is_rotary(k)
     groups, D, mo = _motion(m, ap, plan, k, cancel)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     ev = mo.events
@@ -209,7 +208,7 @@ def usable_box(m: Mechanism, dcs) -> tuple[tuple[float, float], ...]:
     without a limit."""
     out = []
     for dc in dcs:
-        far = np.pi if dc.rotary else mechanism_size(m)
+        far = np.pi if dc.rotary else m.size
         if dc.full_rotation:
             out.append((0.0, 2 * np.pi))
         elif len(dc.limits) == 2:
@@ -318,8 +317,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     if not m.drivers:
         raise InputError(explain("mechanism", expected="at least one driver", got="none"))
     if not 0.0 <= float(min_transmission) <= 90.0:
-        raise InputError(explain("min_transmission", expected="degrees in [0, 90]",
-                                 got=repr(min_transmission)))
+        raise ParameterError(explain("min_transmission", expected="degrees in [0, 90]",
+                                     got=repr(min_transmission)), "min_transmission")
     ap = decompose(m)
     plan = compile_plan(m, ap)
     specs = angle_specs(ap)
@@ -327,7 +326,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     positions = positions or {}
     unknown = set(positions) - {d.joint for d in m.drivers}
     if unknown:
-        raise InputError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))))
+        raise ParameterError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))),
+                             "positions")
     dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
                 for k, d in enumerate(m.drivers))
     if cancel is not None:                  # before the workspace and the last solve

@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from multiloop.kin.figures.labels import place_labels  # noqa: E402
 from multiloop.kin.figures.mechanism import plot_mechanism  # noqa: E402
 from multiloop.kin.figures.style import no_mathtext  # noqa: E402
+from multiloop.kin.motion import DriverMotion  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
 
 from .verdict import fmt_input  # noqa: E402
@@ -33,8 +34,7 @@ __all__ = ["mechanism_axes", "transmission_axes", "instant_centre_axes", "worksp
 
 
 def _solve(m, x, k=0, at=None, derivatives=False):
-    X = np.zeros((len(x), len(m.drivers))) if at is None else np.tile(at, (len(x), 1))
-    X[:, k] = x
+    X = DriverMotion.held(m, k).inputs(x, at)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return solve(m, X, derivatives=derivatives)

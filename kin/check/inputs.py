@@ -15,24 +15,25 @@ import math
 
 import numpy as np
 
-from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.kin.motion import DriverMotion
+from multiloop.topo.errors import InputError, ParameterError, explain
+from multiloop.topo.model import Mechanism
 
 __all__ = ["check_options", "instant_at", "positions", "output_point"]
 
 
 def _to_api(m: Mechanism, v: float, k: int = 0) -> float:
-    return math.radians(v) if m.joint(m.drivers[k].joint).kind is JointKind.R else v
+    return math.radians(v) if m.is_rotary(k) else v
 
 
 def _finite(v: float, what: str) -> float:
     if not math.isfinite(v) or abs(v) > 1e9:
-        raise InputError(explain(what, expected="a finite number of magnitude ≤ 1e9", got=repr(v)))
+        raise ParameterError(explain(what, expected="a finite number of magnitude ≤ 1e9", got=repr(v)), what)
     return v
 
 
 def positions(m: Mechanism, text) -> dict | None:
-    """``--positions`` (comma-separated text, or a list of such texts) as the ``positions``
+    """Positions as text (comma-separated, or a list of such texts) as the ``positions``
     of :func:`~kin.check.check`: the first driver's values in rad or m; None without."""
     if text is None:
         return None
@@ -40,23 +41,22 @@ def positions(m: Mechanism, text) -> dict | None:
     try:
         vals = [float(s) for s in text.split(",") if s.strip()]
     except ValueError:
-        raise InputError(explain("--positions", expected="comma-separated numbers", got=repr(text))) from None
+        raise ParameterError(explain("positions", expected="comma-separated numbers", got=repr(text)),
+                             "positions") from None
     if not m.drivers:
         return None
-    return {m.drivers[0].joint: [_to_api(m, _finite(v, "--positions")) for v in vals]}
+    return {m.drivers[0].joint: [_to_api(m, _finite(v, "positions")) for v in vals]}
 
 
 def instant_at(m: Mechanism, at: float | None) -> np.ndarray | None:
-    """``--at`` (deg or m of the first driver) as the ``at`` of :func:`~kin.check.check`."""
+    """``at`` in deg or m of the first driver as the ``at`` of :func:`~kin.check.check`."""
     if at is None or not m.drivers:
         return None
-    x = np.zeros(len(m.drivers))
-    x[0] = _to_api(m, _finite(at, "--at"))
-    return x
+    return DriverMotion.held(m, 0).inputs([_to_api(m, _finite(at, "at"))])[0]
 
 
 def output_point(m: Mechanism, name: str | None) -> tuple[Mechanism, str | None]:
-    """``m`` and the output name: a joint given as ``--output`` becomes a tracer point
+    """``m`` and the output name: a joint given as the ``output`` becomes a tracer point
     ``joint <name>`` at the joint on its last link (a pin moves with every link on it)."""
     if name is None or name in m.link_names or any(p.name == name for p in m.points) \
             or name not in m.joint_names:
@@ -76,8 +76,8 @@ def check_options(m: Mechanism, source: str, min_transmission: float,
     if not m.drivers:
         raise InputError(explain(f"{source}: [[driver]]", expected="at least one driver", got="none",
                                  hint="the design check follows the motion of the input joint(s)"))
-    if not 0.0 < _finite(min_transmission, "--min-transmission") < 90.0:
-        raise InputError(explain("--min-transmission", expected="an angle between 0 and 90 deg",
-                                 got=f"{min_transmission:g}",
-                                 hint="a transmission angle lies in [0, 90] deg"))
+    if not 0.0 < _finite(min_transmission, "min_transmission") < 90.0:
+        raise ParameterError(explain("min_transmission", expected="an angle between 0 and 90 deg",
+                                     got=f"{min_transmission:g}",
+                                     hint="a transmission angle lies in [0, 90] deg"), "min_transmission")
     return output_point(m, output)

@@ -15,12 +15,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from multiloop.kin.groups.registry import has_closed_form
-from multiloop.topo.errors import AssemblyError, explain
-from multiloop.topo.model import JointKind, Mechanism
-
+from multiloop.kin.motion import DriverMotion
 from multiloop.kin.solve import motion_events
+from multiloop.topo.errors import AssemblyError, explain
+from multiloop.topo.model import Mechanism
 
-from .sweep import XTOL, Side, mechanism_size
+from .sweep import XTOL, Side
 
 __all__ = ["Segment", "Motion", "driver_motion", "R_STEPS", "P_STEPS"]
 
@@ -49,15 +49,31 @@ class Segment:
 
 @dataclass(frozen=True)
 class Motion:
-    """Motion of driver ``k`` from the reference: one segment (full rotation) or two."""
+    """The sampled motion of a driver (``driver``) from the reference: one segment
+    (full rotation) or two.  ``rotary`` and ``events`` (the driver's certified motion,
+    or None without one) are the driver's, copied when the motion is built: every
+    refinement reads them."""
 
-    mechanism: Mechanism
-    k: int
+    driver: DriverMotion
     rotary: bool
     full_rotation: bool
     segments: tuple[Segment, ...]
     periodic: bool
-    events: object = None            # MotionEvents of the certified walk (one driver), else None
+    events: DriverMotion | None
+
+    @classmethod
+    def of(cls, driver: DriverMotion, full_rotation: bool, segments: tuple[Segment, ...],
+           periodic: bool) -> "Motion":
+        return cls(driver, driver.rotary, full_rotation, segments, periodic,
+                   driver if driver.certified else None)
+
+    @property
+    def mechanism(self) -> Mechanism:
+        return self.driver.mechanism
+
+    @property
+    def k(self) -> int:
+        return self.driver.k
 
     @property
     def binds(self) -> tuple[str, ...]:
@@ -139,25 +155,25 @@ def _guarded(side: Side, st) -> Side:
     return replace(side, signs=np.sign(side.branch(st)))
 
 
-def _side(m: Mechanism, plan, k: int, sign: int, heavy: bool, samples: int, stride: int, branch,
+def _side(dm: DriverMotion, plan, sign: int, heavy: bool, samples: int, stride: int, branch,
           cancel=None) -> Side:
     """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
     ``range`` on that side at the same spacing (a range end at the reference: that value).
     An R range wider than the turn is sampled over the turn: the motion repeats beyond it,
     and a turn without a limit runs to the range's end (:func:`_bounded`)."""
-    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    m, rotary = dm.mechanism, dm.rotary
     if rotary:
         h, n = 2.0 * np.pi / R_STEPS, R_STEPS + 2
     else:
         n = P_STEPS // 4 if heavy else P_STEPS
-        h = mechanism_size(m) / n
-    rng = m.drivers[k].range
+        h = m.size / n
+    rng = m.drivers[dm.k].range
     span = n * h if rng is None else abs(rng[1] if sign > 0 else rng[0])
     if rotary:
         span = min(span, n * h)
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
-    return Side(m, plan, k, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)
+    return Side(dm, plan, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)
 
 
 def _bounded(seg: Segment, rng, sign: int) -> Segment:
@@ -178,7 +194,7 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     its usable range is the intersection of the range and the assembly limits, and each
     segment says which of the two binds.  ``cancel()`` is called before every solve of
     the sides (:attr:`Side.cancel`)."""
-    rotary = m.joint(m.drivers[k].joint).kind is JointKind.R
+    rotary = m.is_rotary(k)
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
     # millisecond per position: its mechanism gets a coarser P grid, fewer samples per
@@ -188,14 +204,14 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     samples, stride = (8, 4) if heavy else (32, 1)
     chunk = 8 if heavy else None
     # the certified walk searches ± the size, or to the ends of the range when it is wider
-    extent = None if rotary or rng is None else max(mechanism_size(m), -rng[0], rng[1])
-    ev = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else None
-    hi, lo = (ev.hi, ev.lo) if ev is not None and ev.period is None else (None, None)
-    seg_f = _segment(_side(m, plan, k, +1, heavy, samples, stride, branch, cancel), chunk, hi)
+    extent = None if rotary or rng is None else max(m.size, -rng[0], rng[1])
+    dm = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else DriverMotion.held(m, k)
+    hi, lo = (dm.hi, dm.lo) if dm.certified and not dm.turns_fully else (None, None)
+    seg_f = _segment(_side(dm, plan, +1, heavy, samples, stride, branch, cancel), chunk, hi)
     if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
-        periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * mechanism_size(m))
-        return Motion(m, k, True, True, (seg_f,), periodic, ev)
-    seg_b = _segment(_side(m, plan, k, -1, heavy, samples, stride, branch, cancel), chunk, lo)
-    return Motion(m, k, rotary, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False, ev)
+        periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * m.size)
+        return Motion.of(dm, True, (seg_f,), periodic)
+    seg_b = _segment(_side(dm, plan, -1, heavy, samples, stride, branch, cancel), chunk, lo)
+    return Motion.of(dm, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False)

@@ -1,7 +1,8 @@
 """One driver moved from the reference along its assembly branch, the others held.
 
-:class:`Side` is the motion of driver ``k`` in one direction (``+1`` or ``-1``) from
-the reference configuration.  Every evaluation solves one continuous path from the
+:class:`Side` is the motion of one driver (a :class:`~multiloop.kin.motion.DriverMotion`,
+which builds its inputs) in one direction (``+1`` or ``-1``) from the reference
+configuration.  Every evaluation solves one continuous path from the
 reference (the sampled grid up to the furthest point asked, with the asked points
 inserted in order), so the tracked branch is the one continuous motion reaches.
 
@@ -20,10 +21,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from multiloop.kin.motion import DriverMotion
 from multiloop.kin.solve import solve
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
-__all__ = ["Side", "XTOL", "mechanism_size"]
+__all__ = ["Side", "XTOL"]
 
 #: bracket width at which a refinement stops (rad, or fraction of the size for P drivers)
 XTOL = 1e-10
@@ -32,30 +34,23 @@ _GOLD = 0.5 * (np.sqrt(5.0) - 1.0)
 _STRIDE = 4
 
 
-def mechanism_size(m: Mechanism) -> float:
-    """Largest extent of the reference joint positions (m)."""
-    xy = np.array([j.at for j in m.joints if j.at is not None], float)
-    return float(max(np.max(np.ptp(xy, axis=0)), 1e-12)) if len(xy) > 1 else 1.0
-
-
 @dataclass(frozen=True)
 class Side:
-    """Driver ``k`` moved in direction ``sign`` from the reference, up to ``span``.
+    """A driver's motion taken in direction ``sign`` from the reference, along ``grid``.
 
     Attributes
     ----------
-    mechanism, plan : the mechanism and a compiled solve plan (reused by every call)
-    k : int
-        Driver index.
+    motion : DriverMotion
+        The driver moved and the others held (its certified range, when known).
+    plan : a compiled solve plan (reused by every call)
     sign : int
         +1 (increasing input) or -1.
     grid : ndarray
         Sampled input values ``0, sign·h, 2·sign·h, …`` (rad or m).
     """
 
-    mechanism: Mechanism
+    motion: DriverMotion
     plan: object
-    k: int
     sign: int
     grid: np.ndarray
     samples: int = 32
@@ -65,24 +60,24 @@ class Side:
     cancel: object = None            # callable polled before every solve; it stops the check by raising
     each: bool = False               # refine bracket by bracket (tracked groups: see :meth:`_each`)
 
-    @classmethod
-    def make(cls, m: Mechanism, plan, k: int, sign: int, n: int, span: float,
-             samples: int = 32, stride: int = _STRIDE) -> "Side":
-        return cls(m, plan, k, sign, sign * np.linspace(0.0, span, n), samples, stride)
+    @property
+    def mechanism(self) -> Mechanism:
+        return self.motion.mechanism
+
+    @property
+    def k(self) -> int:
+        return self.motion.k
 
     @property
     def is_rotary(self) -> bool:
-        return self.mechanism.joint(self.mechanism.drivers[self.k].joint).kind is JointKind.R
+        return self.motion.rotary
 
     @property
     def xtol(self) -> float:
-        return XTOL if self.is_rotary else XTOL * mechanism_size(self.mechanism)
+        return XTOL if self.is_rotary else XTOL * self.mechanism.size
 
     def inputs(self, x) -> np.ndarray:
-        x = np.asarray(x, float).reshape(-1)
-        X = np.zeros((x.size, len(self.mechanism.drivers)))
-        X[:, self.k] = x
-        return X
+        return self.motion.inputs(x)
 
     def solve(self, x, derivatives: bool = False):
         """The solver's state along ``x`` (a path that must start at the reference)."""
@@ -90,10 +85,8 @@ class Side:
             self.cancel()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            rates = np.zeros(len(self.mechanism.drivers))
-            rates[self.k] = 1.0                  # this driver at unit rate, the others held
-            return solve(self.mechanism, self.inputs(x), derivatives=derivatives, plan=self.plan,
-                         input_rates=rates if derivatives else None)
+            return solve(self.mechanism, self.motion.inputs(x), derivatives=derivatives, plan=self.plan,
+                         input_rates=self.motion.rates() if derivatives else None)
 
     def at(self, xs, derivatives: bool = False):
         """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.

@@ -43,8 +43,7 @@ import numpy as np
 from multiloop.kin.solve import solve
 
 from .envelope import edge_fractions, envelope
-from multiloop.topo.errors import InputError, explain
-from multiloop.topo.model import JointKind
+from multiloop.topo.errors import ParameterError, explain
 
 __all__ = ["Workspace", "workspace", "alpha_outline"]
 
@@ -226,15 +225,17 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     labels."""
     names = [p.name for p in m.points]
     if point not in names:
-        raise InputError(explain("--workspace", expected="a tracer point of the mechanism",
-                                 got=repr(point), hint="points: " + (", ".join(names) or "none ([[point]])")))
+        raise ParameterError(explain("workspace", expected="a tracer point of the mechanism",
+                                     got=repr(point), hint="points: " + (", ".join(names) or "none ([[point]])")),
+                             "workspace")
     ip = names.index(point)
     box = _inside_limits(m, ip, np.array(box, float).reshape(len(m.drivers), 2))
     X = _box_samples(box)
     P = _solve_point(m, X, ip)
     good = np.isfinite(P).all(axis=1)
     if not good.any():
-        raise InputError(explain("--workspace", expected="positions that assemble", got="none in the box"))
+        raise ParameterError(explain("workspace", expected="positions that assemble", got="none in the box"),
+                             "workspace")
     env = _envelope(m, ip, box)
     Xg, Pg = X[good], P[good]
     if env is not None:                  # the box edges' Chebyshev samples: the corners exactly
@@ -249,7 +250,7 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     else:
         boundary, area = alpha_outline(Pg)
         arcs = ()
-    rotary = tuple(m.joint(d.joint).kind is JointKind.R for d in m.drivers)
+    rotary = tuple(m.is_rotary(d) for d in m.drivers)
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,

@@ -20,8 +20,6 @@ from pathlib import Path
 
 import numpy as np
 
-from multiloop.topo.model import JointKind
-
 from .style import escape_math, no_mathtext
 
 __all__ = ["engine_figures", "engine_plots", "plot_forces"]
@@ -210,7 +208,7 @@ def plot_forces(fr, x, out=None):
     plt = _plt()
     m = fr.mechanism
     fig, axs = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
-    rot = [m.joint(d.joint).kind is JointKind.R for d in m.drivers]
+    rot = [m.is_rotary(d) for d in m.drivers]
     for i, d in enumerate(m.drivers):
         what = "moment M_b (N m)" if rot[i] else "force F_b (N)"
         axs[0].plot(x, fr.balancing[:, i], marker=".", label=f"driver {d.joint}: {what}")

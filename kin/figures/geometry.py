@@ -78,7 +78,7 @@ def slider_guide(state: KinematicState, n: int, joint: int, half_length: float) 
 def is_full_turn(state: KinematicState, rtol: float = 1e-6) -> bool:
     """One R driver swept over a whole turn in equal steps (the next step would repeat the first)."""
     m = state.mechanism
-    if len(m.drivers) != 1 or m.joint(m.drivers[0].joint).kind is not JointKind.R:
+    if len(m.drivers) != 1 or not m.is_rotary(0):
         return False
     x = np.asarray(state.inputs[:, 0], float)
     if len(x) < 3:

@@ -40,7 +40,7 @@ def input_axis(state: KinematicState) -> tuple[np.ndarray, str]:
     """The first driver's values for plotting: degrees for R, metres for P."""
     m = state.mechanism
     d = m.drivers[0]
-    if m.joint(d.joint).kind is JointKind.R:
+    if m.is_rotary(d):
         return np.degrees(state.inputs[:, 0]), f"input {d.joint} (deg)"
     return state.inputs[:, 0], f"input {d.joint} (m)"
 

@@ -76,11 +76,11 @@ from __future__ import annotations
 from .linsolve import solve_batched, solve_sparse
 from .loads import (LinkLoads, PointLoad, check_mass_data, driver_speeds, has_loads, kinetic_energy, link_loads,
                     potential_energy, table_period)
-from .plan import Block, Column, ForcePlan, Pair, compile_forces
+from .plan import METHODS, Block, Column, ForcePlan, Pair, compile_forces
 from .result import VP_TOL, ForceResult
 from .solver import MAX_ANGLE_DEG, MAX_SLIDE_SIZES, forces, reduce_inputs
 
 __all__ = ["Pair", "PointLoad", "ForceResult", "forces", "link_loads", "solve_batched", "solve_sparse",
            "driver_speeds", "kinetic_energy", "potential_energy", "LinkLoads", "ForcePlan", "Block", "Column",
            "compile_forces", "check_mass_data", "table_period", "VP_TOL", "reduce_inputs",
-           "MAX_ANGLE_DEG", "MAX_SLIDE_SIZES", "has_loads"]
+           "MAX_ANGLE_DEG", "MAX_SLIDE_SIZES", "has_loads", "METHODS"]

@@ -19,7 +19,10 @@ from multiloop.topo.errors import InputError, LinkageError, MobilityError, expla
 from multiloop.topo.graphs import pin_pairs
 from multiloop.topo.model import JointKind, Mechanism
 
-__all__ = ["Pair", "Column", "Block", "ForcePlan", "compile_forces", "plan_order"]
+__all__ = ["Pair", "Column", "Block", "ForcePlan", "compile_forces", "plan_order", "METHODS"]
+
+#: the kinetostatic routes: group by group (the default), or one system for all moving links
+METHODS = ("groups", "global")
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,7 +116,7 @@ def _columns(m: Mechanism, pairs: list[Pair]) -> list[Column]:
         kinds = ("Rx", "Ry") if p.kind == "R" else ("PN", "PM")
         cols += [Column(k, i, p.a, p.b, p.joint) for k in kinds]
     for i, d in enumerate(m.drivers):
-        kind = "DP" if m.joint(d.joint).kind is JointKind.P else "DR"
+        kind = "DR" if m.is_rotary(d) else "DP"
         cols.append(Column(kind, i, d.links[0], d.links[1], d.joint))
     return cols
 
@@ -143,8 +146,8 @@ def compile_forces(m: Mechanism, method: str = "groups", plan=None) -> ForcePlan
     MobilityError
         The equations are not square (the drivers do not match the mobility).
     """
-    if method not in ("groups", "global"):
-        raise InputError(explain("method", expected="'groups' or 'global'", got=repr(method)))
+    if method not in METHODS:
+        raise InputError(explain("method", expected=" or ".join(map(repr, METHODS)), got=repr(method)))
     groups, used, notes = _groups(m, method, plan)
     rank = {x: float(i) for i, g in enumerate(groups) for x in g}
     rank.update({lk.name: -1.0 for lk in m.links if lk.is_frame})

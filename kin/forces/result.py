@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.model import Mechanism
 
 from ..result import BatchStatus, inputs_json, json_ready
 from ..state import KinematicState
@@ -129,7 +129,7 @@ class ForceResult(BatchStatus):
         m = self.mechanism
         q = np.array(self.state.inputs, float)
         for k, d in enumerate(m.drivers):
-            if m.joint(d.joint).kind is JointKind.R:
+            if m.is_rotary(d):
                 q[:, k] = np.degrees(q[:, k])
         return q
 
@@ -137,11 +137,11 @@ class ForceResult(BatchStatus):
         m = self.mechanism
         out = []
         for d in m.drivers:
-            kind = m.joint(d.joint).kind
-            out.append({"joint": d.joint, "links": list(d.links), "kind": kind.value,
+            rotary = m.is_rotary(d)
+            out.append({"joint": d.joint, "links": list(d.links), "kind": "R" if rotary else "P",
                         "speed": float(d.speed) if d.speed is not None else 1.0,
                         "acceleration": float(d.acceleration) if d.acceleration is not None else 0.0,
-                        "unit": "N m" if kind is JointKind.R else "N"})
+                        "unit": "N m" if rotary else "N"})
         return out
 
     def _reactions_dict(self) -> dict:
@@ -165,7 +165,7 @@ class ForceResult(BatchStatus):
         lines = [f"{m.name or 'mechanism'}: kinetostatics, {self.n_positions} position(s), method {self.method}{tag}"]
         lines += [f"  note: {n}" for n in notes]
         lines.append("  blocks solved: " + " <- ".join("{" + ", ".join(b) + "}" for b in self.blocks))
-        heads = ["input"] + [("Mb" if m.joint(d.joint).kind is JointKind.R else "Fb") + f"[{d.joint}]"
+        heads = ["input"] + [("Mb" if m.is_rotary(d) else "Fb") + f"[{d.joint}]"
                              for d in m.drivers] + ["VP residual", "status"]
         lines.append("  " + "  ".join(f"{h:>14}" for h in heads))
         for n in range(self.n_positions):

@@ -18,6 +18,7 @@ import numpy as np
 from multiloop.topo.errors import InputError, SingularityWarning, explain
 from multiloop.topo.model import MAX_ANGLE_DEG, MAX_SLIDE_SIZES, JointKind, Mechanism
 
+from ..motion import DriverMotion
 from ..solve import check_finite_inputs
 from ..state import KinematicState
 from .linsolve import SING_TOL, solve_sparse
@@ -379,11 +380,10 @@ def reduce_inputs(m: Mechanism, inputs, degrees: bool = False) -> np.ndarray:
     check_finite_inputs(m, q, "driver inputs")
     period = table_period(m) if degrees else np.radians(table_period(m))
     limit = MAX_ANGLE_DEG if degrees else np.radians(MAX_ANGLE_DEG)
-    xy = np.array([j.at for j in m.joints], float)
-    size = float(np.max(np.ptp(xy, axis=0))) if len(xy) > 1 else 1.0
+    size = m.size
     for k, d in enumerate(m.drivers):
         col = q[:, k]
-        if m.joint(d.joint).kind is JointKind.R:
+        if m.is_rotary(d):
             if np.any(np.abs(col) > limit):
                 big = np.max(np.abs(col)) * (1.0 if degrees else 180.0 / np.pi)
                 raise InputError(explain(f"input of driver {d.joint!r}", expected=f"at most {MAX_ANGLE_DEG:g} deg in magnitude",
@@ -417,9 +417,7 @@ def _solve_state(m: Mechanism, inputs, speeds, accelerations) -> KinematicState:
     for k in range(len(m.drivers)):
         if e[k] == 0.0:
             continue
-        unit = np.zeros(len(m.drivers))
-        unit[k] = 1.0
-        s1 = solve(m, q, derivatives=True, input_rates=unit)
+        s1 = solve(m, q, derivatives=True, input_rates=DriverMotion.held(m, k).rates())
         acc += s1.velocities * e[k]
         eps += s1.omegas * e[k]
     return dataclasses.replace(st, accelerations=acc, epsilons=eps)   # every other field kept

@@ -72,6 +72,7 @@ __all__ = [
     "PlatformModes",
     "SingularStrutsError",
     "COORDINATES",
+    "NORMALISATIONS",
     "plucker_matrices",
     "condition_numbers",
     "strut_forces_equilibrium",
@@ -86,6 +87,10 @@ __all__ = [
 
 #: names of the generalised coordinates of the modes
 COORDINATES = ("x", "y", "z", "phi_x", "phi_y", "phi_z")
+
+#: how mode shapes may be normalised (:meth:`PlatformModes.shapes`): x = 1 as printed by
+#: Doronin 2015, mass-normalised (φᵀAφ = 1), largest component = 1
+NORMALISATIONS = ("first", "mass", "max")
 
 #: condition number above which the struts are treated as singular
 SINGULAR_CONDITION = 1e10
@@ -652,7 +657,8 @@ class PlatformModes:
         if normalise == "max":
             i = np.argmax(np.abs(M), axis=0)
             return M / M[i, np.arange(6)]
-        raise InputError(explain("normalise", expected="'mass', 'first' or 'max'", got=repr(normalise)))
+        raise InputError(explain("normalise", expected=", ".join(map(repr, NORMALISATIONS[:-1]))
+                                 + f" or {NORMALISATIONS[-1]!r}", got=repr(normalise)))
 
 
 def platform_modes(platform: Platform) -> PlatformModes:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from multiloop.kin.forces import forces, has_loads, table_period
+from multiloop.kin.forces import METHODS, forces, has_loads, table_period
 from multiloop.kin.result import json_ready
 from multiloop.kin.sweep import cycle_inputs, driver_forces
 from multiloop.inputs import load_mechanism_or_engine
@@ -34,7 +34,7 @@ def add_arguments(p) -> None:
     p.add_argument("--at", default=None, metavar="ANGLE",
                    help="one input: deg (R driver) or m (P driver); comma-separated for several drivers")
     p.add_argument("--steps", type=int, default=72, metavar="N", help="positions over one cycle (default 72)")
-    p.add_argument("--method", choices=("groups", "global"), default="groups",
+    p.add_argument("--method", choices=METHODS, default=METHODS[0],
                    help="group by group along the Assur plan (default) or one global system")
     p.add_argument("--json", action="store_true", help="print the JSON report")
     p.add_argument("--plot", default=None, metavar="OUT.png", help="plot balancing and reactions against the input")

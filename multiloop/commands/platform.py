@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 
 
-from multiloop.kin.spatial.platform import load_platform
+from multiloop.kin.spatial.platform import NORMALISATIONS, load_platform
 from multiloop.kin.spatial.report import platform_report
 from multiloop.inputs import resolve
 from multiloop.outputs import emit, Outputs, quiet_warnings
@@ -24,7 +24,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="platform file (.toml/.json) or a bundled name, e.g. doronin_platform")
     parser.add_argument("--json", action="store_true", help="print a JSON report (keys: docs/platform.md)")
     parser.add_argument("--plot", metavar="PNG", help="draw platform, struts coloured by force, screw axes")
-    parser.add_argument("--modes", choices=("first", "mass", "max"), default="first",
+    parser.add_argument("--modes", choices=NORMALISATIONS, default=NORMALISATIONS[0],
                         help="normalisation of the printed mode shapes: x = 1 as in Doronin 2015 (default), "
                              "phi^T A phi = 1, or largest component = 1 (JSON always has 'shape' mass-normalised "
                              "and 'shape_x1')")

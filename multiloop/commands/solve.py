@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 
+from multiloop.kin.solve import METHODS
 from multiloop.outputs import dumps_json, Outputs, quiet_warnings
 from multiloop.inputs import load_mechanism as load  # files, .pyslvs or catalogue names
 
@@ -29,7 +30,7 @@ def add_arguments(p) -> None:
                    help="last input (inclusive)")
     p.add_argument("--derivatives", action="store_true",
                    help="velocities and accelerations (analogues: driver at unit rate)")
-    p.add_argument("--method", choices=("auto", "closed_form", "newton"), default="auto",
+    p.add_argument("--method", choices=METHODS, default=METHODS[0],
                    help="closed-form groups (default) or Newton with continuation for all")
     p.add_argument("--assemble", action="store_true",
                    help="solve each input on its own, on the reference's branch signs (no continuation: "

@@ -63,7 +63,7 @@ def add_arguments(p) -> None:
     p.add_argument("--evaluations", default=None, metavar="N",
                    help="stop after N designs evaluated: reproducible (default 20000; without START 100000)")
     p.add_argument("--budget", type=float, default=None, metavar="S", help="a wall-time cap in seconds")
-    p.add_argument("--method", choices=METHODS, default="de",
+    p.add_argument("--method", choices=METHODS, default=METHODS[0],
                    help="global search (default de); local: polish the start only")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the relative RMS error is below this (default 1e-6); without START: "
@@ -135,7 +135,7 @@ def run_without_start(args, limits: dict) -> int:
 def run(args) -> int:
     from multiloop.catalogue.dimensional import synthesise
 
-    limits = Budget.of(args.evaluations, args.budget, default=None, names=("--evaluations", "--budget")).keywords()
+    limits = Budget.of(args.evaluations, args.budget, default=None).keywords()
     if args.start is None:
         return run_without_start(args, limits)
     if args.closed is not None:     # refused, not ignored: a start's motion is --full-rotation's

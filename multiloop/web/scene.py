@@ -120,11 +120,11 @@ def _nodes(st) -> np.ndarray:
 
 
 def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
+    from multiloop.kin.motion import DriverMotion
     from multiloop.kin.solve import plan_of, solve
     if cancel is not None:
         cancel()
-    X = np.zeros((x.size, len(m.drivers)))
-    X[:, k] = x
+    X = DriverMotion.held(m, k).inputs(x)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return solve(m, X, plan=plan_of(m))
@@ -150,7 +150,7 @@ def sweep_driver(m: Mechanism, k: int, cancel=None) -> Sweep:
     from multiloop.kin.check import driver_angles
 
     joint = m.drivers[k].joint
-    rotary = m.joint(joint).kind is JointKind.R
+    rotary = m.is_rotary(k)
     if rotary:
         x = np.linspace(0.0, 2 * np.pi, R_FRAMES)
         st = _solve(m, k, x, cancel)

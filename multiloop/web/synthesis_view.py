@@ -154,7 +154,7 @@ def _menus(say, starts: list[str], atlases) -> dict:
         start=Menu("start menu", say, [*starts[:1], NO_START, *starts[1:]], title="start mechanism", width=200,
                    css_classes=["ml-start"]),
         point=Menu("tracer point menu", say, title="tracer point (--point)", width=160),
-        method=Menu("method menu", say, METHODS, "de", title="method", width=90),
+        method=Menu("method menu", say, METHODS, METHODS[0], title="method", width=90),
         atlas=Menu("atlas menu", say, [str(a) for a in atlases], hint=ATLAS_HINT, title="atlas (--db)",
                    width=260, css_classes=["ml-atlas"]),
         pick=Menu("candidate menu", say, title="candidate", width=120),
