@@ -36,7 +36,7 @@ import numpy as np
 
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, LinkageError, ParameterError, explain
-from multiloop.topo.model import JointKind, Mechanism, MechanismBuilder, TracerPoint
+from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
 from multiloop.kin.check import check
 from multiloop.kin.solve import solve
 
@@ -116,7 +116,7 @@ class Design:
         driver, m for a P driver, from the written reference), else None."""
         if self.interval is None:
             return None
-        rotary = self.mechanism.joint(self.mechanism.drivers[0].joint).kind is JointKind.R
+        rotary = self.mechanism.is_rotary(0)
         return [float(np.degrees(v)) if rotary else float(v) for v in self.interval]
 
     def as_dict(self, file: str | None = None) -> dict:
