@@ -10,6 +10,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import os
 import warnings
 from pathlib import Path
 
@@ -396,3 +397,15 @@ def test_readme_check_example_is_what_check_prints(capsys):
     assert block is not None
     assert main(["check", str(root / "catalogue/mechanisms/four_bar.toml")]) == 0
     assert capsys.readouterr().out.strip() == block.group(1).strip()
+
+
+def test_four_bar_loops_come_in_the_same_order_whatever_the_hash_seed():
+    """Before: the loops were walked over Python sets of link names, so ``check --json`` of
+    knitting_needle_drive and watt_2 listed them in another order from one run to the next."""
+    import subprocess
+    import sys
+    code = ("from multiloop.inputs import load_mechanism; from multiloop.kin.check.grashof import four_bar_loops;"
+            "print([l.links for n in ('knitting_needle_drive', 'watt_2') for l in four_bar_loops(load_mechanism(n))])")
+    runs = {subprocess.run([sys.executable, "-c", code], env={**os.environ, "PYTHONHASHSEED": str(seed)},
+                           capture_output=True, text=True, check=True).stdout for seed in range(6)}
+    assert len(runs) == 1, runs

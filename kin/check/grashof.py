@@ -80,8 +80,9 @@ def four_bar_loops(m: Mechanism, order: dict | None = None) -> tuple[FourBarLoop
         adj.setdefault(a, set()).add(b)
         adj.setdefault(b, set()).add(a)
     idx = {lk: i for i, lk in enumerate(names)}
-    cycles = [(a, b, c, d) for a in names for b in adj.get(a, ()) for c in adj[b]
-              for d in adj[c] if a in adj[d] and len({a, b, c, d}) == 4
+    near = {a: sorted(nb, key=idx.get) for a, nb in adj.items()}     # in link order: the same loops
+    cycles = [(a, b, c, d) for a in names for b in near.get(a, ()) for c in near[b]  # whatever the hash seed
+              for d in near[c] if a in adj[d] and len({a, b, c, d}) == 4
               and idx[a] < min(idx[b], idx[c], idx[d]) and idx[b] < idx[d]]
     for cyc in cycles:
         pairs = [frozenset((cyc[i], cyc[(i + 1) % 4])) for i in range(4)]
