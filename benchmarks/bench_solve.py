@@ -568,12 +568,39 @@ def kernel_startup() -> None:
     print(f"cold start of `multiloop solve four_bar` (36 positions, numba not imported): {best:.2f} s CPU, best of 5")
 
 
+def memory(n: int = 10 ** 6) -> None:
+    """Peak memory of ``solve`` on ``n`` positions of the catalogue's ``linkage_24``, traced
+    by :mod:`tracemalloc` (NumPy's buffers are traced), against what the result keeps (the
+    pose store: every array of the returned state). Goal: peak ≤ 2 × the store."""
+    import tracemalloc
+
+    from multiloop.inputs import load_mechanism
+    m = load_mechanism("linkage_24")
+    x = np.linspace(0.0, 2 * np.pi, n)
+    solve(m, x[:100])                                   # the plan compiled before tracing
+    tracemalloc.start()
+    t = time.process_time()
+    st = solve(m, x)
+    cpu = time.process_time() - t
+    kept, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    store = {k: v.nbytes for k, v in vars(st).items() if isinstance(v, np.ndarray)}
+    print(f"linkage_24, {n} positions: {cpu:.1f} s CPU; peak {peak / 2 ** 20:.0f} MiB, kept after the call "
+          f"{kept / 2 ** 20:.0f} MiB (arrays of the result {sum(store.values()) / 2 ** 20:.0f} MiB, some of them views: "
+          f"{', '.join(f'{k} {v / 2 ** 20:.0f}' for k, v in store.items())}); peak / kept = {peak / kept:.2f} "
+          f"(goal <= 2) -> {'MET' if peak <= 2 * kept else 'NOT MET'}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer positions")
     ap.add_argument("--no-charts", action="store_true")
     ap.add_argument("--ratios", action="store_true", help="only the issue-11 ratios against pylinkage")
+    ap.add_argument("--memory", action="store_true", help="only the peak memory of 10^6 positions of linkage_24")
     a = ap.parse_args(argv)
+    if a.memory:
+        memory()
+        return
     _versions()
     ratios()
     kernel_startup()
