@@ -264,10 +264,10 @@ class AssurGroup:
         roman = _ROMAN.get(self.cls, str(self.cls))
         if self.is_dyad:
             head = f"II{DYAD_KINDS[str(self.kind)]}"
-        elif self.kind in (GroupKind.TRIAD, GroupKind.CLASS_IV):
-            head = roman
-        else:
+        elif self.kind in (GroupKind.GENERAL, GroupKind.DRIVEN, GroupKind.ACTUATED):
             head = f"G{len(self.links)}"
+        else:                               # a triad, a class IV group, a kind registered at run time
+            head = roman
         return f"{head}({','.join(map(str, self.numbers))})"
 
     def describe(self) -> str:
