@@ -127,3 +127,14 @@ def test_a_dimensional_synthesis(mirrored):
     assert res.evaluations <= 200 and res.stopped == "evaluations" and np.isfinite(res.error_max)
     (g,) = decompose(res.mechanism).groups
     assert g.kind == MIRROR
+
+
+def test_the_compiled_kernel_runs_its_lowered_step(mirrored):
+    pytest.importorskip("numba")
+    from multiloop.kin import kernel
+    m, ref = mirrored
+    kp = kernel.kernel_plan(plan_of(m))
+    assert kp.complete                      # its lowered step has a compiled function (the RRR one)
+    with kernel.using("on"):
+        a = solve(m, X_SOLVE)
+    assert a.ok.all() and np.allclose(a.positions, ref["state"].positions, rtol=0, atol=1e-12)

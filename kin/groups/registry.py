@@ -49,6 +49,15 @@ KINDS: dict[object, type[GroupStep]] = {a.kind: a for a in BUILT_IN}
 #: the same map under its first name
 CLOSED_FORM = KINDS
 
+
+def _has_rule(adapter) -> bool:
+    return adapter.relabel.__func__ is not GroupStep.relabel.__func__
+
+
+for _a in BUILT_IN:                 # a library kind the decomposition does not know by itself
+    if _has_rule(_a):
+        add_kind_rule(_a.relabel)
+
 #: a compiled step's key (:attr:`~kin.groups.step.Lowered.key`) -> its scalar function,
 #: which :mod:`kin.kernel` compiles with numba (a kind absent here: NumPy path); fixed when
 #: the kernel is imported, so a kind registered at run time reuses a key or has none
@@ -64,7 +73,8 @@ def register(adapter: type[GroupStep]) -> None:
     if adapter.kind is None or adapter.kind in KINDS:
         raise ValueError(f"group kind: expected a new kind name, got {adapter.kind!r}")
     KINDS[adapter.kind] = adapter
-    add_kind_rule(adapter.relabel)
+    if _has_rule(adapter):
+        add_kind_rule(adapter.relabel)
 
 
 def unregister(kind) -> None:
@@ -73,7 +83,8 @@ def unregister(kind) -> None:
     if adapter is None or adapter in BUILT_IN:
         raise ValueError(f"group kind: expected a registered kind, got {kind!r}")
     del KINDS[kind]
-    remove_kind_rule(adapter.relabel)
+    if _has_rule(adapter):
+        remove_kind_rule(adapter.relabel)
 
 
 @contextlib.contextmanager
