@@ -17,7 +17,7 @@ from multiloop.catalogue.named import load_named
 from multiloop.kin.check import check
 from multiloop.kin.check.transmission import angle_specs
 from multiloop.kin.design import branch_signs, solve_designs
-from multiloop.kin.groups.registry import KINDS, mode_count, registered
+from multiloop.kin.groups.registry import KINDS, mode_count, register, registered, unregister
 from multiloop.kin.groups.rrr import RRRStep
 from multiloop.kin.solve import plan_of, solve
 from multiloop.topo.assur import DyadLayout, GroupKind, decompose
@@ -77,6 +77,16 @@ def test_the_kind_is_gone_after_the_block():
         pass
     (g,) = decompose(load_named("four_bar")).groups
     assert g.kind is GroupKind.RRR
+
+
+def test_a_kind_name_is_registered_once(mirrored):
+    with pytest.raises(ValueError, match="new kind name"):
+        register(MirrorStep)
+    for name in ("RRR", "triad", "group"):
+        with pytest.raises(ValueError, match="new kind name"):
+            register(type("Taken", (RRRStep,), {"kind": name}))
+    with pytest.raises(ValueError, match="registered kind"):
+        unregister(GroupKind.RRR)
 
 
 def test_solve_uses_its_adapter(mirrored):

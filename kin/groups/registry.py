@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import contextlib
 
-from multiloop.topo.assur import AssurGroup, DriverStep, add_kind_rule, remove_kind_rule
+from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, add_kind_rule, remove_kind_rule
 
 from .actuator import ActuatorStep
 from .class4 import Class4Step
@@ -57,6 +57,7 @@ def _has_rule(adapter) -> bool:
 for _a in BUILT_IN:                 # a library kind the decomposition does not know by itself
     if _has_rule(_a):
         add_kind_rule(_a.relabel)
+del _a
 
 #: a compiled step's key (:attr:`~kin.groups.step.Lowered.key`) -> its scalar function,
 #: which :mod:`kin.kernel` compiles with numba (a kind absent here: NumPy path); fixed when
@@ -70,8 +71,10 @@ def register(adapter: type[GroupStep]) -> None:
     yet registered) and declares its facts (:mod:`kin.groups.step`); its ``relabel`` is
     the decomposition's rule for the groups of the kind.  Register before the
     mechanisms are decomposed: a plan made earlier keeps its kinds."""
-    if adapter.kind is None or adapter.kind in KINDS:
-        raise ValueError(f"group kind: expected a new kind name, got {adapter.kind!r}")
+    taken = {str(k) for k in (*KINDS, *GroupKind)}
+    if not isinstance(adapter.kind, str) or str(adapter.kind) in taken:
+        raise ValueError(f"group kind: expected a new kind name (not {', '.join(sorted(taken))}), "
+                         f"got {adapter.kind!r}")
     KINDS[adapter.kind] = adapter
     if _has_rule(adapter):
         add_kind_rule(adapter.relabel)
