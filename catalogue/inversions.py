@@ -10,7 +10,7 @@ McKay & Piperno 2014).  Each representative is decomposed into Assur groups
 (:func:`topo.assur.decompose`), and the atlas records its structure formula, its
 highest class (I for a lone driver, II for dyads, III for triads, ...; Artobolevsky's
 convention) and whether every step has a closed-form kernel
-(the public map ``kin.groups.registry.CLOSED_FORM`` of the kinds with a closed-form
+(``kin.groups.registry.has_closed_form``: the registry of the kinds with a closed-form
 step, and ``kin.groups.driver.is_closed_form`` for the driver).
 
 Two independent routes count the same orbits (tests):
@@ -37,7 +37,7 @@ import pynauty
 from multiloop.topo.assur import DriverStep, decompose
 from multiloop.topo.model import Driver, Mechanism, MechanismBuilder
 from multiloop.kin.groups.driver import is_closed_form as driver_closed_form
-from multiloop.kin.groups.registry import CLOSED_FORM
+from multiloop.kin.groups.registry import has_closed_form
 
 from . import stored_rows as sr
 from .atlas import Atlas, each_with_progress
@@ -147,9 +147,8 @@ def classify(m: Mechanism) -> tuple[str, int, bool, tuple[str, ...]]:
     ('I(0,1) → II1(2,3)', 2, True, ('RRR',))
     """
     plan = decompose(m)
-    kinds = CLOSED_FORM
     closed = all(driver_closed_form(s) if isinstance(s, DriverStep)
-                 else (s.kind in kinds and s.layout is not None) for s in plan.steps)
+                 else (has_closed_form(s.kind) and s.layout is not None) for s in plan.steps)
     cls = max((g.cls for g in plan.groups), default=1)
     return plan.formula, int(cls), bool(closed), tuple(str(g.kind_name) for g in plan.groups)
 

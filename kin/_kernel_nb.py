@@ -36,8 +36,9 @@ def _fresh_cache() -> None:
 
 
 _fresh_cache()                             # before the decorators read the timestamp
-#: the number of scalar steps the kernel dispatches on (the registry's order)
-SLOTS = 8
+#: the number of scalar steps the kernel dispatches on (the registry's order): 8 taken, so
+#: four more kinds with a compiled step need no edit here
+SLOTS = 12
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
 
@@ -49,8 +50,8 @@ for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
     register_jitable(**_JIT)(_helper)
 if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
-_s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7 = (numba.njit(**_JIT)(f) for f in
-                                          (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
+_s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7, _s8, _s9, _s10, _s11 = (
+    numba.njit(**_JIT)(f) for f in (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
 
 
 @numba.njit(**_JIT)
@@ -70,8 +71,16 @@ def _step(c, ip, fp, X, W, F, T, C, S, PP, out) -> None:
         _s5(ip, fp, X, W, F, T, C, S, PP, out)
     elif c == 6:
         _s6(ip, fp, X, W, F, T, C, S, PP, out)
-    else:
+    elif c == 7:
         _s7(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 8:
+        _s8(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 9:
+        _s9(ip, fp, X, W, F, T, C, S, PP, out)
+    elif c == 10:
+        _s10(ip, fp, X, W, F, T, C, S, PP, out)
+    else:
+        _s11(ip, fp, X, W, F, T, C, S, PP, out)
 
 
 @numba.njit(**_JIT)

@@ -38,7 +38,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from multiloop.topo.assur import AssurGroup, AssurPlan, DriverStep, GroupKind, decompose
+from multiloop.topo.assur import AssurPlan, DriverStep, decompose
 from multiloop.topo.constraints import link_origins
 from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, SingularityWarning,
                          explain)
@@ -47,7 +47,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from . import kernel
 from .continuation import Walk, walk
 from .groups.newton import ConstraintSystem, relative_det
-from .groups.registry import closed_form_step, newton_step
+from .groups.registry import closed_form_step, newton_step, singular_hint
 from .groups.step import SINGULAR
 from .memo import cached, memo_of
 from .motion import DriverMotion
@@ -136,9 +136,7 @@ def compile_plan(mechanism: Mechanism, plan: AssurPlan | None = None) -> SolvePl
         cols = (3 * np.asarray(unknown)[:, None] + np.arange(3)).ravel()
         rel = float(relative_det(sysm.jacobian(Z0)[0][:, cols]))      # the same at any scale and place
         if rel < _SINGULAR:
-            hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular" \
-                if isinstance(s, AssurGroup) and s.kind in (GroupKind.PRP, GroupKind.RPP) else \
-                "move a joint so that the group is not at a dead centre / toggle position"
+            hint = singular_hint(s) or "move a joint so that the group is not at a dead centre / toggle position"
             raise SingularityError(explain(
                 f"mechanism '{m.name or ''}': {label}", expected="a regular group in the reference configuration",
                 got=f"a singular one (relative determinant {rel:.1e})", hint=hint))

@@ -48,7 +48,7 @@ References
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import NamedTuple
 
@@ -62,7 +62,7 @@ from .mobility import actual_mobility
 from .model import JointKind, Mechanism
 
 __all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS", "GroupKind",
-           "DyadLayout", "TriadLayout", "Class4Layout", "ActuatorLayout"]
+           "DyadLayout", "TriadLayout", "Class4Layout", "ActuatorLayout", "add_kind_rule", "remove_kind_rule"]
 
 # Constraint, link_origins and reference_jacobian live in topo.constraints; the names
 # stay importable from here for existing callers.
@@ -73,7 +73,8 @@ class GroupKind(str, Enum):
     outer, Vasechkin et al. 2017), the class III triad, the class IV order-2 group, any
     other group (``GENERAL``, solved by Newton), a triangle with a linear actuator as one
     side (``ACTUATED``) and any other block with a driver inside (``DRIVEN``).  A member
-    is its string (``GroupKind.RRR == "RRR"``)."""
+    is its string (``GroupKind.RRR == "RRR"``); a kind registered at run time
+    (:func:`add_kind_rule`, through ``kin.groups.registry.register``) is a plain string."""
 
     RRR = "RRR"
     RRP = "RRP"
@@ -99,6 +100,30 @@ class GroupKind(str, Enum):
 
 #: dyad kind → number (вид) of Vasechkin et al. 2017
 DYAD_KINDS = {"RRR": 1, "RRP": 2, "RPR": 3, "PRP": 4, "RPP": 5}
+
+#: rules that give a decomposed group a kind registered at run time, in the order added
+_KIND_RULES: list = []
+
+
+def add_kind_rule(rule) -> None:
+    """Let :func:`decompose` ask ``rule(mechanism, group)`` for every group: it returns
+    ``(kind, layout)`` to give the group another kind (the first rule that answers wins),
+    or None.  ``kin.groups.registry.register`` adds the rule of the kind it registers."""
+    _KIND_RULES.append(rule)
+
+
+def remove_kind_rule(rule) -> None:
+    """Forget a rule added by :func:`add_kind_rule`."""
+    _KIND_RULES.remove(rule)
+
+
+def _relabelled(m: Mechanism, g: "AssurGroup") -> "AssurGroup":
+    """``g`` with the kind and layout of the first registered rule that claims it."""
+    for rule in _KIND_RULES:
+        hit = rule(m, g)
+        if hit is not None:
+            return replace(g, kind=hit[0], layout=hit[1])
+    return g
 
 
 class DyadLayout(NamedTuple):
@@ -182,7 +207,8 @@ class AssurGroup:
         Class and order (module docstring).
     kind : GroupKind
         ``RRR``, ``RRP``, ``RPR``, ``PRP``, ``RPP``, ``TRIAD``, ``CLASS_IV``,
-        ``GENERAL`` or ``DRIVEN`` (a driver acts inside); :attr:`kind_name` is the
+        ``GENERAL`` or ``DRIVEN`` (a driver acts inside), or the name of a kind
+        registered at run time (:func:`add_kind_rule`); :attr:`kind_name` is the
         printed name (``"<n>-link group"``, ``"driven <n>-link group"`` for the last two).
     links : tuple of str
         Real links of the group (unknown here), in file order.
@@ -219,7 +245,7 @@ class AssurGroup:
 
     @property
     def is_dyad(self) -> bool:
-        return self.kind.is_dyad
+        return str(self.kind) in DYAD_KINDS
 
     @property
     def kind_name(self) -> str:
@@ -230,18 +256,18 @@ class AssurGroup:
             return f"driven {len(self.links)}-link group"
         if self.kind is GroupKind.ACTUATED:
             return f"RRR (actuated: {self.layout.slide})"
-        return self.kind.value
+        return str(self.kind)
 
     @property
     def label(self) -> str:
         """Formula token, e.g. ``II1(2,3)``."""
         roman = _ROMAN.get(self.cls, str(self.cls))
         if self.is_dyad:
-            head = f"II{DYAD_KINDS[self.kind]}"
-        elif self.kind in (GroupKind.TRIAD, GroupKind.CLASS_IV):
-            head = roman
-        else:
+            head = f"II{DYAD_KINDS[str(self.kind)]}"
+        elif self.kind in (GroupKind.GENERAL, GroupKind.DRIVEN, GroupKind.ACTUATED):
             head = f"G{len(self.links)}"
+        else:                               # a triad, a class IV group, a kind registered at run time
+            head = roman
         return f"{head}({','.join(map(str, self.numbers))})"
 
     def describe(self) -> str:
@@ -612,8 +638,9 @@ def _plan(m: Mechanism, inc: _Incidence, blocks: list[_Block], check_rigidity: b
         if len(links) == 1 and len(blk.drivers) == 1:
             steps.append(_driver_step(m, blk.drivers[0], links[0], cons, numbers))
         else:
-            steps.append(_make_group(m, sum(isinstance(s, AssurGroup) for s in steps), links, cons,
-                                     known, list(blk.drivers), tuple(numbers[x] for x in links)))
+            g = _make_group(m, sum(isinstance(s, AssurGroup) for s in steps), links, cons,
+                            known, list(blk.drivers), tuple(numbers[x] for x in links))
+            steps.append(_relabelled(m, g))
         known.update(links)
     return AssurPlan(m, tuple(steps), tuple(numbers.items()), tuple(solved_by.items()))
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
-from multiloop.topo.assur import GroupKind
+from multiloop.kin.groups.registry import reference_margin
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind
 
@@ -434,29 +434,17 @@ class Problem:
         return self.cons.weight * self.violation(X, st, full)
 
     def reference_margin(self, X: np.ndarray) -> np.ndarray:
-        """Smallest relative determinant of the dyads in the reference configuration
-        ``(P,)``: |sin| of the angle between an RRR's links, |cos| between an RRP's link
-        and guide, slide / pivot distance of an RPR.  Zero is a singular reference,
-        which no solver accepts."""
+        """Smallest relative determinant of the groups in the reference configuration
+        ``(P,)``, each kind's own (:func:`multiloop.kin.groups.registry.reference_margin`:
+        |sin| of the angle between an RRR's links, |cos| between an RRP's link and guide,
+        slide / pivot distance of an RPR).  Zero is a singular reference, which no
+        solver accepts."""
         ev = self.ev
         out = np.ones(X.shape[0])
         for g in ev.plan.groups:
-            o1, inner, o2, l1, l2 = g.layout if g.is_dyad else (None,) * 5
-            if g.kind is GroupKind.RRR:
-                u, w = ev.at(X, inner) - ev.at(X, o1), ev.at(X, inner) - ev.at(X, o2)
-                r = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
-                r = r / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
-            elif g.kind is GroupKind.RRP:
-                u = ev.at(X, inner) - ev.at(X, o1)
-                r = np.abs(np.sum(u * ev.axis(X, o2), 1)) / np.linalg.norm(u, axis=1)
-            elif g.kind is GroupKind.RPR:
-                guide = ev.mechanism.joint(inner).links[0]
-                gx, bx = (o1, o2) if guide == l1 else (o2, o1)
-                d = ev.at(X, bx) - ev.at(X, gx)
-                r = np.abs(np.sum(d * ev.axis(X, inner), 1)) / np.linalg.norm(d, axis=1)
-            else:
-                continue
-            out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
+            r = reference_margin(ev.mechanism, g, lambda n: ev.at(X, n), lambda n: ev.axis(X, n))
+            if r is not None:
+                out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
         return out
 
     def violation(self, X: np.ndarray, st: DesignPoses, full: np.ndarray) -> np.ndarray:

@@ -25,7 +25,8 @@ Definitions (all in degrees):
 
 PRP and RPP dyads have no reach limit; their only singularity (parallel guides) is a
 design error rejected when the plan is built, so no angle is reported for them.
-Which angle a group kind has is a fact of the kind (:data:`kin.groups.registry.FACTS`).
+Which angle a group kind has is a fact of the kind, declared by its adapter
+(``monitored_angles``) and asked through :func:`kin.groups.registry.angle_defs`.
 """
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ from multiloop.topo.assur import GroupKind
 
 from .base import carry, length, margin_tol, num, place, place_along
 from .rrr import rrr_branch, rrr_rates, rrr_xy, triangle_apex
-from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["ActuatorStep", "actuator_place"]
 
@@ -78,6 +78,22 @@ def actuator_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
 class ActuatorStep(GroupStep):
     """A triangle with a linear actuator as one side (:class:`~topo.assur.ActuatorLayout`),
     compiled once: the actuator's guide, the branch sign, the third side's length."""
+
+    kind = GroupKind.ACTUATED
+    compiled = staticmethod(actuator_place)
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """Two: a triangle with a reach limit (its two signs of the closed form)."""
+        return 2
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """The transmission angle at the inner pin B of the triangle A-B-C: the angle
+        between BA and BC (Vasechkin et al. 2017, kind 1);
+        for a cylinder A-B, the angle between the actuator's axis and the lever C-B it drives."""
+        lay = group.layout
+        return (AngleDef(lay.inner, "transmission", (lay.outer1, lay.inner, lay.outer2)),)
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)

@@ -23,6 +23,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from multiloop.topo.assur import GroupKind
+
 from .base import cramer, is_singular, quiet
 from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, track_designs, triad_modes
 from ..continuation import Probe
@@ -254,6 +256,18 @@ class Class4Step(GroupStep):
     (:func:`class4_track`); rates from the group's Jacobian."""
 
     solver = "class4"
+
+    kind = GroupKind.CLASS_IV
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """The real assembly modes at the reference (all-modes kernel, Hunt 1983)."""
+        at, lay = {j.name: np.asarray(j.at, float) for j in m.joints}, group.layout
+        O = np.array([at[lay.outer1], at[lay.outer2]])
+        J = np.array([at[j] for j in (lay.j11, lay.j12, lay.j21, lay.j22)])
+        r = J - O[[0, 0, 1, 1]]
+        ll = np.array([np.hypot(*(J[2] - J[0])), np.hypot(*(J[3] - J[1]))])
+        return int(class4_modes(O, r, ll).n_modes)
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)

@@ -179,6 +179,15 @@ class PRPStep(GroupStep):
     """A PRP dyad of a plan: two sliders pinned together at B, each on the guide of a
     known link; compiled once."""
 
+    kind = GroupKind.PRP
+    compiled = staticmethod(prp_place)
+    singular_hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """One (linear: no reach limit, no angle to monitor)."""
+        return 1
+
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout

@@ -1,89 +1,150 @@
-"""Which compiled step solves which plan step: the one map from a group's kind to the
-adapter next to its kernel (see :mod:`kin.groups.step` for the protocol), the map from
-a lowered step to its scalar function for the compiled kernel (:mod:`kin.kernel`), and the
-per-kind facts the design check asks for (:mod:`kin.groups.facts`): the number of
-assembly modes and the transmission definition."""
+"""The group kinds: the one map from a group's kind to the adapter next to its kernel.
+
+Each adapter (a :class:`~kin.groups.step.GroupStep` subclass, see :mod:`kin.groups.step`
+for the protocol) solves its kind and declares the kind's facts; the library asks them
+here and never switches on the kind:
+
+* the solver's step (:func:`closed_form_step`, :mod:`kin.solve`; batches of designs,
+  :mod:`kin.design`) and the advice for a singular reference (:func:`singular_hint`);
+* the compiled kernel's scalar function (:data:`COMPILED`, :mod:`kin.kernel`);
+* the design check's assembly modes and monitored angles (:func:`mode_count`,
+  :func:`angle_defs`, :mod:`kin.check`), which the synthesis's transmission constraint
+  reads too;
+* the synthesis's margin of a reference configuration (:func:`reference_margin`,
+  ``catalogue.dimensional``);
+* the decomposition's hook that gives a group a kind registered at run time (the
+  adapter's ``relabel``, added to :func:`topo.assur.add_kind_rule` by :func:`register`).
+
+A new kind is one adapter class next to its kernel and one entry in :data:`BUILT_IN`,
+or, without editing the library, :func:`register` (or the block :func:`registered`).
+"""
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+import contextlib
 
-from multiloop.topo.assur import DriverStep, GroupKind
+from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, add_kind_rule, remove_kind_rule
 
-from .actuator import ActuatorStep, actuator_place
+from .actuator import ActuatorStep
 from .class4 import Class4Step
 from .driver import DriverStepSolver, is_closed_form, slide_place, turn_place
-from . import facts as F
 from .newton import NewtonStep
-from .prp import PRPStep, prp_place
-from .rpp import RPPStep, rpp_place
-from .rpr import RPRStep, rpr_place
-from .rrp import RRPStep, rrp_place
-from .rrr import RRRStep, rrr_place
+from .prp import PRPStep
+from .rpp import RPPStep
+from .rpr import RPRStep
+from .rrp import RRPStep
+from .rrr import RRRStep
 from .step import GroupStep
 from .triad import TriadStep
 
-__all__ = ["CLOSED_FORM", "COMPILED", "FACTS", "KindFacts", "closed_form_step", "newton_step", "has_closed_form",
-           "mode_count", "angle_defs"]
+__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "register", "unregister", "registered",
+           "adapter_of", "closed_form_step", "newton_step", "has_closed_form", "mode_count", "angle_defs",
+           "reference_margin", "singular_hint"]
 
-#: group kind -> its closed-form step
-CLOSED_FORM: dict[GroupKind, type[GroupStep]] = {
-    GroupKind.RRR: RRRStep, GroupKind.RRP: RRPStep, GroupKind.RPR: RPRStep,
-    GroupKind.PRP: PRPStep, GroupKind.RPP: RPPStep, GroupKind.TRIAD: TriadStep,
-    GroupKind.CLASS_IV: Class4Step, GroupKind.ACTUATED: ActuatorStep,
-}
+#: the library's closed-form adapters, in the compiled kernel's order
+BUILT_IN: tuple[type[GroupStep], ...] = (RRRStep, RRPStep, RPRStep, PRPStep, RPPStep, TriadStep, Class4Step,
+                                         ActuatorStep)
 
+#: group kind -> its closed-form adapter (the built-in ones and those registered since)
+KINDS: dict[object, type[GroupStep]] = {a.kind: a for a in BUILT_IN}
+#: the same map under its first name
+CLOSED_FORM = KINDS
+
+
+def _has_rule(adapter) -> bool:
+    return adapter.relabel.__func__ is not GroupStep.relabel.__func__
+
+
+for _a in BUILT_IN:                 # a library kind the decomposition does not know by itself
+    if _has_rule(_a):
+        add_kind_rule(_a.relabel)
+del _a
 
 #: a compiled step's key (:attr:`~kin.groups.step.Lowered.key`) -> its scalar function,
-#: which :mod:`kin.kernel` compiles with numba (a kind absent here: NumPy path)
-COMPILED: dict = {
-    "drive_R": turn_place, "drive_P": slide_place, GroupKind.RRR: rrr_place, GroupKind.RRP: rrp_place,
-    GroupKind.RPR: rpr_place, GroupKind.PRP: prp_place, GroupKind.RPP: rpp_place,
-    GroupKind.ACTUATED: actuator_place,
-}
+#: which :mod:`kin.kernel` compiles with numba (a kind absent here: NumPy path); fixed when
+#: the kernel is imported, so a kind registered at run time reuses a key or has none
+COMPILED: dict = {"drive_R": turn_place, "drive_P": slide_place,
+                  **{a.kind: a.compiled for a in BUILT_IN if a.compiled is not None}}
 
 
-class KindFacts(NamedTuple):
-    """What the check asks of a kind: ``modes(m, group)`` (assembly modes at the
-    reference) and ``angles(m, group)`` (its monitored angles, :class:`~kin.groups.facts.AngleDef`)."""
+def register(adapter: type[GroupStep]) -> None:
+    """Add a group kind at run time: ``adapter`` names it (``adapter.kind``, a string not
+    yet registered) and declares its facts (:mod:`kin.groups.step`); its ``relabel`` is
+    the decomposition's rule for the groups of the kind.  Register before the
+    mechanisms are decomposed: a plan made earlier keeps its kinds."""
+    taken = {str(k) for k in (*KINDS, *GroupKind)}
+    if not isinstance(adapter.kind, str) or str(adapter.kind) in taken:
+        raise ValueError(f"group kind: expected a new kind name (not {', '.join(sorted(taken))}), "
+                         f"got {adapter.kind!r}")
+    KINDS[adapter.kind] = adapter
+    if _has_rule(adapter):
+        add_kind_rule(adapter.relabel)
 
-    modes: Callable
-    angles: Callable
+
+def unregister(kind) -> None:
+    """Remove a kind added by :func:`register` (a built-in kind stays)."""
+    adapter = KINDS.get(kind)
+    if adapter is None or adapter in BUILT_IN:
+        raise ValueError(f"group kind: expected a registered kind, got {kind!r}")
+    del KINDS[kind]
+    if _has_rule(adapter):
+        remove_kind_rule(adapter.relabel)
 
 
-#: group kind -> its check facts (a kind absent here: modes not enumerated, no angle)
-FACTS: dict[GroupKind, KindFacts] = {
-    GroupKind.RRR: KindFacts(F.two_modes, F.triangle_angles),
-    GroupKind.RRP: KindFacts(F.two_modes, F.rrp_angles),
-    GroupKind.RPR: KindFacts(F.two_modes, F.rpr_angles),
-    GroupKind.PRP: KindFacts(F.one_mode, F.no_angles),
-    GroupKind.RPP: KindFacts(F.one_mode, F.no_angles),
-    GroupKind.TRIAD: KindFacts(F.triad_mode_count, F.triad_angles),
-    GroupKind.CLASS_IV: KindFacts(F.class4_mode_count, F.no_angles),
-    GroupKind.ACTUATED: KindFacts(F.two_modes, F.triangle_angles),
-}
+@contextlib.contextmanager
+def registered(adapter: type[GroupStep]):
+    """A block in which ``adapter``'s kind is registered (:func:`register`)."""
+    register(adapter)
+    try:
+        yield adapter
+    finally:
+        unregister(adapter.kind)
+
+
+def adapter_of(group) -> type[GroupStep] | None:
+    """The closed-form adapter of an Assur group, or None (no kernel for its kind, no
+    layout, or a driver step)."""
+    if not isinstance(group, AssurGroup) or group.layout is None:
+        return None
+    return KINDS.get(group.kind)
 
 
 def has_closed_form(kind) -> bool:
     """Does a group of ``kind`` have a closed-form (or all-modes) kernel?"""
-    return kind in CLOSED_FORM
+    return kind in KINDS
 
 
 def mode_count(m, g) -> int | None:
     """Assembly modes of group ``g`` at the reference, or None when they are not
     enumerated (no kernel for its kind, or the count failed)."""
-    f = FACTS.get(g.kind)
-    if f is None or g.layout is None:
+    a = adapter_of(g)
+    if a is None:
         return None
     try:
-        return int(f.modes(m, g))
+        n = a.assembly_modes(m, g)
     except Exception:  # noqa: BLE001 - a count we cannot make is reported as unknown
         return None
+    return None if n is None else int(n)
 
 
 def angle_defs(m, g) -> tuple:
     """The monitored angles of group ``g`` (empty for a kind without a definition)."""
-    f = FACTS.get(g.kind)
-    return () if f is None or g.layout is None else tuple(f.angles(m, g))
+    a = adapter_of(g)
+    return () if a is None else tuple(a.monitored_angles(m, g))
+
+
+def reference_margin(m, g, at, axis):
+    """The relative determinant ``(P,)`` of group ``g`` in designs' reference
+    configurations (``at(joint)``, ``axis(joint)``: ``(P, 2)``), or None for a kind
+    without one."""
+    a = adapter_of(g)
+    return None if a is None else a.reference_margin(m, g, at, axis)
+
+
+def singular_hint(step) -> str | None:
+    """The advice when plan step ``step`` is singular in the reference (None: the
+    general one)."""
+    a = KINDS.get(step.kind) if isinstance(step, AssurGroup) else None
+    return None if a is None else a.singular_hint
 
 
 def closed_form_step(mechanism, st, size: float) -> GroupStep | None:
@@ -92,8 +153,8 @@ def closed_form_step(mechanism, st, size: float) -> GroupStep | None:
     s = st.step
     if isinstance(s, DriverStep):
         return DriverStepSolver(mechanism, st, size) if is_closed_form(s) else None
-    kind = CLOSED_FORM.get(s.kind)
-    return None if kind is None or s.layout is None else kind(mechanism, st, size)
+    a = adapter_of(s)
+    return None if a is None else a(mechanism, st, size)
 
 
 def newton_step(mechanism, st, size: float) -> GroupStep:

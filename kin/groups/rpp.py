@@ -182,6 +182,15 @@ class RPPStep(GroupStep):
     """An RPP dyad of a plan: link1 pinned at outer1 and sliding in the block link2,
     which slides on the guide of the known link at outer2; compiled once."""
 
+    kind = GroupKind.RPP
+    compiled = staticmethod(rpp_place)
+    singular_hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """One (linear: no reach limit, no angle to monitor)."""
+        return 1
+
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
         lay = self.layout = self.group.layout

@@ -30,7 +30,7 @@ from .base import (square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cra
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
-from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["RPRPosition", "RPRRates", "rpr_position", "rpr_branch", "rpr_rates", "RPRStep", "rpr_place"]
 
@@ -186,6 +186,35 @@ def rpr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
 class RPRStep(GroupStep):
     """An RPR dyad of a plan: the guide (the P joint's first link) pivoted at X, the
     block at Y; compiled once."""
+
+    kind = GroupKind.RPR
+    compiled = staticmethod(rpr_place)
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """Two: the block on either side of the guide's pivot."""
+        return 2
+
+    @staticmethod
+    def _pivots(m, group) -> tuple[str, str]:
+        """(the guide's pivot, the block's pivot)."""
+        o1, inner, o2, l1, _ = group.layout
+        guide = m.joint(inner).links[0]
+        return (o1, o2) if guide == l1 else (o2, o1)
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """The pressure angle: the guide against the line from the guide's pivot to the
+        block's pivot (Vasechkin et al. 2017, kind 3)."""
+        inner = group.layout.inner
+        return (AngleDef(inner, "pressure", cls._pivots(m, group), (inner, m.joint(inner).links[0])),)
+
+    @classmethod
+    def reference_margin(cls, m, group, at, axis) -> np.ndarray:
+        """The slide over the pivot distance (|cos| of the guide against the pivots' line)."""
+        gx, bx = cls._pivots(m, group)
+        d = at(bx) - at(gx)
+        return np.abs(np.sum(d * axis(group.layout.inner), 1)) / np.linalg.norm(d, axis=1)
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)

@@ -30,7 +30,7 @@ from .base import (margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, leng
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
-from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["RRPPosition", "RRPRates", "rrp_position", "rrp_branch", "rrp_rates", "RRPStep", "rrp_place"]
 
@@ -212,6 +212,28 @@ def rrp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
 class RRPStep(GroupStep):
     """An RRP dyad of a plan (link1 pinned at outer1 and at the slider's pin, the slider
     link2 on the guide of the known link at outer2): compiled once."""
+
+    kind = GroupKind.RRP
+    compiled = staticmethod(rrp_place)
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """Two: the rod reaches the guide on either side."""
+        return 2
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """The pressure angle: the rod outer1-inner against the guide of the slider's P
+        joint outer2 (Vasechkin et al. 2017, kind 2)."""
+        o1, inner, o2, _, _ = group.layout
+        return (AngleDef(inner, "pressure", (o1, inner), (o2, m.joint(o2).links[0])),)
+
+    @classmethod
+    def reference_margin(cls, m, group, at, axis) -> np.ndarray:
+        """|cos| of the angle between the rod and the guide at the reference."""
+        o1, inner, o2, _, _ = group.layout
+        u = at(inner) - at(o1)
+        return np.abs(np.sum(u * axis(o2), 1)) / np.linalg.norm(u, axis=1)
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)

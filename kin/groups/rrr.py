@@ -32,7 +32,7 @@ from .base import (square_curvature, margin_tol, REACH_RTOL, carry, cramer, is_s
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
-from .step import SINGULAR, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["RRRPosition", "RRRRates", "rrr_position", "rrr_branch", "rrr_rates", "RRRStep", "rrr_place",
            "triangle_apex", "link_turn"]
@@ -287,6 +287,29 @@ def link_turn(dx, dy, exact, rc, rs, uc, us):
 class RRRStep(GroupStep):
     """An RRR dyad of a plan: lengths, branch sign and reference directions compiled
     once; positions by :func:`rrr_position`, rates by :func:`rrr_rates`."""
+
+    kind = GroupKind.RRR
+    compiled = staticmethod(rrr_place)
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """Two: a triangle with a reach limit (its two signs of the closed form)."""
+        return 2
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """The transmission angle at the inner pin B of the triangle A-B-C: the angle
+        between BA and BC (Vasechkin et al. 2017, kind 1)."""
+        lay = group.layout
+        return (AngleDef(lay.inner, "transmission", (lay.outer1, lay.inner, lay.outer2)),)
+
+    @classmethod
+    def reference_margin(cls, m, group, at, axis) -> np.ndarray:
+        """|sin| of the angle between the dyad's links at the reference."""
+        o1, inner, o2, _, _ = group.layout
+        u, w = at(inner) - at(o1), at(inner) - at(o2)
+        r = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
+        return r / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)

@@ -17,7 +17,21 @@ is compiled once into an object with
   names it in :data:`kin.groups.registry.COMPILED`.
 
 The closed-form kinds keep their adapter next to their kernel (``rrr.RRRStep`` …,
-``triad.TriadStep``, ``class4.Class4Step``, ``driver.DriverStepSolver``);
+``triad.TriadStep``, ``class4.Class4Step``, ``driver.DriverStepSolver``).  An adapter
+also declares every fact of its kind that the rest of the library asks the registry
+(:mod:`kin.groups.registry`) for, so that no caller switches on the kind:
+
+* ``kind``: its key in the registry (a ``topo.assur.GroupKind``, or the name of a kind
+  registered at run time), and ``compiled``: its scalar function, if any;
+* ``assembly_modes(m, group)``: the group's assembly modes at the reference (None: not
+  enumerated);
+* ``monitored_angles(m, group)``: the angles the design check and the synthesis's
+  transmission constraint watch (:class:`AngleDef`);
+* ``reference_margin(m, group, at, axis)``: the relative determinant of a population
+  of designs' reference configurations (the synthesis's penalty near a singular one);
+* ``singular_hint``: the advice when a group of the kind is singular at the reference;
+* ``relabel(m, group)``: the decomposition's hook for a kind registered at run time:
+  ``(kind, layout)`` for a group the decomposition gave another kind, or None.
 :class:`~kin.groups.newton.NewtonStep` solves any group by continuation, and its rates
 (the group's Jacobian, one linear system per position, exact for any group) serve the
 triad and class IV steps too.
@@ -32,7 +46,7 @@ from ..continuation import Probe
 from ..geometry import Geometry
 from ..result import Status
 
-__all__ = ["Outcome", "GroupStep", "Lowered", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "trig_row"]
+__all__ = ["Outcome", "GroupStep", "Lowered", "AngleDef", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "trig_row"]
 
 #: relative determinant below which a position is singular
 SINGULAR = 1e-9
@@ -63,6 +77,18 @@ def trig_row(driver: int, sign: float) -> int:
     return 4 * driver + (2 if sign < 0 else 0)
 
 
+class AngleDef(NamedTuple):
+    """One monitored angle of a group (:meth:`GroupStep.monitored_angles`): reported at
+    ``joint``; ``quantity`` is ``"transmission"``, ``"pressure"`` or ``"triad"``
+    (:mod:`kin.check.transmission`); ``points`` the joint names its formula reads;
+    ``guide`` = (P joint, guide link) for a pressure angle."""
+
+    joint: str
+    quantity: str
+    points: tuple[str, ...]
+    guide: tuple[str, str] | None = None
+
+
 class Outcome(NamedTuple):
     """What :meth:`GroupStep.positions` found: ``ok`` (N,), ``why`` {n: (Status, text)}
     for the failed positions, ``probe`` (or None)."""
@@ -84,6 +110,34 @@ class GroupStep:
     #: the plan's name for the solver (``StepPlan.solver``): "dyad" (closed form with two
     #: branches or none, charted by the continuation walk), "triad", "class4", "newton"
     solver = "dyad"
+    #: the group kind this adapter solves: its key in :data:`kin.groups.registry.KINDS`
+    kind = None
+    #: its scalar function for the compiled kernel (:data:`kin.groups.registry.COMPILED`)
+    compiled = None
+    #: the advice when a group of this kind is singular in the reference configuration
+    singular_hint = None
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int | None:
+        """The assembly modes of ``group`` at the reference (None: not enumerated)."""
+        return None
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """The monitored angles of ``group`` (none by default)."""
+        return ()
+
+    @classmethod
+    def reference_margin(cls, m, group, at, axis) -> np.ndarray | None:
+        """The relative determinant ``(P,)`` of designs' reference configurations (zero:
+        singular), from ``at(joint)`` and ``axis(joint)`` ``(P, 2)``; None: no margin."""
+        return None
+
+    @classmethod
+    def relabel(cls, m, group):
+        """The decomposition's hook for a kind registered at run time: ``(kind, layout)``
+        when ``group`` is one of this kind, else None."""
+        return None
 
     def __init__(self, mechanism, st, size: float, geo=None):
         self.mechanism, self.st, self.size = mechanism, st, size

@@ -34,12 +34,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from multiloop.topo.assur import GroupKind
+
 from .base import SINGULAR_RTOL, quiet
 from ..continuation import Probe
 from ..poses import known_on
 from ..result import Status
 from .newton import jacobian_rates
-from .step import GroupStep, Outcome
+from .step import AngleDef, GroupStep, Outcome
 
 __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
            "triad_rates", "follow_modes", "follow_modes_batch", "track_designs", "MAX_MODES", "TriadStep"]
@@ -789,6 +791,24 @@ class TriadStep(GroupStep):
     (:func:`triad_track`); rates from the group's Jacobian."""
 
     solver = "triad"
+
+    kind = GroupKind.TRIAD
+
+    @classmethod
+    def assembly_modes(cls, m, group) -> int:
+        """The real assembly modes at the reference (all-modes kernel, Hunt 1983)."""
+        at, lay = {j.name: np.asarray(j.at, float) for j in m.joints}, group.layout
+        A = np.array([at[o] for o in lay.outers])
+        b = np.array([at[i] for i in lay.inners])
+        return int(triad_modes(A, b, np.hypot(*(b - A).T)).n_modes)
+
+    @classmethod
+    def monitored_angles(cls, m, group) -> tuple[AngleDef, ...]:
+        """One angle at each inner joint (legs i, j, k in turn): the leg against the line
+        to the instant centre of the other two legs (Hunt 1983)."""
+        outs, inns = group.layout.outers, group.layout.inners
+        return tuple(AngleDef(inns[i], "triad", (outs[i], inns[i], outs[(i + 1) % 3], inns[(i + 1) % 3],
+                                                 outs[(i + 2) % 3], inns[(i + 2) % 3])) for i in range(3))
 
     def __init__(self, mechanism, st, size: float, geo=None):
         super().__init__(mechanism, st, size, geo)
