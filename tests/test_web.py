@@ -724,3 +724,62 @@ def test_units_mm_show_a_slider_drivers_check_json_in_mm(page):
         assert page.locator("#ml-positions").text_content() == f"{m.drivers[0].joint} = {1000 * r['input']:.3f} mm"
     finally:
         page.locator(".ml-length-unit select").select_option("m")
+
+
+def _address_text(page) -> str:
+    """The mechanism file in the page's address (``?design=CODE``: zlib + base64url)."""
+    import base64
+    import zlib
+    from urllib.parse import parse_qs, urlsplit
+    code = parse_qs(urlsplit(page.url).query)["design"][0]
+    return zlib.decompress(base64.urlsafe_b64decode(code + "=" * (-len(code) % 4))).decode("utf-8")
+
+
+def test_edit_length_typed_in_mm_solves_as_the_library_and_undo_gives_the_file_back(page, tmp_path_factory):
+    """Type the coupler's length in mm: B moves along A→B, the page's drawing is the
+    library's solve of ``with_length(four_bar, coupler, 0.15)``; a length of 0 is the
+    one-line message naming the link; Ctrl-Z gives the original design, its file in the
+    address byte for byte that of four_bar."""
+    from multiloop.topo.io import dumps_toml
+    from multiloop.web.lengths import with_length
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    original = load_mechanism("four_bar")
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        sync_api.expect(page.locator(".ml-edit-length input")).to_have_value(re.compile(r"^\d"), timeout=120000)
+        page.locator(".ml-edit-link select").select_option("coupler")
+        a, b = (np.array(original.joint(n).at) for n in ("A", "B"))
+        sync_api.expect(page.locator(".ml-edit-length input")).to_have_value(
+            format(1000 * math.dist(a, b), ".12g"), timeout=120000)
+        for text in ("0", "150"):
+            page.locator(".ml-edit-length input").fill(text)
+            page.locator(".ml-edit-length input").press("Enter")
+            page.locator(".ml-edit-length-apply button").click()
+            if text == "0":
+                page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=120000)
+                assert page.locator("#ml-message").text_content().strip() == (
+                    "length of link 'coupler': expected a finite length > 0, got 0 mm")
+        m = with_length(original, "coupler", 0.150)
+        want_b = list(m.joint("B").at)
+        at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
+            if (!r || !r.getAttribute('data-positions') || r.getAttribute('data-mechanism') != 'edited: four_bar') return false;
+            const b = JSON.parse(r.getAttribute('data-positions'))['B'];
+            return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+        page.wait_for_function(at_b, arg=want_b, timeout=120000)
+        page.wait_for_function("() => location.search.includes('design=')", timeout=120000)
+        assert _address_text(page) == dumps_toml(m)
+        r = _readout(page)
+        st = solve(m, [math.radians(r["input"])])
+        names = list(m.joint_names) + [p.name for p in m.points]
+        want = np.concatenate([st.positions[0], st.point_positions[0]])
+        np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-12)
+        _shot(page, "web_edit_length.png", tmp_path_factory)
+        edited_url = page.url
+        page.mouse.click(5, 5)                      # the focus leaves the text field
+        page.keyboard.press("Control+z")
+        page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=120000)
+        page.wait_for_function("([u]) => location.href != u", arg=[edited_url], timeout=120000)
+        assert _address_text(page) == dumps_toml(original)
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
