@@ -3,7 +3,8 @@ driven by Playwright), plus the background job's cancel without a browser.
 
 The server runs as ``multiloop serve`` in a subprocess on a free port; every request the
 page makes is recorded and must stay on 127.0.0.1 (the page works offline).  Set
-``MULTILOOP_SCREENSHOTS=DIR`` to keep the screenshots (docs/figures/ holds two).
+``MULTILOOP_SCREENSHOTS=DIR`` to keep the screenshots (docs/figures/web_*.png are
+these, the later ones reduced to 128 colours).
 """
 from __future__ import annotations
 
