@@ -1,6 +1,7 @@
-"""Load time of the web workbench (``multiloop serve``) in a real browser (plain script).
+"""Load time and edit latency of the web workbench (``multiloop serve``) in a real browser (plain script).
 
 Run:  python benchmarks/bench_web.py [--runs N] [--quick] [--settle S] [--other MULTILOOP] [--mechanism NAME]
+      python benchmarks/bench_web.py --edit-latency [--edits N] [--names NAME ...]
 
 Each run starts ``multiloop serve`` on a free port, opens the address it prints (with
 its token) in Debian's chromium (driven by Playwright; its own browser download is not
@@ -14,11 +15,21 @@ a previous release in its own environment): the runs alternate between the two, 
 ratio of the mean load times is printed.  The goal is a page usable within 3 s.
 Without Playwright or chromium (the ``[browser-test]`` extra, Debian's ``chromium``) it
 says so and exits 0, so that ``multiloop bench`` goes on.
+
+``--edit-latency`` serves the page once and, for each catalogue mechanism (or
+``--names``), once its check is shown, drags one joint with the mouse ``--edits`` times
+(8 moves of 2 px each, then the drop; the joint is the one whose ring lies farthest from
+the others on the screen).  The page times itself (``performance.now``, EDIT_TIMER_JS):
+each mouse move to the animation frame in which the drawing shows the joint moved
+(*follow*, goal 50 ms), and the drop to the frame in which the re-solved drawing is in
+the readout (*drawing*) and to the frame in which the new check's report is in the page
+(*check*, goal 300 ms).  It prints the median and the maximum per mechanism.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import shutil
 import socket
@@ -68,13 +79,149 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
         srv.stdout.close()
 
 
+#: the page times each mouse move of a drag until the drawing's joints change (window.__mlFollow, ms)
+#: and each drop until the readout has the re-solved drawing and the check's report is
+#: back (window.__mlDrop: {ack, draw, check}, ms; ack: the server's new design arrived,
+#: the readout cleared until its motion is solved)
+EDIT_TIMER_JS = """() => {
+  window.__mlFollow = []; window.__mlDrop = [];
+  if (window.__mlEditTimer) { return; }
+  window.__mlEditTimer = true;
+  const deep = (sel) => { const out = []; const walk = (root) => {
+    root.querySelectorAll(sel).forEach(e => out.push(e));
+    root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
+    walk(document); return out; };
+  const joints = () => { const d = Bokeh.documents[0].get_model_by_name('ml-joints').data;
+    return JSON.stringify([d.x, d.y]); };
+  const frame = () => new Promise(res => requestAnimationFrame(() => res()));
+  document.addEventListener('pointermove', (e) => {
+    if (!(e.buttons & 1)) { return; }
+    const t0 = performance.now(), before = joints();
+    (async () => { while (performance.now() - t0 < 5000) { await frame();
+      if (joints() != before) { window.__mlFollow.push(performance.now() - t0); return; } } })();
+  }, true);
+  document.addEventListener('pointerup', () => {
+    const t0 = performance.now(), rec = {};
+    (async () => { let phase = 0;
+      while (performance.now() - t0 < 600000) { await frame();
+        const r = deep('#ml-positions')[0], has = r && r.getAttribute('data-positions');
+        if (phase == 0 && !has) { rec.ack = performance.now() - t0; phase = 1; }
+        if (phase == 1 && has) { rec.draw = performance.now() - t0; phase = 2; }
+        if (phase == 2 && deep('#ml-check-json').length) { rec.check = performance.now() - t0; break; }
+        const msg = deep('#ml-message[data-error]')[0];
+        if (msg) { rec.error = msg.textContent; break; }
+        if (phase == 0 && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; } }
+      window.__mlDrop.push(rec); })();
+  }, true); }"""
+
+#: the name and screen position of the drag ring NAME, or (NAME null) of the ring farthest
+#: from every other ring
+FAR_HANDLE_JS = """([name]) => { const doc = Bokeh.documents[0];
+  const src = doc.get_model_by_name('ml-handles'), fig = doc.get_model_by_name('ml-mechanism');
+  const view = Bokeh.index.find_one(fig);
+  view.el.scrollIntoView({block: 'center'});
+  const r = view.canvas_view.el.getBoundingClientRect(), f = view.frame;
+  const p = src.data.name.map((n, i) => [n, r.left + f.x_scale.compute(src.data.x[i]),
+                                           r.top + f.y_scale.compute(src.data.y[i])]);
+  const inside = p.filter(q => q[1] > r.left + f.bbox.left + 20 && q[1] < r.left + f.bbox.right - 20
+                            && q[2] > r.top + f.bbox.top + 20 && q[2] < r.top + f.bbox.bottom - 20);
+  if (name != null) { return p.find(q => q[0] == name); }
+  let best = null, far = -1;
+  for (const q of inside) {
+    const d = Math.min(...p.filter(o => o !== q).map(o => Math.hypot(o[1] - q[1], o[2] - q[2])));
+    if (d > far) { far = d; best = q; } }
+  return best; }"""
+
+
+def _serve(exe: str):
+    """``multiloop serve`` on a free port: (the process, the page's address)."""
+    srv = subprocess.Popen([exe, "serve", "--port", str(_free_port())], stdout=subprocess.PIPE,
+                           stderr=subprocess.DEVNULL, text=True)
+    url = re.search(r"http://\S+", srv.stdout.readline())
+    if url is None:
+        srv.terminate()
+        raise SystemExit(f"bench_web: {exe} serve printed no address")
+    return srv, url.group(0)
+
+
+def _checked(page, name: str, timeout_ms: int) -> None:
+    """Wait until the page shows ``name`` (the menu's entry or ``edited: name``) with
+    its motion and its check's report."""
+    page.wait_for_function("""([name]) => { const deep = (sel) => { const out = []; const walk = (root) => {
+        root.querySelectorAll(sel).forEach(e => out.push(e));
+        root.querySelectorAll('*').forEach(e => { if (e.shadowRoot) walk(e.shadowRoot); }); };
+        walk(document); return out; };
+      const r = deep('#ml-positions')[0];
+      return r && r.getAttribute('data-positions') && r.getAttribute('data-mechanism').endsWith(name)
+        && deep('#ml-check-json').length > 0; }""", arg=[name], timeout=timeout_ms)
+
+
+def edit_latency_of(page, name: str, edits: int, timeout_ms: int) -> dict:
+    """``edits`` drags of one joint of catalogue mechanism ``name`` (module docstring):
+    the page's own timings (ms)."""
+    page.locator(".ml-pick select").select_option(name)
+    _checked(page, name, timeout_ms)
+    page.evaluate(EDIT_TIMER_JS)
+    joint = page.evaluate(FAR_HANDLE_JS, [None])[0]
+    for k in range(edits):
+        sign = 1 if k % 2 == 0 else -1
+        _, sx, sy = page.evaluate(FAR_HANDLE_JS, [joint])      # the drawing is fitted to each design
+        page.mouse.move(sx, sy)
+        page.mouse.down()
+        for i in range(1, 9):
+            page.mouse.move(sx + sign * 2 * i, sy + sign * i)
+        page.mouse.up()
+        page.wait_for_function(f"() => window.__mlDrop.length > {k}", timeout=timeout_ms)
+        error = page.evaluate(f"() => window.__mlDrop[{k}].error")
+        if error:
+            print(f"{name}: drag {k + 1} of {joint}: {error}", flush=True)
+            break
+        _checked(page, name, timeout_ms)
+    return dict(joint=joint, follow=page.evaluate("() => window.__mlFollow"),
+                drop=page.evaluate("() => window.__mlDrop"))
+
+
+def _stats(values) -> str:
+    import statistics
+    v = [x for x in values if x is not None]
+    return f"{statistics.median(v):7.1f} {max(v):7.1f}" if v else "      -       -"
+
+
+def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None:
+    """Print the edit latency table of every mechanism of ``names`` (module docstring)."""
+    srv, url = _serve(exe)
+    page = browser.new_page(viewport={"width": 1400, "height": 1000})
+    try:
+        page.goto(url)
+        page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=60000)
+        print(f"{'mechanism':24s} {'joint':8s} follow (ms) median max  n | drawing (ms) median max | "
+              "check (ms) median max")
+        for name in names:
+            r = edit_latency_of(page, name, edits, int(1000 * timeout_s))
+            drops = r["drop"]
+            print(f"{name:24s} {r['joint'][:8]:8s} {_stats(r['follow'])} {len(r['follow']):3d} | "
+                  f"{_stats([d.get('draw') for d in drops])} | {_stats([d.get('check') for d in drops])}",
+                  flush=True)
+    finally:
+        page.close()
+        srv.terminate()
+        srv.wait(timeout=20)
+        srv.stdout.close()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=4, help="page loads per executable (default 4)")
     ap.add_argument("--quick", action="store_true", help="2 page loads per executable")
     ap.add_argument("--settle", type=float, default=3.0, help="seconds the browser runs before serve starts")
     ap.add_argument("--other", help="a second multiloop executable to alternate with (e.g. a previous release)")
+    ap.add_argument("--exe", help="the multiloop executable measured (default: the one beside this Python)")
     ap.add_argument("--mechanism", help="the FILE or catalogue name to open (default: the page's first)")
+    ap.add_argument("--edit-latency", action="store_true",
+                    help="time drags and the re-check after each drop, per catalogue mechanism")
+    ap.add_argument("--edits", type=int, default=3, help="drags per mechanism (--edit-latency; default 3)")
+    ap.add_argument("--names", nargs="*", help="the catalogue mechanisms of --edit-latency (default: all)")
+    ap.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one re-check")
     args = ap.parse_args(argv)
     runs = 2 if args.quick else args.runs
     try:
@@ -86,8 +233,20 @@ def main(argv=None) -> int:
     if chromium is None:
         print("bench_web skipped: no chromium on the PATH (Debian: apt-get install chromium)")
         return 0
-    ours = str(Path(sys.executable).with_name("multiloop"))
+    ours = args.exe or str(Path(sys.executable).with_name("multiloop"))
     exes = [("this", ours)] + ([("other", args.other)] if args.other else [])
+    if args.edit_latency:
+        from multiloop.web.app import catalogue_names
+        print(f"python {sys.version.split()[0]}; chromium {chromium}; {ours}; load average "
+              f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox", "--disable-gpu"])
+            for label, exe in exes:
+                print(f"{label}: {exe}")
+                edit_latency(browser, exe, args.names or catalogue_names(), args.edits, args.timeout)
+            browser.close()
+        print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+        return 0
     print(f"python {sys.version.split()[0]}; chromium {chromium}; settle {args.settle} s; {ours}"
           + (f" against {args.other}" if args.other else ""))
     usable: dict[str, list[float]] = {k: [] for k, _ in exes}

@@ -3,7 +3,8 @@ driven by Playwright), plus the background job's cancel without a browser.
 
 The server runs as ``multiloop serve`` in a subprocess on a free port; every request the
 page makes is recorded and must stay on 127.0.0.1 (the page works offline).  Set
-``MULTILOOP_SCREENSHOTS=DIR`` to keep the screenshots (docs/figures/ holds two).
+``MULTILOOP_SCREENSHOTS=DIR`` to keep the screenshots (docs/figures/web_*.png are
+these, the later ones reduced to 128 colours).
 """
 from __future__ import annotations
 
@@ -437,7 +438,7 @@ HANDLE_JS = """([name]) => { const doc = Bokeh.documents[0];
           src.data.x[i], src.data.y[i]]; }"""
 
 
-def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
+def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     """Drag B's handle with the mouse: the page opens the edited design, whose drawing
     (at the reference frame) is the library's solve of ``moved(four_bar, B, new)``;
     Ctrl-Z gives the original back."""
@@ -459,6 +460,7 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
       return h.data.x[k] != %r && j.data.x[i] == h.data.x[k] && j.data.y[i] == h.data.y[k]
         && doc.get_model_by_name('ml-frame').value == h.tags[0]; }""" % x0
     page.wait_for_function(following, timeout=60000)
+    _shot(page, "web_drag.png", tmp_path_factory)              # during the drag: the links stretch
     t0 = time.perf_counter()
     page.mouse.up()
     edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
@@ -483,7 +485,7 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page):
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
 
 
-def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
+def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory):
     """Switch the page to mm and rad: the check's events shown are ``check --json``'s
     (deg) in rad, the readout's input too, the edit row shows B's coordinates in mm, and
     120, 80 typed in mm put B at (0.12, 0.08) m; back to m and deg afterwards."""
@@ -495,6 +497,7 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
         page.locator(".ml-length-unit select").select_option("mm")
         page.locator(".ml-angle-unit select").select_option("rad")
         page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=120000)
+        _shot(page, "web_units_mm.png", tmp_path_factory)
         d = check(load_mechanism("four_bar")).as_dict()["drivers"]["O2"]
         want = sorted([*d["limits"], *(x for xs in d["dead_centres"].values() for x in xs),
                        *(a[k] for a in d["angles"].values() for k in ("at_min", "at_max"))])
@@ -524,7 +527,8 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page):
         page.locator(".ml-angle-unit select").select_option("deg")
 
 
-def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(page, browser, server):
+def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(page, browser, server,
+                                                                             tmp_path_factory):
     """After an edit the address holds ``?design=CODE`` beside the unchanged token; that
     address in a fresh context (no cookie) shows the edited design; a damaged code is the
     one-line message over the default mechanism, and the page keeps working."""
@@ -553,6 +557,7 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
             return r && r.getAttribute('data-mechanism') == 'shared: four_bar' && r.getAttribute('data-positions'); }}""",
                                 timeout=120000)
         r = _readout(fresh)
+        _shot(fresh, "web_share.png", tmp_path_factory)
         m = load_mechanism("four_bar")
         st = solve(_edited_four_bar(), [math.radians(r["input"])])
         np.testing.assert_allclose(r["positions"]["B"], st.positions[0][list(m.joint_names).index("B")], atol=1e-12)
@@ -575,7 +580,7 @@ def _edited_four_bar():
     return moved(load_mechanism("four_bar"), "B", (0.12, 0.08))
 
 
-def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
+def test_atlas_card_opens_in_the_mechanism_view_and_solves(page, tmp_path_factory):
     """Atlas tab: a click on a card chooses its chain; chain #1's first mechanism opens
     with the library's generic dimensions;
     the drawing is the library's solve of the design in the page's address, and the
@@ -600,6 +605,7 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page):
     want = np.concatenate([st.positions[0], st.point_positions[0]])
     names = list(m.joint_names) + [p.name for p in m.points]
     np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-12)
+    _shot(page, "web_atlas_design.png", tmp_path_factory)
     page.get_by_text("Atlas", exact=True).click()
     page.locator(".ml-atlas-start button").click()
     page.wait_for_function(TARGET_READY_JS, timeout=120000)
@@ -627,7 +633,7 @@ def _stroke_in(page, box, t0, t1):
     page.mouse.up()
 
 
-def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
+def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_path_factory):
     """Draw two strokes, undo one, make the target closed (the library reads it as
     closed), drag a target point with the mouse and undo the drag, then run with a
     prescribed timing: one candidate."""
@@ -650,6 +656,7 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page):
                            arg=[page.evaluate(points)[0][1]], timeout=120000)
     x, y = page.evaluate(points)
     assert len(x) == 24 and is_closed(np.column_stack([x, y]))
+    _shot(page, "web_target.png", tmp_path_factory)
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-target-drag').active = true; }")
     sx, sy, x0, y0, _ = page.evaluate(TARGET_POINT_JS, [5])
     page.mouse.move(sx, sy)
@@ -722,5 +729,64 @@ def test_units_mm_show_a_slider_drivers_check_json_in_mm(page):
         np.testing.assert_allclose(shown, 1000 * np.array(want), rtol=1e-12)
         r = _readout(page)
         assert page.locator("#ml-positions").text_content() == f"{m.drivers[0].joint} = {1000 * r['input']:.3f} mm"
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
+
+
+def _address_text(page) -> str:
+    """The mechanism file in the page's address (``?design=CODE``: zlib + base64url)."""
+    import base64
+    import zlib
+    from urllib.parse import parse_qs, urlsplit
+    code = parse_qs(urlsplit(page.url).query)["design"][0]
+    return zlib.decompress(base64.urlsafe_b64decode(code + "=" * (-len(code) % 4))).decode("utf-8")
+
+
+def test_edit_length_typed_in_mm_solves_as_the_library_and_undo_gives_the_file_back(page, tmp_path_factory):
+    """Type the coupler's length in mm: B moves along A→B, the page's drawing is the
+    library's solve of ``with_length(four_bar, coupler, 0.15)``; a length of 0 is the
+    one-line message naming the link; Ctrl-Z gives the original design, its file in the
+    address byte for byte that of four_bar."""
+    from multiloop.topo.io import dumps_toml
+    from multiloop.web.lengths import with_length
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    original = load_mechanism("four_bar")
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        sync_api.expect(page.locator(".ml-edit-length input")).to_have_value(re.compile(r"^\d"), timeout=120000)
+        page.locator(".ml-edit-link select").select_option("coupler")
+        a, b = (np.array(original.joint(n).at) for n in ("A", "B"))
+        sync_api.expect(page.locator(".ml-edit-length input")).to_have_value(
+            format(1000 * math.dist(a, b), ".12g"), timeout=120000)
+        for text in ("0", "150"):
+            page.locator(".ml-edit-length input").fill(text)
+            page.locator(".ml-edit-length input").press("Enter")
+            page.locator(".ml-edit-length-apply button").click()
+            if text == "0":
+                page.wait_for_selector("#ml-message[data-error]", state="attached", timeout=120000)
+                assert page.locator("#ml-message").text_content().strip() == (
+                    "length of link 'coupler': expected a finite length > 0, got 0 mm")
+        m = with_length(original, "coupler", 0.150)
+        want_b = list(m.joint("B").at)
+        at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
+            if (!r || !r.getAttribute('data-positions') || r.getAttribute('data-mechanism') != 'edited: four_bar') return false;
+            const b = JSON.parse(r.getAttribute('data-positions'))['B'];
+            return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+        page.wait_for_function(at_b, arg=want_b, timeout=120000)
+        page.wait_for_function("() => location.search.includes('design=')", timeout=120000)
+        assert _address_text(page) == dumps_toml(m)
+        r = _readout(page)
+        st = solve(m, [math.radians(r["input"])])
+        names = list(m.joint_names) + [p.name for p in m.points]
+        want = np.concatenate([st.positions[0], st.point_positions[0]])
+        np.testing.assert_allclose(np.array([r["positions"][n] for n in names]), want, rtol=0, atol=1e-12)
+        _shot(page, "web_edit_length.png", tmp_path_factory)
+        edited_url = page.url
+        page.mouse.click(5, 5)                      # the focus leaves the text field
+        page.keyboard.press("Control+z")
+        page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=120000)
+        page.wait_for_function("([u]) => location.href != u", arg=[edited_url], timeout=120000)
+        assert _address_text(page) == dumps_toml(original)
     finally:
         page.locator(".ml-length-unit select").select_option("m")

@@ -152,3 +152,34 @@ def test_forged_handles_are_one_line_and_change_nothing(wb):
         assert _message(wb).count("\n") == 0 and ": expected" in _message(wb), data
         assert dumps_toml(wb.mechanism) == before and not wb.editor.history.can_undo
         assert wb.view.handles.data == good                     # the handles went back
+
+
+def test_an_edits_motion_and_check_wake_the_page_when_ready(wb):
+    """The job of an edited design calls the page's ``wake`` (the server's
+    ``add_next_tick_callback(poll)``) when its motion is solved and when its check ends,
+    so the page shows them without waiting for its periodic callback."""
+    woken = []
+    wb.wake = lambda: woken.append(wb.job.state if wb.job is not None else None)
+    _edit(wb, "B", 0.12, 0.08)
+    job = wb.job
+    job.thread.join(timeout=600)
+    assert not job.thread.is_alive() and job.state == "done" and len(woken) == 2
+    wb.poll()                                   # what the woken page runs
+    assert wb.check_doc == job.result and wb.job is None
+
+
+def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
+    """dyad_prp's slider is 4.9e5 sizes away at the ends of its motion: the drawing's
+    ranges stay around the mechanism (before, ±40 km: every ring on one pixel, and a drag
+    of one moved all four)."""
+    w = Workbench(requested="dyad_prp")
+    try:
+        while w.job is not None:
+            w.job.thread.join(timeout=600)
+            w.poll()
+        assert w.view.sweeps
+        size = w.mechanism.size
+        for r in (w.view.fig.x_range, w.view.fig.y_range):
+            assert r.end - r.start < 12 * size, (r.start, r.end)
+    finally:
+        w.close()

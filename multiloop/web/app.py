@@ -99,6 +99,7 @@ def _motion_and_check(job, m, threshold, key=None):
         job.poll()
     job.sweeps = _sweeps(m, key, job.poll)
     job.report(1 / 2)
+    job.notify()
     if key is not None and (key, threshold) in _CHECKS:
         return _CHECKS[key, threshold]
     from multiloop.kin.check import check
@@ -172,6 +173,7 @@ class Workbench:
         self.mechanism, self.mechanism_name = None, ""
         self.check_doc = None                   # the open design's check, once computed
         self.job = None
+        self.wake = None                        # wake(): poll soon, from a job's thread (set by the server)
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
@@ -321,7 +323,7 @@ class Workbench:
             self.check.busy("no geometry: nothing to move or check")
         else:
             self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
-            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check")
+            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -432,6 +434,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
         wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc),
                        shared=requested_design(doc))
         doc.add_periodic_callback(wb.poll, 150)
+        wb.wake = lambda: doc.add_next_tick_callback(wb.poll)      # a job's result shown at once
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()

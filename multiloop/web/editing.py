@@ -1,5 +1,5 @@
 """Editing the open design by hand: a joint's or a tracer point's reference coordinates
-typed in, a dyad added or the last group removed (:mod:`.structure_edits`), and undo /
+typed in, a binary link's length typed in (:mod:`.lengths`), a dyad added or the last group removed (:mod:`.structure_edits`), and undo /
 redo over every edit (buttons, and Ctrl-Z / Ctrl-Shift-Z in the page).
 
 An edit makes a new :class:`~multiloop.topo.model.Mechanism` (frozen: nothing is
@@ -98,6 +98,7 @@ class Editor:
     def __init__(self, say, show, sweeps_of=None):
         from bokeh.models import Button, Column, CustomJS, Row, TextInput
 
+        from .lengths import LengthBar
         from .menus import Menu
         from .structure_edits import StructureBar
         from .units import Units
@@ -119,8 +120,10 @@ class Editor:
         self.keys = CustomJS(args=dict(undo=self.undo), code=UNDO_KEYS_JS)
         #: the structure edits (a dyad added, the last group removed), edits of this history
         self.structure = StructureBar(say, self.push, sweeps_of)
+        #: a binary link's length typed (:mod:`.lengths`), an edit of this history
+        self.lengths = LengthBar(say, self.push)
         self.panel = Column(Row(self.point.select, self.x, self.y, self.apply, self.undo, self.redo),
-                            self.structure.panel)
+                            Row(self.lengths.panel, self.structure.panel))
 
     def reset(self, m) -> None:
         """A design opened (not edited): its history starts with it."""
@@ -160,6 +163,7 @@ class Editor:
         """Show and read x and y in ``units`` (a :class:`~.units.Units`)."""
         self.units = units
         self.x.title, self.y.title = f"x ({units.length})", f"y ({units.length})"
+        self.lengths.use_units(units)
         self._fill()
 
     def drag(self, name: str, xy) -> None:
@@ -195,6 +199,7 @@ class Editor:
         self.point.set(names, self.point.value if self.point.value in names else (names[0] if names else ""))
         self.undo.disabled, self.redo.disabled = not self.history.can_undo, not self.history.can_redo
         self.structure.refresh(m)
+        self.lengths.refresh(m)
         self._fill()
 
     def _fill(self) -> None:

@@ -1,7 +1,9 @@
 """Background jobs of one page: a worker thread, its progress, its result, a real cancel.
 
 The page never waits for a job: a periodic callback of the session reads
-:attr:`Job.state` and updates the widgets.  :meth:`Job.cancel` sets an event that the
+:attr:`Job.state` and updates the widgets, and a job's ``wake`` (the session's
+``add_next_tick_callback``, the one thread-safe way into a Bokeh document) has it read at
+once when the job has a result.  :meth:`Job.cancel` sets an event that the
 job's progress callback (:meth:`Job.report`) or cancel hook (:meth:`Job.poll`, given to
 ``check(..., cancel=)``) checks; it then raises ``_Cancelled`` inside the worker, which
 unwinds the optimiser or the check and ends the thread (the work stops, it is not
@@ -36,8 +38,10 @@ class Job:
     result, error : the return value, or the error message (one line).
     """
 
-    def __init__(self, fn, name: str = "job"):
-        self.fn, self.name = fn, name
+    def __init__(self, fn, name: str = "job", wake=None):
+        """``wake()``: called from the worker at :meth:`notify` and when the job ends (the
+        page then reads the job at once, not at its next periodic callback)."""
+        self.fn, self.name, self.wake = fn, name, wake
         self.state, self.fraction, self.best, self.note = "running", 0.0, float("nan"), ""
         self.result, self.error = None, ""
         self._stop = threading.Event()
@@ -62,6 +66,15 @@ class Job:
         finally:
             LOG.info("job %s: %s after %.1f s (its thread ends)", self.name, self.state,
                      time.perf_counter() - self.started)
+            self.notify()
+
+    def notify(self) -> None:
+        """Wake the page (``wake``): the job has something new to show."""
+        if self.wake is not None:
+            try:
+                self.wake()
+            except Exception:  # noqa: BLE001 - a session gone: its periodic callback is gone too
+                pass
 
     def report(self, fraction: float, best: float = float("nan"), note: str = "") -> None:
         """Progress from the worker; raises ``_Cancelled`` once :meth:`cancel` was called."""

@@ -33,6 +33,12 @@ __all__ = ["MechanismView", "REDRAW_JS", "FOLLOW_JS", "TICKS_JS", "readout_html"
 #: the drawing's tick labels in the display length unit (``scale`` per metre)
 TICKS_JS = "return String(Number((tick * scale).toPrecision(6)));"
 
+#: the drawing's ranges hold the positions within this many sizes of the reference's
+#: centre: a slider whose motion runs off towards an asymptote (dyad_prp's, 4.9e5 sizes
+#: away at its limits) does not shrink the mechanism to a dot (every catalogue
+#: mechanism else stays within 1.11 sizes)
+FIT_SIZES = 4.0
+
 #: a drag in the drawing (the point-draw tool active): at its start the player goes to
 #: the reference frame (``handles.tags[0]``, where the handles are); then the joints
 #: and links follow the handles (in the browser only: the server re-solves on the drop)
@@ -314,9 +320,15 @@ class MechanismView:
         self.draw_frame(int(self.player.slider.value))
 
     def _fit(self, nodes: np.ndarray) -> None:
-        """Ranges around every finite position of ``nodes``, equal scales on both axes."""
+        """Ranges around every finite position of ``nodes`` within :data:`FIT_SIZES` sizes of
+        the reference's centre (still drawn beyond), equal scales on both axes."""
         P = nodes.reshape(-1, 2)
         P = P[np.all(np.isfinite(P), axis=1)]
+        ref = self.scene.reference[np.all(np.isfinite(self.scene.reference), axis=1)] if self.scene else P[:0]
+        if len(ref):
+            c0 = (ref.min(axis=0) + ref.max(axis=0)) / 2
+            near = np.hypot(*(P - c0).T) <= FIT_SIZES * self.scene.mechanism.size
+            P = np.concatenate([ref, P[near]])
         if not len(P):
             return
         lo, hi = P.min(axis=0), P.max(axis=0)
