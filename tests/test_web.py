@@ -641,6 +641,8 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     page.get_by_text("Synthesis", exact=True).click()
     page.locator(".ml-start select").select_option("four_bar", timeout=120000)
     page.wait_for_function(TARGET_READY_JS, timeout=120000)
+    # the freehand tool active whatever an earlier test on this page left (tests run in any order)
+    page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
     n0 = page.evaluate(STROKES_JS)
     canvas = page.locator(".bk-Canvas").last
     sync_api.expect(canvas).to_be_visible(timeout=120000)
