@@ -291,9 +291,7 @@ def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory
     page.locator(".ml-budget input").press("Enter")
     page.get_by_role("button", name="Clear target").click()
     page.wait_for_function(f"() => ({STROKES_JS})() == 0", timeout=120000)
-    canvas = page.locator(".bk-Canvas").last
-    sync_api.expect(canvas).to_be_visible(timeout=120000)
-    box = canvas.bounding_box()
+    box = page.evaluate(TARGET_BOX_JS)
     cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
     page.mouse.move(cx + r, cy)
     page.mouse.down()
@@ -614,6 +612,13 @@ def test_atlas_card_opens_in_the_mechanism_view_and_solves(page, tmp_path_factor
 
 
 #: the screen position of target point K and its data position (as HANDLE_JS)
+#: the target figure's canvas on the screen (not "the last canvas": the lazily built tabs
+#: add theirs after it in whatever order the tests opened them)
+TARGET_BOX_JS = """() => { const view = Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name('ml-target'));
+  view.el.scrollIntoView({block: 'center'});
+  const r = view.canvas_view.el.getBoundingClientRect();
+  return {x: r.left, y: r.top, width: r.width, height: r.height}; }"""
+
 TARGET_POINT_JS = """([k]) => { const doc = Bokeh.documents[0];
   const src = doc.get_model_by_name('ml-target-points'), fig = doc.get_model_by_name('ml-target');
   const view = Bokeh.index.find_one(fig);
@@ -644,11 +649,9 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     # the freehand tool active whatever an earlier test on this page left (tests run in any order)
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
     n0 = page.evaluate(STROKES_JS)
-    canvas = page.locator(".bk-Canvas").last
-    sync_api.expect(canvas).to_be_visible(timeout=120000)
-    _stroke_in(page, canvas.bounding_box(), 0.0, 2.0)
+    _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 2.0)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
-    _stroke_in(page, canvas.bounding_box(), 2.2, 4.5)
+    _stroke_in(page, page.evaluate(TARGET_BOX_JS), 2.2, 4.5)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=120000)
     page.locator(".ml-target-undo button").click()
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
