@@ -281,6 +281,89 @@ def link_cd(target: np.ndarray, curve: np.ndarray, closed: bool, stroke=None) ->
     return float(batch_chamfer_distance(best, uniformize(part[None], N_FINAL))[0] * og_scale)
 
 
+def get_partial_matches(curves: np.ndarray, target_curve: np.ndarray) -> np.ndarray:
+    """``OptimJax.get_partial_matches``: of each closed curve, the arc between its
+    points nearest the target's ends (of the two arcs, the one nearer the target by
+    :func:`batch_ordered_distance`), resampled to the target's number of points."""
+    n = target_curve.shape[0]
+    out = []
+    for c in curves:
+        s = int(np.linalg.norm(target_curve[0] - c, axis=-1).argmin())
+        e = int(np.linalg.norm(target_curve[-1] - c, axis=-1).argmin())
+        lo, hi = min(s, e), max(s, e)
+        p1 = uniformize(c[lo:hi + 1][None], n)[0]
+        p2 = uniformize(np.concatenate([c[hi:], c[:lo + 1]], 0)[None], n)[0]
+        parts = np.stack([p1, p2])
+        f = batch_ordered_distance(parts, np.stack([target_curve, target_curve]))
+        out.append(uniformize(parts[int(np.argmin(f))][None], n)[0])
+    return np.array(out)
+
+
+def link_solve(A: np.ndarray, x: np.ndarray, node_types: np.ndarray, thetas: np.ndarray) -> np.ndarray:
+    """Positions (joints, len(thetas), 2) of a LInK mechanism (adjacency ``A``, joint
+    positions ``x``, ``node_types`` 1 for a frame joint), as LInK's dyadic solver
+    computes them (``solve_rev_vectorized_batch_CPU`` in LInKGenerator's
+    ``LInK/Solver.py``): joint 1 turns about joint 0 at the absolute angle theta, every
+    later moving joint k closes a dyad on the two earlier joints it is linked to, on
+    the side it is on in ``x``.  Written here from that description, for
+    :func:`check_link_results`."""
+    x = np.asarray(x, float)
+    n = len(x)
+    fixed = np.asarray(node_types, float).reshape(-1) == 1
+    P = np.repeat(x[:, None, :], len(thetas), axis=1)
+    r = np.linalg.norm(x[1] - x[0])
+    P[1] = x[0] + r * np.stack([np.cos(thetas), np.sin(thetas)], -1)
+    for k in range(3, n):
+        if fixed[k]:
+            continue
+        i, j = np.argsort(A[k, :k], kind="stable")[-2:]
+        gik, gjk = np.linalg.norm(x[i] - x[k]), np.linalg.norm(x[j] - x[k])
+        d = P[j] - P[i]
+        lij = np.linalg.norm(d, axis=-1)
+        cphi = (lij ** 2 + gik ** 2 - gjk ** 2) / (2 * lij * gik)
+        sgn = np.sign((x[i, 1] - x[k, 1]) * (x[i, 0] - x[j, 0]) - (x[i, 1] - x[j, 1]) * (x[i, 0] - x[k, 0]))
+        phi = sgn * np.arccos(cphi)
+        u = d / lij[:, None] * gik
+        P[k] = P[i] + np.stack([np.cos(phi) * u[:, 0] - np.sin(phi) * u[:, 1],
+                                np.sin(phi) * u[:, 0] + np.cos(phi) * u[:, 1]], -1)
+    return P
+
+
+def link_result_cd(target: np.ndarray, mechanism) -> float:
+    """LInK's final CD of one of its own results (``alpha_res.npy[i, 0]``: adjacency,
+    positions, node types, …), computed by this port as ``PathSynthesis.synthesize``
+    computes it (the tracer: the last joint over one turn of 2000 steps, in LInK's
+    frame)."""
+    A, x, nt = (np.asarray(v, float) for v in mechanism[:3])
+    curve = link_solve(A, x, nt, np.linspace(0, 2 * np.pi, N_FINAL))[-1]
+    target = np.asarray(target, float)
+    og_scale = float(get_scales(target[None])[0])
+    best = uniformize(curve[None], N_FINAL)
+    if is_link_closed(target):
+        target_uni = uniformize(preprocess_curves(target[None], N_CURVE), N_FINAL)[0]
+        tr, sc, an = find_transforms(best, target_uni)
+        tiled = apply_transforms(target_uni[None], tr, sc, -an)
+    else:
+        part, _ = link_stroke(target)
+        closed = closed_with_ellipse(target)
+        target_uni = uniformize(preprocess_curves(closed[None], N_CURVE), N_FINAL)[0]
+        tr, sc, an = find_transforms(best, target_uni)
+        tiled = apply_transforms(uniformize(part[None], N_FINAL), tr, sc, -an)
+        best = get_partial_matches(best, tiled[0])
+    return float(batch_chamfer_distance(best / sc[:, None, None], tiled / sc[:, None, None])[0] * og_scale)
+
+
+def check_link_results(targets: np.ndarray, results_path: str, letters: str) -> list[dict]:
+    """This port of LInK's metric on LInK's own designs against the CD LInK stored."""
+    R = np.load(results_path, allow_pickle=True)
+    rows = []
+    for ch in letters:
+        i = string.ascii_uppercase.index(ch)
+        rows.append({"letter": ch, "port": link_result_cd(targets[i], R[i, 0]), "stored": float(R[i, 1][0])})
+        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
+    return rows
+
+
 # --- the benchmark ---------------------------------------------------------------------
 
 def load_targets(path: str) -> np.ndarray:
@@ -374,8 +457,19 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None)
     p.add_argument("--chart", default=None)
+    p.add_argument("--check-link", default=None, metavar="ALPHA_RES",
+                   help="only score LInK's own designs (its alpha_res.npy) by this port, beside its stored CD")
     a = p.parse_args(argv)
     T = load_targets(a.targets)
+    if a.check_link:
+        rows = check_link_results(T, a.check_link, a.letters)
+        print("| letter | LInK's CD, stored | LInK's design, this port |\n|---|---|---|")
+        for r in rows:
+            print(f"| {r['letter']} | {r['stored']:.5f} | {r['port']:.5f} |")
+        if a.json:
+            with open(a.json, "w") as f:
+                json.dump(rows, f, indent=1)
+        return 0
     rows = []
     for ch in a.letters:
         rows.append(run_letter(ch, T[string.ascii_uppercase.index(ch)], a.db, a.evaluations, seed=a.seed))
