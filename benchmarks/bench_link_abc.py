@@ -437,20 +437,21 @@ def chart(rows: list[dict], path: str) -> None:
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| letter | mode | ours: CD | links | s | LInK: CD | joints |", "|---|---|---|---|---|---|---|"]
+    lines = ["| letter | mode | ours: CD | links | wall s | CPU s | LInK: CD | LInK: joints |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         cd = "none" if r["cd"] is None else f"{r['cd']:.4f}"
-        lines.append(f"| {r['letter']} | {r['mode']} | {cd} | {r['links'] or '-'} | {r['seconds']:.0f} | "
+        lines.append(f"| {r['letter']} | {r['mode']} | {cd} | {r['links'] or '-'} | {r['seconds']:.0f} | {r['cpu_seconds']:.0f} | "
                      f"{r['link_cd']:.4f} | {r['link_joints']} |")
     ours = [r["cd"] for r in rows if r["cd"] is not None]
     lines.append(f"| mean | | {np.mean(ours):.4f} ({len(ours)} letters) | | "
-                 f"{np.mean([r['seconds'] for r in rows]):.0f} | {np.mean([r['link_cd'] for r in rows]):.4f} | |")
+                 f"{np.mean([r['seconds'] for r in rows]):.0f} | {np.mean([r['cpu_seconds'] for r in rows]):.0f} | {np.mean([r['link_cd'] for r in rows]):.4f} | |")
     return "\n".join(lines)
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--targets", required=True, help=f"LInKGenerator's alphabet.npy ({TARGETS_URL})")
+    p.add_argument("--targets", default=None, help=f"LInKGenerator's alphabet.npy ({TARGETS_URL})")
     p.add_argument("--db", default=None, help="atlas (default: the default curve atlas)")
     p.add_argument("--evaluations", type=int, default=20000)
     p.add_argument("--letters", default=string.ascii_uppercase)
@@ -459,7 +460,23 @@ def main(argv=None) -> int:
     p.add_argument("--chart", default=None)
     p.add_argument("--check-link", default=None, metavar="ALPHA_RES",
                    help="only score LInK's own designs (its alpha_res.npy) by this port, beside its stored CD")
+    p.add_argument("--report", nargs="+", default=None, metavar="JSON",
+                   help="no run: merge the rows of these --json files (e.g. letters run in two processes), "
+                        "print the table, write --json and --chart")
     a = p.parse_args(argv)
+    if a.report:
+        docs = [json.load(open(f)) for f in a.report]
+        rows = sorted((r for d in docs for r in d["rows"]), key=lambda r: r["letter"])
+        doc = {k: v for k, v in docs[0].items() if k != "rows"} | {"rows": rows}
+        print(table(rows))
+        if a.json:
+            with open(a.json, "w") as f:
+                json.dump(doc, f, indent=1)
+        if a.chart:
+            chart(rows, a.chart)
+        return 0
+    if a.targets is None:
+        p.error("--targets is required (LInKGenerator's alphabet.npy)")
     T = load_targets(a.targets)
     if a.check_link:
         rows = check_link_results(T, a.check_link, a.letters)
