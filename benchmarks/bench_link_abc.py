@@ -466,7 +466,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     if a.report:
         docs = [json.load(open(f)) for f in a.report]
-        rows = sorted((r for d in docs for r in d["rows"]), key=lambda r: r["letter"])
+        rows = sorted({r["letter"]: r for d in docs for r in d["rows"]}.values(), key=lambda r: r["letter"])
         doc = {k: v for k, v in docs[0].items() if k != "rows"} | {"rows": rows}
         print(table(rows))
         if a.json:
