@@ -269,12 +269,19 @@ def _unit(path, closed: bool, n: int) -> np.ndarray:
 
 
 def chamfer_score(target, curve, closed: bool | None = None, n: int = 200, angles: int = 360) -> float:
-    """LInK's chamfer distance between a target and an achieved curve (Nobari et al.
-    2024): both resampled by arc length to ``n`` points, centred, scaled to unit RMS
-    radius, the achieved curve turned by the best rotation (``angles / 5`` turns, then
-    11 around the best); the sum of
-    the two mean nearest-point distances.  ``closed`` defaults to :func:`is_closed` of
-    the target (an open target is compared with the achieved arc as given)."""
+    """A chamfer distance after LInK's (Nobari et al. 2024) between a target and an
+    achieved curve: both resampled by arc length to ``n`` points, centred, scaled to
+    unit RMS radius, the achieved curve turned by the best rotation (``angles / 5``
+    turns, then 11 around the best); the sum of the two mean nearest-point distances.
+    ``closed`` defaults to :func:`is_closed` of the target (an open target is compared
+    with the achieved arc as given).
+
+    Not LInK's final metric to the digit: LInK (``LInK/OptimJax.py``,
+    ``PathSynthesis.synthesize``) resamples to 2000 points, chooses the rotation among
+    100 by its *ordered* distance, multiplies by the target's RMS radius and scores an
+    open stroke in the frame of the stroke closed by half an ellipse.  That metric,
+    ported exactly and checked against LInK's stored per-letter values, is in
+    ``benchmarks/bench_link_abc.py`` (``link_cd``)."""
     if closed is None:
         closed = is_closed(target)
     A = _unit(target, closed, n)

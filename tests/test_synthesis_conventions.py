@@ -317,3 +317,22 @@ def test_csv_messages_name_file_lines_and_semicolon_tables_are_read():
         parse_table("x,y\n0,0\n\n1,0\n0,nan\n", (2,), "path", "t.csv")
     with _pt.raises(InputError, match="t.csv line 4"):
         parse_table("x,y\n0,0\n\n1,0,3\n", (2,), "path", "t.csv")
+
+
+def test_assess_a_design_that_does_not_assemble_at_its_reference():
+    """A design that reaches no grid sample (two letters of LInK's alphabet met one in
+    the polish, ``benchmarks/bench_link_abc.py``): the assessment says the targets are
+    not reached (it raised a ValueError on the empty range of motion before)."""
+    from multiloop.catalogue.dimensional.synthesise import _assess
+
+    m = load_named("four_bar")
+    pt = m.points[0].name
+    st = solve(m, np.radians(np.arange(0.0, 300.0, 30.0)))
+    pr = _problem(m, pt, st.point_positions[:, st.point_index(pt)])
+    z = pr.x0.copy()
+    assert _assess(pr, z, pr.match(z))[2]
+    far = z.copy()
+    far[0] = np.nan                                   # a design that solves at no driver value
+    assert not pr.ev.poses(far[None, :pr.nx], [0.0]).ok.any()
+    rel, ang, ok = _assess(pr, far, np.zeros(len(st.point_positions)))
+    assert not ok and ang is None

@@ -233,10 +233,13 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     Z = z[None, :]
     st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, phi]))
     _, valid, cphi, full = problem.curve(st.ok[:, :problem.M])
-    lo, hi = cphi[valid].min(), cphi[valid].max()
     d = np.diff(phi)
     ordered = bool(np.all(d >= -1e-12) or np.all(d <= 1e-12))
-    inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
+    if valid.any():
+        lo, hi = cphi[valid].min(), cphi[valid].max()
+        inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
+    else:                   # (the design does not assemble at its reference: nothing is reached)
+        inside = False
     ok = ordered and inside and bool(st.ok[0, problem.M:].all())
     r = problem.residuals(z, phi).reshape(len(phi), -1)
     ang = None
