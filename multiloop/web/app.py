@@ -408,15 +408,8 @@ def requested_mechanism(doc) -> str | None:
     """The menu entry the page's address names (``?mechanism=NAME``; its token and other
     arguments are left to :mod:`.access`), or None: text only, looked up among the
     menu's entries, never used as a path."""
-    try:
-        values = doc.session_context.request.arguments.get("mechanism") or []
-    except AttributeError:               # no request (a document made outside a server)
-        return None
-    if not values:
-        return None
-    raw = values[0]
-    text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else str(raw)
-    return text[:MAX_REQUESTED]
+    from .share import address_argument
+    return address_argument(doc, "mechanism", MAX_REQUESTED)
 
 
 def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):

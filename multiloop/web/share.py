@@ -31,7 +31,7 @@ import zlib
 
 from multiloop.topo.errors import InputError, LinkageError, explain
 
-__all__ = ["design_code", "design_from_code", "requested_design", "shared_design", "open_first", "Address",
+__all__ = ["address_argument", "design_code", "design_from_code", "requested_design", "shared_design", "open_first", "Address",
            "ADDRESS_JS", "MAX_CODE", "MAX_TEXT"]
 
 #: longest code put in (and read from) the address, in characters (browsers and servers
@@ -104,18 +104,24 @@ def design_from_code(code: str):
         raise InputError(f"{WHAT}: {exc}") from None
 
 
-def requested_design(doc) -> str | None:
-    """The ``?design=`` code of the page's address, or None (text only, at most a
-    character more than :data:`MAX_CODE`, so that a longer one is refused as too long)."""
+def address_argument(doc, key: str, limit: int) -> str | None:
+    """The first ``?key=`` value of the page's address as text (at most ``limit``
+    characters), or None: text only, never used as a path."""
     try:
-        values = doc.session_context.request.arguments.get("design") or []
+        values = doc.session_context.request.arguments.get(key) or []
     except AttributeError:               # no request (a document made outside a server)
         return None
     if not values:
         return None
     raw = values[0]
     text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else str(raw)
-    return text[:MAX_CODE + 1]
+    return text[:limit]
+
+
+def requested_design(doc) -> str | None:
+    """The ``?design=`` code of the page's address, or None (text only, at most a
+    character more than :data:`MAX_CODE`, so that a longer one is refused as too long)."""
+    return address_argument(doc, "design", MAX_CODE + 1)
 
 
 def shared_design(code: str | None) -> tuple:
