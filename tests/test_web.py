@@ -407,6 +407,14 @@ def test_share_by_name_opens_the_mechanism_in_a_fresh_browser_context(browser, s
         ctx.close()
 
 
+
+def _at_joint_js(name: str, tol: float) -> str:
+    """A page function ``([x, y]) => bool``: the readout puts joint ``name`` at (x, y) within ``tol``."""
+    return """([x, y]) => { const r = (%s)('#ml-positions')[0];
+        if (!r || !r.getAttribute('data-positions')) return false;
+        const b = JSON.parse(r.getAttribute('data-positions'))[%s];
+        return Math.abs(b[0] - x) < %r && Math.abs(b[1] - y) < %r; }""" % (DEEP_JS, json.dumps(name), tol, tol)
+
 def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
     """Type B's coordinates, Apply: the drawing is the edited design at its reference;
     Ctrl-Z in the page gives the original back, Ctrl-Shift-Z the edit."""
@@ -420,10 +428,7 @@ def test_undo_a_typed_edit_with_ctrl_z_in_the_page(page):
         page.locator(css).fill(v)
         page.locator(css).press("Enter")
     page.locator(".ml-edit-apply button").click()
-    at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
-        if (!r || !r.getAttribute('data-positions')) return false;
-        const b = JSON.parse(r.getAttribute('data-positions'))['B'];
-        return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+    at_b = _at_joint_js("B", 1e-12)
     page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=60000)
     page.mouse.click(5, 5)                      # the focus leaves the text field
     page.keyboard.press("Control+z")
@@ -484,10 +489,7 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     assert r["positions"]["B"] == pytest.approx([x1, y1], abs=1e-12)
     page.mouse.click(5, 5)
     page.keyboard.press("Control+z")
-    at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
-        if (!r || !r.getAttribute('data-positions')) return false;
-        const b = JSON.parse(r.getAttribute('data-positions'))['B'];
-        return Math.abs(b[0] - x) < 1e-12 && Math.abs(b[1] - y) < 1e-12; }""" % DEEP_JS
+    at_b = _at_joint_js("B", 1e-12)
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
 
 
@@ -523,10 +525,7 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory
             page.locator(css).fill(v)
             page.locator(css).press("Enter")
         page.locator(".ml-edit-apply button").click()
-        at_b = """([x, y]) => { const r = (%s)('#ml-positions')[0];
-            if (!r || !r.getAttribute('data-positions')) return false;
-            const b = JSON.parse(r.getAttribute('data-positions'))['B'];
-            return Math.abs(b[0] - x) < 1e-15 && Math.abs(b[1] - y) < 1e-15; }""" % DEEP_JS
+        at_b = _at_joint_js("B", 1e-15)
         page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=120000)
     finally:
         page.locator(".ml-length-unit select").select_option("m")
