@@ -663,10 +663,11 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=120000)
     page.locator(".ml-target-undo button").click()
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
-    page.locator(".ml-target-shape select").select_option("closed")
     points = "() => { const d = Bokeh.documents[0].get_model_by_name('ml-target-points').data; return [d.x, d.y]; }"
+    open_x1 = page.evaluate(points)[0][1]          # read before the change: the server's answer can come first
+    page.locator(".ml-target-shape select").select_option("closed")
     page.wait_for_function("""([x0]) => Bokeh.documents[0].get_model_by_name('ml-target-points').data.x[1] != x0""",
-                           arg=[page.evaluate(points)[0][1]], timeout=120000)
+                           arg=[open_x1], timeout=120000)
     x, y = page.evaluate(points)
     assert len(x) == 24 and is_closed(np.column_stack([x, y]))
     _shot(page, "web_target.png", tmp_path_factory)
