@@ -572,30 +572,49 @@ def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
 def _solve_ranged(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     """One driver with tracked groups (triads, class IV, Newton): the cached chart gives
     the certified motion range; inputs outside it are marked with the limit, the others
-    are reached by one continuous path from the reference through them, in order."""
+    are reached by one continuous path from the reference (:func:`_solve_monotone`)."""
     x = X[:, 0]
     ch = _chart(sp, kernels, x)
-    if ch.period is not None:
-        return _solve_path(sp, X, needed, kernels)
     xr, reach = ch.reduce(x)
-    if reach.all():
-        run, notes = _solve_path(sp, xr[:, None], needed, kernels)
-        _turn_drivers(sp, run, x - xr)
-        return run, notes
     rows = np.flatnonzero(reach)
     if rows.size:
-        sub, notes = _solve_path(sp, xr[rows, None], needed, kernels)
+        sub, notes = _solve_monotone(sp, xr[rows], needed, kernels)
     else:
-        sub, notes = _run(sp, np.zeros((1, 1)), needed, {}, kernels), []
+        sub, notes = _run(sp, np.zeros((1, 1)), needed, {}, kernels), None
+    if notes is None and ch.crossings:
+        notes = _crossing_notes(sp, ch.crossings, np.concatenate([[0.0], x if ch.period else xr]), reach,
+                                ch.flips, ch.period)
     where = np.zeros(len(x), int)
     where[rows] = np.arange(rows.size)
     run = _take(sub, where)
     _turn_drivers(sp, run, np.where(reach, x - xr, 0.0))
+    if reach.all():
+        return run, notes or []
     run.code[~reach] = 0
     for n in np.flatnonzero(~reach):
         run.reason.pop(int(n), None)
     _mark_unreachable(sp, ch, run, X, ~reach, kernels)
-    return run, notes
+    return run, notes or []
+
+
+def _solve_monotone(sp: SolvePlan, xr: np.ndarray, needed, kernels) -> tuple[_Run, list | None]:
+    """The chart coordinates ``xr`` (inside the certified motion) reached by one path that
+    visits them sorted: from the reference down through the negative ones, then up
+    through the others.  Within the chart a pose depends only on its coordinate (the
+    motion is one interval, or one period, without a limit inside), so the order the
+    inputs were asked in changes only the path's length: a batch that jumps back and
+    forth near the limits would approach them once per jump, and the walk re-evaluates
+    its whole path each round.  Notes: None (the chart's crossings name the rows in the
+    order asked), or the walk's own when it stopped short of the chart (rounding at a
+    limit), from the path in the order asked."""
+    u, inverse = np.unique(xr, return_inverse=True)
+    order = np.concatenate([np.flatnonzero(u < 0)[::-1], np.flatnonzero(u >= 0)])
+    sub, _ = _solve_path(sp, u[order, None], needed, kernels)
+    if np.any(sub.code == Status.LIMIT):
+        return _solve_path(sp, xr[:, None], needed, kernels)
+    rank = np.empty(len(order), int)
+    rank[order] = np.arange(len(order))
+    return _take(sub, rank[inverse]), None
 
 
 def _turn_drivers(sp: SolvePlan, run: _Run, turns: np.ndarray) -> None:

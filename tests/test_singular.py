@@ -239,6 +239,40 @@ def test_triad_is_reached_from_anywhere_in_any_order():
         assert np.allclose(got, want, atol=1e-9 * 0.2)
 
 
+def test_a_batch_that_jumps_between_the_limits_costs_one_path(monkeypatch):
+    """Issue 36, smaller faults: 96 triad inputs alternating between 1e-9 and 1e-2 of the
+    range inside either limit.  The batch walked reference → x₀ → x₁ … and approached a
+    limit 96 times, the walk re-evaluating its whole path each round (25–36 s CPU; then
+    "continuation did not settle").  Within the certified range a pose depends only on
+    its input: the batch equals the inputs solved one by one, and it evaluates no more
+    samples than the two sorted paths to the deepest inputs solved one by one."""
+    import multiloop.kin.solve as ks
+    from multiloop.kin.solve import _chart, plan_of
+    m = limited_triad()
+    ch = _chart(plan_of(m), True, np.zeros(1))
+    rng = np.random.default_rng(0)
+    eps = 10 ** rng.uniform(-9, -2, 96) * (ch.hi - ch.lo)
+    x = np.where(np.arange(96) % 2 == 0, ch.lo + eps, ch.hi - eps)
+    rows = []
+    real_run = ks._run
+
+    def counted(sp, X, *a, **kw):
+        rows.append(len(X))
+        return real_run(sp, X, *a, **kw)
+    monkeypatch.setattr(ks, "_run", counted)
+    batch = solve(m, x)
+    n_batch = sum(rows)
+    rows.clear()
+    ends = [solve(m, np.array([v])) for v in (x.min(), x.max())]
+    n_ends = sum(rows)
+    monkeypatch.setattr(ks, "_run", real_run)
+    assert batch.ok.all()
+    assert n_batch <= 2 * n_ends, (n_batch, n_ends)
+    one = [solve(m, np.array([v])) for v in x]
+    assert np.allclose(batch.positions, np.concatenate([s.positions for s in one]), atol=1e-9)
+    assert all(s.ok.all() for s in ends)
+
+
 def test_triad_limits_are_turning_points():
     """At a limit the triad is singular: its three leg lines are concurrent, so every
     triad transmission angle is zero there (to the bracket's √ width)."""
