@@ -35,17 +35,6 @@ def add_arguments(p) -> None:
                    help="the check's threshold (default 40, as 'multiloop check')")
 
 
-def _log_jobs() -> None:
-    """The page's jobs (a check, a synthesis) log their start and end on stderr."""
-    import logging
-    log = logging.getLogger("multiloop.web.jobs")
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("multiloop serve: %(message)s"))
-    log.addHandler(handler)
-    log.setLevel(logging.INFO)
-    log.propagate = False
-
-
 def run(args) -> int:
     from importlib.util import find_spec
 
@@ -64,7 +53,8 @@ def run(args) -> int:
         for db in args.atlas:
             Atlas(db, readonly=True).close()        # a bad atlas is an error before serving
     _check_token(args)
-    _log_jobs()
+    from multiloop.web.jobs import log_to
+    log_to(sys.stderr)
     try:
         serve(files, port=args.port, host=args.host, open_browser=args.open, atlases=args.atlas,
               threshold=args.min_transmission, token=args.token, require_token=not args.no_token,

@@ -1,33 +1,8 @@
-"""``multiloop synthesise [START.toml] (--path T.csv --point NAME | --function F.csv --output JOINT |
---motion POSES.csv --link NAME) --out OUT.toml [--seed N] [--evaluations N] [--budget S] [--method de|cmaes|local]
-[--timing reference|absolute|step] [--bounds NAME=LOW:HIGH ...] [--grashof crank-rocker|double-crank|any]
-[--mode reference|any] [--direction ccw|cw|any] [--json] [--plot P]``: dimensional synthesis.
-
-``START.toml`` gives the topology, names, one driver and a starting geometry.
-Tables are CSV with an optional header line:
-
-* ``--path``: rows ``x,y`` (m) met in this order with free timing, or ``x,y,input``
-  with the driver value (deg, m for a slider input) from the reference;
-  ``--shape-only`` lets the target be scaled, rotated and translated;
-* ``--function``: rows ``input,output`` (deg for R joints, m for P joints), the first
-  row being the reference configuration; the output is the relative rotation (or
-  slide) of ``--output``'s ``links[1]`` w.r.t. ``links[0]``;
-* ``--motion``: rows ``x,y,angle`` (m, m, deg) of a frame attached to ``--link``.
-
-Without ``START`` (``--path`` only), the atlas chooses the topology
-(``catalogue.topology_synthesis``): ``--db ATLAS`` with stored coupler curves,
-``--links 4,6,8``, ``--top K`` designs written as ``OUT.toml``, ``OUT-2.toml``, …;
-``--open`` / ``--closed`` say what the target is (default: detected); an open target's
-designs are written with their driver's ``range`` over the target's part of the motion;
-``--json`` lists ``{"error_max", "error_rms", "links", "structure", "file", …}``;
-``--plot`` is refused there (exit 2): draw a design with ``multiloop solve OUT.toml --plot``.
-
-``OUT.toml`` is a normal mechanism file (the start's topology and names, the new
-dimensions, ``source`` citing the target).  ``--evaluations`` (reproducible) and ``--budget``
-(seconds, a cap) limit the run.  The report gives the error (max and RMS distance to the
-targets relative to the target's size), the evaluations, the time, what stopped the run;
-``--json`` prints it as JSON.  ``--plot`` draws the target against the achieved
-curve and the mechanism.  Nothing is written unless the whole run succeeds.
+"""``multiloop synthesise [START.toml] (--path T.csv | --function F.csv | --motion POSES.csv) --out OUT.toml``:
+dimensional synthesis from a start (its topology, names, one driver and a starting geometry), or, with
+``--path`` alone, the atlas chooses the topology (``catalogue.topology_synthesis``; ``--top K`` designs
+written as ``OUT.toml``, ``OUT-2.toml``, …).  The tables' columns and units, the options and the report
+are in docs/synthesis.md and ``--help``; nothing is written unless the whole run succeeds.
 """
 from __future__ import annotations
 
@@ -141,8 +116,6 @@ def run(args) -> int:
     if args.closed is not None:     # refused, not ignored: a start's motion is --full-rotation's
         raise InputError(explain("--open/--closed", expected="no START (the atlas route)", got="a START",
                                  hint="with a start, --full-rotation asks for a closed curve over whole turns"))
-    if args.tol is None:
-        args.tol = 1e-6
     m = load(args.start)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
@@ -150,8 +123,8 @@ def run(args) -> int:
     with progress_bar(sys.stderr.isatty() and not args.json) as cb:     # the library checks the task
         res = synthesise(m, path=args.path, point=args.point, shape_only=args.shape_only, function=args.function,
                          output=args.output, motion=args.motion, link=args.link, seed=args.seed,
-                         **limits, method=args.method, tol=args.tol, full_rotation=args.full_rotation,
-                         min_transmission=args.min_transmission, max_ratio=args.max_ratio,
+                         **limits, method=args.method, tol=1e-6 if args.tol is None else args.tol,
+                         full_rotation=args.full_rotation, min_transmission=args.min_transmission, max_ratio=args.max_ratio,
                          length_bounds=args.length_bounds, progress=cb, timing=args.timing,
                          grashof=args.grashof, mode=args.mode, direction=args.direction,
                          bounds=parse_bounds(args.bounds))

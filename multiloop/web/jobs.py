@@ -22,6 +22,16 @@ __all__ = ["Job"]
 LOG = logging.getLogger("multiloop.web.jobs")
 
 
+def log_to(stream, prefix: str = "multiloop serve: ") -> None:
+    """The jobs (a check, a synthesis) log their start and end on ``stream``, one
+    line each after ``prefix`` (``multiloop serve`` gives stderr)."""
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(logging.Formatter(prefix + "%(message)s"))
+    LOG.addHandler(handler)
+    LOG.setLevel(logging.INFO)
+    LOG.propagate = False
+
+
 class _Cancelled(Exception):
     """Raised inside a job's worker when the job was cancelled."""
 
