@@ -9,8 +9,8 @@ not a closed curve, and a design need not turn its driver fully to trace it:
   nearest first, each with the similarity that carries its window onto the target.
 * **The input interval.**  The polish gives every target point its own driver value
   (free timing); the design's input interval ``[a, b]`` is the span of those values.
-  :func:`is_within_motion` asks :func:`kin.check.check` that the interval lies in
-  the driver's certified range of motion, and :func:`on_interval` writes the design
+  :meth:`kin.motion.DriverMotion.holds_span` says whether the interval lies in the
+  driver's certified range of motion (:func:`kin.solve.motion_events`), and :func:`on_interval` writes the design
   with its reference configuration at the first target point and its driver's
   ``range`` over the interval only, so ``solve`` and ``check`` move it over that part.
 
@@ -28,7 +28,7 @@ from .atlas import Atlas
 from .curve_atlas import CurveIndex, stored_curve
 from .curves import normalise_open, similarity_to, window_distances
 
-__all__ = ["ranked_windows", "on_interval", "is_within_motion"]
+__all__ = ["ranked_windows", "on_interval"]
 
 
 def ranked_windows(atlas: Atlas, index: CurveIndex, target: np.ndarray,
@@ -48,19 +48,6 @@ def ranked_windows(atlas: Atlas, index: CurveIndex, target: np.ndarray,
         tf = similarity_to(ct, rt, centre, c["radius"] * float(found["radius"][i]), complex(found["rotation"][i]))
         out.append((float(found["distance"][i]), c, tf))
     return out
-
-
-def is_within_motion(driver_check, inputs) -> bool:
-    """Whether the inputs' span lies in the certified range of motion of
-    :func:`kin.check.check`'s ``driver_check`` (a full rotation contains any span;
-    else its usable range, to 1e-9 rad or m)."""
-    x = np.asarray(inputs, float)
-    if driver_check.full_rotation:
-        return True
-    usable = driver_check.usable
-    if usable is None:
-        return False
-    return bool(usable[0] - 1e-9 <= x.min() and x.max() <= usable[1] + 1e-9)
 
 
 def on_interval(m: Mechanism, inputs) -> tuple[Mechanism, tuple[float, float]]:

@@ -9,8 +9,9 @@ best few mechanisms of each topology onto the target by the similarity that alig
 their curves, screens each by the dimensional synthesiser's local polish
 (:func:`.dimensional.synthesise` with ``method="local"``, which frees every joint and
 the tracer point) and polishes the best few again on more target points.
-A design is returned only when :func:`kin.check.check` reaches every target input
-on one continuous branch (``positions``); an open target's design is written over its
+A design is returned only when its driver's certified motion
+(:func:`kin.solve.motion_events`) reaches every target input on one continuous branch;
+an open target's design is written over its
 input interval (the driver's ``range``).  Designs are ordered by RMS error, fewer
 links first when their errors agree within ``tol``.  While the best error is above
 ``tol``, further rounds of retrieved starts are screened until the limits are spent
@@ -37,8 +38,7 @@ import numpy as np
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, LinkageError, ParameterError, explain
 from multiloop.topo.model import Mechanism, MechanismBuilder, TracerPoint
-from multiloop.kin.check import check
-from multiloop.kin.solve import solve
+from multiloop.kin.solve import motion_events, solve
 
 from .atlas import Atlas
 from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor, is_closed, normalise,
@@ -50,7 +50,7 @@ from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
-from .open_targets import is_within_motion, on_interval, ranked_windows
+from .open_targets import on_interval, ranked_windows
 from .synthesis import SynthesisOptions
 from .tracers import best_tracers
 
@@ -267,16 +267,21 @@ def _subset(target: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
     return target[np.minimum(idx, len(target) - 1)]
 
 
-def _passes_check(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> bool:
-    """The check reaches every target input on the design's branch (no circuit defect);
-    for an open target, the inputs' span lies in the driver's certified range of motion
-    too (:func:`.open_targets.is_within_motion`)."""
+def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> bool:
+    """The design's certified motion (:func:`kin.solve.motion_events`: its driver's
+    limits and crossings by continuation) reaches every target input on the design's
+    branch (no circuit defect); for an open target, the inputs' span lies in it too
+    (:meth:`~kin.motion.DriverMotion.holds_span`).  Only the motion is asked, not the
+    whole design check."""
+    x = np.asarray(inputs, float)
     try:
-        rep = check(m, min_transmission=0.0, positions={m.drivers[0].joint: [float(x) for x in inputs]})
+        motion = motion_events(m, extent=max(float(np.max(np.abs(x), initial=0.0)), 1e-12) * 1.01
+                               if not m.is_rotary(0) else None)
     except (LinkageError, ValueError, FloatingPointError):
         return False
-    dc = rep.drivers[0]
-    return not dc.unreachable and (closed or is_within_motion(dc, inputs))
+    if motion is None or not motion.reaches(x).all():
+        return False
+    return closed or motion.holds_span(x)
 
 
 def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
@@ -305,12 +310,12 @@ def _local(start: Mechanism, target: np.ndarray, closed: bool, point: str, limit
 
 def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, seconds: float,
             target: np.ndarray, evaluations: int = 0) -> Design | None:
-    """A :class:`Design` of a polished result, when :func:`kin.check.check` reaches every
+    """A :class:`Design` of a polished result, when its certified motion reaches every
     target input on one branch (an open target: within the certified range of motion,
     and the design is written over that interval, :func:`.open_targets.on_interval`);
     with LInK's chamfer score and the dense deviation."""
     m, inputs, interval = res.mechanism, np.asarray(res.inputs, float), None
-    if not _passes_check(m, inputs, closed):
+    if not _reaches_targets(m, inputs, closed):
         return None
     if not closed:
         try:

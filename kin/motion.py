@@ -97,6 +97,30 @@ class DriverMotion:
         """The inputs of the crossings, in order."""
         return tuple(x for x, _ in self.crossings)
 
+    def reaches(self, x) -> np.ndarray:
+        """Whether the certified motion reaches each input ``x`` (rad or m from the
+        reference): every input when the driver turns fully; else those in
+        ``[lo, hi]``, an R input modulo 360° (320° is −40° when turning the other way
+        reaches it), as :func:`kin.solve.solve` reduces them."""
+        x = np.asarray(x, float)
+        if not self.certified:
+            raise ValueError("reaches() needs a certified motion (kin.solve.motion_events)")
+        if self.turns_fully:
+            return np.ones(x.shape, bool)
+        if self.rotary:
+            t = 2 * np.pi
+            x = x + t * np.ceil((self.lo - x) / t)           # the turn of x at or above lo
+        return (x >= self.lo) & (x <= self.hi)
+
+    def holds_span(self, x, tol: float = 1e-9) -> bool:
+        """Whether the span ``[min x, max x]`` lies in the motion (a full turn holds any
+        span; else ``[lo, hi]``, to ``tol`` rad or m): the interval an open target's
+        design moves over, continuously, without passing a limit."""
+        x = np.asarray(x, float)
+        if not self.certified:
+            raise ValueError("holds_span() needs a certified motion (kin.solve.motion_events)")
+        return self.turns_fully or bool(self.lo - tol <= x.min() and x.max() <= self.hi + tol)
+
     def inputs(self, x, at=None) -> np.ndarray:
         """Driver inputs ``(N, n_drivers)`` that move this driver through ``x`` (N values,
         rad or m from the reference) and hold every other driver at the reference, or at

@@ -93,3 +93,29 @@ def test_no_other_module_moves_a_driver_alone():
              for p in sorted((root / pkg).rglob("*.py"))
              for i, line in enumerate(p.read_text().splitlines(), 1) if alone.search(line)]
     assert [f.split(":")[0] for f in found] == ["kin/motion.py", "kin/motion.py"]
+
+
+@pytest.mark.parametrize("dims", [(1.0, 3.5, 3.0), (1.0, 1.5, 3.0), (2.2, 2.0, 3.0)])
+def test_reaches_agrees_with_solve_and_with_the_check(dims):
+    """Two routes to "the motion reaches this input": DriverMotion.reaches (the certified
+    ends, R inputs modulo 360°) against solve's own answer (ok, or a limit / another
+    circuit) and against the check's unreachable positions, on a crank-rocker and two
+    non-Grashof four-bars, over inputs from −720° to 720°."""
+    from multiloop.kin.check import check
+    from multiloop.kin.solve import solve
+    m = _four_bar(*dims)
+    mo = motion_events(m)
+    x = np.radians(np.linspace(-720.0, 720.0, 97)) + 1e-3
+    got = mo.reaches(x)
+    st = solve(m, x)
+    assert np.array_equal(got, np.asarray(st.ok, bool))
+    dc = check(m, positions={"O": list(x)}).drivers[0]
+    assert {float(v) for v in dc.unreachable} == {float(v) for v in x[~got]}
+    assert mo.holds_span(x) == mo.turns_fully
+    if not mo.turns_fully:
+        assert mo.holds_span([mo.lo, mo.hi]) and not mo.holds_span([mo.lo, mo.hi + 1e-6])
+
+
+def test_reaches_needs_a_certified_motion():
+    with pytest.raises(ValueError, match="certified"):
+        DriverMotion.held(_four_bar(1.0, 3.5, 3.0)).reaches([0.0])
