@@ -119,3 +119,21 @@ def test_reaches_agrees_with_solve_and_with_the_check(dims):
 def test_reaches_needs_a_certified_motion():
     with pytest.raises(ValueError, match="certified"):
         DriverMotion.held(_four_bar(1.0, 3.5, 3.0)).reaches([0.0])
+
+
+def test_turns_fully_agrees_with_the_checks_full_rotation():
+    """The dimensional synthesis asks the certified motion whether a design turns fully
+    (catalogue.dimensional.report.turns_fully), where it ran the whole check: both
+    routes agree on four-bars around the Grashof boundary (crank + frame = coupler +
+    rocker ± 1e-3) and on every one-crank catalogue mechanism."""
+    from multiloop.kin.check import check
+    from multiloop.inputs import load_mechanism
+    ms = [_four_bar(1.0, c, 3.0) for c in (2.0 - 1e-3, 2.0 + 1e-3, 2.5, 1.2)]
+    ms += [load_mechanism(n) for n in ("four_bar", "watt_1", "watt_2", "stephenson_1", "stephenson_3_triad",
+                                      "crank_slider")]
+    seen = set()
+    for m in ms:
+        full = check(m).drivers[0].full_rotation
+        assert motion_events(m).turns_fully == full, m.name
+        seen.add(full)
+    assert seen == {True, False}

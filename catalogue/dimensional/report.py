@@ -26,16 +26,19 @@ def _row(name: str, required, value, violation: float) -> dict:
 
 
 def turns_fully(problem: Problem, z: np.ndarray) -> bool:
-    """Whether the driver of design ``z`` turns fully by ``multiloop check``'s certified
-    range of motion (:func:`multiloop.kin.check.check`), not only on the driver grid
-    (a design on the edge of full rotation may pass every grid sample and still lock
-    between two)."""
-    from multiloop.kin.check import check
+    """Whether the driver of design ``z`` turns fully by its certified motion
+    (:func:`multiloop.kin.solve.motion_events`, the walk ``multiloop check`` starts from:
+    limits found by continuation), not only on the driver grid (a design on the edge of
+    full rotation may pass every grid sample and still lock between two).  A driver with
+    a ``range`` does not turn fully, as ``check`` says."""
+    from multiloop.kin.solve import motion_events
     from multiloop.topo.errors import LinkageError
+    m = problem.ev.with_design(np.asarray(z, float)[:problem.nx])
     try:
-        return bool(check(problem.ev.with_design(np.asarray(z, float)[:problem.nx])).drivers[0].full_rotation)
+        motion = motion_events(m)
     except LinkageError:
         return False
+    return bool(motion is not None and motion.rotary and motion.turns_fully and m.drivers[0].range is None)
 
 
 def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuous: bool) -> list[dict]:
