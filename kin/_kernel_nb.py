@@ -20,7 +20,7 @@ from numba.extending import register_jitable
 from .groups.base import SCALAR_HELPERS, arctan2
 from .groups.registry import COMPILED
 
-__all__ = ["solve_positions", "finish_rows", "SLOTS"]
+__all__ = ["solve_positions", "solve_motion", "finish_rows", "SLOTS"]
 
 
 def _fresh_cache() -> None:
@@ -100,6 +100,14 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
     :func:`finish_rows` (the derived angle rows, the points ``P`` of ``hosts``).
     Returns the number of rows that failed.
     """
+    failed = _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend)
+    finish_rows(T, C, S, pend, np.ones(T.shape[0], np.int8), hosts, offs, np.ones(hosts.size, np.int8), P)
+    return failed
+
+
+@numba.njit(**_JIT)
+def _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend) -> int:
+    """The step loop of :func:`solve_positions` (without its finish)."""
     out = np.empty(X.shape[0], np.int8)
     failed = 0
     for i in range(steps.size):
@@ -114,23 +122,65 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
                     u = unknown[k, j]
                     if u >= 0:
                         T[u, 0, n] = T[u, 1, n] = T[u, 2, n] = C[u, n] = S[u, n] = np.nan
-    finish_rows(T, C, S, pend, hosts, offs, P)
+    return failed
+
+
+
+
+@numba.njit(**_JIT)
+def solve_motion(codes, ints, floats, unknown, trig, frame, X, T, fail, pend, want_links, hosts, offs, want_points, P):
+    """Every step of a lowered plan at every row of ``X`` (M, n_drivers) on the
+    reference branch, in one call (the per-call work of :func:`solve_positions`'s
+    caller done here): the table ``W`` of cos and sin of ``sign × input`` for each
+    (driver, sign) row of ``trig`` (K, 2), the frame's pose, the work rows ``C``, ``S``
+    and the factors.  ``T`` (n_links, 3, M), ``fail`` (M,) zeros, ``pend`` (n_links,)
+    zeros and ``P`` as :func:`solve_positions`; only the derived angle rows of
+    ``want_links`` and the points of ``want_points`` (int8 masks) are computed, the
+    others NaN (what ``outputs=`` leaves out).  Returns the number of failed rows (an
+    array returned would be boxed with its dtype unpickled on every call)."""
+    M = X.shape[0]
+    nl = T.shape[0]
+    W = np.empty((4 * X.shape[1], M))
+    for t in range(trig.shape[0]):
+        d, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
+        for n in range(M):
+            a = X[n, d] if trig[t, 1] > 0 else -X[n, d]
+            W[r, n] = np.cos(a)
+            W[r + 1, n] = np.sin(a)
+    C = np.empty((nl, M))
+    S = np.empty((nl, M))
+    for n in range(M):
+        T[frame, 0, n] = T[frame, 1, n] = T[frame, 2, n] = 0.0
+        C[frame, n] = 1.0
+        S[frame, n] = 0.0
+    failed = _steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
+                    np.ones((codes.shape[0], 1)), T, C, S, fail, pend)
+    finish_rows(T, C, S, pend, want_links, hosts, offs, want_points, P)
     return failed
 
 
 @numba.njit(**_JIT)
-def finish_rows(T, C, S, pend, hosts, offs, P):
-    """After :func:`solve_positions`: the angle rows of the pending links (``arctan2(S,
-    C)``, fdlibm's: within 1 ulp of NumPy's and faster than the libm call) and the
-    points ``P`` (n_points, 2, M) of the joints and tracer points, each carried by its
-    host link ``hosts[i]`` from the offset ``offs[i]`` (:meth:`kin.poses.Poses.carry`)."""
+def finish_rows(T, C, S, pend, want_links, hosts, offs, want_points, P):
+    """After the steps: the angle rows of the pending links (``arctan2(S, C)``,
+    fdlibm's: within 1 ulp of NumPy's and faster than the libm call) and the points
+    ``P`` (n_points, 2, M) of the joints and tracer points, each carried by its host
+    link ``hosts[i]`` from the offset ``offs[i]`` (:meth:`kin.poses.Poses.carry`); a
+    pending link outside ``want_links`` and a point outside ``want_points`` (int8 masks)
+    are NaN instead (not computed)."""
     M = T.shape[2]
     for k in range(T.shape[0]):
-        if pend[k]:
+        if pend[k] and want_links[k]:
             for n in range(M):
                 T[k, 2, n] = arctan2(S[k, n], C[k, n])
+        elif pend[k]:
+            for n in range(M):
+                T[k, 2, n] = np.nan
     for i in range(hosts.size):
         h, ox, oy = hosts[i], offs[i, 0], offs[i, 1]
+        if not want_points[i]:
+            for n in range(M):
+                P[i, 0, n] = P[i, 1, n] = np.nan
+            continue
         for n in range(M):
             P[i, 0, n] = T[h, 0, n] + (C[h, n] * ox - S[h, n] * oy)
             P[i, 1, n] = T[h, 1, n] + (S[h, n] * ox + C[h, n] * oy)

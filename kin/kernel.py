@@ -43,6 +43,7 @@ References
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import sys
 import threading
@@ -56,7 +57,7 @@ from .groups.registry import COMPILED
 from .groups.step import trig_row
 from .memo import cached
 
-__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "load", "is_loaded", "wanted",
+__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
@@ -88,6 +89,7 @@ class KernelPlan:
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
     complete: bool = False
+    trig_rows: np.ndarray | None = None     # ``trig`` as (K, 2) int64 (driver, ±1), for run_motion
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
@@ -110,12 +112,14 @@ def lower_plan(sp) -> KernelPlan:
     low = [st.closed.lower(sp.origins) if st.closed is not None else None for st in sp.steps]
     codes = np.array([_CODES.get(lw.key, -1) if lw is not None else -1 for lw in low], np.int64)
     codes.flags.writeable = False
+    trig = tuple(sorted({t for lw in low if lw is not None for t in lw.trig}))
+    rows = np.array([(d, 1 if sign > 0 else -1) for d, sign in trig], np.int64).reshape(-1, 2)
+    rows.flags.writeable = False
     return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
-                      sp.mechanism.link_names.index(sp.mechanism.frame),
-                      tuple(sorted({t for lw in low if lw is not None for t in lw.trig})),
-                      *_hosts(sp), bool(np.all(codes >= 0)))
+                      sp.mechanism.link_names.index(sp.mechanism.frame), trig,
+                      *_hosts(sp), bool(np.all(codes >= 0)), rows)
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
@@ -226,7 +230,7 @@ _SCRATCH = threading.local()
 
 def _scratch(name: str, shape: tuple) -> np.ndarray:
     """A work array of ``shape`` (contents undefined) reused by this thread's later calls."""
-    n = int(np.prod(shape))
+    n = math.prod(shape)                 # (np.prod costs ten times as much on a tuple)
     if n > SCRATCH_MAX:
         return np.empty(shape)
     buf = getattr(_SCRATCH, name, None)
@@ -260,6 +264,21 @@ def _steps(kp: KernelPlan, steps) -> np.ndarray:
 
 
 _ALL: dict = {}
+
+
+def run_motion(kp: KernelPlan, X: np.ndarray, T: np.ndarray, P: np.ndarray, fail: np.ndarray,
+               pend: np.ndarray, want_links: np.ndarray, want_points: np.ndarray) -> int:
+    """Every step at the inputs ``X`` (M, n_drivers, C-contiguous, writable) on the
+    reference branch in one compiled call (:func:`kin._kernel_nb.solve_motion`): the
+    poses into ``T`` (n_links, 3, M), the joints' and tracer points' positions into ``P``
+    (n_points, 2, M), each row's first failing status into ``fail`` (M,) int8 zeros,
+    1 into ``pend`` (n_links,) int8 zeros for the links whose angle rows were derived
+    from their cos and sin; only the derived angles of ``want_links`` and the points of
+    ``want_points`` (int8 masks) are computed, the others NaN.  Returns the number of
+    failed rows.  The lean route of :func:`kin.solve.solve` for a whole motion;
+    :func:`run_positions` serves every other caller."""
+    return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig_rows, kp.frame, X, T, fail, pend,
+                               want_links, kp.hosts, kp.offs, want_points, P)
 
 
 class KernelRun(NamedTuple):

@@ -813,34 +813,55 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     kp = kernel.kernel_plan(sp)
     if not kp.complete:
         return None
-    T = np.empty((m.n_links, 3, X.shape[0]))
-    T[kp.frame] = 0.0
-    kr = kernel.run_positions(kp, X, range(len(sp.steps)), {}, T, points=True, scratch=True)
-    if kr.failed:
+    M, nj = X.shape[0], m.n_joints
+    T = np.empty((m.n_links, 3, M))
+    P = np.empty((kp.hosts.size, 2, M))
+    fail = np.zeros(M, np.int8)
+    Xc = X if X.flags.c_contiguous and X.flags.writeable else np.array(X)   # (one compiled signature)
+    want_links, want_points = cached(sp, ("want", select), _wanted_rows, select)
+    if kernel.run_motion(kp, Xc, T, P, fail, np.zeros(m.n_links, np.int8), want_links, want_points):
         return None
-    P, nj = kr.points, m.n_joints
-    if select is not None:                   # as _finish and _points with outputs=
-        drop_links, drop_points = cached(sp, ("drop", select), _dropped, (select, tuple(kr.derived)))
-        if drop_links.size:
-            T[drop_links, 2] = np.nan
-        if drop_points.size:
-            P.transpose(1, 2, 0)[drop_points] = np.nan  # (the points' own rows: contiguous)
-    Z = T.transpose(2, 0, 1)
-    status = np.empty(X.shape[0], dtype=object)
-    status.fill("ok")
-    return KinematicState(m, X, P[:, :nj], Z[:, :, 2], status, point_names=tuple(p.name for p in m.points),
-                          point_positions=P[:, nj:] if m.points else None, poses=Z, codes=kr.fail)
+    for a in (T, P, fail):                   # fresh arrays: frozen in place, and given as views only
+        a.flags.writeable = False            # (the views cannot be made writable again)
+    Z, Q = T.transpose(2, 0, 1), P.transpose(2, 0, 1)
+    return KinematicState.frozen_from(mechanism=m, inputs=X, positions=Q[:, :nj], angles=Z[:, :, 2],
+                                      status=_all_ok(M), point_names=tuple(p.name for p in m.points),
+                                      point_positions=Q[:, nj:] if m.points else None, poses=Z, codes=fail[:])
 
 
-def _dropped(sp: SolvePlan, arg) -> tuple[np.ndarray, np.ndarray]:
-    """The links whose derived angle and the joints and tracer points (their indices
-    among the kernel's points) that ``outputs=`` leaves NaN: ``arg`` = (selection,
-    derived links)."""
-    (joints, points, links), derived = arg
-    nj = sp.mechanism.n_joints
-    return (np.array([k for k in derived if k not in links], np.intp),
-            np.array([i for i in range(nj) if i not in joints] +
-                     [nj + i for i in range(len(sp.mechanism.points)) if i not in points], np.intp))
+def _all_ok(M: int) -> np.ndarray:
+    """A read-only (M,) status array of ``"ok"``, shared by the states of M rows (read
+    only all the way down: no view of it can be made writable)."""
+    hit = _ALL_OK.get(M)
+    if hit is None:
+        base = np.empty(M, dtype=object)
+        base.fill("ok")
+        base.flags.writeable = False     # (an array that owns its data could be made writable again)
+        hit = base.view()
+        if M <= 1 << 16:
+            _ALL_OK[M] = hit
+    return hit
+
+
+_ALL_OK: dict = {}
+
+
+def _wanted_rows(sp: SolvePlan, select) -> tuple[np.ndarray, np.ndarray]:
+    """The int8 masks of the links whose derived angle and of the joints and tracer
+    points (the kernel's points: joints, then tracer points) that ``outputs=`` asks for
+    (``select``: the selection's indices, None: everything); the others are left NaN,
+    as :func:`_finish` leaves them."""
+    m = sp.mechanism
+    nj, n = m.n_joints, m.n_joints + len(m.points)
+    if select is None:
+        links, points = np.ones(m.n_links, np.int8), np.ones(n, np.int8)
+    else:
+        joints, pts, chosen = select
+        links, points = np.zeros(m.n_links, np.int8), np.zeros(n, np.int8)
+        links[list(chosen)] = 1
+        points[[*joints, *(nj + i for i in pts)]] = 1
+    links.flags.writeable = points.flags.writeable = False
+    return links, points
 
 
 def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:

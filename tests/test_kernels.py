@@ -236,3 +236,27 @@ def test_by_default_a_loaded_kernel_changes_no_bit():
         compiled = solve(m, x)
     assert np.array_equal(default.positions, numpy_path.positions, equal_nan=True)
     np.testing.assert_allclose(compiled.positions, numpy_path.positions, rtol=0, atol=1e-12 * plan_of(m).size)
+
+
+def test_the_compiled_routes_state_is_frozen_all_the_way_down():
+    """The compiled route builds its state with ``KinematicState.frozen_from`` (arrays
+    frozen in place, a shared read-only "ok" status): every array is read-only, none can
+    be made writable again, and a missing field is refused."""
+    from multiloop.kin.state import KinematicState
+    m = load_named("four_bar")
+    x = np.linspace(0.0, 2 * np.pi, 360, endpoint=False)
+    with kernel.using("on"):
+        solve(m, x)
+        a, b = solve(m, x), solve(m, x, outputs=["B"])
+    assert a.status is b.status                              # shared, so it must stay read-only
+    for st in (a, b):
+        for name, v in vars(st).items():
+            if isinstance(v, np.ndarray):
+                assert not v.flags.writeable, name
+                if name == "inputs":         # a view of the caller's own array, as on every route
+                    continue
+                with pytest.raises(ValueError):
+                    v.flags.writeable = True
+    assert np.isnan(b.positions[:, m.joint_names.index("A")]).all() and np.isfinite(b.positions[:, 2]).all()
+    with pytest.raises(TypeError, match="expected the fields"):
+        KinematicState.frozen_from(mechanism=m, inputs=x[:, None])
