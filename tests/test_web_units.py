@@ -8,12 +8,17 @@ import html
 import math
 import re
 
+import numpy as np
 import pytest
 
 pytest.importorskip("bokeh")
 
 from multiloop.topo.errors import InputError  # noqa: E402
 from multiloop.web.units import Units  # noqa: E402
+
+
+#: a number and its unit in a verdict line (°, rad, m, mm or in)
+QUANTITY = r"([-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)(°| rad| mm| m| in)(?!\w)"
 
 
 def test_units_are_frozen_hashable_and_checked():
@@ -57,6 +62,14 @@ def test_units_reach_the_edit_row_readout_and_check_table():
         assert wb.view.ticks.args == {"scale": 1000.0} and wb.view.fig.xaxis[0].axis_label == "x (mm)"
         table = html.unescape(re.sub(r"<[^>]+>", " ", wb.check.table.text))
         assert "O2 (rad)" in table and "flagged below 0.6981 rad" in table
+        # the verdict's lines: the document's (m, deg) with every angle in rad
+        lines = [html.unescape(v) for v in re.findall(r"<li>(.*?)</li>", wb.check.verdict.text)]
+        assert len(lines) == len(wb.check_doc["verdict"]) == 1
+        for mine, si in zip(lines, wb.check_doc["verdict"]):
+            assert re.sub(QUANTITY, "#", mine) == re.sub(QUANTITY, "#", si)       # the words are the same
+            got, want = ([(float(v), u) for v, u in re.findall(QUANTITY, t)] for t in (mine, si))
+            assert [u for _, u in got] == [" rad"] * len(want) and {u for _, u in want} == {"°"}
+            np.testing.assert_allclose([v for v, _ in got], [math.radians(v) for v, _ in want], atol=5e-4)
         wb.editor.typed("B", ("120", "80"))
         assert wb.mechanism.joint("B").at == (0.12, 0.08)
         wb.editor.typed("B", ("12o", "80"))

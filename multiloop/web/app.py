@@ -63,7 +63,7 @@ def load_choice(files: dict, name: str):
 #: its check documents per threshold; the events of the first mechanism's warm-up
 _SCENES: dict[str, tuple] = {}
 _SWEEPS: dict[str, tuple] = {}
-_CHECKS: dict[tuple[str, float], dict] = {}
+_CHECKS: dict[tuple[str, float], tuple] = {}      # (its JSON document, the CheckReport)
 _WARMING: dict = {}
 
 
@@ -91,7 +91,8 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 
 
 def _motion_and_check(job, m, threshold, key=None):
-    """Worker: the sweeps of every driver, then the check (its JSON document); both
+    """Worker: the sweeps of every driver, then the check (its JSON document; the
+    report itself in ``job.report``, for its verdict in the page's units); both
     stop at the next solve once the job is cancelled.  The first mechanism's warm-up
     computes the same: its results are awaited, not computed twice."""
     warming = _WARMING.get(key)
@@ -101,11 +102,13 @@ def _motion_and_check(job, m, threshold, key=None):
     job.report(1 / 2)
     job.notify()
     if key is not None and (key, threshold) in _CHECKS:
-        return _CHECKS[key, threshold]
+        doc, job.report = _CHECKS[key, threshold]
+        return doc
     from multiloop.kin.check import check
-    doc = check(m, min_transmission=threshold, cancel=job.poll).as_dict()
+    job.report = check(m, min_transmission=threshold, cancel=job.poll)
+    doc = job.report.as_dict()
     if key is not None:
-        _CHECKS[key, threshold] = doc
+        _CHECKS[key, threshold] = (doc, job.report)
     return doc
 
 
@@ -354,7 +357,8 @@ class Workbench:
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
             self.check_doc = job.result
-            self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
+            self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold,
+                            getattr(job, "report", None))
 
     def move_to(self, x) -> None:
         if x is not None and self.view.sweeps and np.isfinite(x):
