@@ -212,6 +212,7 @@ class Workbench:
         from .synthesis_view import SynthesisView
         self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_candidate, self.say,
                                        atlases)
+        self.units.add(self.synthesis)
         return self.synthesis.panel
 
     def _atlas_view(self, atlases):
