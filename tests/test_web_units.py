@@ -15,10 +15,7 @@ pytest.importorskip("bokeh")
 
 from multiloop.topo.errors import InputError  # noqa: E402
 from multiloop.web.units import Units  # noqa: E402
-
-
-#: a number and its unit in a verdict line (°, rad, m, mm or in)
-QUANTITY = r"([-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)(°| rad| mm| m| in)(?!\w)"
+from tests.common import QUANTITY  # noqa: E402
 
 
 def test_units_are_frozen_hashable_and_checked():
