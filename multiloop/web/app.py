@@ -425,14 +425,18 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     from bokeh.models import CustomJS
 
     from .atlas_design import CARD_CLICK_JS
+    from .glue import held
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         from .share import requested_design
         wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc),
                        shared=requested_design(doc))
-        doc.add_periodic_callback(wb.poll, 150)
-        wb.wake = lambda: doc.add_next_tick_callback(wb.poll)      # a job's result shown at once
+        def poll():                     # the results shown in one batch of changes
+            with held(doc):
+                wb.poll()
+        doc.add_periodic_callback(poll, 150)
+        wb.wake = lambda: doc.add_next_tick_callback(poll)      # a job's result shown at once
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()

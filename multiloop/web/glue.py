@@ -11,6 +11,7 @@ Panel as well spends ~0.6 s more before it listens and sends ~0.8 MB more script
 from __future__ import annotations
 
 import base64
+from contextlib import contextmanager
 
 from bokeh.models import Button, CustomJS, Div, FileInput, Slider, Toggle
 
@@ -19,7 +20,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .markup import Html, html, join
 
-__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload"]
+__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload", "held"]
 
 #: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
 #: from the end back to the start (one timer per slider, stopped with the toggle)
@@ -220,3 +221,20 @@ def on_upload(file_input, fn, fail) -> None:
             pending.append(doc.add_next_tick_callback(read))
     file_input.on_change("value", changed)
     file_input.on_change("filename", changed)
+
+
+@contextmanager
+def held(doc):
+    """The changes made inside sent at its end, two changes of one property as one
+    (``doc.hold("combine")``): Bokeh's server writes one message per change and the page
+    applies each on its own (an edit and its re-check made about 60; a source emptied
+    and filled again in one callback was sent twice).  ``doc`` None (a session without
+    a page, as the tests' Workbench): nothing held."""
+    if doc is None:
+        yield
+        return
+    doc.hold("combine")
+    try:
+        yield
+    finally:
+        doc.unhold()
