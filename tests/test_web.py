@@ -783,6 +783,8 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 5.0)
         page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
         page.get_by_role("button", name="Run").click()
+        # this run's: an earlier test's run left its status done and its candidates listed
+        page.wait_for_selector("#ml-synthesis-status[data-state=running]", state="attached", timeout=120000)
         page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=300000)
         row = "#ml-candidates[data-unit={u}] tr[data-candidate]"
         mm = [float(page.locator(row.format(u="mm")).first.get_attribute(a)) for a in ("data-error-max", "data-error-rms")]
