@@ -2,6 +2,7 @@
 
 Run:  python benchmarks/bench_web.py [--runs N] [--quick] [--settle S] [--other MULTILOOP] [--mechanism NAME]
       python benchmarks/bench_web.py --edit-latency [--edits N] [--names NAME ...]
+      python benchmarks/bench_web.py --server [--edits N] [--names NAME ...]
 
 Each run starts ``multiloop serve`` on a free port, opens the address it prints (with
 its token) in Debian's chromium (driven by Playwright; its own browser download is not
@@ -24,6 +25,11 @@ each mouse move to the animation frame in which the drawing shows the joint move
 (*follow*, goal 50 ms), and the drop to the frame in which the re-solved drawing is in
 the readout (*drawing*) and to the frame in which the new check's report is in the page
 (*check*, goal 300 ms).  It prints the median and the maximum per mechanism.
+
+``--server`` measures the server's share of the same re-check without a browser: per
+mechanism, ``--edits`` edits in a session (the last joint moved by 1e-3 of the size),
+the edit's handler, the job (every driver's sweep, then the check) and the showing of
+its results, in ms (median and maximum).
 """
 from __future__ import annotations
 
@@ -209,6 +215,52 @@ def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None
         srv.stdout.close()
 
 
+def server_latency_of(name: str, edits: int) -> dict:
+    """``edits`` edits of catalogue mechanism ``name`` in a session without a browser (a
+    :class:`~multiloop.web.app.Workbench` in a Bokeh document, as a page's): its last
+    joint moved by ±1e-3 of the size, as a drag does; seconds of the edit's handler, of
+    the job (the sweeps, then the check) and of showing its results (the session's poll)."""
+    from bokeh.document import Document
+
+    from multiloop.web.app import Workbench
+    wb = Workbench(requested=name)
+    Document().add_root(wb.panel)
+
+    def settle():
+        while wb.job is not None:
+            wb.job.thread.join()
+            wb.poll()
+    try:
+        settle()
+        joint = wb.mechanism.joints[-1]
+        out = dict(handler=[], job=[], show=[])
+        for k in range(edits):
+            x, y = joint.at
+            t0 = time.perf_counter()
+            wb.editor.drag(joint.name, (x + (1e-3 if k % 2 == 0 else 0.0) * wb.mechanism.size, y))
+            t1 = time.perf_counter()
+            wb.job.thread.join()
+            t2 = time.perf_counter()
+            settle()
+            t3 = time.perf_counter()
+            for key, v in zip(out, (t1 - t0, t2 - t1, t3 - t2)):
+                out[key].append(1000 * v)
+        return out
+    finally:
+        wb.close()
+
+
+def server_latency(names, edits: int) -> None:
+    """Print the server's share of a re-check per mechanism (:func:`server_latency_of`)."""
+    print(f"{'mechanism':24s} handler (ms) median max | job: sweeps + check (ms) median max | "
+          "show (ms) median max | total median")
+    for name in names:
+        r = server_latency_of(name, edits)
+        total = [a + b + c for a, b, c in zip(r["handler"], r["job"], r["show"])]
+        print(f"{name:24s} {_stats(r['handler'])} | {_stats(r['job'])} | {_stats(r['show'])} | "
+              f"{sorted(total)[len(total) // 2]:7.1f}", flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=4, help="page loads per executable (default 4)")
@@ -222,7 +274,18 @@ def main(argv=None) -> int:
     ap.add_argument("--edits", type=int, default=3, help="drags per mechanism (--edit-latency; default 3)")
     ap.add_argument("--names", nargs="*", help="the catalogue mechanisms of --edit-latency (default: all)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one re-check")
+    ap.add_argument("--server", action="store_true",
+                    help="the server's share of each re-check (no browser): handler, job, show, per mechanism")
     args = ap.parse_args(argv)
+    if args.server:
+        import warnings
+
+        from multiloop.web.app import catalogue_names
+        warnings.simplefilter("ignore")
+        print(f"python {sys.version.split()[0]}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+        server_latency(args.names or catalogue_names(), args.edits)
+        print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+        return 0
     runs = 2 if args.quick else args.runs
     try:
         from playwright.sync_api import sync_playwright

@@ -184,3 +184,8 @@ def stop(proc) -> None:
     proc.wait(timeout=20)
     proc.stdout.close()
     proc.err.close()
+
+
+#: a number and its unit in a verdict line (°, rad, m, mm or in): the page's verdict
+#: in other units has the words of ``check --json``'s and these numbers scaled
+QUANTITY = r"([-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)(°| rad| mm| m| in)(?!\w)"

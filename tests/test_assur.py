@@ -372,3 +372,22 @@ def test_documented_outputs_match_the_commands(capsys):
             assert shown == printed[:len(shown)], f"{doc.name}: multiloop {cmd}"
             seen += 1
     assert seen >= 3
+
+
+def test_a_mechanism_is_decomposed_once_and_an_equal_copy_alike(monkeypatch):
+    """decompose keeps the plans of the last mechanisms by identity: the same object gives
+    the same plan without a second decomposition; an equal copy is decomposed again, to an
+    equal formula."""
+    import dataclasses
+
+    from multiloop.inputs import load_mechanism
+    from multiloop.topo import assur
+    m = load_mechanism("stephenson_3")
+    calls = []
+    real = assur._decompose
+    monkeypatch.setattr(assur, "_decompose", lambda *a: calls.append(1) or real(*a))
+    first = assur.decompose(m)
+    assert assur.decompose(m) is first and len(calls) <= 1
+    copy = dataclasses.replace(m)
+    assert copy is not m and assur.decompose(copy).formula == first.formula
+    assert assur.decompose(copy, check_rigidity=False).formula == first.formula

@@ -409,3 +409,20 @@ def test_four_bar_loops_come_in_the_same_order_whatever_the_hash_seed():
     runs = {subprocess.run([sys.executable, "-c", code], env={**os.environ, "PYTHONHASHSEED": str(seed)},
                            capture_output=True, text=True, check=True).stdout for seed in range(6)}
     assert len(runs) == 1, runs
+
+
+def test_the_drawing_and_the_check_of_one_design_compute_its_motion_once(monkeypatch):
+    """driver_angles (the page's motion) then check, twice: each driver's motion is
+    solved once, and the reports are equal to a fresh check's."""
+    from multiloop.kin.check import core, driver_angles
+    from multiloop.kin.check.motion import driver_motion
+    m = load(CAT / "excavator.toml")
+    fresh = check(m).as_dict()
+    calls = []
+    monkeypatch.setattr(core, "driver_motion", lambda *a, **k: calls.append(a[2]) or driver_motion(*a, **k))
+    m2 = load(CAT / "excavator.toml")
+    angles = [driver_angles(m2, k) for k in range(len(m2.drivers))]
+    reports = [check(m2).as_dict(), check(m2).as_dict()]
+    assert sorted(calls) == list(range(len(m2.drivers)))
+    assert reports[0] == reports[1] == fresh
+    assert [sorted(a.limits) for a in angles] == [sorted(d["limits"]) for d in fresh["drivers"].values()]

@@ -33,7 +33,7 @@ else:
 
 from multiloop.inputs import load_mechanism  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
-from tests.common import start_serve, stop  # noqa: E402
+from tests.common import QUANTITY, start_serve, stop  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or ("/usr/bin/chromium" if os.environ.get("CI") else None)
 MULTILOOP = [sys.executable, "-m", "multiloop"]
@@ -744,6 +744,59 @@ def test_units_mm_show_a_slider_drivers_check_json_in_mm(page):
         assert page.locator("#ml-positions").text_content() == f"{m.drivers[0].joint} = {1000 * r['input']:.3f} mm"
     finally:
         page.locator(".ml-length-unit select").select_option("m")
+
+
+def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
+    """In mm and rad: the check's verdict lines are the library's (``check --json``'s)
+    with every angle in rad, the words the same; in the Synthesis tab the length bounds
+    are titled in mm, the timing's inputs in rad, and a run's candidate errors shown in
+    mm are those shown in m times 1000."""
+    from multiloop.kin.check import check
+    page.get_by_text("Mechanism", exact=True).first.click()
+    _pick(page, "four_bar")
+    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        page.locator(".ml-angle-unit select").select_option("rad")
+        page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=120000)
+        lines = page.locator("#ml-check-status + ul li").all_text_contents()
+        si = check(load_mechanism("four_bar")).verdict
+        assert len(lines) == len(si) >= 1
+        for mine, want in zip(lines, si):
+            assert re.sub(QUANTITY, "#", mine) == re.sub(QUANTITY, "#", want)
+            got, lib = ([(float(v), u) for v, u in re.findall(QUANTITY, t)] for t in (mine, want))
+            assert [u for _, u in got] == [" rad"] * len(lib) and {u for _, u in lib} == {"°"}
+            np.testing.assert_allclose([v for v, _ in got], [math.radians(v) for v, _ in lib], atol=5e-4)
+        page.get_by_text("Synthesis", exact=True).click()
+        page.locator(".ml-start select").select_option("four_bar", timeout=120000)
+        page.wait_for_function(TARGET_READY_JS, timeout=120000)
+        sync_api.expect(page.get_by_text("length ≥ (mm)")).to_be_attached(timeout=120000)
+        sync_api.expect(page.get_by_text("min transmission (rad)")).to_be_attached()
+        page.locator(".ml-timing select").select_option("prescribed")
+        sync_api.expect(page.get_by_text("last input (rad)")).to_be_attached(timeout=120000)
+        page.locator(".ml-timing select").select_option("free")
+        page.locator(".ml-budget input").fill("2")
+        page.locator(".ml-budget input").press("Enter")
+        page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
+        _clear_target(page)
+        n0 = page.evaluate(STROKES_JS)
+        _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 5.0)
+        page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
+        page.get_by_role("button", name="Run").click()
+        # this run's: an earlier test's run left its status done and its candidates listed
+        page.wait_for_selector("#ml-synthesis-status[data-state=running]", state="attached", timeout=120000)
+        page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=300000)
+        row = "#ml-candidates[data-unit={u}] tr[data-candidate]"
+        mm = [float(page.locator(row.format(u="mm")).first.get_attribute(a)) for a in ("data-error-max", "data-error-rms")]
+        page.locator(".ml-length-unit select").select_option("m")
+        page.wait_for_selector(row.format(u="m"), state="attached", timeout=120000)
+        m = [float(page.locator(row.format(u="m")).first.get_attribute(a)) for a in ("data-error-max", "data-error-rms")]
+        np.testing.assert_allclose(mm, 1000 * np.array(m), rtol=1e-12)
+        assert m[1] > 0
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
+        page.locator(".ml-angle-unit select").select_option("deg")
+        page.get_by_text("Mechanism", exact=True).first.click()
 
 
 def _address_text(page) -> str:

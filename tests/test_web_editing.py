@@ -183,3 +183,52 @@ def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
             assert r.end - r.start < 12 * size, (r.start, r.end)
     finally:
         w.close()
+
+
+def test_changes_held_in_a_callback_are_written_as_one_message():
+    """glue.held: the changes made inside reach each connection of the session as one
+    PATCH-DOC message holding all of them (Bokeh's session writes one per change), a
+    property changed twice once; without a session, Bokeh's own unhold."""
+    import asyncio
+    from types import SimpleNamespace
+
+    from bokeh.document import Document
+    from bokeh.models import ColumnDataSource, Div
+    from bokeh.protocol import Protocol
+    from bokeh.server.session import ServerSession
+
+    from multiloop.web.glue import held
+    doc = Document()
+    a, b = Div(text="a"), ColumnDataSource(dict(x=[1]))
+    doc.add_root(a)
+    doc.add_root(b)
+    written, single = [], []
+
+    class Connection:
+        protocol = Protocol()
+        _socket = SimpleNamespace(send_message=lambda msg: written.append(msg) or asyncio.sleep(0))
+
+        def send_patch_document(self, event):
+            single.append(event)
+            return asyncio.sleep(0)
+    session = ServerSession("s", doc)
+    conn = Connection()
+    session._subscribed_connections = {conn}
+    session._pending_writes = []
+    context = SimpleNamespace(_session=session)
+    doc._session_context = lambda: context     # as Bokeh's server sets it (a weak reference)
+    with held(doc):
+        a.text = "b"
+        a.text = "c"
+        b.data = dict(x=[2])
+    assert single == [] and len(written) == 1          # one message, none per change
+    events = written[0].content["events"]
+    assert [e["kind"] for e in events] == ["ModelChanged", "ColumnDataChanged"] and events[0]["new"] == "c"
+    async def written_out():                  # every write awaited, as the session does
+        for p in session._pending_writes:
+            await p
+    asyncio.run(written_out())
+    session._pending_writes = None            # no callback running: Bokeh's unhold
+    with pytest.raises(RuntimeError):        # (its session refuses a change outside a callback)
+        with held(doc):
+            a.text = "d"

@@ -8,12 +8,14 @@ import html
 import math
 import re
 
+import numpy as np
 import pytest
 
 pytest.importorskip("bokeh")
 
 from multiloop.topo.errors import InputError  # noqa: E402
 from multiloop.web.units import Units  # noqa: E402
+from tests.common import QUANTITY  # noqa: E402
 
 
 def test_units_are_frozen_hashable_and_checked():
@@ -57,6 +59,14 @@ def test_units_reach_the_edit_row_readout_and_check_table():
         assert wb.view.ticks.args == {"scale": 1000.0} and wb.view.fig.xaxis[0].axis_label == "x (mm)"
         table = html.unescape(re.sub(r"<[^>]+>", " ", wb.check.table.text))
         assert "O2 (rad)" in table and "flagged below 0.6981 rad" in table
+        # the verdict's lines: the document's (m, deg) with every angle in rad
+        lines = [html.unescape(v) for v in re.findall(r"<li>(.*?)</li>", wb.check.verdict.text)]
+        assert len(lines) == len(wb.check_doc["verdict"]) == 1
+        for mine, si in zip(lines, wb.check_doc["verdict"]):
+            assert re.sub(QUANTITY, "#", mine) == re.sub(QUANTITY, "#", si)       # the words are the same
+            got, want = ([(float(v), u) for v, u in re.findall(QUANTITY, t)] for t in (mine, si))
+            assert [u for _, u in got] == [" rad"] * len(want) and {u for _, u in want} == {"°"}
+            np.testing.assert_allclose([v for v, _ in got], [math.radians(v) for v, _ in want], atol=5e-4)
         wb.editor.typed("B", ("120", "80"))
         assert wb.mechanism.joint("B").at == (0.12, 0.08)
         wb.editor.typed("B", ("12o", "80"))
@@ -64,5 +74,48 @@ def test_units_reach_the_edit_row_readout_and_check_table():
             wb.message.text)
         wb.units.lengths.select.value = "km"                # forged: the menu refuses it
         assert wb.units.units.length == "mm" and "length unit menu: expected one of its entries" in wb.message.text
+    finally:
+        wb.close()
+
+
+def test_units_reach_the_synthesis_tab_its_errors_bounds_and_timing():
+    """In mm and rad the Synthesis tab shows a candidate's errors in mm (its table's
+    numbers are the library's times 1000), reads the length bounds typed in mm and the
+    transmission threshold in rad, and the prescribed timing's inputs in rad; the values
+    typed before the switch are converted, the run's options stay in m and deg."""
+    from types import SimpleNamespace
+
+    from multiloop.web.app import Workbench
+    wb = Workbench(requested="four_bar")
+    try:
+        wb.tabs.active = 2                            # the tab is built when first shown
+        sv = wb.synthesis
+        sv.w["length_low"].value, sv.w["length_high"].value = "0.02", "0.5"
+        sv.w["min_transmission"].value = "30"
+        wb.units.lengths.select.value = "mm"          # as the page's menus set them
+        wb.units.angles.select.value = "rad"
+        assert (sv.w["length_low"].title, sv.w["length_low"].value) == ("length ≥ (mm)", "20")
+        assert sv.w["length_high"].value == "500" and sv.w["min_transmission"].title == "min transmission (rad)"
+        assert float(sv.w["min_transmission"].value) == pytest.approx(math.radians(30), rel=1e-12)
+        opts = sv._options()
+        assert opts["length_bounds"] == pytest.approx((0.02, 0.5), rel=1e-12)
+        assert opts["min_transmission"] == pytest.approx(30.0, rel=1e-12)
+        assert sv.fig.xaxis[0].axis_label == "x (mm)" and sv.ticks.args == {"scale": 1000.0}
+        d = sv.drawing
+        assert (d.first.title, d.last.title) == ("first input (rad)", "last input (rad)")
+        assert d.last.value == pytest.approx(2 * math.pi, rel=1e-12)
+        d.history = d.history + (dataclasses.replace(d.state, points=np.zeros((3, 2))),)
+        d.timing.select.value = "prescribed"
+        np.testing.assert_allclose(d.target()[:, 2], [0.0, 180.0, 360.0], rtol=1e-12)   # deg, as synthesise
+        m = wb.mechanism
+        sv.results = [SimpleNamespace(mechanism=m, error_max=0.00123, error_rms=0.000456, seed=0, stopped="",
+                                  achieved=np.zeros((2, 2)))]
+        sv._list()
+        row = re.search(r'data-error-max="([^"]+)" data-error-rms="([^"]+)"', sv.table.text)
+        assert [float(v) for v in row.groups()] == pytest.approx([1.23, 0.456], rel=1e-12)
+        assert 'data-unit="mm"' in sv.table.text and "error max (mm)" in sv.table.text
+        wb.units.lengths.select.value = "in"
+        row = re.search(r'data-error-max="([^"]+)"', sv.table.text)
+        assert float(row.group(1)) == pytest.approx(0.00123 / 0.0254, rel=1e-12)
     finally:
         wb.close()

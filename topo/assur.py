@@ -420,9 +420,28 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
 
     Notes
     -----
-    Matching is Hopcroft–Karp, O(E √V) on the scalar incidence; SCCs are linear.
+    Matching is Hopcroft–Karp, O(E √V) on the scalar incidence; SCCs are linear.  The
+    plans of the last :data:`_KEPT` mechanisms are kept, by identity (a mechanism and
+    its plan are frozen, and the rigidity test's generic geometry is seeded): a page
+    that draws, solves and checks one design decomposes it once.
     """
-    m = mechanism
+    hit = _DECOMPOSED.get((id(mechanism), check_rigidity))
+    if hit is not None and hit[0] is mechanism:
+        return hit[1]
+    plan = _decompose(mechanism, check_rigidity)
+    if len(_DECOMPOSED) >= _KEPT:
+        del _DECOMPOSED[next(iter(_DECOMPOSED))]
+    _DECOMPOSED[id(mechanism), check_rigidity] = (mechanism, plan)   # holds it: its id stays unique
+    return plan
+
+
+#: the plans of the last mechanisms decomposed: (id, check_rigidity) -> (mechanism, plan)
+_DECOMPOSED: dict = {}
+_KEPT = 16
+
+
+def _decompose(m: Mechanism, check_rigidity: bool) -> AssurPlan:
+    """:func:`decompose`'s work (its cache aside)."""
     if m.frame is None:
         raise DecompositionError(explain("mechanism", expected="a frame link (frame = true)",
                                          got="a bare chain", hint="mark the ground link with frame = true"))

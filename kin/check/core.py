@@ -10,9 +10,11 @@ four-bar loop, the instant centres at one position and a verdict.
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
+from multiloop.kin.memo import cached
 from multiloop.kin.solve import compile_plan, solve
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, ParameterError, explain
@@ -120,6 +122,41 @@ def _motion(m, ap, plan, k, cancel=None):
     return groups, D, driver_motion(m, plan, k, tuple(g.kind for g in ap.groups), D if groups else None, cancel)
 
 
+def check_plan(m: Mechanism):
+    """The plan :func:`check` and :func:`driver_angles` solve ``m`` with: compiled once
+    per mechanism (by identity, for the last :data:`_PLANS_KEPT`), its own (not
+    :func:`~kin.solve.plan_of`'s, so that other solves of ``m`` leave its memo as the
+    check alone makes it).  The motion and the angle extremes of each driver are kept
+    beside it (:func:`_kept_motion`, :func:`_kept_angles`): a page that draws the
+    motion (``driver_angles``) and then checks the same design computes them once."""
+    hit = _PLANS.get(id(m))
+    if hit is not None and hit[0] is m:
+        return hit[1]
+    plan = compile_plan(m, decompose(m))
+    if len(_PLANS) >= _PLANS_KEPT:
+        del _PLANS[next(iter(_PLANS))]
+    _PLANS[id(m)] = (m, plan)           # holds the mechanism: its id stays unique
+    return plan
+
+
+#: the check's compiled plans of the last mechanisms checked, by identity (Mechanism is frozen)
+_PLANS: dict = {}
+_PLANS_KEPT = 8
+
+
+def _kept_motion(m, plan, k, cancel=None):
+    """:func:`_motion` of driver ``k`` on ``plan`` (:func:`check_plan`), computed once
+    per plan; the motion returned polls ``cancel`` (not the first caller's)."""
+    groups, D, mo = cached(plan, ("motion", k), lambda p, _: _motion(m, p.assur, p, k, cancel))
+    segs = tuple(replace(s, side=replace(s.side, cancel=cancel)) for s in mo.segments)
+    return groups, D, replace(mo, segments=segs)
+
+
+def _kept_angles(plan, k, mo, specs) -> tuple[AngleResult, ...]:
+    """:func:`_angles` of driver ``k``'s motion ``mo`` on ``plan``, computed once per plan."""
+    return cached(plan, ("angles", k), lambda p, _: _angles(mo, specs))
+
+
 def _angles(mo, specs) -> tuple[AngleResult, ...]:
     """Exact extremes of every monitored angle over the motion ``mo``, read on both sides
     of the certified walk's crossings (:func:`~kin.check.events.extremes`), with the
@@ -134,7 +171,7 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = m.is_rotary(k)
-    groups, D, mo = _motion(m, ap, plan, k, cancel)
+    groups, D, mo = _kept_motion(m, plan, k, cancel)
     driver_link = dj.links[1] if dj.links[0] == m.frame else (dj.links[0] if m.frame in dj.links else None)
     ev = mo.events
     limit_groups = []
@@ -159,7 +196,7 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
     else:
         bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
     dead = found[len(groups):] or [[] for _ in ww]
-    angles = _angles(mo, specs)
+    angles = _kept_angles(plan, k, mo, specs)
     out = _output(m, w, output, driver_link)
     if output is None and out is not None:
         # the default output must move with this driver: the last watched link that does
@@ -275,9 +312,10 @@ def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
     if not 0 <= k < len(m.drivers):
         raise InputError(explain("driver index", expected=f"0…{len(m.drivers) - 1}" if m.drivers
                                  else "a mechanism with a driver", got=repr(k)))
-    ap = decompose(m)
-    _, _, mo = _motion(m, ap, compile_plan(m, ap), k)
-    return DriverAngles(m.drivers[k].joint, mo.rotary, mo.full_rotation, mo.limits, _angles(mo, angle_specs(ap)))
+    plan = check_plan(m)
+    _, _, mo = _kept_motion(m, plan, k)
+    return DriverAngles(m.drivers[k].joint, mo.rotary, mo.full_rotation, mo.limits,
+                        _kept_angles(plan, k, mo, angle_specs(plan.assur)))
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
@@ -319,8 +357,8 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     if not 0.0 <= float(min_transmission) <= 90.0:
         raise ParameterError(explain("min_transmission", expected="degrees in [0, 90]",
                                      got=repr(min_transmission)), "min_transmission")
-    ap = decompose(m)
-    plan = compile_plan(m, ap)
+    plan = check_plan(m)
+    ap = plan.assur
     specs = angle_specs(ap)
     w = watched(m)
     positions = positions or {}

@@ -63,7 +63,7 @@ def load_choice(files: dict, name: str):
 #: its check documents per threshold; the events of the first mechanism's warm-up
 _SCENES: dict[str, tuple] = {}
 _SWEEPS: dict[str, tuple] = {}
-_CHECKS: dict[tuple[str, float], dict] = {}
+_CHECKS: dict[tuple[str, float], tuple] = {}      # (its JSON document, the CheckReport)
 _WARMING: dict = {}
 
 
@@ -91,7 +91,8 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 
 
 def _motion_and_check(job, m, threshold, key=None):
-    """Worker: the sweeps of every driver, then the check (its JSON document); both
+    """Worker: the sweeps of every driver, then the check (its JSON document; the
+    report itself in ``job.report``, for its verdict in the page's units); both
     stop at the next solve once the job is cancelled.  The first mechanism's warm-up
     computes the same: its results are awaited, not computed twice."""
     warming = _WARMING.get(key)
@@ -101,11 +102,13 @@ def _motion_and_check(job, m, threshold, key=None):
     job.report(1 / 2)
     job.notify()
     if key is not None and (key, threshold) in _CHECKS:
-        return _CHECKS[key, threshold]
+        doc, job.report = _CHECKS[key, threshold]
+        return doc
     from multiloop.kin.check import check
-    doc = check(m, min_transmission=threshold, cancel=job.poll).as_dict()
+    job.report = check(m, min_transmission=threshold, cancel=job.poll)
+    doc = job.report.as_dict()
     if key is not None:
-        _CHECKS[key, threshold] = doc
+        _CHECKS[key, threshold] = (doc, job.report)
     return doc
 
 
@@ -209,6 +212,7 @@ class Workbench:
         from .synthesis_view import SynthesisView
         self.synthesis = SynthesisView(["(open mechanism)"] + choices, self._start, self.open_candidate, self.say,
                                        atlases)
+        self.units.add(self.synthesis)
         return self.synthesis.panel
 
     def _atlas_view(self, atlases):
@@ -354,7 +358,8 @@ class Workbench:
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
             self.check_doc = job.result
-            self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold)
+            self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold,
+                            getattr(job, "report", None))
 
     def move_to(self, x) -> None:
         if x is not None and self.view.sweeps and np.isfinite(x):
@@ -420,14 +425,18 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     from bokeh.models import CustomJS
 
     from .atlas_design import CARD_CLICK_JS
+    from .glue import held
 
     def page(doc):
         warm.wait(timeout=5.0)           # the warm-up is the quickest way to the first page
         from .share import requested_design
         wb = Workbench(files, atlases, threshold, later=True, requested=requested_mechanism(doc),
                        shared=requested_design(doc))
-        doc.add_periodic_callback(wb.poll, 150)
-        wb.wake = lambda: doc.add_next_tick_callback(wb.poll)      # a job's result shown at once
+        def poll():                     # the results shown in one batch of changes
+            with held(doc):
+                wb.poll()
+        doc.add_periodic_callback(poll, 150)
+        wb.wake = lambda: doc.add_next_tick_callback(poll)      # a job's result shown at once
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()

@@ -1,6 +1,8 @@
 """The design-check panel: verdict, events, transmission / pressure plot, the JSON.
 
-It shows :func:`multiloop.kin.check.check`'s report: the JSON is
+It shows :func:`multiloop.kin.check.check`'s report (its verdict's lines and the
+events in the page's units: :func:`~multiloop.kin.check.verdict.verdict` given the
+:class:`~.units.Units`): the JSON is
 ``CheckReport.as_dict()``, the document ``multiloop check --json`` prints, in the
 element ``#ml-check-json``.  Events are marked on the input axis of the angle plot and
 on the drawing; a click (tap) on the plot moves the mechanism to that input.
@@ -13,6 +15,8 @@ import numpy as np
 from bokeh.events import Tap
 from bokeh.models import Button, Column, ColumnDataSource, PlainText, Range1d, Row, Span
 from bokeh.plotting import figure
+
+from multiloop.kin.check.verdict import verdict
 
 from .glue import div
 from .markup import html, join
@@ -56,7 +60,7 @@ class CheckView:
     def __init__(self, move_to, cancel=None):
         self.move_to = move_to
         self.mark = None               # mark(events) on the drawing, once a report is shown
-        self.shown: tuple | None = None    # (doc, sweep, threshold) of the report shown
+        self.shown: tuple | None = None    # (doc, sweep, threshold, report) of the report shown
         self.units = Units()
         self.scale = 1.0               # display units of the plot's input axis per the sweep's
         self.curves = ColumnDataSource(dict(xs=[], ys=[], name=[], colour=[]))
@@ -66,6 +70,11 @@ class CheckView:
                           x_range=Range1d(0, 360),
                           x_axis_label="input", y_axis_label="angle", name="ml-angles")
         self.fig.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2, legend_field="name")
+        # the axis labels: plain text (a name between $$ would otherwise be read as TeX),
+        # one model each whose text changes (a new model per report made Bokeh collect
+        # every model of the document again: 0.14 s per re-check)
+        self.labels = PlainText(text="input"), PlainText(text="angle")
+        self.fig.xaxis.axis_label, self.fig.yaxis.axis_label = self.labels
         self.fig.scatter("x", 0, source=self.events, marker="inverted_triangle", size=10, color="#d62728")
         self.fig.add_layout(self.cursor)
         self.fig.on_event(Tap, lambda e: self.move_to(None if e.x is None else e.x / self.scale))
@@ -95,17 +104,20 @@ class CheckView:
         if self.shown is not None:
             self.show(*self.shown)
 
-    def show(self, doc: dict | None, sw: Sweep | None, threshold: float) -> list[tuple[float, str]]:
-        """Fill the panel from a check JSON document (None: nothing to check); returns the
+    def show(self, doc: dict | None, sw: Sweep | None, threshold: float, report=None) -> list[tuple[float, str]]:
+        """Fill the panel from a check JSON document (None: nothing to check) and its
+        ``report`` (the :class:`~multiloop.kin.check.report.CheckReport`: the verdict's
+        lines in the display units; without it, the document's in m and deg); returns the
         events of the current driver on its axis (also given to :attr:`mark`)."""
         self.doc = doc
-        self.shown = (doc, sw, threshold) if sw is not None else None
+        self.shown = (doc, sw, threshold, report) if sw is not None else None
         self.stop.disabled = True
         if doc is None:
             self.busy("no check: the mechanism has no drivers")
             return []
         ok = "ok" if doc["ok"] else "faults found"
-        items = join(html("<li>{v}</li>", v=v) for v in doc["verdict"]) or html("<li>no fault found</li>")
+        lines = doc["verdict"] if report is None else verdict(report, self.units)
+        items = join(html("<li>{v}</li>", v=v) for v in lines) or html("<li>no fault found</li>")
         self.verdict.text = html('<h3 id="ml-check-status" data-ok="{flag}">Verdict: {ok}</h3><ul>{items}</ul>',
                                  flag=str(doc["ok"]).lower(), ok=ok, items=items)
         self.json.text = html('<details><summary>check --json</summary><pre id="ml-check-json" '
@@ -132,9 +144,8 @@ class CheckView:
         u = self.units
         self.scale, sa = u.scale(sw.unit), u.scale("deg")
         self.events.data = dict(x=[x * self.scale for x, _ in ev], label=[lb for _, lb in ev])
-        # plain text: a name between $$ would otherwise be read as TeX
-        self.fig.xaxis.axis_label = PlainText(text=f"{sw.joint} ({u.label(sw.unit)})")
-        self.fig.yaxis.axis_label = PlainText(text=f"angle ({u.angle})")
+        self.labels[0].text = f"{sw.joint} ({u.label(sw.unit)})"
+        self.labels[1].text = f"angle ({u.angle})"
         lo, hi = u.shown(sw.x.min(), sw.unit), u.shown(sw.x.max(), sw.unit)
         self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         A = np.where(np.isfinite(sw.angles), sw.angles, np.nan) * sa

@@ -11,6 +11,7 @@ Panel as well spends ~0.6 s more before it listens and sends ~0.8 MB more script
 from __future__ import annotations
 
 import base64
+from contextlib import contextmanager
 
 from bokeh.models import Button, CustomJS, Div, FileInput, Slider, Toggle
 
@@ -19,7 +20,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .markup import Html, html, join
 
-__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload"]
+__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload", "held"]
 
 #: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
 #: from the end back to the start (one timer per slider, stopped with the toggle)
@@ -220,3 +221,49 @@ def on_upload(file_input, fn, fail) -> None:
             pending.append(doc.add_next_tick_callback(read))
     file_input.on_change("value", changed)
     file_input.on_change("filename", changed)
+
+
+@contextmanager
+def held(doc):
+    """The changes made inside sent at its end in one message, two changes of one
+    property as one (``doc.hold("combine")``).  Bokeh's server writes one message per
+    change, and the page applies each on its own, drawing a frame between two (an edit
+    and its re-check made about 60 messages, and the frames between them were most of
+    the time the page took to show the new drawing).  ``doc`` None, or a document
+    without a server session (the tests' Workbench): nothing held."""
+    if doc is None:
+        yield
+        return
+    doc.hold("combine")
+    try:
+        yield
+    finally:
+        _unhold_in_one_message(doc)
+
+
+async def _written() -> None:
+    """An awaitable already done: what a change held in a batch waits for."""
+
+
+def _unhold_in_one_message(doc) -> None:
+    """``doc.unhold()`` with the changes for each of the session's connections written
+    as one PATCH-DOC message (Bokeh's protocol takes a list of changes; its session
+    writes one per change).  Each change is dispatched as ``unhold`` does (the models'
+    Python callbacks, the echo to the page that made it suppressed); only the writing is
+    gathered.  Without a session whose callback is running, plain ``unhold``."""
+    session = getattr(getattr(doc, "session_context", None), "_session", None)
+    connections = list(getattr(session, "_subscribed_connections", None) or ())
+    if not connections or getattr(session, "_pending_writes", None) is None:
+        doc.unhold()
+        return
+    batches: dict = {c: [] for c in connections}
+    for c in connections:
+        c.send_patch_document = lambda event, c=c: batches[c].append(event) or _written()
+    try:
+        doc.unhold()
+    finally:
+        for c in connections:
+            del c.send_patch_document
+    for c, events in batches.items():
+        if events:
+            session._pending_writes.append(c._socket.send_message(c.protocol.create("PATCH-DOC", events)))

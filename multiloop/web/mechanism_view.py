@@ -22,7 +22,7 @@ from bokeh.models import (Column, ColumnDataSource, CustomJS, CustomJSTickFormat
                           Range1d, Row)
 from bokeh.plotting import figure
 
-from .glue import Player, div
+from .glue import Player, div, held
 from .markup import Html, html
 from .menus import Menu
 from .scene import Scene, Sweep
@@ -229,7 +229,8 @@ class MechanismView:
         scene = self.scene
         if len(moved) == 1 and self.on_drag is not None:
             i = moved[0]
-            self.on_drag(names[i], (got[1][i], got[2][i]))
+            with held(self.handles.document):      # the new design's changes in one batch
+                self.on_drag(names[i], (got[1][i], got[2][i]))
         else:
             self.say(explain("dragged handles", expected="one handle of the design moved",
                              got=f"{len(moved)} moved" if got is not None and got[0] == names else "other handles"))

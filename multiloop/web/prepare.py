@@ -10,7 +10,8 @@ writes its results pickled to its stdout, as they come:
 
 * ``("scene", (Scene, structure HTML))``: the drawing and the structure tab;
 * ``("sweeps", (Sweep, ...))``: the motion of every driver;
-* ``("check", dict)``: ``check(...).as_dict()``, the document of ``multiloop check --json``.
+* ``("check", (dict, CheckReport))``: ``check(...).as_dict()``, the document of
+  ``multiloop check --json``, and the report itself (its verdict in the page's units).
 
 The child writes nothing else, runs at a lower priority (the server's own start comes
 first when the cores are busy) and stops at its next solve once the server is gone.
@@ -79,7 +80,8 @@ def main(argv: list[str]) -> int:
     if m.drivers and m.has_geometry:
         send("sweeps", tuple(sweep_driver(m, k, cancel=cancel) for k in range(len(m.drivers))))
         from multiloop.kin.check import check      # after the first page's needs
-        send("check", check(m, min_transmission=threshold, cancel=cancel).as_dict())
+        rep = check(m, min_transmission=threshold, cancel=cancel)
+        send("check", (rep.as_dict(), rep))
     return 0
 
 

@@ -13,7 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from bokeh.models import Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, NumericInput, Row, TextInput
+from bokeh.models import (Button, Checkbox, CheckboxGroup, Column, ColumnDataSource, CustomJSTickFormatter, NumericInput,
+                          Row, TextInput)
 from bokeh.plotting import figure
 
 from multiloop.catalogue.dimensional.optimise import METHODS
@@ -22,8 +23,10 @@ from multiloop.topo.errors import InputError, LinkageError, explain
 from .glue import Download, Upload, div, progress_html
 from .jobs import Job
 from .markup import Html, html, join
+from .mechanism_view import TICKS_JS
 from .menus import Menu, refusal
 from .target_drawing import TargetDrawing
+from .units import Units
 
 #: what a target upload is, in the hint of its size refusal
 TARGET_UPLOAD = "upload a target table of x, y rows (a few hundred points are plenty)"
@@ -187,6 +190,7 @@ class SynthesisView:
         w["clear"].on_click(lambda: self._clear())
         w["open"].on_click(lambda: self._open())
         self.menus["pick"].on_choice(lambda i: self._draw_candidates())
+        self.units = Units()
         self.status = div(status_html("draw a target path or upload a CSV"))
         self.progress = div(progress_html(0.0))
         self.table = div("")
@@ -207,7 +211,31 @@ class SynthesisView:
         f.multi_line("xs", "ys", source=self.start_src, line_color="#bbbbbb", line_dash="dotted")
         f.scatter("x", "y", source=self.uploaded, size=7, color="black")
         f.multi_line("xs", "ys", source=self.curves, line_color="colour", line_width=2)
+        self.ticks = CustomJSTickFormatter(args=dict(scale=1.0), code=TICKS_JS)
+        f.xaxis.formatter = f.yaxis.formatter = self.ticks
+        f.xaxis.axis_label, f.yaxis.axis_label = "x (m)", "y (m)"
         return f
+
+    def use_units(self, units: Units) -> None:
+        """Show and read the panel's lengths and angles in ``units`` (the page's menus):
+        the candidates' errors, the target's axes, the length bounds and the transmission
+        threshold typed (the values typed are converted), the timing's first and last
+        input.  Targets, runs and files stay in m and deg."""
+        old, self.units = self.units, units
+        w = self.w
+        for k, unit, title in (("length_low", "m", "length ≥"), ("length_high", "m", "length ≤"),
+                               ("min_transmission", "deg", "min transmission")):
+            w[k].title = f"{title} ({units.label(unit)})"
+            try:
+                v = _float_or_none(w[k].value, title)
+            except InputError:
+                continue                     # left as typed: Run names it
+            if v is not None:
+                w[k].value = format(units.shown(old.typed(v, unit), unit), ".12g")
+        self.ticks.args = dict(scale=units.scale("m"))
+        self.fig.xaxis.axis_label, self.fig.yaxis.axis_label = f"x ({units.length})", f"y ({units.length})"
+        self.drawing.use_units(units)
+        self._table()
 
     def choose_start(self, name: str) -> None:
         """The server's choice of the start ``name`` (an entry of the start menu)."""
@@ -229,6 +257,8 @@ class SynthesisView:
             self.say(str(exc))
             return
         self.menus["point"].set([p.name for p in m.points])
+        if m.drivers:                       # the timing's inputs: the start's first driver's
+            self.drawing.use_units(self.units, "deg" if m.is_rotary(0) else "m")
         if len(m.drivers) == 1 and m.points:
             P = traced(m)
             self.start_src.data = dict(xs=[p[:, 0].tolist() for p in P], ys=[p[:, 1].tolist() for p in P])
@@ -260,15 +290,19 @@ class SynthesisView:
         raise InputError(explain("target path", expected="a drawn stroke or an uploaded CSV", got="none"))
 
     def _options(self) -> dict:
-        w = self.w
-        lo, hi = (_float_or_none(w["length_low"].value, "length ≥"), _float_or_none(w["length_high"].value, "length ≤"))
+        w, u = self.w, self.units
+
+        def typed(k, what, unit):           # a number typed in the page's units, or None
+            v = _float_or_none(w[k].value, what)
+            return None if v is None else u.typed(v, unit, what)
+        lo, hi = typed("length_low", "length ≥", "m"), typed("length_high", "length ≤", "m")
         if (lo is None) != (hi is None):
             raise InputError(explain("length bounds", expected="both LOW and HIGH, or neither", got="one of them"))
         return dict(point=self.menus["point"].value or None, shape_only=w["shape_only"].active,
                     method=self.menus["method"].value,
                     seed=w["seed"].value or 0, budget=w["budget"].value, tol=w["tol"].value,
                     full_rotation=w["full_rotation"].active,
-                    min_transmission=_float_or_none(w["min_transmission"].value, "min transmission"),
+                    min_transmission=typed("min_transmission", "min transmission", "deg"),
                     max_ratio=_float_or_none(w["max_ratio"].value, "max ratio"),
                     length_bounds=None if lo is None else (lo, hi))
 
@@ -344,7 +378,17 @@ class SynthesisView:
         self.status.text = status_html(f"{job.state}: {len(self.results)} candidate(s)", job.state)
 
     def _list(self) -> None:
+        """The candidates' table and menu (the best chosen), and their paths drawn."""
+        self._table()
+        best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms, default=-1)
+        self.menus["pick"].set([str(i) for i in range(1, len(self.results) + 1)], str(best + 1))
+        self._draw_candidates()
+
+    def _table(self) -> None:
+        """The candidates' table, their errors in the page's length unit (``data-error-max``
+        and ``data-error-rms``: the values shown, unrounded)."""
         from multiloop.topo.assur import decompose
+        u = self.units
         rows = []
         for i, r in enumerate(self.results, 1):
             m = r.mechanism
@@ -352,16 +396,15 @@ class SynthesisView:
                 formula = r.structure if isinstance(r, AtlasDesign) else decompose(m).formula
             except LinkageError as exc:
                 formula = str(exc)
-            rows.append(html('<tr data-candidate="{i}"><td>{i}</td><td>{emax:.3g}</td><td>{erms:.3g}</td>'
-                             "<td>{links}</td><td>{formula}</td><td>{seed}</td><td>{stopped}</td></tr>",
-                             i=i, emax=r.error_max, erms=r.error_rms, links=len(m.links), formula=formula,
-                             seed=r.seed, stopped=r.stopped))
+            rows.append(html('<tr data-candidate="{i}" data-error-max="{emax!r}" data-error-rms="{erms!r}"><td>{i}'
+                             "</td><td>{emax:.3g}</td><td>{erms:.3g}</td><td>{links}</td><td>{formula}</td>"
+                             "<td>{seed}</td><td>{stopped}</td></tr>",
+                             i=i, emax=u.shown(r.error_max, "m"), erms=u.shown(r.error_rms, "m"), links=len(m.links),
+                             formula=formula, seed=r.seed, stopped=r.stopped))
         self.table.text = "" if not rows else html(
-            '<table id="ml-candidates"><tr><th>#</th><th>error max</th><th>error RMS</th>'
-            "<th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}</table>", rows=join(rows))
-        best = min(range(len(self.results)), key=lambda i: self.results[i].error_rms, default=-1)
-        self.menus["pick"].set([str(i) for i in range(1, len(self.results) + 1)], str(best + 1))
-        self._draw_candidates()
+            '<table id="ml-candidates" data-unit="{unit}"><tr><th>#</th><th>error max ({unit})</th>'
+            "<th>error RMS ({unit})</th><th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}"
+            "</table>", unit=u.length, rows=join(rows))
 
     def _chosen(self):
         v = self.menus["pick"].value

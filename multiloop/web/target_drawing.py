@@ -11,7 +11,8 @@ The points are drawn, and the point-draw tool drags them one at a time; a dragge
 is part of the target until the strokes change.  **Undo** steps back one change (a
 stroke, a drag, a switch between open and closed).  With **prescribed** timing, point *k*
 gets the driver value ``first + (last − first)·k/(N − 1)`` (deg or m from the
-reference; a closed target ``…·k/N``): the third column of ``synthesise --path``.
+reference; a closed target ``…·k/N``): the third column of ``synthesise --path``.  The
+first and last input are typed in the page's units (:meth:`TargetDrawing.use_units`).
 
 Everything the page sends is data checked here: strokes that are not numbers, or
 points that are not the points shown with one of them moved, are the one-line message,
@@ -115,9 +116,11 @@ class TargetDrawing:
                           css_classes=["ml-target-shape"])
         self.timing = Menu("timing menu", say, TIMINGS, "free", title="timing", width=110,
                            css_classes=["ml-timing"])
-        self.first = NumericInput(title="first input", value=0.0, mode="float", width=90, visible=False,
+        from .units import Units
+        self.units, self.input_unit = Units(), "deg"     # the timing shown in units.label(input_unit)
+        self.first = NumericInput(title="first input (deg)", value=0.0, mode="float", width=90, visible=False,
                                   css_classes=["ml-timing-first"])
-        self.last = NumericInput(title="last input", value=360.0, mode="float", width=90, visible=False,
+        self.last = NumericInput(title="last input (deg)", value=360.0, mode="float", width=90, visible=False,
                                  css_classes=["ml-timing-last"])
         self.undo = Button(label="↶ Undo stroke", width=120, disabled=True, css_classes=["ml-target-undo"])
         self.shape.on_choice(lambda v: self._push(self.state.with_shape(v == "closed")))
@@ -143,9 +146,22 @@ class TargetDrawing:
         if not (np.isfinite(a) and np.isfinite(b)) or a == b:
             raise InputError(explain("prescribed timing", expected="two different finite inputs (first, last)",
                                      got=f"{self.first.value}, {self.last.value}"))
+        a, b = a / self.units.scale(self.input_unit), b / self.units.scale(self.input_unit)
         n = len(P)
         k = np.arange(n) / (n if self.state.closed else n - 1)
         return np.column_stack([P, a + (b - a) * k])
+
+    def use_units(self, units, input_unit: str | None = None) -> None:
+        """Show and read the first and last input in ``units`` (a :class:`~.units.Units`);
+        ``input_unit``: the start's driver's command-line unit (``"deg"`` or ``"m"``), if
+        it changed.  The values shown are converted: the timing stays the same."""
+        old = self.units.scale(self.input_unit)
+        self.units, self.input_unit = units, input_unit or self.input_unit
+        new = self.units.scale(self.input_unit)
+        for box, what in ((self.first, "first"), (self.last, "last")):
+            if box.value is not None and input_unit is None:
+                box.value = float(box.value) / old * new
+            box.title = f"{what} input ({units.label(self.input_unit)})"
 
     # ------------------------------------------------------------------ changes
     def clear(self) -> None:

@@ -1,8 +1,9 @@
 """The units the page shows and reads: mm, m or in for lengths, deg or rad for angles.
 
 Files, exports and the ``check --json`` document keep the command line's units (m and
-deg); only what the page shows (the edit row, the player's readout, the check's events,
-plot axes and status lines) and what is typed into it are converted, by one frozen
+deg); only what the page shows (the edit row, the player's readout, the check's verdict
+and events, plot axes and status lines, the Synthesis tab's errors, bounds and timing)
+and what is typed into it are converted, by one frozen
 :class:`Units` value.  A quantity is named by its command-line unit, ``"m"`` or
 ``"deg"``, as :attr:`multiloop.web.scene.Sweep.unit` names a driver's.
 
@@ -93,6 +94,12 @@ class UnitsBar:
         self.lengths.on_choice(lambda v: self._set())
         self.angles.on_choice(lambda v: self._set())
         self.widgets = (self.lengths.select, self.angles.select)
+
+    def add(self, view) -> None:
+        """A view made later (the Synthesis tab, on its first opening): it gets the
+        units chosen now and every new choice."""
+        self.views += (view,)
+        view.use_units(self.units)
 
     def _set(self) -> None:
         self.units = Units(self.lengths.value, self.angles.value)
