@@ -74,6 +74,7 @@ class Workspace:
     samples: np.ndarray = field(repr=False)
     arcs: tuple = ()        # (label, (K, 2) points) per boundary arc, labelled by what sets it
     exact: bool = False     # boundary and area from the box edges and singular curves
+    reason: str = ""        # why the boundary is the samples' outline (empty when exact)
 
     def arc_labels(self) -> list[str]:
         """The boundary arcs' labels, in order around the boundary, runs merged."""
@@ -91,6 +92,7 @@ class Workspace:
         return {"point": self.point, "x": list(self.x), "y": list(self.y),
                 "x_at": [self.user(v) for v in self.x_at], "y_at": [self.user(v) for v in self.y_at],
                 "boundary": self.boundary.tolist(), "area": self.area, "exact": self.exact,
+                "reason": self.reason,
                 "arcs": [{"set_by": lab, "from": pts[0].tolist(), "to": pts[-1].tolist(),
                           "n_points": len(pts)} for lab, pts in self.arcs]}
 
@@ -208,13 +210,14 @@ def _largest_loop(P: np.ndarray, edges: np.ndarray) -> list[int]:
 def _arc_label(m, arc, ends) -> str:
     """What sets a boundary arc: the drivers held at an end (their range, or an assembly
     limit), or a singular curve."""
-    if arc.kind == "singular":
-        return "singular curve (the Jacobian has rank one)"
     parts = []
     for k, end in arc.ends:
         why = ends[k][0 if end == "low" else 1] if ends is not None else None
         what = {"assembly": "an assembly limit", "range": "its range"}.get(why, why)
         parts.append(f"{m.drivers[k].joint} at its {end} end" + (f" ({what})" if what else ""))
+    if arc.kind == "singular":
+        return "singular curve (the Jacobian has rank one)" + (
+            " on the face where " + ", ".join(parts) if parts else "")
     return ", ".join(parts)
 
 
@@ -236,7 +239,7 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     if not good.any():
         raise ParameterError(explain("workspace", expected="positions that assemble", got="none in the box"),
                              "workspace")
-    env = _envelope(m, ip, box)
+    env, reason = _envelope(m, ip, box)
     Xg, Pg = X[good], P[good]
     if env is not None:                  # the box edges' Chebyshev samples: the corners exactly
         Xg, Pg = np.vstack([Xg, env.edge_inputs]), np.vstack([Pg, env.edge_points])
@@ -254,18 +257,23 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,
-                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None)
+                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None,
+                     reason)
 
 
 def _envelope(m, ip, box):
-    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two drivers whose
-    box assembles everywhere on the reference's modes, else None (the alpha shape)."""
-    if box.shape[0] != 2 or np.any(box[:, 1] <= box[:, 0]):
-        return None
+    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two or three
+    drivers whose box assembles everywhere on the reference's modes, with no face of
+    rank one throughout and (three drivers) no critical point inside: (envelope, "");
+    else (None, the reason), and the alpha shape is used."""
+    if box.shape[0] not in (2, 3):
+        return None, f"{box.shape[0]} driver(s): the exact boundary is built for two or three"
+    if np.any(box[:, 1] <= box[:, 0]):
+        return None, "a driver's usable range is a single value"
     try:
-        return envelope(m, ip, box)
-    except ValueError:
-        return None
+        return envelope(m, ip, box), ""
+    except ValueError as e:
+        return None, str(e)
 
 
 def _inside_limits(m, ip, box: np.ndarray) -> np.ndarray:
