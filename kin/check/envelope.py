@@ -455,46 +455,61 @@ def _chains(A, B):
     return out
 
 
-def _rank_defect(m, ip, S):
-    """Σ over the pairs of columns of ``∂p/∂s`` at driver values ``S`` (M, n) of the
-    squared sine of their angle: zero iff the Jacobian has rank below two (a column that
-    vanishes counts as parallel to every other); +inf where ``S`` does not assemble."""
+def _minors(m, ip, S):
+    """The 2 × 2 minors of ``∂p/∂s`` at driver values ``S`` (M, n), its columns scaled to
+    unit length, one per pair of drivers (M, n(n-1)/2): the sines of the angles between
+    the columns, all zero iff the Jacobian has rank below two (a column that vanishes
+    counts as parallel to every other); +inf where ``S`` does not assemble."""
     n = S.shape[1]
     J = np.stack([_solve_p(m, ip, S, np.eye(n)[k]) for k in range(n)], axis=2)      # (M, 2, n)
     U = J / np.maximum(np.linalg.norm(J, axis=1), 1e-300)[:, None, :]
-    minors = U[:, 0, :, None] * U[:, 1, None, :] - U[:, 1, :, None] * U[:, 0, None, :]
-    R = 0.5 * np.sum(minors ** 2, axis=(1, 2))
-    return np.where(np.isfinite(R), R, np.inf)
+    i, j = np.triu_indices(n, 1)
+    r = U[:, 0, i] * U[:, 1, j] - U[:, 1, i] * U[:, 0, j]
+    return np.where(np.isfinite(r).all(axis=1, keepdims=True), r, np.inf)
 
 
-def _critical_points(m, ip, box, R, S):
-    """Interior points of the box where ``∂p/∂s`` has rank below two, from the seed
-    grid's values ``R`` (:func:`_rank_defect`, shape ``(k,) * n``) at ``S``: every local
-    minimum of the grid (at most 16, the lowest) is followed by a zoom search (the
-    ``3^n`` window around the best point, moved to its best sample or halved, down to
-    1e-8 of each range); a point reached with ``R`` below 1e-12 (sines of 1e-6) at least
-    1e-6 of each range inside the box is critical.  Returns (K, n)."""
+def _critical_points(m, ip, box, r, S, k):
+    """Interior points of the box where ``∂p/∂s`` has rank below two, from the minors
+    ``r`` (:func:`_minors`) on the seed grid ``S`` (``k`` points per driver): from every
+    local minimum of ``R = Σ r²`` on the grid (at most 16, the lowest), Gauss-Newton
+    steps on ``r`` (least-squares steps, the zero set being a curve; forward differences,
+    the step shortened until ``R`` decreases), at most 40; a point reached with ``R``
+    below 1e-12 (sines of 1e-6) at least 1e-6 of each range inside the box is critical.
+    Returns (K, n)."""
     from scipy.ndimage import minimum_filter
 
     n = len(box)
     span = box[:, 1] - box[:, 0]
+    R = np.sum(r ** 2, axis=1).reshape((k,) * n)
     loc = (R == minimum_filter(R, size=3, mode="nearest")) & np.isfinite(R)
     idx = np.flatnonzero(loc.ravel())
     idx = idx[np.argsort(R.ravel()[idx])][:16]
-    x, best = S[idx], R.ravel()[idx]
-    offs = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=n)))
-    h = np.tile(span / (R.shape[0] - 1), (len(x), 1))
-    E = np.arange(len(x))
-    while len(x) and np.any((h > 1e-8 * span).any(axis=1) & (best >= 1e-14)):
-        cand = np.clip(x[:, None, :] + offs[None] * h[:, None, :], box[:, 0], box[:, 1])
-        v = _rank_defect(m, ip, cand.reshape(-1, n)).reshape(len(x), len(offs))
-        i = np.argmin(v, axis=1)
-        better = v[E, i] < best
-        x = np.where(better[:, None], cand[E, i], x)
-        best = np.where(better, v[E, i], best)
-        h = np.where(better[:, None], h, 0.5 * h)
+    x, rx = S[idx], r[idx]
+    steps = np.vstack([np.zeros(n), 1e-7 * np.diag(span)])
+    for _ in range(40):
+        best = np.sum(rx ** 2, axis=1)
+        live = best >= 1e-14
+        if not live.any():
+            break
+        xl = x[live]
+        rr = _minors(m, ip, (xl[:, None, :] + steps[None]).reshape(-1, n)).reshape(len(xl), n + 1, -1)
+        Jr = np.swapaxes((rr[:, 1:] - rr[:, :1]) / (1e-7 * span)[None, :, None], 1, 2)
+        d = np.stack([np.linalg.lstsq(a, -b, rcond=None)[0] if np.isfinite(a).all() else np.zeros(n)
+                      for a, b in zip(Jr, rr[:, 0])])
+        trial = np.clip(xl[:, None, :] + np.array([1.0, 0.25, 1 / 16])[None, :, None] * d[:, None, :],
+                        box[:, 0], box[:, 1])
+        rt = _minors(m, ip, trial.reshape(-1, n)).reshape(len(xl), 3, -1)
+        Rt = np.sum(rt ** 2, axis=2)
+        c = np.argmin(Rt, axis=1)
+        E = np.arange(len(xl))
+        ok = Rt[E, c] < best[live]
+        if not ok.any():
+            break
+        li = np.flatnonzero(live)[ok]
+        x[li], rx[li] = trial[E, c][ok], rt[E, c][ok]
+    R = np.sum(rx ** 2, axis=1)
     inner = np.all((x - box[:, 0] > 1e-6 * span) & (box[:, 1] - x > 1e-6 * span), axis=1)
-    return x[inner & (best < 1e-12)]
+    return x[inner & (R < 1e-12)]
 
 
 def _check_interior(m, ip, box, a, b, loops, diam):
@@ -510,7 +525,7 @@ def _check_interior(m, ip, box, a, b, loops, diam):
     k = _INNER
     t = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, k)))
     S = np.array(list(itertools.product(*[lo + (hi - lo) * t for lo, hi in box])))
-    crit = _critical_points(m, ip, box, _rank_defect(m, ip, S).reshape((k,) * len(box)), S)
+    crit = _critical_points(m, ip, box, _minors(m, ip, S), S, k)
     if len(crit):
         at = ", ".join(f"{d.joint} = {v:.6g}" for d, v in zip(m.drivers, crit[0]))
         raise ValueError(f"the Jacobian has rank one inside the box (at {at}): a critical "
