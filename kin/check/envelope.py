@@ -5,9 +5,15 @@ assembling on the reference's modes) has an image ``p(B)`` whose boundary lies o
 images of the box's faces and of the *singular curves*, where the Jacobian ``∂p/∂s``
 loses rank (the fold curves of the planar map; Whitney 1955, "On singularities of
 mappings of Euclidean spaces. I. Mappings of the plane into the plane", Ann. Math. 62(3)
-374-410).  For ``n >= 3`` the fibre of a regular value is a curve that leaves the box,
-so ``p(B)`` is the union of the images of the box's two-dimensional faces; each face is
-handled as a two-driver box.
+374-410).  For ``n = 3`` a boundary point of ``p(B)`` has its preimages on the box's
+faces or where ``∂p/∂s`` (2 × 3) has rank one inside the box (elsewhere ``p`` is a
+submersion, an open map); that critical set is generically a curve whose image can bound
+the workspace (an arm stretched straight reaches farther than any face), so it is
+searched for and, if found, the construction refuses.  Without it, ``p(B)`` is the union
+of the images of the box's two-dimensional faces (each handled as a two-driver box) and
+of any hole of that union that closed fibres inside the box fill, which an interior grid
+checks.  Four drivers or more are refused (their three-dimensional faces would need the
+same search).
 
 On a face (drivers ``i``, ``j``) the determinant ``D = det ∂p/∂(s_i, s_j)`` is sampled on
 a Chebyshev grid (the seed only); every grid edge where ``D`` changes sign is *bracketed*
@@ -547,7 +553,7 @@ def _check_interior(m, ip, box, a, b, loops, diam):
 
 def envelope(m, ip: int, box) -> Envelope:
     """The exact boundary and area of tracer point ``ip``'s workspace over ``box``
-    ((low, high) per driver, rad or m from the reference; at least two drivers).
+    ((low, high) per driver, rad or m from the reference; two or three drivers).
 
     Returns
     -------
@@ -560,7 +566,10 @@ def envelope(m, ip: int, box) -> Envelope:
     ------
     ValueError
         If a position of the box does not assemble on the reference's modes (the map
-        is then not defined on the whole box).
+        is then not defined on the whole box), a face has rank one throughout, or, for
+        three drivers, ``∂p/∂s`` has rank one inside the box or an interior position
+        maps outside the faces' images; for four drivers or more.  The message is the
+        reason.
 
     Notes
     -----

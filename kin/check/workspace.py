@@ -21,11 +21,13 @@ halves the window, down to 1e-10 of each range; all four extremes are polled in 
 per iteration.  Polling every direction of the window (not only the driver axes) keeps
 the search moving along a curved assembly limit, where a compass search stalls.
 
-With two drivers whose box assembles everywhere, the boundary and area are exact
-(:mod:`~kin.check.envelope`: the box's edges and the singular curves, each arc labelled
-by what sets it, the area by Green's theorem); a box end at a reach limit is first
-moved inside it by the fewest units in the last place that make its edge assemble.
-Otherwise the boundary is the outline of the samples' alpha shape (Edelsbrunner,
+With two or three drivers whose box assembles everywhere, the boundary and area are
+exact (:mod:`~kin.check.envelope`: the box's edges and the singular curves, of every
+two-dimensional face for three drivers, each arc labelled by what sets it, the area by
+Green's theorem), unless a face has rank one throughout or, for three drivers, the
+Jacobian has rank one inside the box (``Workspace.reason`` then says why); a box end at
+a reach limit is first moved inside it by the fewest units in the last place that make
+its edge assemble.  Otherwise the boundary is the outline of the samples' alpha shape (Edelsbrunner,
 Kirkpatrick & Seidel 1983, "On the shape of a set of points in the plane", IEEE Trans.
 Inf. Theory 29(4) 551-559): the triangles of their Delaunay triangulation whose longest
 edge is below ``alpha`` (6 × the median edge), the edges of one kept triangle only,
