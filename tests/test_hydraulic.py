@@ -116,7 +116,7 @@ def test_workspace_extremes_against_a_refined_brute_force_grid(name, point):
             assert abs(p[c] - lo_hi[j]) < 1e-12
     assert ws.area > 0 and len(ws.boundary) > 10
     d = rep.as_dict()["workspace"]
-    assert set(d) == {"point", "x", "y", "x_at", "y_at", "boundary", "area", "exact", "arcs"}
+    assert set(d) == {"point", "x", "y", "x_at", "y_at", "boundary", "area", "exact", "reason", "arcs"}
 
 
 def _zoom(m, box, x0, c, sgn, k=21, shrink=4.0):

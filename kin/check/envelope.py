@@ -5,9 +5,15 @@ assembling on the reference's modes) has an image ``p(B)`` whose boundary lies o
 images of the box's faces and of the *singular curves*, where the Jacobian ``∂p/∂s``
 loses rank (the fold curves of the planar map; Whitney 1955, "On singularities of
 mappings of Euclidean spaces. I. Mappings of the plane into the plane", Ann. Math. 62(3)
-374-410).  For ``n >= 3`` the fibre of a regular value is a curve that leaves the box,
-so ``p(B)`` is the union of the images of the box's two-dimensional faces; each face is
-handled as a two-driver box.
+374-410).  For ``n = 3`` a boundary point of ``p(B)`` has its preimages on the box's
+faces or where ``∂p/∂s`` (2 × 3) has rank one inside the box (elsewhere ``p`` is a
+submersion, an open map); that critical set is generically a curve whose image can bound
+the workspace (an arm stretched straight reaches farther than any face), so it is
+searched for and, if found, the construction refuses.  Without it, ``p(B)`` is the union
+of the images of the box's two-dimensional faces (each handled as a two-driver box) and
+of any hole of that union that closed fibres inside the box fill, which an interior grid
+checks.  Four drivers or more are refused (their three-dimensional faces would need the
+same search).
 
 On a face (drivers ``i``, ``j``) the determinant ``D = det ∂p/∂(s_i, s_j)`` is sampled on
 a Chebyshev grid (the seed only); every grid edge where ``D`` changes sign is *bracketed*
@@ -42,6 +48,8 @@ _SEED = 65          # seed grid per face (Chebyshev points per driver)
 _EDGE = 4097        # Chebyshev points per box edge
 _NUDGE = 1e-9       # D at a box edge is read this far (of the range) inside it
 _CHORDS = 4000      # a singular curve's chords are refined below the corners' spread / this
+_FLAT = 1e-8        # a face whose columns' median sine is below this has rank one throughout
+_INNER = 17         # three drivers: the interior's seed grid (Chebyshev points per driver)
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,8 +57,8 @@ class BoundaryArc:
     """A piece of the workspace boundary: what sets it and its (K, 2) polyline.
 
     ``kind`` is ``"edge"`` (``ends``: the drivers held at an end, as (driver index,
-    ``"low"`` or ``"high"``) pairs) or ``"singular"`` (the Jacobian has rank one; ``ends``
-    empty)."""
+    ``"low"`` or ``"high"``) pairs) or ``"singular"`` (the Jacobian of the face's two
+    drivers has rank one; ``ends``: the other drivers' ends, which fix the face)."""
 
     kind: str
     ends: tuple
@@ -89,8 +97,9 @@ class _Face:
     """A two-driver face of the box: ``(u, v)`` in [0, 1]² mapped to driver values at
     Chebyshev spacing, ``s = lo + (hi - lo)(1 - cos πu)/2``."""
 
-    def __init__(self, m, ip, box, i, j, fixed):
+    def __init__(self, m, ip, box, i, j, fixed, rest=()):
         self.m, self.ip, self.box, self.i, self.j, self.fixed = m, ip, box, i, j, fixed
+        self.rest = rest                # the other drivers' ends: ((driver, 0 or 1), ...)
 
     def drivers(self, UV):
         UV = np.atleast_2d(UV)
@@ -100,13 +109,17 @@ class _Face:
             S[:, k] = lo + (hi - lo) * 0.5 * (1.0 - np.cos(np.pi * UV[:, c]))
         return S
 
-    def det(self, UV):
-        """``D`` at ``UV``, read ``_NUDGE`` inside the box at its edges."""
+    def det(self, UV, normalised: bool = False):
+        """``D`` at ``UV``, read ``_NUDGE`` inside the box at its edges; ``normalised``:
+        divided by the columns' lengths (the sine of the angle between them)."""
         S = self.drivers(np.clip(UV, _NUDGE, 1.0 - _NUDGE))
         n = len(self.fixed)
         Ji = _solve_p(self.m, self.ip, S, np.eye(n)[self.i])
         Jj = _solve_p(self.m, self.ip, S, np.eye(n)[self.j])
-        return Ji[:, 0] * Jj[:, 1] - Ji[:, 1] * Jj[:, 0]
+        D = Ji[:, 0] * Jj[:, 1] - Ji[:, 1] * Jj[:, 0]
+        if normalised:
+            return D, np.abs(D) / np.maximum(np.hypot(*Ji.T) * np.hypot(*Jj.T), 1e-300)
+        return D
 
     def points(self, UV):
         return _solve_p(self.m, self.ip, self.drivers(UV))
@@ -282,7 +295,7 @@ def _faces(m, ip, box):
             rest = tuple(zip(others, ends))
             keys = [(i, tuple(sorted(rest + ((j, 0),)))), (j, tuple(sorted(rest + ((i, 1),)))),
                     (i, tuple(sorted(rest + ((j, 1),)))), (j, tuple(sorted(rest + ((i, 0),))))]
-            out.append((_Face(m, ip, box, i, j, fixed), keys))
+            out.append((_Face(m, ip, box, i, j, fixed, rest), keys))
     return out
 
 
@@ -314,7 +327,13 @@ def _sheets(m, ip, box):
     for face, keys in faces:
         if not np.isfinite(face.points(UV)).all():
             raise ValueError("the box does not assemble everywhere")
-        D = face.det(UV).reshape(_SEED, _SEED)
+        D, sine = face.det(UV, normalised=True)
+        if np.median(sine) < _FLAT:
+            # two drivers move the point along one line (they turn the same link): the
+            # face's image is a curve, rank one throughout, not a region bounded by folds
+            raise ValueError(f"the Jacobian has rank one throughout the face of "
+                             f"{m.drivers[face.i].joint} and {m.drivers[face.j].joint}")
+        D = D.reshape(_SEED, _SEED)
         segs, bx = _crossing_segments(face, t, D)
         for side, key in enumerate(keys):
             splits.setdefault(key, []).extend(bx[side])
@@ -343,7 +362,7 @@ def _sheets(m, ip, box):
                 P = face.points(loop)
                 flags = np.zeros(len(P), bool)
                 flags[[0, -1]] = True
-                arcs.append((("singular", None), P, flags))
+                arcs.append((("singular", face.rest), P, flags))
     S = np.concatenate([e[1] for e in edges.values()])
     P = np.concatenate([e[2] for e in edges.values()])
     return np.concatenate(A), np.concatenate(B), np.concatenate(W), arcs, (S, P)
@@ -442,9 +461,99 @@ def _chains(A, B):
     return out
 
 
+def _minors(m, ip, S):
+    """The 2 × 2 minors of ``∂p/∂s`` at driver values ``S`` (M, n), its columns scaled to
+    unit length, one per pair of drivers (M, n(n-1)/2): the sines of the angles between
+    the columns, all zero iff the Jacobian has rank below two (a column that vanishes
+    counts as parallel to every other); +inf where ``S`` does not assemble."""
+    n = S.shape[1]
+    J = np.stack([_solve_p(m, ip, S, np.eye(n)[k]) for k in range(n)], axis=2)      # (M, 2, n)
+    U = J / np.maximum(np.linalg.norm(J, axis=1), 1e-300)[:, None, :]
+    i, j = np.triu_indices(n, 1)
+    r = U[:, 0, i] * U[:, 1, j] - U[:, 1, i] * U[:, 0, j]
+    return np.where(np.isfinite(r).all(axis=1, keepdims=True), r, np.inf)
+
+
+def _critical_points(m, ip, box, r, S, k):
+    """Interior points of the box where ``∂p/∂s`` has rank below two, from the minors
+    ``r`` (:func:`_minors`) on the seed grid ``S`` (``k`` points per driver): from every
+    local minimum of ``R = Σ r²`` on the grid (at most 16, the lowest), Gauss-Newton
+    steps on ``r`` (least-squares steps, the zero set being a curve; forward differences,
+    the step shortened until ``R`` decreases), at most 40; a point reached with ``R``
+    below 1e-12 (sines of 1e-6) at least 1e-6 of each range inside the box is critical.
+    Returns (K, n)."""
+    from scipy.ndimage import minimum_filter
+
+    n = len(box)
+    span = box[:, 1] - box[:, 0]
+    R = np.sum(r ** 2, axis=1).reshape((k,) * n)
+    loc = (R == minimum_filter(R, size=3, mode="nearest")) & np.isfinite(R)
+    idx = np.flatnonzero(loc.ravel())
+    idx = idx[np.argsort(R.ravel()[idx])][:16]
+    x, rx = S[idx], r[idx]
+    steps = np.vstack([np.zeros(n), 1e-7 * np.diag(span)])
+    for _ in range(40):
+        best = np.sum(rx ** 2, axis=1)
+        live = best >= 1e-14
+        if not live.any():
+            break
+        xl = x[live]
+        rr = _minors(m, ip, (xl[:, None, :] + steps[None]).reshape(-1, n)).reshape(len(xl), n + 1, -1)
+        Jr = np.swapaxes((rr[:, 1:] - rr[:, :1]) / (1e-7 * span)[None, :, None], 1, 2)
+        d = np.stack([np.linalg.lstsq(a, -b, rcond=None)[0] if np.isfinite(a).all() else np.zeros(n)
+                      for a, b in zip(Jr, rr[:, 0])])
+        trial = np.clip(xl[:, None, :] + np.array([1.0, 0.25, 1 / 16])[None, :, None] * d[:, None, :],
+                        box[:, 0], box[:, 1])
+        rt = _minors(m, ip, trial.reshape(-1, n)).reshape(len(xl), 3, -1)
+        Rt = np.sum(rt ** 2, axis=2)
+        c = np.argmin(Rt, axis=1)
+        E = np.arange(len(xl))
+        ok = Rt[E, c] < best[live]
+        if not ok.any():
+            break
+        li = np.flatnonzero(live)[ok]
+        x[li], rx[li] = trial[E, c][ok], rt[E, c][ok]
+    R = np.sum(rx ** 2, axis=1)
+    inner = np.all((x - box[:, 0] > 1e-6 * span) & (box[:, 1] - x > 1e-6 * span), axis=1)
+    return x[inner & (R < 1e-12)]
+
+
+def _check_interior(m, ip, box, a, b, loops, diam):
+    """Three drivers: raise ``ValueError`` unless the boundary of the faces' images is
+    the workspace's.  A boundary point of ``p(B)`` has each preimage on a face of the
+    box or where ``∂p/∂s`` has rank below two (elsewhere ``p`` is a submersion, an
+    open map); with no such interior point, ``p(B)`` is the union of the faces' images
+    and of the bounded holes of that union that interior fibres fill (closed loops).
+    So: no interior critical point (:func:`_critical_points`) and no solved position of
+    an interior grid outside the boundary (``loops``: (polygon, signed area) with the
+    workspace on the left; ``a``→``b`` its segments) by more than 1e-7 of its diameter
+    ``diam``."""
+    k = _INNER
+    t = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, k)))
+    S = np.array(list(itertools.product(*[lo + (hi - lo) * t for lo, hi in box])))
+    crit = _critical_points(m, ip, box, _minors(m, ip, S), S, k)
+    if len(crit):
+        at = ", ".join(f"{d.joint} = {v:.6g}" for d, v in zip(m.drivers, crit[0]))
+        raise ValueError(f"the Jacobian has rank one inside the box (at {at}): a critical "
+                         "curve there may bound the workspace")
+    inner = np.all((S > box[:, 0]) & (S < box[:, 1]), axis=1)
+    P = _solve_p(m, ip, S[inner])
+    if not np.isfinite(P).all():
+        raise ValueError("the box does not assemble everywhere")
+    from matplotlib.path import Path
+
+    wind = sum(np.sign(area) * Path(q).contains_points(P) for q, area in loops)
+    out = np.flatnonzero(wind < 0.5)
+    d = b - a
+    for q in P[out]:
+        u = np.clip(np.sum((q - a) * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300), 0, 1)
+        if np.min(np.hypot(*(q - a - u[:, None] * d).T)) > 1e-7 * diam:
+            raise ValueError("a position inside the box lies outside its faces' images")
+
+
 def envelope(m, ip: int, box) -> Envelope:
     """The exact boundary and area of tracer point ``ip``'s workspace over ``box``
-    ((low, high) per driver, rad or m from the reference; at least two drivers).
+    ((low, high) per driver, rad or m from the reference; two or three drivers).
 
     Returns
     -------
@@ -457,7 +566,10 @@ def envelope(m, ip: int, box) -> Envelope:
     ------
     ValueError
         If a position of the box does not assemble on the reference's modes (the map
-        is then not defined on the whole box).
+        is then not defined on the whole box), a face has rank one throughout, or, for
+        three drivers, ``∂p/∂s`` has rank one inside the box or an interior position
+        maps outside the faces' images; for four drivers or more.  The message is the
+        reason.
 
     Notes
     -----
@@ -466,6 +578,9 @@ def envelope(m, ip: int, box) -> Envelope:
     so the area's error is that of the polylines' chords, O(h²) in the edge spacing h.
     """
     box = np.asarray(box, float)
+    if len(box) > 3:
+        raise ValueError("four drivers or more: the critical sets inside the box's "
+                         "three-dimensional faces are not searched")
     SA, SB, SW, arcs, (S, P) = _sheets(m, ip, box)
     A, B, arc, run = _pieces(arcs)
     allp = np.concatenate([A, B])
@@ -480,6 +595,8 @@ def envelope(m, ip: int, box) -> Envelope:
     loops = [np.array([a[c[0]]] + [b[k] for k in c]) for c in chains]
     shoelace = [0.5 * np.sum(q[:-1, 0] * q[1:, 1] - q[1:, 0] * q[:-1, 1]) for q in loops]
     best = int(np.argmax(shoelace)) if loops else None
+    if len(box) == 3:
+        _check_interior(m, ip, box, a, b, list(zip(loops, shoelace)), max(diam, 1e-300))
     outer = loops[best] if loops else np.empty((0, 2))
     barcs = []
     for c in chains:
@@ -493,5 +610,5 @@ def envelope(m, ip: int, box) -> Envelope:
 def _arc(label, pts) -> BoundaryArc:
     kind, key = label
     if kind == "singular":
-        return BoundaryArc("singular", (), pts)
+        return BoundaryArc("singular", tuple((int(d), ("low", "high")[e]) for d, e in key), pts)
     return BoundaryArc("edge", tuple((int(d), ("low", "high")[e]) for d, e in key[1]), pts)

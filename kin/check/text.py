@@ -53,7 +53,8 @@ def _workspace(ws) -> list[str]:
             f"  x from {ws.x[0]:.6g} m (at {at(ws.x_at[0])}) to {ws.x[1]:.6g} m (at {at(ws.x_at[1])})",
             f"  y from {ws.y[0]:.6g} m (at {at(ws.y_at[0])}) to {ws.y[1]:.6g} m (at {at(ws.y_at[1])})",
             f"  area {ws.area:.6g} m², boundary polygon of {len(ws.boundary)} vertices (--json)"
-            + ("" if ws.exact else " (the outline of the samples)")] + (
+            + ("" if ws.exact else " (the outline of the samples"
+               + (f": {ws.reason})" if ws.reason else ")"))] + (
             ["  boundary arcs, in order (each set by):"] + [f"    {lab}" for lab in ws.arc_labels()]
             if ws.exact else [])
 

@@ -21,11 +21,13 @@ halves the window, down to 1e-10 of each range; all four extremes are polled in 
 per iteration.  Polling every direction of the window (not only the driver axes) keeps
 the search moving along a curved assembly limit, where a compass search stalls.
 
-With two drivers whose box assembles everywhere, the boundary and area are exact
-(:mod:`~kin.check.envelope`: the box's edges and the singular curves, each arc labelled
-by what sets it, the area by Green's theorem); a box end at a reach limit is first
-moved inside it by the fewest units in the last place that make its edge assemble.
-Otherwise the boundary is the outline of the samples' alpha shape (Edelsbrunner,
+With two or three drivers whose box assembles everywhere, the boundary and area are
+exact (:mod:`~kin.check.envelope`: the box's edges and the singular curves, of every
+two-dimensional face for three drivers, each arc labelled by what sets it, the area by
+Green's theorem), unless a face has rank one throughout or, for three drivers, the
+Jacobian has rank one inside the box (``Workspace.reason`` then says why); a box end at
+a reach limit is first moved inside it by the fewest units in the last place that make
+its edge assemble.  Otherwise the boundary is the outline of the samples' alpha shape (Edelsbrunner,
 Kirkpatrick & Seidel 1983, "On the shape of a set of points in the plane", IEEE Trans.
 Inf. Theory 29(4) 551-559): the triangles of their Delaunay triangulation whose longest
 edge is below ``alpha`` (6 × the median edge), the edges of one kept triangle only,
@@ -74,6 +76,7 @@ class Workspace:
     samples: np.ndarray = field(repr=False)
     arcs: tuple = ()        # (label, (K, 2) points) per boundary arc, labelled by what sets it
     exact: bool = False     # boundary and area from the box edges and singular curves
+    reason: str = ""        # why the boundary is the samples' outline (empty when exact)
 
     def arc_labels(self) -> list[str]:
         """The boundary arcs' labels, in order around the boundary, runs merged."""
@@ -91,6 +94,7 @@ class Workspace:
         return {"point": self.point, "x": list(self.x), "y": list(self.y),
                 "x_at": [self.user(v) for v in self.x_at], "y_at": [self.user(v) for v in self.y_at],
                 "boundary": self.boundary.tolist(), "area": self.area, "exact": self.exact,
+                "reason": self.reason,
                 "arcs": [{"set_by": lab, "from": pts[0].tolist(), "to": pts[-1].tolist(),
                           "n_points": len(pts)} for lab, pts in self.arcs]}
 
@@ -208,13 +212,14 @@ def _largest_loop(P: np.ndarray, edges: np.ndarray) -> list[int]:
 def _arc_label(m, arc, ends) -> str:
     """What sets a boundary arc: the drivers held at an end (their range, or an assembly
     limit), or a singular curve."""
-    if arc.kind == "singular":
-        return "singular curve (the Jacobian has rank one)"
     parts = []
     for k, end in arc.ends:
         why = ends[k][0 if end == "low" else 1] if ends is not None else None
         what = {"assembly": "an assembly limit", "range": "its range"}.get(why, why)
         parts.append(f"{m.drivers[k].joint} at its {end} end" + (f" ({what})" if what else ""))
+    if arc.kind == "singular":
+        return "singular curve (the Jacobian has rank one)" + (
+            " on the face where " + ", ".join(parts) if parts else "")
     return ", ".join(parts)
 
 
@@ -236,7 +241,7 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     if not good.any():
         raise ParameterError(explain("workspace", expected="positions that assemble", got="none in the box"),
                              "workspace")
-    env = _envelope(m, ip, box)
+    env, reason = _envelope(m, ip, box)
     Xg, Pg = X[good], P[good]
     if env is not None:                  # the box edges' Chebyshev samples: the corners exactly
         Xg, Pg = np.vstack([Xg, env.edge_inputs]), np.vstack([Pg, env.edge_points])
@@ -254,18 +259,23 @@ def workspace(m, point: str, box, ends=None) -> Workspace:
     t = [tuple(float(v) for v in r) for r in xs]
     return Workspace(point, (float(vals[0]), float(vals[1])), (float(vals[2]), float(vals[3])),
                      (t[0], t[1]), (t[2], t[3]), boundary, area,
-                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None)
+                     tuple((float(lo), float(hi)) for lo, hi in box), rotary, Pg, arcs, env is not None,
+                     reason)
 
 
 def _envelope(m, ip, box):
-    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two drivers whose
-    box assembles everywhere on the reference's modes, else None (the alpha shape)."""
-    if box.shape[0] != 2 or np.any(box[:, 1] <= box[:, 0]):
-        return None
+    """The exact envelope (:func:`~kin.check.envelope.envelope`) for two or three
+    drivers whose box assembles everywhere on the reference's modes, with no face of
+    rank one throughout and (three drivers) no critical point inside: (envelope, "");
+    else (None, the reason), and the alpha shape is used."""
+    if box.shape[0] not in (2, 3):
+        return None, f"{box.shape[0]} driver(s): the exact boundary is built for two or three"
+    if np.any(box[:, 1] <= box[:, 0]):
+        return None, "a driver's usable range is a single value"
     try:
-        return envelope(m, ip, box)
-    except ValueError:
-        return None
+        return envelope(m, ip, box), ""
+    except ValueError as e:
+        return None, str(e)
 
 
 def _inside_limits(m, ip, box: np.ndarray) -> np.ndarray:
