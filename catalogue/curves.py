@@ -45,6 +45,10 @@ CURVE_POINTS = 64
 #: window lengths, as fractions of a stored closed curve's arc length, that an open
 #: target is compared with (:func:`window_distances`)
 WINDOW_FRACTIONS = (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 0.95)
+#: the second, finer pass over the nearest curves (:func:`.open_targets.ranked_windows`):
+#: lengths every 1/32 of the arc and starts every quarter of a sample
+FINE_FRACTIONS = tuple(np.round(np.arange(3, 31) / 32.0, 6)) + (0.95, 0.98)
+FINE_OFFSETS = (0.0, 0.25, 0.5, 0.75)
 #: points of an open target and of every window in that comparison
 WINDOW_POINTS = 32
 
@@ -123,15 +127,16 @@ def normalise_open(path, m: int = WINDOW_POINTS) -> tuple[np.ndarray, complex, f
     return zn[0], complex(c[0]), float(r[0])
 
 
-def _window_maps(a: np.ndarray, n: int, fraction: float) -> tuple[np.ndarray, ...]:
+def _window_maps(a: np.ndarray, n: int, fraction: float, offset: float = 0.0) -> tuple[np.ndarray, ...]:
     """Linear maps from a closed curve's ``n`` samples (equally spaced by arc length) to
-    its windows of ``fraction`` of the arc, one per start sample, each of ``len(a)``
+    its windows of ``fraction`` of the arc, one per start sample (moved on by ``offset``
+    of a sample), each of ``len(a)``
     points interpolated linearly between the samples: ``(n, n)`` matrices whose column
     ``s`` gives, for the window starting at sample ``s``, the sum ``Σ conj(a_j) w_j`` and
     the same with ``a`` reversed (``G``, ``Gr``), the mean ``Σ w_j / m`` (``C``), and the
     mean square ``Σ |w_j|² / m`` as ``|B_k|² @ U + Re(conj(B_k) B_{k+1}) @ V``."""
     m = len(a)
-    t = np.arange(n)[:, None] + fraction * n * np.linspace(0.0, 1.0, m)[None, :]     # (starts, m)
+    t = np.arange(n)[:, None] + offset + fraction * n * np.linspace(0.0, 1.0, m)[None, :]     # (starts, m)
     i0 = np.floor(t).astype(int)
     w = t - i0
     i0, i1, s = i0 % n, (i0 + 1) % n, np.broadcast_to(np.arange(n)[:, None], t.shape)
@@ -148,24 +153,26 @@ def _window_maps(a: np.ndarray, n: int, fraction: float) -> tuple[np.ndarray, ..
     return (*out, U, V)
 
 
-def window_distances(a: np.ndarray, B: np.ndarray, fractions=WINDOW_FRACTIONS) -> dict[str, np.ndarray]:
+def window_distances(a: np.ndarray, B: np.ndarray, fractions=WINDOW_FRACTIONS, offsets=(0.0,)) -> dict[str, np.ndarray]:
     """The window of each stored closed shape (rows of ``B``, (K, n), complex) nearest
     to the open target ``a`` (centred, unit RMS radius, e.g. from
     :func:`normalise_open`, (m,)), over the window lengths ``fractions``, the start
-    samples and both directions (module docstring).  A window is linear in the samples,
-    so every start of a length is one matrix product (:func:`_window_maps`).
+    samples (each moved on by every fraction of a sample in ``offsets``) and both
+    directions (module docstring).  A window is linear in the samples, so every start
+    of a length is one matrix product (:func:`_window_maps`).
 
     Returns a dict of (K,) arrays: ``distance`` (RMS after the best rotation, in units
     of the normalised target), ``rotation`` (``a ≈ rotation · (w − centre) / radius``),
     ``centre`` and ``radius`` of the window in the stored shape's coordinates,
-    ``fraction``, ``start`` and ``reversed``.  Cost: 2 K n² per length and direction.
+    ``fraction``, ``start`` (in samples) and ``reversed``.  Cost: 2 K n² per length,
+    offset and direction.
     """
     a, B = np.asarray(a, complex), np.atleast_2d(np.asarray(B, complex))
     m, n, k = len(a), B.shape[1], np.arange(len(B))
     sq, cross = np.abs(B) ** 2, np.real(np.conj(B) * np.roll(B, -1, axis=1))
     best = {"distance": np.full(len(B), np.inf)}
-    for f in fractions:
-        G, Gr, C, U, V = _window_maps(a, n, f)
+    for f, off in ((f, o) for f in fractions for o in offsets):
+        G, Gr, C, U, V = _window_maps(a, n, f, off)
         c = B @ C
         r = np.sqrt(np.maximum(sq @ U + cross @ V - np.abs(c) ** 2, 0.0))
         ok = r > 1e-9
@@ -176,7 +183,7 @@ def window_distances(a: np.ndarray, B: np.ndarray, fractions=WINDOW_FRACTIONS) -
             better = d[k, s] < best["distance"]
             t = top[k, s]
             found = {"distance": d[k, s], "rotation": np.conj(t) / np.maximum(np.abs(t), 1e-300), "centre": c[k, s],
-                     "radius": r[k, s], "fraction": np.full(len(B), f), "start": s.astype(float),
+                     "radius": r[k, s], "fraction": np.full(len(B), f), "start": s + off,
                      "reversed": np.full(len(B), rev)}
             best = {key: np.where(better, v, best[key]) if key in best else np.where(better, v, np.nan * v)
                     for key, v in found.items()}

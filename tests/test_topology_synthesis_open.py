@@ -155,10 +155,14 @@ def test_open_and_closed_need_no_start(tmp_path, capsys):
 
 # ---------------------------------------------------------------------------------
 # 3. the budget is used: more starts screened while the error is above tol
-def test_the_budget_screens_further_starts(tiny_atlas):
-    """The stroke's own curve is retrieved third: the first round (the two nearest
-    curves of the four-bar) does not reach tol, so the run screens the next round."""
+def test_the_budget_screens_further_starts(tiny_atlas, monkeypatch):
+    """The stroke's own curve ranked third (the retrieval's first is moved there: the
+    fine windows now rank it first): the first round (the two nearest curves of the
+    four-bar) does not reach tol, so the run screens the next round."""
+    import multiloop.catalogue.topology_synthesis as ts
     from multiloop.catalogue.topology_synthesis import synthesise
+    ranked = ts._ranked
+    monkeypatch.setattr(ts, "_ranked", lambda *a, **k: (lambda r: [*r[1:3], r[0], *r[3:]])(ranked(*a, **k)))
     target = _stroke(_four_bar(tiny_atlas))
     r = synthesise(target, links=(4,), atlas=tiny_atlas, evaluations=20000, top=1)
     assert r.polished > 2 and r.stopped == "tolerance" and r.designs[0].error_rms <= 1e-4
