@@ -128,27 +128,25 @@ def _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend) ->
 
 
 @numba.njit(**_JIT)
-def solve_motion(codes, ints, floats, unknown, trig, frame, X, T, fail, pend, want_links, hosts, offs, want_points, P):
+def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail, pend, want_links, hosts, offs,
+                 want_points, P):
     """Every step of a lowered plan at every row of ``X`` (M, n_drivers) on the
     reference branch, in one call (the per-call work of :func:`solve_positions`'s
-    caller done here): the table ``W`` of cos and sin of ``sign × input`` for each
-    (driver, sign) row of ``trig`` (K, 2), the frame's pose, the work rows ``C``, ``S``
-    and the factors.  ``T`` (n_links, 3, M), ``fail`` (M,) zeros, ``pend`` (n_links,)
+    caller done here): the table ``W`` (4 n_drivers, M) of cos and sin of ``sign ×
+    input`` for each (driver, sign) row of ``trig`` (K, 2), the frame's pose and cos and
+    sin rows in ``C``, ``S`` (n_links, M: the caller's work arrays, reused between calls
+    so that a large batch touches no fresh page), and the factors.  ``T`` (n_links, 3, M), ``fail`` (M,) zeros, ``pend`` (n_links,)
     zeros and ``P`` as :func:`solve_positions`; only the derived angle rows of
     ``want_links`` and the points of ``want_points`` (int8 masks) are computed, the
     others NaN (what ``outputs=`` leaves out).  Returns the number of failed rows (an
     array returned would be boxed with its dtype unpickled on every call)."""
     M = X.shape[0]
-    nl = T.shape[0]
-    W = np.empty((4 * X.shape[1], M))
     for t in range(trig.shape[0]):
         d, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
         for n in range(M):
             a = X[n, d] if trig[t, 1] > 0 else -X[n, d]
             W[r, n] = np.cos(a)
             W[r + 1, n] = np.sin(a)
-    C = np.empty((nl, M))
-    S = np.empty((nl, M))
     for n in range(M):
         T[frame, 0, n] = T[frame, 1, n] = T[frame, 2, n] = 0.0
         C[frame, n] = 1.0
