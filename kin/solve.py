@@ -43,6 +43,7 @@ from multiloop.topo.constraints import link_origins
 from multiloop.topo.errors import (AssemblyError, InputError, SingularityError, SingularityWarning,
                          explain)
 from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.recent import Recent
 
 from . import kernel
 from .continuation import Walk, walk
@@ -905,19 +906,11 @@ def plan_of(mechanism: Mechanism, plan=None) -> SolvePlan:
         return plan
     if plan is not None:
         return compile_plan(mechanism, plan)
-    hit = _PLANS.get(id(mechanism))
-    if hit is not None and hit[0] is mechanism:
-        return hit[1]
-    sp = compile_plan(mechanism)
-    if len(_PLANS) >= _PLANS_KEPT:
-        del _PLANS[next(iter(_PLANS))]
-    _PLANS[id(mechanism)] = (mechanism, sp)      # holds the mechanism: its id stays unique
-    return sp
+    return _PLANS.get(mechanism, lambda: compile_plan(mechanism))
 
 
-#: compiled plans of the last mechanisms solved, by identity (Mechanism is frozen)
-_PLANS: dict = {}
-_PLANS_KEPT = 64
+#: compiled plans of the last 64 mechanisms solved, by identity (Mechanism is frozen)
+_PLANS = Recent(64)
 
 
 def _selection(sp: SolvePlan, outputs) -> tuple:

@@ -60,6 +60,7 @@ from .errors import DecompositionError, MobilityError, explain
 from .graphs import n_pairs, pin_pairs
 from .mobility import actual_mobility
 from .model import JointKind, Mechanism
+from .recent import Recent
 
 __all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS", "GroupKind",
            "DyadLayout", "TriadLayout", "Class4Layout", "ActuatorLayout", "add_kind_rule", "remove_kind_rule"]
@@ -421,23 +422,15 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
     Notes
     -----
     Matching is Hopcroft–Karp, O(E √V) on the scalar incidence; SCCs are linear.  The
-    plans of the last :data:`_KEPT` mechanisms are kept, by identity (a mechanism and
+    plans of the last 16 mechanisms are kept, by identity (a mechanism and
     its plan are frozen, and the rigidity test's generic geometry is seeded): a page
     that draws, solves and checks one design decomposes it once.
     """
-    hit = _DECOMPOSED.get((id(mechanism), check_rigidity))
-    if hit is not None and hit[0] is mechanism:
-        return hit[1]
-    plan = _decompose(mechanism, check_rigidity)
-    if len(_DECOMPOSED) >= _KEPT:
-        del _DECOMPOSED[next(iter(_DECOMPOSED))]
-    _DECOMPOSED[id(mechanism), check_rigidity] = (mechanism, plan)   # holds it: its id stays unique
-    return plan
+    return _DECOMPOSED.get(mechanism, lambda: _decompose(mechanism, check_rigidity), check_rigidity)
 
 
-#: the plans of the last mechanisms decomposed: (id, check_rigidity) -> (mechanism, plan)
-_DECOMPOSED: dict = {}
-_KEPT = 16
+#: the plans of the last 16 mechanisms decomposed (by identity and check_rigidity)
+_DECOMPOSED = Recent(16)
 
 
 def _decompose(m: Mechanism, check_rigidity: bool) -> AssurPlan:

@@ -19,6 +19,7 @@ from multiloop.kin.solve import compile_plan, solve
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
+from multiloop.topo.recent import Recent
 
 from .circuits import group_circuits
 from .events import extremes, roots
@@ -124,24 +125,16 @@ def _motion(m, ap, plan, k, cancel=None):
 
 def check_plan(m: Mechanism):
     """The plan :func:`check` and :func:`driver_angles` solve ``m`` with: compiled once
-    per mechanism (by identity, for the last :data:`_PLANS_KEPT`), its own (not
+    per mechanism (by identity, for the last 8), its own (not
     :func:`~kin.solve.plan_of`'s, so that other solves of ``m`` leave its memo as the
     check alone makes it).  The motion and the angle extremes of each driver are kept
     beside it (:func:`_kept_motion`, :func:`_kept_angles`): a page that draws the
     motion (``driver_angles``) and then checks the same design computes them once."""
-    hit = _PLANS.get(id(m))
-    if hit is not None and hit[0] is m:
-        return hit[1]
-    plan = compile_plan(m, decompose(m))
-    if len(_PLANS) >= _PLANS_KEPT:
-        del _PLANS[next(iter(_PLANS))]
-    _PLANS[id(m)] = (m, plan)           # holds the mechanism: its id stays unique
-    return plan
+    return _PLANS.get(m, lambda: compile_plan(m, decompose(m)))
 
 
-#: the check's compiled plans of the last mechanisms checked, by identity (Mechanism is frozen)
-_PLANS: dict = {}
-_PLANS_KEPT = 8
+#: the check's compiled plans of the last 8 mechanisms checked, by identity (Mechanism is frozen)
+_PLANS = Recent(8)
 
 
 def _kept_motion(m, plan, k, cancel=None):
