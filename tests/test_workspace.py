@@ -329,9 +329,11 @@ def _outside_by(m, ip, box, ws, k):
     return _distance_outside(Q, ws.boundary).max()
 
 
-@pytest.mark.parametrize("stick_high, bucket_high, where", [(0.8, 0.5, "before"),
-                                                            (STICK_LIMIT, BUCKET_LIMIT, "at"),
-                                                            (2.0, 1.5, "beyond")])
+@pytest.mark.parametrize("stick_high, bucket_high, where", [
+    (0.8, 0.5, "before"), (STICK_LIMIT, BUCKET_LIMIT, "at"),
+    # 31 s of CPU: a benchmark (the suite's 10 minutes on 2 cores); the two-cylinder
+    # tests above run "beyond" in the suite, and so does the excavator below
+    pytest.param(2.0, 1.5, "beyond", marks=pytest.mark.benchmark)])
 def test_three_cylinder_area_against_polygon_clipping(stick_high, bucket_high, where):
     """Three drivers: the exact boundary's area against the union of the images of a
     dense solve of every 2-face of the box (shapely polygon clipping, Richardson-
