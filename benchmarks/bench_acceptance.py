@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,16 +24,9 @@ from multiloop.inputs import load_mechanism  # noqa: E402
 from multiloop.kin.check import check  # noqa: E402
 from multiloop.kin.solve import motion_events  # noqa: E402
 
+from bench_solve import _cpu_best  # noqa: E402  (the benchmarks' best-of-R in CPU time)
+
 NAMES = ("four_bar", "watt_1", "watt_2", "stephenson_3", "stephenson_3_triad")
-
-
-def _cpu(fn, repeat: int) -> tuple[float, object]:
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t = time.process_time()
-        out = fn()
-        best = min(best, time.process_time() - t)
-    return best, out
 
 
 def main() -> None:
@@ -44,10 +36,14 @@ def main() -> None:
     x = np.radians(np.linspace(0.0, 350.0, 24))
     print(f"{'mechanism':20s} {'check':>10s} {'motion':>10s} {'ratio':>6s}")
     for name in NAMES:
-        t_c, dc = _cpu(lambda: check(m := load_mechanism(name), min_transmission=0.0,
-                                     positions={m.drivers[0].joint: list(x)}).drivers[0], args.repeat)
-        t_m, r = _cpu(lambda: motion_events(load_mechanism(name)).reaches(x), args.repeat)
-        assert (len(dc.unreachable) == 0) == bool(r.all()), name
+        def by_check():
+            m = load_mechanism(name)
+            return check(m, min_transmission=0.0, positions={m.drivers[0].joint: list(x)}).drivers[0]
+
+        def by_motion():
+            return motion_events(load_mechanism(name)).reaches(x)
+        t_c, t_m = _cpu_best(by_check, args.repeat), _cpu_best(by_motion, args.repeat)
+        assert (len(by_check().unreachable) == 0) == bool(by_motion().all()), name
         print(f"{name:20s} {t_c * 1e3:8.1f}ms {t_m * 1e3:8.1f}ms {t_c / t_m:5.1f}x")
 
 
