@@ -8,6 +8,7 @@ these, the later ones reduced to 128 colours).
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -493,11 +494,10 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
 
 
-def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory):
-    """Switch the page to mm and rad: the check's events shown are ``check --json``'s
-    (deg) in rad, the readout's input too, the edit row shows B's coordinates in mm, and
-    120, 80 typed in mm put B at (0.12, 0.08) m; back to m and deg afterwards."""
-    from multiloop.kin.check import check
+@contextlib.contextmanager
+def _four_bar_in_mm_and_rad(page):
+    """The catalogue four-bar open and checked, the page in mm and rad (the check's events
+    shown in rad), and back to m, deg and the Mechanism tab afterwards whatever happens."""
     page.get_by_text("Mechanism", exact=True).first.click()
     _pick(page, "four_bar")
     page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
@@ -505,6 +505,19 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory
         page.locator(".ml-length-unit select").select_option("mm")
         page.locator(".ml-angle-unit select").select_option("rad")
         page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=120000)
+        yield
+    finally:
+        page.locator(".ml-length-unit select").select_option("m")
+        page.locator(".ml-angle-unit select").select_option("deg")
+        page.get_by_text("Mechanism", exact=True).first.click()
+
+
+def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory):
+    """Switch the page to mm and rad: the check's events shown are ``check --json``'s
+    (deg) in rad, the readout's input too, the edit row shows B's coordinates in mm, and
+    120, 80 typed in mm put B at (0.12, 0.08) m; back to m and deg afterwards."""
+    from multiloop.kin.check import check
+    with _four_bar_in_mm_and_rad(page):
         _shot(page, "web_units_mm.png", tmp_path_factory)
         d = check(load_mechanism("four_bar")).as_dict()["drivers"]["O2"]
         want = sorted([*d["limits"], *(x for xs in d["dead_centres"].values() for x in xs),
@@ -527,9 +540,6 @@ def test_units_mm_and_rad_show_and_read_check_json_scaled(page, tmp_path_factory
         page.locator(".ml-edit-apply button").click()
         at_b = _at_joint_js("B", 1e-15)
         page.wait_for_function(at_b, arg=[0.12, 0.08], timeout=120000)
-    finally:
-        page.locator(".ml-length-unit select").select_option("m")
-        page.locator(".ml-angle-unit select").select_option("deg")
 
 
 def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(page, browser, server,
@@ -752,13 +762,7 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
     are titled in mm, the timing's inputs in rad, and a run's candidate errors shown in
     mm are those shown in m times 1000."""
     from multiloop.kin.check import check
-    page.get_by_text("Mechanism", exact=True).first.click()
-    _pick(page, "four_bar")
-    page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
-    try:
-        page.locator(".ml-length-unit select").select_option("mm")
-        page.locator(".ml-angle-unit select").select_option("rad")
-        page.wait_for_selector("#ml-check-events[data-unit=rad]", state="attached", timeout=120000)
+    with _four_bar_in_mm_and_rad(page):
         lines = page.locator("#ml-check-status + ul li").all_text_contents()
         si = check(load_mechanism("four_bar")).verdict
         assert len(lines) == len(si) >= 1
@@ -793,10 +797,6 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         m = [float(page.locator(row.format(u="m")).first.get_attribute(a)) for a in ("data-error-max", "data-error-rms")]
         np.testing.assert_allclose(mm, 1000 * np.array(m), rtol=1e-12)
         assert m[1] > 0
-    finally:
-        page.locator(".ml-length-unit select").select_option("m")
-        page.locator(".ml-angle-unit select").select_option("deg")
-        page.get_by_text("Mechanism", exact=True).first.click()
 
 
 def _address_text(page) -> str:
