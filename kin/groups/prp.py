@@ -25,7 +25,7 @@ from multiloop.topo.assur import GroupKind
 
 from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned, xy, quiet
 from ..poses import known_on, normal
-from .step import PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["PRPPosition", "PRPRates", "prp_position", "prp_rates", "PRPStep", "prp_place"]
 
@@ -181,7 +181,7 @@ class PRPStep(GroupStep):
 
     kind = GroupKind.PRP
     compiled = staticmethod(prp_place)
-    singular_hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
+    singular_hint = GUIDES_HINT
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:

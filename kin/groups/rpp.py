@@ -25,7 +25,7 @@ from multiloop.topo.assur import GroupKind
 
 from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack, turned, xy, quiet
 from ..poses import angle_of, known_on, normal
-from .step import PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
+from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
 __all__ = ["RPPPosition", "RPPRates", "rpp_position", "rpp_rates", "RPPStep", "rpp_place"]
 
@@ -184,7 +184,7 @@ class RPPStep(GroupStep):
 
     kind = GroupKind.RPP
     compiled = staticmethod(rpp_place)
-    singular_hint = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
+    singular_hint = GUIDES_HINT
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:

@@ -46,13 +46,16 @@ from ..continuation import Probe
 from ..geometry import Geometry
 from ..result import Status
 
-__all__ = ["Outcome", "GroupStep", "Lowered", "AngleDef", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "trig_row"]
+__all__ = ["Outcome", "GroupStep", "Lowered", "AngleDef", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "GUIDES_HINT",
+           "trig_row"]
 
 #: relative determinant below which a position is singular
 SINGULAR = 1e-9
 #: PRP/RPP: |det| = |sin(angle between the unit guides)| below which the guides count as
 #: parallel; nearer than this the slider positions exceed 1e6 × the offsets (change point)
 PARALLEL_GUIDES = 1e-6
+#: the advice for a singular reference of a linear dyad (PRP, RPP: their guides)
+GUIDES_HINT = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
 
 
 class Lowered(NamedTuple):
