@@ -74,8 +74,8 @@ class KernelPlan:
     """A plan lowered to flat arrays (read-only): ``codes`` (n_steps,) the kind of each
     step (its index in the registry; -1: no compiled step), ``ints`` / ``floats``
     (n_steps, width) each step's numbers, ``unknown`` (n_steps, width) the links each
-    step places (-1 padded), ``frame`` the frame's link index, ``trig`` the (driver,
-    sign) whose cos and sin of ``sign × input`` the steps read from the table ``W``,
+    step places (-1 padded), ``frame`` the frame's link index, ``trig`` (K, 2) the
+    (driver, ±1) whose cos and sin of ``±input`` the steps read from the table ``W``,
     ``hosts`` / ``offs`` the link carrying each joint and tracer point and the point's
     offset from that link's reference point, ``complete`` whether every step has a
     compiled step."""
@@ -85,11 +85,10 @@ class KernelPlan:
     floats: np.ndarray
     unknown: np.ndarray
     frame: int
-    trig: tuple = ()
+    trig: np.ndarray | None = None
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
     complete: bool = False
-    trig_rows: np.ndarray | None = None     # ``trig`` as (K, 2) int64 (driver, ±1), for run_motion
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
@@ -112,14 +111,14 @@ def lower_plan(sp) -> KernelPlan:
     low = [st.closed.lower(sp.origins) if st.closed is not None else None for st in sp.steps]
     codes = np.array([_CODES.get(lw.key, -1) if lw is not None else -1 for lw in low], np.int64)
     codes.flags.writeable = False
-    trig = tuple(sorted({t for lw in low if lw is not None for t in lw.trig}))
-    rows = np.array([(d, 1 if sign > 0 else -1) for d, sign in trig], np.int64).reshape(-1, 2)
-    rows.flags.writeable = False
+    trig = np.array(sorted({(d, 1 if sign > 0 else -1) for lw in low if lw is not None for d, sign in lw.trig}),
+                    np.int64).reshape(-1, 2)
+    trig.flags.writeable = False
     return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
                       sp.mechanism.link_names.index(sp.mechanism.frame), trig,
-                      *_hosts(sp), bool(np.all(codes >= 0)), rows)
+                      *_hosts(sp), bool(np.all(codes >= 0)))
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
@@ -243,8 +242,8 @@ def _scratch(name: str, shape: tuple) -> np.ndarray:
 def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
     """The table ``W`` (4 n_drivers, M): cos and sin of ±input (the rows asked for), in
     this thread's work array (it lives only during the kernel's call)."""
-    W = _scratch("W", (4 * X.shape[1] if kp.trig else 0, X.shape[0]))
-    for d, sign in kp.trig:
+    W = _scratch("W", (4 * X.shape[1] if len(kp.trig) else 0, X.shape[0]))
+    for d, sign in kp.trig.tolist():
         r = trig_row(d, sign)
         th = X[:, d] if sign > 0 else -X[:, d]
         np.cos(th, out=W[r])
@@ -279,7 +278,7 @@ def run_motion(kp: KernelPlan, X: np.ndarray, T: np.ndarray, P: np.ndarray, fail
     (:func:`_scratch`).  The lean route of :func:`kin.solve.solve` for a whole motion;
     :func:`run_positions` serves every other caller."""
     M, nl = X.shape[0], T.shape[0]
-    return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig_rows, kp.frame, X,
+    return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig, kp.frame, X,
                                _scratch("W", (4 * X.shape[1], M)), _scratch("C", (nl, M)), _scratch("S", (nl, M)),
                                T, fail, pend, want_links, kp.hosts, kp.offs, want_points, P)
 
