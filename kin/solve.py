@@ -839,7 +839,9 @@ def _all_ok(M: int) -> np.ndarray:
         base.fill("ok")
         base.flags.writeable = False     # (an array that owns its data could be made writable again)
         hit = base.view()
-        if M <= 1 << 16:
+        if M <= 1 << 16:                 # the last 16 batch sizes kept (a bounded cache)
+            if len(_ALL_OK) >= 16:
+                del _ALL_OK[next(iter(_ALL_OK))]
             _ALL_OK[M] = hit
     return hit
 
