@@ -20,7 +20,7 @@ from numba.extending import register_jitable
 from .groups.base import SCALAR_HELPERS, arctan2
 from .groups.registry import COMPILED
 
-__all__ = ["solve_positions", "solve_motion", "finish_rows", "SLOTS"]
+__all__ = ["solve_positions", "solve_motion", "solve_designs", "finish_rows", "SLOTS"]
 
 
 def _fresh_cache() -> None:
@@ -154,6 +154,49 @@ def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail,
     failed = _steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
                     np.ones((codes.shape[0], 1)), T, C, S, fail, pend)
     finish_rows(T, C, S, pend, want_links, hosts, offs, want_points, P)
+    return failed
+
+
+@numba.njit(**_JIT)
+def solve_designs(codes, ints, floats, unknown, steps, trig, frame, X, W, Tw, Cw, Sw, failw, pend, T, C, S):
+    """The steps ``steps`` of a plan lowered for D designs (``floats`` (D, n_steps,
+    width): each design's numbers) at the inputs ``X`` (D, N, n_drivers) of each design,
+    on each design's reference branch: design by design, each step over the design's N
+    inputs (as :func:`solve_motion`, in the work arrays ``W``, ``Tw`` (n_links, 3, N),
+    ``Cw``, ``Sw`` (n_links, N), ``failw`` (N,)), the poses copied into the pose store
+    ``T`` (n_links, 3, D, N) and the cos and sin into ``C``, ``S`` (n_links, D, N).  A
+    failing step's links are NaN at that input.  ``pend`` (n_links,) is set to 1 for the
+    links whose angle rows are left to be derived from their cos and sin (not computed
+    here).  Returns the number of failed (design, input) cells."""
+    D, N = X.shape[0], X.shape[1]
+    F = np.ones((codes.shape[0], 1))
+    failed = 0
+    for d in range(D):
+        Xd = X[d]
+        for t in range(trig.shape[0]):
+            j, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
+            for n in range(N):
+                a = Xd[n, j] if trig[t, 1] > 0 else -Xd[n, j]
+                W[r, n] = np.cos(a)
+                W[r + 1, n] = np.sin(a)
+        for n in range(N):
+            Tw[frame, 0, n] = Tw[frame, 1, n] = Tw[frame, 2, n] = 0.0
+            Cw[frame, n] = 1.0
+            Sw[frame, n] = 0.0
+            failw[n] = 0
+        for k in range(pend.size):
+            pend[k] = 0
+        failed += _steps(codes, ints, floats[d], unknown, steps, Xd, W, F, Tw, Cw, Sw, failw, pend)
+        for i in range(steps.size):
+            for j in range(unknown.shape[1]):
+                k = unknown[steps[i], j]
+                if k >= 0:
+                    for n in range(N):
+                        T[k, 0, d, n] = Tw[k, 0, n]
+                        T[k, 1, d, n] = Tw[k, 1, n]
+                        T[k, 2, d, n] = Tw[k, 2, n]
+                        C[k, d, n] = Cw[k, n]
+                        S[k, d, n] = Sw[k, n]
     return failed
 
 

@@ -35,6 +35,7 @@ from multiloop.topo.errors import InputError, LinkageError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
 from .geometry import Geometry, design_names
+from . import kernel
 from .poses import Poses
 from .solve import SolvePlan, check_finite_inputs, needed_steps, plan_of, solve
 
@@ -193,12 +194,29 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
     G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape)
+    kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
+    if kp is not None and kp.covers(steps):
+        return _compiled(sp, geo, G, kp, bound, steps, X)
     for k, step in zip(steps, bound):
         okk = step.positions(G, X).ok
         G.invalidate(sp.steps[k].unknown, ~okk)
     G.unset_to_nan()
     ok = G.finite([i for k in steps for i in sp.steps[k].unknown])
     return DesignPoses(sp, geo, G, ok)
+
+
+def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, bound, steps, X) -> DesignPoses:
+    """The designs by the compiled kernel (:func:`kin.kernel.run_designs`): the same
+    steps on the same branches as the NumPy route, equal to it to rounding."""
+    origins = np.stack([geo.origin(x) for x in sp.mechanism.link_names])
+    floats = kernel.design_floats(kp, bound, steps, origins, geo.D)
+    X = np.broadcast_to(X, (geo.D, *X.shape[-2:])) if X.ndim == 2 else X
+    links = [i for k in steps for i in sp.steps[k].unknown]
+    C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)
+    G.adopt(links, C, S)
+    G.pending.update(int(k) for k in pend if k in set(links))
+    G.unset_to_nan()
+    return DesignPoses(sp, geo, G, G.finite(links))
 
 
 def _bind(st, mechanism, size, geo):

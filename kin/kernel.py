@@ -12,10 +12,13 @@ triangle.  Each does the NumPy kernel's operations in the same order (the floats
 to rounding) and gives the same statuses.  The drivers' cos and sin are NumPy's own,
 computed before the loop; the angle rows are fdlibm's ``atan2`` (Sun Microsystems 1993,
 within 1 ulp of NumPy's) in the kernel when every step is solved, else NumPy's, later.
-The NumPy path stays as the oracle (``tests/test_kernels.py``) and solves what the
+:func:`run_designs` runs the same steps for a batch of D designs (each design's numbers
+lowered by the same adapters, :func:`design_floats`): synthesis's populations
+(:func:`compiled_batches`).  The NumPy path stays as the oracle
+(``tests/test_kernels.py``, ``tests/test_synthesis_kernel.py``) and solves what the
 kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
-the continuation walk, velocities and accelerations, batches of designs
-(:mod:`kin.design`), and the reasons of the rows that fail.
+the continuation walk, velocities and accelerations, and the reasons of the rows that
+fail.
 
 Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships
 wheels for Linux, macOS and Windows, and it caches compiled code on disk
@@ -57,7 +60,8 @@ from .groups.registry import COMPILED
 from .groups.step import trig_row
 from .memo import cached
 
-__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "load", "is_loaded", "wanted",
+__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "design_floats",
+           "run_designs", "compiled_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
@@ -65,6 +69,8 @@ MODES = ("auto", "on", "off")
 #: in mode "auto", a batch of at least this many positions loads numba itself
 LAZY_MIN = 2_000_000
 _MODE = [os.environ.get("MULTILOOP_KERNEL", "off")]
+#: whether the mode is the default one (``MULTILOOP_KERNEL`` unset, no :func:`using` block)
+_DEFAULT = ["MULTILOOP_KERNEL" not in os.environ]
 _CODES = {key: i for i, key in enumerate(COMPILED)}
 _NB = "multiloop.kin._kernel_nb"
 
@@ -161,12 +167,12 @@ def using(m: str):
     """Run a block with the kernel's mode ``m`` (one of :data:`MODES`)."""
     if m not in MODES:
         raise ValueError(f"kernel mode: expected one of {MODES}, got {m!r}")
-    old = _MODE[0]
-    _MODE[0] = m
+    old = _MODE[0], _DEFAULT[0]
+    _MODE[0], _DEFAULT[0] = m, False
     try:
         yield
     finally:
-        _MODE[0] = old
+        _MODE[0], _DEFAULT[0] = old
 
 
 def is_loaded() -> bool:
@@ -202,6 +208,17 @@ def wanted(n_positions: int) -> bool:
     if m == "on" or (m == "auto" and (is_loaded() or n_positions >= LAZY_MIN)):
         return load() is not None
     return False
+
+
+def compiled_batches() -> bool:
+    """Whether populations of designs (synthesis's objective, :mod:`kin.design`) run
+    compiled: in the modes ``on`` and ``auto``, and by default (``MULTILOOP_KERNEL``
+    unset) whenever numba is installed: a search evaluates thousands of candidates, so
+    numba's start-up pays for itself, and the search's result does not depend on what
+    else the process ran.  Never in an explicit ``off``."""
+    if _MODE[0] == "off" and not _DEFAULT[0]:
+        return False
+    return load() is not None
 
 
 _ONES: dict = {}
@@ -325,3 +342,35 @@ def run_positions(kp: KernelPlan, X: np.ndarray, steps, signs: dict, T: np.ndarr
     failed = nb.solve_positions(kp.codes, kp.ints, kp.floats, kp.unknown, _steps(kp, steps), X, _trig(kp, X),
                                 _factors(len(kp.codes), M, signs), T, C, S, fail, pend, hosts, kp.offs, P)
     return KernelRun(C, S, fail, failed, pend, P.transpose(2, 0, 1) if points else None)
+
+
+def design_floats(kp: KernelPlan, bound, steps, origins: np.ndarray, D: int) -> np.ndarray:
+    """The numbers of D designs for the steps ``steps`` of ``kp``: ``(D, n_steps,
+    width)``, each step ``bound[i]`` (bound to the designs' geometry, :mod:`kin.design`)
+    lowered with the designs' link reference points ``origins`` (n_links, D, 1, 2)
+    (:meth:`~kin.groups.step.GroupStep.lower` gives arrays ``(D, 1)`` where a number
+    varies by design); the codes, link indices and trig rows are the plan's own."""
+    out = np.full((D, len(kp.codes), kp.floats.shape[1]), np.nan)
+    for k, step in zip(steps, bound):
+        row = out[:, k]
+        for i, v in enumerate(step.lower(origins).floats):
+            row[:, i] = v.ravel() if isinstance(v, np.ndarray) and v.ndim else v
+    return out
+
+
+def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.ndarray):
+    """Run the plan's steps ``steps`` for D designs (``floats`` from
+    :func:`design_floats`) at the inputs ``X`` (D, N, n_drivers) in one compiled call
+    (:func:`kin._kernel_nb.solve_designs`): the poses into the store ``T`` (n_links, 3,
+    D, N).  Returns the cos and sin rows ``C``, ``S`` (n_links, D, N) and the links
+    whose angle rows are still to be derived from them."""
+    nl, (D, N) = T.shape[0], X.shape[:2]
+    X = np.ascontiguousarray(X, float)
+    if not X.flags.writeable:
+        X = X.copy()
+    C, S = np.empty((nl, D, N)), np.empty((nl, D, N))
+    pend = np.zeros(nl, np.int8)
+    load().solve_designs(kp.codes, kp.ints, floats, kp.unknown, _steps(kp, steps), kp.trig, kp.frame, X,
+                         _scratch("W", (4 * X.shape[2], N)), _scratch("Td", (nl, 3, N)), _scratch("C", (nl, N)),
+                         _scratch("S", (nl, N)), np.zeros(N, np.int8), pend, T, C, S)
+    return C, S, np.flatnonzero(pend)

@@ -12,12 +12,14 @@ assembly branch (mode) of the design's own reference configuration.
 """
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
 
 from multiloop.kin.design import (DesignPoses, branch_signs, design_mechanism, design_names, solve_designs,
                                   unbatched_steps)
+from multiloop.kin import kernel
 from multiloop.kin.geometry import Geometry
 from multiloop.topo.assur import DriverStep, decompose
 from multiloop.topo.errors import InputError, explain
@@ -131,8 +133,9 @@ class Evaluator:
         driver value from the reference configuration (rad, or m for a P driver).
         """
         X = np.atleast_2d(np.asarray(X, float))
-        return solve_designs(self.mechanism, self.space.names, X, np.asarray(phi, float), outputs=outputs,
-                             deadline=self.deadline)
+        with kernel.using("on") if kernel.compiled_batches() else contextlib.nullcontext():
+            return solve_designs(self.mechanism, self.space.names, X, np.asarray(phi, float), outputs=outputs,
+                                 deadline=self.deadline)
 
     def branches(self, X) -> np.ndarray:
         """Assembly branches ``(P, n_dyads)`` (±1, NaN on a boundary) of every RRR, RRP and

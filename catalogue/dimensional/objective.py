@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from multiloop.kin import kernel
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.kin.groups.registry import reference_margin
@@ -329,9 +330,7 @@ class Problem:
     def sqdist(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
         """Squared relative distances ``(P, N, K)`` of features ``F`` (P, K, c) to
         targets ``T`` (P, N, c), column by column (no (P, N, K, c) array)."""
-        ang = isinstance(self.target, MotionTarget) or (
-            isinstance(self.target, FunctionTarget)
-            and self.ev.mechanism.joint(self.target.joint).kind.is_rotary)
+        ang = self.angular
         c = F.shape[-1]
         inv = (1.0 / size)[:, None, None]
         out = None
@@ -399,16 +398,7 @@ class Problem:
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         if tim is None:
-            ok = st.ok[:, :M]
-            d0 = self.sqdist(F[:, :M], T[:, :1], size)[:, 0]
-            (oidx, ovalid, _), _ = self.orders(ok, d0)
-            Fo = np.take_along_axis(F[:, :M], oidx[..., None], axis=1)
-            d2f = np.where(ovalid[:, None, :], self.sqdist(Fo, T, size), np.inf)
-            # backward walk: the forward one reversed (and, for a closed curve, shifted so that
-            # it starts two samples past the sample nearest to the first target)
-            rev = d2f[..., ::-1]
-            d2b = np.where(full[:, None, None], np.roll(rev, 5, axis=2), rev)
-            cost = np.min([_dp(d) for k, d in enumerate((d2f, d2b)) if k in self.walks()], axis=0)
+            cost = self.free_costs(F[:, :M], T, size, st.ok[:, :M], full)
         else:
             cost = np.sum(np.square(self.diff(F[:, M:], T, size)), axis=(1, 2))
             lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
@@ -417,6 +407,37 @@ class Problem:
         f = np.sqrt(cost / self.n_targets)
         f = f + self.cons.weight * self.violation(X, st, full)
         return np.where(np.isfinite(f), f, _FAIL)
+
+    def free_costs(self, F: np.ndarray, T: np.ndarray, size: np.ndarray, ok: np.ndarray,
+                   full: np.ndarray) -> np.ndarray:
+        """Free timing: each candidate's smallest sum of squared relative distances of
+        the targets ``T`` (P, N, c) to its grid features ``F`` (P, M, c), assigned in
+        driver order along its allowed walks (:meth:`walks`) of the samples reached
+        from the reference (``ok`` (P, M), ``full`` (P,) from :meth:`curve`), ``(P,)``.
+        The compiled route (:mod:`._match_nb`) when the kernel is in use, else NumPy's;
+        the two agree bit for bit."""
+        nb = _compiled_matching()
+        if nb is not None:
+            out = np.empty(F.shape[0])
+            walks = self.walks()
+            nb.free_timing_costs(np.ascontiguousarray(F), np.ascontiguousarray(T), 1.0 / size,
+                                 np.ascontiguousarray(ok), self.rotary, self.angular, 0 in walks, 1 in walks, out)
+            return out
+        d0 = self.sqdist(F, T[:, :1], size)[:, 0]
+        (oidx, ovalid, _), _ = self.orders(ok, d0)
+        Fo = np.take_along_axis(F, oidx[..., None], axis=1)
+        d2f = np.where(ovalid[:, None, :], self.sqdist(Fo, T, size), np.inf)
+        # backward walk: the forward one reversed (and, for a closed curve, shifted so that
+        # it starts two samples past the sample nearest to the first target)
+        rev = d2f[..., ::-1]
+        d2b = np.where(full[:, None, None], np.roll(rev, 5, axis=2), rev)
+        return np.min([_dp(d) for k, d in enumerate((d2f, d2b)) if k in self.walks()], axis=0)
+
+    @property
+    def angular(self) -> bool:
+        """Whether the last feature is an angle (compared wrapped to (−π, π])."""
+        return isinstance(self.target, MotionTarget) or (
+            isinstance(self.target, FunctionTarget) and self.ev.mechanism.joint(self.target.joint).kind.is_rotary)
 
     @property
     def constrained(self) -> bool:
@@ -554,6 +575,15 @@ def grashof_margins(problem: Problem, X: np.ndarray) -> np.ndarray:
     k = 0 if problem.cons.grashof == "crank-rocker" else 3
     others = np.delete(L, k, axis=1).min(1)
     return np.stack([g, np.maximum(0.0, L[:, k] - others) / mean], axis=1)
+
+
+def _compiled_matching():
+    """The compiled matching module when populations run compiled
+    (:func:`multiloop.kin.kernel.compiled_batches`), else None."""
+    if not kernel.compiled_batches():
+        return None
+    from . import _match_nb
+    return _match_nb
 
 
 def _dp(d2: np.ndarray) -> np.ndarray:

@@ -30,7 +30,7 @@ from ..result import Status
 from ..rigid import perp
 from multiloop.topo.assur import GroupKind
 
-from .base import carry, length, margin_tol, num, place, place_along
+from .base import pair, carry, length, margin_tol, num, place, place_along
 from .rrr import rrr_branch, rrr_rates, rrr_xy, triangle_apex
 from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -141,12 +141,10 @@ class ActuatorStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`actuator_place`."""
-        if self.geo.batch:
-            return None
         o = origins
-        f = (self.sigma, *self.d0.tolist(), *self.u0.tolist(), *self.rel(o, self.k1, self.A),
+        f = (self.sigma, *pair(self.d0), *pair(self.u0), *self.rel(o, self.k1, self.A),
              *self.rel(o, self.k3, self.C), self.lc, self.sign, *self.off(o, self.kn, self.A),
-             *self.off(o, self.kf, self.B), *self.off(o, self.k2, self.C), *unit(self.dir2).tolist())
+             *self.off(o, self.kf, self.B), *self.off(o, self.k2, self.C), *pair(unit(self.dir2)))
         return Lowered(GroupKind.ACTUATED, (self.layout.driver, self.k1, self.k3, self.kn, self.kf, self.k2), f)
 
     def _probe(self, G, a, c, b, L, ok, why: dict, probe: bool):

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..continuation import Probe
 from ..rigid import perp
-from .base import angle, carry, place
+from .base import pair, angle, carry, place
 from .step import GroupStep, Lowered, Outcome, trig_row
 
 __all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place"]
@@ -113,10 +113,8 @@ class DriverStepSolver(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`turn_place` or :func:`slide_place`."""
-        if self.geo.batch:
-            return None
         k, o = self.link_index(self.link), self.link_index(self.other)
-        r = self.r.tolist()
+        r = self.r
         if self.u is None:
             h = self.link_index(self.host)
             d, frame = self.drive.driver, o == self.link_index(self.mechanism.frame)
@@ -124,7 +122,7 @@ class DriverStepSolver(GroupStep):
                            (self.sign, *self.rel(origins, h, r), *self.off(origins, k, r)),
                            ((d, self.sign),) if frame else ())
         return Lowered("drive_P", (self.drive.driver, o, k),
-                       (self.sign, *self.rel(origins, o, r), *self.u.tolist(), *self.off(origins, k, r)))
+                       (self.sign, *self.rel(origins, o, r), *pair(self.u), *self.off(origins, k, r)))
 
     def rates(self, R, input_rates) -> None:
         rate = input_rates[self.drive.driver]

@@ -23,7 +23,7 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned, xy, quiet
+from .base import pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned, xy, quiet
 from ..poses import known_on, normal
 from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -208,11 +208,9 @@ class PRPStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`prp_place`."""
-        if self.geo.batch:
-            return None
         lay, o = self.layout, origins
         k1, k2, l1, l2 = (self.link_index(x) for x in (self.k1, self.k2, lay.link1, lay.link2))
-        f = (*self.rel(o, k1, self.P1), *self.u1.tolist(), self.h1, *self.rel(o, k2, self.P2), *self.u2.tolist(),
+        f = (*self.rel(o, k1, self.P1), *pair(self.u1), self.h1, *self.rel(o, k2, self.P2), *pair(self.u2),
              self.h2, *self.off(o, l1, self.B), *self.off(o, l2, self.B))
         return Lowered(GroupKind.PRP, (k1, k2, l1, l2), f)
 

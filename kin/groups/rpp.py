@@ -23,7 +23,7 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack, turned, xy, quiet
+from .base import pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack, turned, xy, quiet
 from ..poses import angle_of, known_on, normal
 from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -211,12 +211,10 @@ class RPPStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rpp_place`."""
-        if self.geo.batch:
-            return None
         lay, o = self.layout, origins
         k1, kq, l1, l2 = (self.link_index(x) for x in (self.k1, self.kq, lay.link1, lay.link2))
-        f = (*self.rel(o, k1, self.A), *self.rel(o, kq, self.Q), *self.u.tolist(),
-             float(np.cos(self.alpha)), float(np.sin(self.alpha)), self.h,
+        f = (*self.rel(o, k1, self.A), *self.rel(o, kq, self.Q), *pair(self.u),
+             num(np.cos(self.alpha)), num(np.sin(self.alpha)), self.h,
              *self.off(o, l2, self.Q), *self.off(o, l1, self.A))
         return Lowered(GroupKind.RPP, (k1, kq, l1, l2), f)
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cramer, dot, is_singular, num,
+from .base import (pair, square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cramer, dot, is_singular, num,
                    place, place_along, sign_of, stack, xy,
                    quiet)
 from ..continuation import Probe
@@ -251,11 +251,9 @@ class RPRStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rpr_place`."""
-        if self.geo.batch:
-            return None
         o = origins
         kx, ky, g, b = (self.link_index(x) for x in (self.kx, self.ky, self.guide, self.block))
-        f = (*self.rel(o, kx, self.X), *self.rel(o, ky, self.Y), self.h, self.sign, *unit(self.u).tolist(),
+        f = (*self.rel(o, kx, self.X), *self.rel(o, ky, self.Y), self.h, self.sign, *pair(unit(self.u)),
              *self.off(o, g, self.X), *self.off(o, b, self.Y), SINGULAR * self.size)
         return Lowered(GroupKind.RPR, (kx, ky, g, b), f)
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, length, num, place_along, place_like,
+from .base import (pair, margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, length, num, place_along, place_like,
                    sign_of, stack, turned, xy, quiet)
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
@@ -272,12 +272,10 @@ class RRPStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rrp_place`."""
-        if self.geo.batch:
-            return None
         lay, o = self.layout, origins
         k1, kp, l1, l2 = (self.link_index(x) for x in (self.known1, self.kp, lay.link1, lay.link2))
-        f = (*self.rel(o, k1, self.A), *self.rel(o, kp, self.P), *self.u.tolist(), self.h, self.la, self.sign,
-             *unit(self.B - self.A).tolist(), *self.off(o, l1, self.A), *self.off(o, l2, self.B),
+        f = (*self.rel(o, k1, self.A), *self.rel(o, kp, self.P), *pair(self.u), self.h, self.la, self.sign,
+             *pair(unit(self.B - self.A)), *self.off(o, l1, self.A), *self.off(o, l2, self.B),
              SINGULAR * self.la)
         return Lowered(GroupKind.RRP, (k1, kp, l1, l2), f)
 

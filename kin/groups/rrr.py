@@ -362,12 +362,10 @@ class RRRStep(GroupStep):
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rrr_place`."""
-        if self.geo.batch:
-            return None
         o = origins
         at1, at2 = (self.B if self.from_B1 else self.A), (self.B if self.from_B2 else self.C)
         f = (*self.rel(o, self.k1, self.A), *self.rel(o, self.k2, self.C), self.la, self.lc, self.sign,
-             *self.rot1, *self.rot2, *unit(self.dir1).tolist(), *unit(self.dir2).tolist(),
+             *self.rot1, *self.rot2, *pair(unit(self.dir1)), *pair(unit(self.dir2)),
              *self.off(o, self.l1, at1), *self.off(o, self.l2, at2),
              float(self.from_B1), float(self.from_B2), SINGULAR * (self.la * self.lc))
         return Lowered(GroupKind.RRR, (self.k1, self.k2, self.l1, self.l2), f)

@@ -176,9 +176,14 @@ class GroupStep:
     @staticmethod
     def rel(origins, k: int, r) -> tuple[float, float]:
         """Reference point ``r`` relative to link k's reference point (as the pose store
-        computes it: the same floats)."""
-        o = np.asarray(origins, float)[k].tolist()
-        return float(r[0]) - o[0], float(r[1]) - o[1]
+        computes it: the same floats); for a batch of designs (``origins`` (n_links, D,
+        1, 2)) arrays ``(D, 1)``."""
+        o = np.asarray(origins, float)[k]
+        if o.ndim == 1:
+            o = o.tolist()
+            return float(r[0]) - o[0], float(r[1]) - o[1]
+        r = np.asarray(r, float)          # a batch: origins (n_links, D, 1, 2), r (D, 1, 2)
+        return r[..., 0] - o[..., 0], r[..., 1] - o[..., 1]
 
     @staticmethod
     def off(origins, k: int, r) -> tuple[float, float]:

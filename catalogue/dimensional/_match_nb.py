@@ -1,0 +1,146 @@
+"""The numba side of free-timing matching (:meth:`.objective.Problem.batch`): the
+reachable curve of each candidate, its driver-ordered walks and the monotone
+assignment of the targets to the walk's samples, for a whole population in one call.
+
+Imported only when the compiled kernel is in use (:func:`multiloop.kin.kernel.wanted`),
+with the kernel's disk cache (``cache=True``).  Each operation is the NumPy route's
+(:meth:`.objective.Problem.curve`, :meth:`~.objective.Problem.orders`,
+:meth:`~.objective.Problem.sqdist`, ``_dp``) in the same order, so the costs agree
+with it bit for bit; ``tests/test_synthesis_kernel.py`` compares both.
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+__all__ = ["free_timing_costs"]
+
+_JIT = dict(cache=True, error_model="numpy", nogil=True)
+
+
+@numba.njit(**_JIT)
+def _sqd(f, t, inv, ang):
+    """Squared relative distance of a feature ``f`` (c,) to a target ``t`` (c,)
+    (:meth:`~.objective.Problem.sqdist`: the last column an angle, wrapped, when ``ang``)."""
+    c = f.size
+    out = 0.0
+    for j in range(c):
+        d = f[j] - t[j]
+        if ang and j == c - 1:
+            d = (d + np.pi) % (2.0 * np.pi) - np.pi
+            if c == 1:
+                d = d * inv
+        else:
+            d = d * inv
+        out = d * d if j == 0 else out + d * d
+    return out
+
+
+@numba.njit(**_JIT)
+def _distances(Fp, Tp, idx, valid, inv, ang, d2):
+    """``d2[i, k]``: the squared relative distance of target i to the walk's sample k
+    (``inf`` where the sample is not reached)."""
+    N, M, c = Tp.shape[0], idx.size, Fp.shape[1]
+    if c == 2 and not ang:                 # a path: the common case, written out
+        for i in range(N):
+            tx, ty = Tp[i, 0], Tp[i, 1]
+            for k in range(M):
+                if valid[k]:
+                    dx = (Fp[idx[k], 0] - tx) * inv
+                    dy = (Fp[idx[k], 1] - ty) * inv
+                    d2[i, k] = dx * dx + dy * dy
+                else:
+                    d2[i, k] = np.inf
+        return
+    for i in range(N):
+        for k in range(M):
+            d2[i, k] = _sqd(Fp[idx[k]], Tp[i], inv, ang) if valid[k] else np.inf
+
+
+@numba.njit(**_JIT)
+def _leading(ok, p, start, stop, step):
+    """How many of ``ok[p, start], ok[p, start + step], …`` (before ``stop``) are true
+    before the first false one."""
+    n = 0
+    for k in range(start, stop, step):
+        if not ok[p, k]:
+            break
+        n += 1
+    return n
+
+
+@numba.njit(**_JIT)
+def _assign(d2, order, acc, run):
+    """Cheapest monotone assignment of the targets (rows of ``d2``) to the samples in
+    the column order ``order`` (``_dp``: acc = d2[0]; acc = d2[i] + running min)."""
+    N, K = d2.shape[0], order.size
+    for k in range(K):
+        acc[k] = d2[0, order[k]]
+    for i in range(1, N):
+        m = acc[0]
+        for k in range(K):
+            if acc[k] < m:
+                m = acc[k]
+            run[k] = m
+        for k in range(K):
+            acc[k] = d2[i, order[k]] + run[k]
+    best = acc[0]
+    for k in range(1, K):
+        if acc[k] < best:
+            best = acc[k]
+    return best
+
+
+@numba.njit(**_JIT)
+def free_timing_costs(F, T, inv, ok, rotary, ang, forward, backward, out):
+    """Free-timing cost of each candidate: ``out[p]`` = the smallest sum of squared
+    relative distances (``inv[p]`` = 1 / target size) of the targets ``T[p]`` (N, c) to
+    the features ``F[p]`` (M, c) of the grid samples reached continuously from the
+    reference (``ok[p]`` (M,)), assigned in driver order along the forward walk and/or
+    (``backward``) the backward one; ``inf`` when no sample is reached.
+    ``rotary``: the grid is one turn (else half forward, half backward from the
+    reference)."""
+    P, M, N = F.shape[0], F.shape[1], T.shape[1]
+    idx = np.empty(M, np.int64)
+    valid = np.empty(M, np.bool_)
+    d2 = np.empty((N, M))
+    acc, run = np.empty(M), np.empty(M)
+    order = np.empty(M, np.int64)
+    for p in range(P):
+        full = False
+        if rotary:
+            f = _leading(ok, p, 0, M, 1)
+            full = f == M
+            b = 0 if full else _leading(ok, p, M - 1, 0, -1)
+            if full:
+                k0, best = 0, np.inf
+                for k in range(M):
+                    v = _sqd(F[p, k], T[p, 0], inv[p], ang)
+                    if ok[p, k] and v < best:
+                        k0, best = k, v
+                s = (k0 - 2) % M
+                for k in range(M):
+                    idx[k] = (s + k) % M
+                    valid[k] = True
+            else:
+                for k in range(M):
+                    idx[k] = (k - b) % M
+                    valid[k] = k < b + f
+        else:
+            half = M // 2
+            f = _leading(ok, p, 0, half, 1)
+            b = _leading(ok, p, half, M, 1)
+            for k in range(M):
+                valid[k] = k < b + f
+                idx[k] = (half + (b - 1 - k) if k < b else k - b) if valid[k] else 0
+        _distances(F[p], T[p], idx, valid, inv[p], ang, d2)
+        cost = np.inf
+        if forward:
+            for k in range(M):
+                order[k] = k
+            cost = _assign(d2, order, acc, run)
+        if backward:                 # the forward walk reversed (a closed curve's shifted by 5)
+            for k in range(M):
+                order[k] = M - 1 - ((k - 5) % M) if full else M - 1 - k
+            cost = min(cost, _assign(d2, order, acc, run))
+        out[p] = cost
