@@ -114,16 +114,22 @@ def triad_goal(D: int, N: int) -> None:
 def synthesis_goal(py: str | None, budget: int = 2) -> None:
     import bench_synthesis as bs
     T = bs.targets()["four-bar 10 points"]
+    # numba's import and disk-cache read once, outside the timing (as Pyslvs's start-up is)
+    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=500, seed=0)
     res = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=float(budget), seed=0)
     ours = res.evaluations / res.seconds
+    de = bs.eval_rates(480)["batched objective"]
+    line = (f"ours {ours:,.0f} evaluations/s over the whole run (population and polish; "
+            f"{res.evaluations:,} in {res.seconds:.2f} s, each population member on a 96-position grid, "
+            f"continuity checked), the population objective alone {de:,.0f}/s")
     if py is None:
-        print(f"synthesis, four-bar 10 points, free timing: ours {ours:,.0f} evaluations/s; Pyslvs not run")
+        print(f"synthesis, four-bar 10 points, free timing: {line}; Pyslvs not run")
         return
     _, _, n = bs.pyslvs_run(T, budget, py)
     theirs = n / budget
-    print(f"synthesis evaluations per second, four-bar 10 points, free timing, DE {budget} s: ours {ours:,.0f} "
-          f"(each on a 96-position grid, continuity checked), Pyslvs FPlanar {theirs:,.0f}; goal ratio >= 1: "
-          f"{ours / theirs:.2f} -> {'MET' if ours >= theirs else 'NOT MET'}")
+    print(f"synthesis evaluations per second, four-bar 10 points, free timing, DE {budget} s: {line}; "
+          f"Pyslvs FPlanar {theirs:,.0f}; goal ratio >= 2: {ours / theirs:.2f} "
+          f"(population objective {de / theirs:.2f}) -> {'MET' if ours >= 2 * theirs else 'NOT MET'}")
 
 
 def main(argv=None):
