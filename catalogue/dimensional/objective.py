@@ -163,7 +163,9 @@ class Problem:
             half = self.M // 2
             self.delta = 2.0 * size / half
             self.grid = np.concatenate([self.delta * np.arange(half), -self.delta * np.arange(1, half + 1)])
-        self.n_targets = len(self.target_values())
+        self._targets = self.target_values()           # (the target is immutable)
+        self._size = target.size if target.size > 0 else 1.0
+        self.n_targets = len(self._targets)
 
     def init_motion_frame(self) -> None:
         """Motion generation: the frame on the link that meets pose 0 exactly at the
@@ -279,7 +281,7 @@ class Problem:
 
     def targets_for(self, Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Targets ``(P, N, c)`` (transformed for shape-only) and their size ``(P,)``."""
-        T = self.target_values()
+        T = self._targets
         P = Z.shape[0]
         t = self.target
         if isinstance(t, PathTarget) and t.shape_only:
@@ -291,8 +293,7 @@ class Problem:
             x = s[:, None] * (cs * d[:, 0] - sn * d[:, 1]) + c0[0] + e[:, 2:3]
             y = s[:, None] * (sn * d[:, 0] + cs * d[:, 1]) + c0[1] + e[:, 3:4]
             return np.stack([x, y], axis=-1), s * t.size
-        size = t.size if t.size > 0 else 1.0
-        return np.broadcast_to(T, (P,) + T.shape), np.full(P, size)
+        return np.broadcast_to(T, (P,) + T.shape), np.full(P, self._size)
 
     def features(self, Z: np.ndarray, st: DesignPoses) -> np.ndarray:
         """What is compared with the targets, ``(P, N, c)``, from poses ``st``."""
