@@ -60,6 +60,7 @@ def test_the_library_types_facts():
     assert r.flagged(30.0, 90.0, 40.0) and not r.flagged(60.0, 90.0, 40.0)
     assert (t.margin(30.0, 170.0), p.margin(0.0, 55.0), r.margin(30.0, 90.0)) == (10.0, 35.0, 30.0)
     assert t.reach_limit and p.reach_limit and not r.reach_limit
+    assert AngleType().margin(30.0, 90.0) == np.inf and not AngleType().flagged(0.0, 180.0, 40.0)
 
 
 # -- a type of the test's own, and a group kind that declares it ----------------------

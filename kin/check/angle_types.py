@@ -122,11 +122,11 @@ class AngleType:
 
     def margin(self, lo, hi):
         """The least distance (deg) of extremes ``lo``, ``hi`` (numbers or arrays) to a
-        degenerate value: ``margin(a, a)`` folds one angle so that 0 is singular."""
-        out = None
+        degenerate value (``inf`` for a type without one): ``margin(a, a)`` folds one
+        angle so that 0 is singular."""
+        out = np.inf
         for d in self.degenerate:
-            m = lo - d if self.low(d) else d - hi
-            out = m if out is None else np.minimum(out, m)
+            out = np.minimum(out, lo - d if self.low(d) else d - hi)
         return out
 
     def plot_lines(self, threshold: float) -> tuple[float, ...]:
