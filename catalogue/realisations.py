@@ -31,6 +31,7 @@ from multiloop.topo.assur import decompose
 from multiloop.topo.errors import LinkageError
 from multiloop.topo.model import Mechanism
 from multiloop.kin.check import driver_angles
+from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import solve_designs
 from multiloop.kin.geometry import design_matrix, design_names
@@ -115,8 +116,7 @@ def _certified(m: Mechanism, min_angle: float) -> float | None:
         return None
     if not dc.full_rotation or dc.flagged(min_angle):
         return None
-    lows = [min(a.extreme.min, 180.0 - a.extreme.max) if a.quantity != "pressure" else 90.0 - a.extreme.max
-            for a in dc.angles if a.extreme is not None]
+    lows = [angle_type(a.quantity).margin(a.extreme.min, a.extreme.max) for a in dc.angles if a.extreme is not None]
     return float(min(lows, default=90.0))
 
 

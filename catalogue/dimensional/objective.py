@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from multiloop.kin import kernel
+from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.kin.groups.registry import reference_margin
@@ -80,14 +81,17 @@ def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.nda
     (:func:`multiloop.kin.check.transmission.angle_specs`, ``spec_value``): a triangle
     (RRR, or an actuated one), the angle μ at the inner pin between the lines to the
     outer pins, folded to ``min(μ, 180° − μ)``; RRP and RPR, 90° minus the pressure angle.
-    Triads' angles are not included.
+    Only the angles whose degenerate value is a reach limit of their group are included
+    (:attr:`~multiloop.kin.check.angle_types.AngleType.reach_limit`; not a triad's),
+    each folded by its type (``margin(a, a)``: the distance to its nearest degenerate value).
     """
     out = np.full(st.ok.shape, np.inf)
     for sp in angle_specs(ev.plan):
-        if sp.quantity == "triad":
+        t = angle_type(sp.quantity)
+        if not t.reach_limit:
             continue
         a = spec_value(st, sp)
-        out = np.fmin(out, np.minimum(a, 180.0 - a) if sp.quantity == "transmission" else 90.0 - a)
+        out = np.fmin(out, t.margin(a, a))
     return out
 
 

@@ -21,6 +21,7 @@ from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
 from multiloop.topo.recent import Recent
 
+from .angle_types import angle_type
 from .circuits import group_circuits
 from .events import extremes, roots
 from .grashof import four_bar_loops
@@ -28,7 +29,7 @@ from .instant_centres import instant_centres
 from .motion import driver_motion
 from .singular_values import exact_extremes
 from .report import AngleResult, CheckReport, DriverAngles, DriverCheck
-from .transmission import angle_specs, angle_values, guide_direction
+from .transmission import angle_specs, angle_values, signed_dets_of
 from .verdict import verdict
 from .workspace import workspace as workspace_of
 
@@ -68,27 +69,16 @@ def _velocity(state, w) -> np.ndarray:
 
 def signed_dets(plan):
     """Groups with a reach limit and their normalised signed determinant ``D(state)``,
-    from each group's monitored angle (:func:`~kin.check.transmission.angle_specs`):
-    sin of the angle at B of a triangle (an RRR dyad or an actuated triangle), cos of
-    the rod–guide angle (RRP), s/|CA| (RPR)."""
-    specs = [sp for sp in angle_specs(plan) if sp.quantity in ("transmission", "pressure")]
+    from each group's monitored angle whose type has one
+    (:attr:`~kin.check.angle_types.AngleType.reach_limit`;
+    :func:`~kin.check.transmission.angle_specs`): sin of the angle at B of a triangle
+    (an RRR dyad or an actuated triangle), cos of the rod–guide angle (RRP), s/|CA| (RPR)."""
+    specs = [sp for sp in angle_specs(plan) if angle_type(sp.quantity).reach_limit]
     by_label = {g.describe(): g for g in plan.groups}
     groups = [by_label[sp.group] for sp in specs]
 
     def D(state):
-        P = state.positions
-        out = np.full((P.shape[0], len(specs)), np.nan)
-        for c, sp in enumerate(specs):
-            if sp.quantity == "transmission":
-                A, B, C = (P[:, state.joint_index(n)] for n in sp.points)
-                u, v = A - B, C - B
-                out[:, c] = (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (
-                    np.hypot(*u.T) * np.hypot(*v.T))
-                continue
-            X, Y = (P[:, state.joint_index(n)] for n in sp.points)
-            d = Y - X
-            out[:, c] = np.sum(d * guide_direction(state, sp), axis=-1) / np.hypot(*d.T)
-        return out
+        return signed_dets_of(state, specs)
     return groups, D
 
 

@@ -59,6 +59,7 @@ def transmission_axes(ax, ax2, m, rep):
     # angles sampled along the motion (the exact extremes are in the report)
     from multiloop.topo.assur import decompose
 
+    from .angle_types import angle_type
     from .transmission import angle_specs, angle_values
     specs = angle_specs(decompose(m))
     st = _solve(m, dc.ratio_x)
@@ -66,9 +67,11 @@ def transmission_axes(ax, ax2, m, rep):
     for c, sp in enumerate(specs):
         ax.plot(x, V[:, c], lw=1.4, label=f"{sp.quantity} at {sp.joint}")
     thr = rep.min_transmission
-    ax.axhline(thr, color="r", lw=0.8, ls=":")
-    if any(sp.quantity == "transmission" for sp in specs):
-        ax.axhline(180 - thr, color="r", lw=0.8, ls=":")
+    lines = [thr]                  # the threshold, then each type's own lines
+    for sp in specs:
+        lines += [y for y in angle_type(sp.quantity).plot_lines(thr) if y not in lines]
+    for y in lines:
+        ax.axhline(y, color="r", lw=0.8, ls=":")
     ax.set_ylabel("angle (deg)")
     ma = np.abs(1.0 / np.where(dc.ratio == 0, np.nan, dc.ratio))
     ax2.semilogy(x, np.clip(ma, 1e-3, 1e4), color="k", lw=1.2,

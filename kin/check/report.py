@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..result import json_ready
+from .angle_types import ANGLE_TYPES, angle_type
 from .events import Extreme
 
 __all__ = ["AngleResult", "DriverAngles", "DriverCheck", "GroupCircuit", "CheckReport"]
@@ -24,19 +25,15 @@ class AngleResult:
     """Extremes of one monitored angle (degrees) over a driver's reachable motion."""
 
     joint: str
-    quantity: str           # "transmission", "pressure" or "triad"
+    quantity: str           # its type's name (kin.check.angle_types.ANGLE_TYPES)
     group: str
     extreme: Extreme | None
 
     def flagged(self, threshold: float) -> bool:
+        """Whether an extreme comes within ``threshold`` (deg) of a degenerate value of
+        the angle's type (:meth:`~kin.check.angle_types.AngleType.flagged`)."""
         e = self.extreme
-        if e is None:
-            return False
-        if self.quantity == "pressure":
-            return e.max > 90.0 - threshold
-        if self.quantity == "triad":
-            return e.min < threshold
-        return e.min < threshold or e.max > 180.0 - threshold
+        return e is not None and angle_type(self.quantity).flagged(e.min, e.max, threshold)
 
 
 @dataclass(frozen=True)
@@ -188,13 +185,13 @@ class CheckReport:
     def as_dict(self) -> dict:
         """JSON-ready dict with the documented keys (NaN and infinities as ``None``)."""
         first = self.drivers[0] if self.drivers else None
-        trans, press, triad, dead = {}, {}, {}, {}
-        table = {"transmission": trans, "pressure": press, "triad": triad}
+        tables = {name: {} for name in ANGLE_TYPES}
+        dead = {}
         for dc in self.drivers:
             for a in dc.angles:
                 if a.extreme is None:
                     continue
-                tgt = table[a.quantity]
+                tgt = tables[a.quantity]
                 cur = tgt.get(a.joint)
                 e = a.extreme
                 if cur is None or e.min < cur["min"] or e.max > cur["max"]:
@@ -203,13 +200,13 @@ class CheckReport:
                                     "quantity": a.quantity, "driver": dc.joint}
         if first is not None:
             dead = {k: sorted(first.value(x) for x in xs) for k, xs in first.dead_centres}
+        summaries = {t.summary: {j: {k: v[k] for k in t.summary_keys} for j, v in tables[name].items()}
+                     for name, t in ANGLE_TYPES.items()}
         return json_ready({
             "mechanism": self.mechanism, "formula": self.formula,
             "min_transmission": self.min_transmission,
             "drivers": {dc.joint: dc.as_dict() for dc in self.drivers},
-            "transmission": {k: {"min": v["min"], "max": v["max"]} for k, v in trans.items()},
-            "pressure_angles": press,
-            "triad_transmission": triad,
+            **summaries,
             "dead_centres": dead,
             "circuits": [c.as_dict() for c in self.circuits],
             "branch_points": [{"driver": dc.joint, "at": dc.value(x), "group": g}

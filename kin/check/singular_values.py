@@ -9,9 +9,9 @@ kinematics of in-parallel-actuated robot-arms", J. Mech. Transm. Autom. Des. 105
 extremes are read beside it (1e-9 to 1e-7 of the input away, where a square-root
 approach leaves up to about 1e-2°).  Where the position is such a located point, the
 angle there is known exactly and is reported instead: a value read beside the point
-(toward the reference) that lies within :data:`SNAP` of a degenerate value of its
-quantity is that value at the point, and it competes with the other candidates of the
-extreme.
+(toward the reference) that lies within :data:`SNAP` of a degenerate value of its type
+(:attr:`kin.check.angle_types.AngleType.degenerate`) is that value at the point, and
+it competes with the other candidates of the extreme.
 """
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ from dataclasses import replace
 
 import numpy as np
 
-__all__ = ["DEGENERATE", "SNAP", "singular_points", "exact_extremes"]
+from .angle_types import angle_type
 
-#: the values an angle takes where its group's determinant vanishes (degrees)
-DEGENERATE = {"transmission": (0.0, 180.0), "pressure": (90.0,), "triad": (0.0,)}
+__all__ = ["SNAP", "singular_points", "exact_extremes"]
+
 #: a reading beside a located singular point this close to a degenerate value is it (deg)
 SNAP = 0.5
 
@@ -69,7 +69,7 @@ def exact_extremes(mo, specs, ext, values) -> list:
             e = out[c]
             if e is None or not np.isfinite(v[c]) or (label is not None and sp.group != label):
                 continue
-            exact = min(DEGENERATE.get(sp.quantity, ()), key=lambda d: abs(d - v[c]), default=None)
+            exact = min(angle_type(sp.quantity).degenerate, key=lambda d: abs(d - v[c]), default=None)
             if exact is None or abs(exact - v[c]) > SNAP:
                 continue
             if exact <= e.min:

@@ -26,7 +26,9 @@ Definitions (all in degrees):
 PRP and RPP dyads have no reach limit; their only singularity (parallel guides) is a
 design error rejected when the plan is built, so no angle is reported for them.
 Which angle a group kind has is a fact of the kind, declared by its adapter
-(``monitored_angles``) and asked through :func:`kin.groups.registry.angle_defs`.
+(``monitored_angles``) and asked through :func:`kin.groups.registry.angle_defs`; every
+fact of a type of angle (its formula, range, ideal, degenerate and flagged values) is
+its object in :mod:`kin.check.angle_types`.
 """
 from __future__ import annotations
 
@@ -37,13 +39,15 @@ import numpy as np
 from multiloop.kin.groups.registry import angle_defs
 from multiloop.topo.assur import AssurPlan
 
-__all__ = ["AngleSpec", "angle_specs", "angle_values", "guide_direction"]
+from .angle_types import angle_type, guide_of
+
+__all__ = ["AngleSpec", "angle_specs", "angle_values", "signed_dets_of", "guide_direction"]
 
 
 @dataclass(frozen=True)
 class AngleSpec:
-    """One monitored angle: ``joint`` (where it is reported), ``quantity``
-    (``"transmission"``, ``"pressure"`` or ``"triad"``), the group label and the
+    """One monitored angle: ``joint`` (where it is reported), ``quantity`` (the name of
+    its type in :data:`kin.check.angle_types.ANGLE_TYPES`), the group label and the
     joint/link names the formula needs (``points``: three joint names; ``guide``:
     (P joint, guide link) for sliders; for a triad ``points`` = (Aᵢ, Pᵢ, Aⱼ, Pⱼ, Aₖ, Pₖ))."""
 
@@ -56,7 +60,8 @@ class AngleSpec:
 
     @property
     def ideal(self) -> float:
-        return 0.0 if self.quantity == "pressure" else 90.0
+        """The best value of the angle (its type's, degrees)."""
+        return angle_type(self.quantity).ideal
 
 
 def angle_specs(plan: AssurPlan) -> tuple[AngleSpec, ...]:
@@ -67,19 +72,6 @@ def angle_specs(plan: AssurPlan) -> tuple[AngleSpec, ...]:
         out += [AngleSpec(d.joint, d.quantity, g.describe(), g.kind, d.points, d.guide)
                 for d in angle_defs(m, g)]
     return tuple(out)
-
-
-def _angle(u, w):
-    """Unsigned angle between vectors (…, 2), degrees in [0, 180]."""
-    cr = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
-    dt = u[..., 0] * w[..., 0] + u[..., 1] * w[..., 1]
-    return np.degrees(np.abs(np.arctan2(cr, dt)))
-
-
-def _line_angle(u, w):
-    """Angle between two lines (…, 2), degrees in [0, 90]."""
-    a = _angle(u, w)
-    return np.minimum(a, 180.0 - a)
 
 
 class _StateView:
@@ -101,47 +93,16 @@ class _StateView:
         return ax / np.hypot(*ax)
 
 
-def _guide(view, spec: AngleSpec):
-    """Unit direction (..., 2) of the guide of a pressure angle ``spec`` in the world."""
-    pj, guide = spec.guide
-    ax = view.axis(pj)
-    th = view.angle(guide)
-    c, s = np.cos(th), np.sin(th)
-    return np.stack([c * ax[..., 0] - s * ax[..., 1], s * ax[..., 0] + c * ax[..., 1]], axis=-1)
-
-
 def guide_direction(state, spec: AngleSpec):
     """Unit direction (N, 2) of the guide of a pressure angle ``spec`` in the world."""
-    return _guide(_StateView(state), spec)
-
-
-def _triad(view, names):
-    Ai, Pi, Aj, Pj, Ak, Pk = (view.point(n) for n in names)
-    # homogeneous lines through (A, P): l = (A,1) × (P,1); intersection I = lj × lk
-    def line(A, Q):
-        return np.cross(np.concatenate([A, np.ones_like(A[..., :1])], -1),
-                        np.concatenate([Q, np.ones_like(Q[..., :1])], -1))
-    inter = np.cross(line(Aj, Pj), line(Ak, Pk))
-    w = inter[..., 2:3]
-    scale = np.maximum(np.abs(inter[..., :2]).max(axis=-1, keepdims=True), 1e-300)
-    finite = np.abs(w) > 1e-12 * scale
-    # at infinity the line from Pi to I is parallel to the (parallel) legs j, k
-    to_i = np.where(finite, inter[..., :2] / np.where(finite, w, 1.0) - Pi, Pj - Aj)
-    return _angle(Ai - Pi, to_i)
+    return guide_of(_StateView(state), spec.guide)
 
 
 def spec_value(view, sp: AngleSpec) -> np.ndarray:
-    """One monitored angle in degrees over a view's batch (see :class:`_StateView`):
-    a transmission angle in [0, 180], a pressure angle in [0, 90], a triad's folded
-    angle in [0, 90]."""
-    if sp.quantity == "transmission":
-        A, B, C = (view.point(n) for n in sp.points)
-        return _angle(A - B, C - B)
-    if sp.quantity == "pressure":
-        X, Y = (view.point(n) for n in sp.points)
-        return _line_angle(Y - X, _guide(view, sp))
-    a = _triad(view, sp.points)
-    return np.minimum(a, 180.0 - a)
+    """One monitored angle in degrees over a view's batch (see :class:`_StateView`),
+    computed by its type (:func:`kin.check.angle_types.angle_type`): a transmission
+    angle in [0, 180], a pressure angle in [0, 90], a triad's folded angle in [0, 90]."""
+    return angle_type(sp.quantity).value(view, sp)
 
 
 def angle_values(state, specs) -> np.ndarray:
@@ -150,4 +111,14 @@ def angle_values(state, specs) -> np.ndarray:
     out = np.full((state.positions.shape[0], len(specs)), np.nan)
     for c, sp in enumerate(specs):
         out[:, c] = spec_value(view, sp)
+    return out
+
+
+def signed_dets_of(state, specs) -> np.ndarray:
+    """``(N, len(specs))`` normalised signed determinants of the groups of ``specs`` (their
+    types' :meth:`~kin.check.angle_types.AngleType.signed_det`; zero: singular)."""
+    view = _StateView(state)
+    out = np.full((state.positions.shape[0], len(specs)), np.nan)
+    for c, sp in enumerate(specs):
+        out[:, c] = angle_type(sp.quantity).signed_det(view, sp)
     return out

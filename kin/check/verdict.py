@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .angle_types import angle_type
+
 __all__ = ["verdict", "fmt_input", "fmt_span", "usable_text", "quantity", "SIUnits", "SI"]
 
 
@@ -104,17 +106,14 @@ def _angles(dc, thr: float, u) -> list[str]:
         e = a.extreme
         if e is None or not a.flagged(thr) or e.max - e.min <= 1e-9 * max(1.0, abs(e.max)):
             continue     # (an angle this driver does not change is judged under the driver that does)
-        if a.quantity == "pressure":
-            out.append(f"pressure angle at {a.joint} reaches {deg(e.max)} at {fmt_input(dc, e.at_max, u)} "
-                       f"(above {deg(90 - thr, 'g')}) in {a.group}")
-            continue
-        name = "transmission angle" if a.quantity == "transmission" else "triad transmission angle"
-        if e.min < thr:
-            out.append(f"{name} at {a.joint} falls to {deg(e.min)} at {fmt_input(dc, e.at_min, u)} "
-                       f"(below {deg(thr, 'g')}) in {a.group}")
-        if e.max > 180.0 - thr and a.quantity == "transmission":
-            out.append(f"{name} at {a.joint} rises to {deg(e.max)} at {fmt_input(dc, e.at_max, u)} "
-                       f"(above {deg(180 - thr, 'g')}) in {a.group}")
+        t = angle_type(a.quantity)
+        for d in t.degenerate:
+            if t.low(d) and e.min < d + thr:
+                out.append(f"{t.label} at {a.joint} falls to {deg(e.min)} at {fmt_input(dc, e.at_min, u)} "
+                           f"(below {deg(d + thr, 'g')}) in {a.group}")
+            elif not t.low(d) and e.max > d - thr:
+                out.append(f"{t.label} at {a.joint} {t.rises} {deg(e.max)} at {fmt_input(dc, e.at_max, u)} "
+                           f"(above {deg(d - thr, 'g')}) in {a.group}")
     return out
 
 

@@ -82,9 +82,11 @@ def trig_row(driver: int, sign: float) -> int:
 
 class AngleDef(NamedTuple):
     """One monitored angle of a group (:meth:`GroupStep.monitored_angles`): reported at
-    ``joint``; ``quantity`` is ``"transmission"``, ``"pressure"`` or ``"triad"``
-    (:mod:`kin.check.transmission`); ``points`` the joint names its formula reads;
-    ``guide`` = (P joint, guide link) for a pressure angle."""
+    ``joint``; ``quantity`` is the name of its type, a key of
+    :data:`kin.check.angle_types.ANGLE_TYPES` (``"transmission"``, ``"pressure"``,
+    ``"triad"``, or one registered there), whose object owns its formula, range, ideal
+    and flagged values; ``points`` the joint names its formula reads; ``guide`` =
+    (P joint, guide link) for a pressure angle."""
 
     joint: str
     quantity: str
