@@ -160,7 +160,8 @@ def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail,
 @numba.njit(**_JIT)
 def solve_designs(codes, ints, floats, unknown, steps, trig, frame, X, W, Tw, Cw, Sw, failw, pend, T, C, S):
     """The steps ``steps`` of a plan lowered for D designs (``floats`` (D, n_steps,
-    width): each design's numbers) at the inputs ``X`` (D, N, n_drivers) of each design,
+    width): each design's numbers) at the inputs ``X`` (D, N, n_drivers) of each design
+    (or (1, N, n_drivers) shared by all: their cos and sin computed once),
     on each design's reference branch: design by design, each step over the design's N
     inputs (as :func:`solve_motion`, in the work arrays ``W``, ``Tw`` (n_links, 3, N),
     ``Cw``, ``Sw`` (n_links, N), ``failw`` (N,)), the poses copied into the pose store
@@ -168,12 +169,12 @@ def solve_designs(codes, ints, floats, unknown, steps, trig, frame, X, W, Tw, Cw
     failing step's links are NaN at that input.  ``pend`` (n_links,) is set to 1 for the
     links whose angle rows are left to be derived from their cos and sin (not computed
     here).  Returns the number of failed (design, input) cells."""
-    D, N = X.shape[0], X.shape[1]
+    D, N = floats.shape[0], X.shape[1]
     F = np.ones((codes.shape[0], 1))
     failed = 0
     for d in range(D):
-        Xd = X[d]
-        for t in range(trig.shape[0]):
+        Xd = X[d if X.shape[0] > 1 else 0]
+        for t in range(trig.shape[0] if d == 0 or X.shape[0] > 1 else 0):
             j, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
             for n in range(N):
                 a = Xd[n, j] if trig[t, 1] > 0 else -Xd[n, j]

@@ -210,7 +210,7 @@ def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, bound, steps, X) -> De
     steps on the same branches as the NumPy route, equal to it to rounding."""
     origins = np.stack([np.stack(o, axis=-1) for o in G.org])      # (n_links, D, 1, 2)
     floats = kernel.design_floats(kp, bound, steps, origins, geo.D)
-    X = np.broadcast_to(X, (geo.D, *X.shape[-2:])) if X.ndim == 2 else X
+    X = X[None] if X.ndim == 2 else X                 # (inputs shared by the designs)
     links = [i for k in steps for i in sp.steps[k].unknown]
     C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)
     G.adopt(links, C, S)

@@ -364,7 +364,7 @@ def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.
     (:func:`kin._kernel_nb.solve_designs`): the poses into the store ``T`` (n_links, 3,
     D, N).  Returns the cos and sin rows ``C``, ``S`` (n_links, D, N) and the links
     whose angle rows are still to be derived from them."""
-    nl, (D, N) = T.shape[0], X.shape[:2]
+    nl, D, N = T.shape[0], floats.shape[0], X.shape[1]
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:
         X = X.copy()

@@ -398,13 +398,15 @@ class Problem:
         tim = self.timing_for(Z)
         M = self.M
         grid = np.broadcast_to(self.grid, (Z.shape[0], M))
-        st = self.ev.poses(X, grid if tim is None else np.concatenate([grid, tim], axis=1))
-        idx, valid, cphi, full = self.curve(st.ok[:, :M])
+        st = self.ev.poses(X, self.grid if tim is None else np.concatenate([grid, tim], axis=1))
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
+        ok = st.ok[:, :M]
         if tim is None:
-            cost = self.free_costs(F[:, :M], T, size, st.ok[:, :M], full)
+            full = ok.all(axis=1) if self.rotary else np.zeros(len(ok), bool)    # (as curve's)
+            cost = self.free_costs(F[:, :M], T, size, ok, full)
         else:
+            idx, valid, cphi, full = self.curve(ok)
             cost = np.sum(np.square(self.diff(F[:, M:], T, size)), axis=(1, 2))
             lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
             inside = full[:, None] | ((tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12))
