@@ -128,6 +128,27 @@ def _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend) ->
 
 
 @numba.njit(**_JIT)
+def _trig_table(trig, X, W) -> None:
+    """The table ``W``: cos and sin of ``sign × input`` for each (driver, sign) row of
+    ``trig`` at every row of ``X`` (M, n_drivers)."""
+    for t in range(trig.shape[0]):
+        d, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
+        for n in range(X.shape[0]):
+            a = X[n, d] if trig[t, 1] > 0 else -X[n, d]
+            W[r, n] = np.cos(a)
+            W[r + 1, n] = np.sin(a)
+
+
+@numba.njit(**_JIT)
+def _frame_rows(frame, T, C, S) -> None:
+    """The frame's pose (zero) and its cos and sin (1, 0) at every position."""
+    for n in range(T.shape[2]):
+        T[frame, 0, n] = T[frame, 1, n] = T[frame, 2, n] = 0.0
+        C[frame, n] = 1.0
+        S[frame, n] = 0.0
+
+
+@numba.njit(**_JIT)
 def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail, pend, want_links, hosts, offs,
                  want_points, P):
     """Every step of a lowered plan at every row of ``X`` (M, n_drivers) on the
@@ -140,17 +161,8 @@ def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail,
     ``want_links`` and the points of ``want_points`` (int8 masks) are computed, the
     others NaN (what ``outputs=`` leaves out).  Returns the number of failed rows (an
     array returned would be boxed with its dtype unpickled on every call)."""
-    M = X.shape[0]
-    for t in range(trig.shape[0]):
-        d, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
-        for n in range(M):
-            a = X[n, d] if trig[t, 1] > 0 else -X[n, d]
-            W[r, n] = np.cos(a)
-            W[r + 1, n] = np.sin(a)
-    for n in range(M):
-        T[frame, 0, n] = T[frame, 1, n] = T[frame, 2, n] = 0.0
-        C[frame, n] = 1.0
-        S[frame, n] = 0.0
+    _trig_table(trig, X, W)
+    _frame_rows(frame, T, C, S)
     failed = _steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
                     np.ones((codes.shape[0], 1)), T, C, S, fail, pend)
     finish_rows(T, C, S, pend, want_links, hosts, offs, want_points, P)
@@ -174,19 +186,11 @@ def solve_designs(codes, ints, floats, unknown, steps, trig, frame, X, W, Tw, Cw
     failed = 0
     for d in range(D):
         Xd = X[d if X.shape[0] > 1 else 0]
-        for t in range(trig.shape[0] if d == 0 or X.shape[0] > 1 else 0):
-            j, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
-            for n in range(N):
-                a = Xd[n, j] if trig[t, 1] > 0 else -Xd[n, j]
-                W[r, n] = np.cos(a)
-                W[r + 1, n] = np.sin(a)
-        for n in range(N):
-            Tw[frame, 0, n] = Tw[frame, 1, n] = Tw[frame, 2, n] = 0.0
-            Cw[frame, n] = 1.0
-            Sw[frame, n] = 0.0
-            failw[n] = 0
-        for k in range(pend.size):
-            pend[k] = 0
+        if d == 0 or X.shape[0] > 1:
+            _trig_table(trig, Xd, W)
+        _frame_rows(frame, Tw, Cw, Sw)
+        failw[:] = 0
+        pend[:] = 0
         failed += _steps(codes, ints, floats[d], unknown, steps, Xd, W, F, Tw, Cw, Sw, failw, pend)
         for i in range(steps.size):
             for j in range(unknown.shape[1]):
