@@ -3,6 +3,7 @@ and eight-bars dimensioned by an independent sampler (plain script).
 
 Run:  python benchmarks/bench_unseen_targets.py [--count 20] [--evaluations 40000]
       [--db ATLAS] [--json out.json]
+      python benchmarks/bench_unseen_targets.py --coverage 20   (no synthesis)
 
 The atlas's realisations (``catalogue.realisations.realise``) draw link proportions
 from their own distribution, so targets traced by them (``bench_topology_synthesis.py
@@ -22,7 +23,9 @@ budget (reproducible, whatever the machine's load).  Reported per target: the be
 design's error (max distance of the polished target points, over the target's size)
 and deviation (every target point to the design's traced curve), its links, and the
 CPU seconds.  The summary: median and mean deviation, how many within 1e-3 and 1e-2,
-and how many beat the best four-bar.
+and how many beat the best four-bar.  ``--coverage N`` measures instead how far fresh
+targets lie from the stored curves (the nearest descriptor, exact scan), unseen ones
+against the atlas's own sampler's, and the index's recall@10 on them.
 """
 from __future__ import annotations
 
@@ -141,6 +144,37 @@ def summary(rows: list[dict]) -> str:
             f"CPU per target {np.mean([r['atlas_cpu_s'] for r in rows]):.1f} s")
 
 
+def coverage(count: int, db: str | None, seed: int = 0) -> dict:
+    """The curve space's coverage: the descriptor distance (exact scan) from each fresh
+    target to its nearest stored curve, for ``count`` targets of the unseen sampler and
+    ``count`` of the atlas's own sampler (fresh seeds), and the recall@10 of the index
+    the synthesiser uses against the exact scan on the same queries."""
+    from multiloop.catalogue.atlas import Atlas
+    from multiloop.catalogue.curve_atlas import CurveIndex
+    from multiloop.catalogue.curves import descriptor
+    from multiloop.catalogue.default_atlas import default_atlas_path
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_topology_synthesis import _fresh_target
+
+    path = str(db or default_atlas_path())
+    rng = np.random.default_rng(seed)
+    bases = [load_named(n) for n in SIX_BARS] + [_eight_bar_with_triple_pin()]
+    unseen = [unseen_target(bases[i % len(bases)], rng)[1] for i in range(count)]
+    own = [_fresh_target(path, 6 if i % 2 == 0 else 8, 10 ** 6 + 1000 * i)[1] for i in range(count)]
+    out = {}
+    with Atlas(path, readonly=True) as atlas:
+        exact, index = CurveIndex(atlas, exact=True), CurveIndex(atlas)
+        for label, curves in (("unseen", unseen), ("own sampler", own)):
+            ds = [descriptor(c, closed=True) for c in curves]
+            near = [exact.query(d, 10) for d in ds]
+            got = [index.query(d, 10) for d in ds]
+            out[label] = {"nearest": [h[0].distance for h in near],
+                          "recall_at_10": float(np.mean([len({x.curve for x in a} & {x.curve for x in b}) / 10
+                                                         for a, b in zip(near, got)]))}
+        out["curves"], out["index"] = len(exact), index.kind
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--count", type=int, default=20)
@@ -148,8 +182,21 @@ def main(argv=None) -> int:
     ap.add_argument("--db", default=None, help="the atlas with curves (default: the default atlas)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--coverage", type=int, default=0,
+                    help="only the coverage: this many targets of each sampler, no synthesis")
     a = ap.parse_args(argv)
     t = time.time()
+    if a.coverage:
+        cov = coverage(a.coverage, a.db, a.seed)
+        for label in ("unseen", "own sampler"):
+            d = np.array(cov[label]["nearest"])
+            print(f"{label}: nearest stored curve (descriptor distance, exact scan over {cov['curves']:,} curves) "
+                  f"median {np.median(d):.3g}, max {d.max():.3g}; {cov['index']} recall@10 "
+                  f"{cov[label]['recall_at_10']:.2f}")
+        if a.json:
+            with open(a.json, "w") as f:
+                json.dump(cov, f, indent=1)
+        return 0
     rows = run(a.count, a.evaluations, a.db, a.seed)
     line = summary(rows)
     print(line)
