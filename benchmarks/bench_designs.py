@@ -5,7 +5,8 @@ Run:  python benchmarks/bench_designs.py [--quick]
 Measured in one run, each the best of a few repeats (CPU, one thread):
 
 * four-bar coupler curves, D = 10⁴ designs × N = 96 positions:
-  ``kin.design.solve_designs(..., outputs=["P"])`` against a bare NumPy closed form of
+  ``kin.design.solve_designs(..., outputs=["P"])`` on the compiled route (synthesis's;
+  the NumPy route's ratio beside it) against a bare NumPy closed form of
   the same curves (crank cos/sin, one RRR, the coupler point; no status, no pose store);
 * Stephenson III (class III triad) curves, D = 10³ × N = 96: the batch against the
   per-candidate route (each design's steps run alone along the inputs: the triad
@@ -32,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from multiloop.catalogue.dimensional import design_space  # noqa: E402
 from multiloop.catalogue.named import load_named  # noqa: E402
+from multiloop.kin import kernel  # noqa: E402
 from multiloop.kin.design import design_mechanism, solve_designs  # noqa: E402
 from multiloop.kin.design import _one_design  # noqa: E402  (the per-candidate route, for the ratio)
 from multiloop.kin.solve import plan_of  # noqa: E402
@@ -83,13 +85,18 @@ def four_bar_goal(D: int, N: int) -> None:
     names, X = _population(m, D, 0.02)
     phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)
     plan_of(m)
-    ours, r = _best(lambda: solve_designs(m, names, X, phi, outputs=["P"]).point("P"))
+    with kernel.using("off"):
+        numpy_route, _ = _best(lambda: solve_designs(m, names, X, phi, outputs=["P"]).point("P"))
+    with kernel.using("on"):               # synthesis's route (kin.kernel.compiled_batches)
+        solve_designs(m, names, X[:2], phi)
+        ours, r = _best(lambda: solve_designs(m, names, X, phi, outputs=["P"]).point("P"))
     floor, P = _best(lambda: bare_curves(m, names, X, phi))
     both = np.isfinite(r[..., 0]) & np.isfinite(P[..., 0])
     dev = float(np.max(np.abs(r[both] - P[both])))
     ratio = ours / floor
-    print(f"four-bar coupler curves, D = {D} x N = {N}: batch {ours * 1e3:.1f} ms "
-          f"({ours / (D * N) * 1e9:.0f} ns per design-position), bare NumPy closed form {floor * 1e3:.1f} ms, "
+    print(f"four-bar coupler curves, D = {D} x N = {N}: batch {ours * 1e3:.1f} ms compiled "
+          f"({ours / (D * N) * 1e9:.0f} ns per design-position; NumPy route {numpy_route * 1e3:.1f} ms, "
+          f"{numpy_route / floor:.2f}x), bare NumPy closed form {floor * 1e3:.1f} ms, "
           f"largest difference {dev:.1e} m; goal ratio <= 1.5: {ratio:.2f} -> {'MET' if ratio <= 1.5 else 'NOT MET'}")
 
 
