@@ -707,7 +707,7 @@ def _coarse_follow(A, b, l, start):
 
 
 @quiet
-def track_designs(A, b, l, start, *, stride=32):
+def track_designs(A, b, l, start, *, stride=32, jit=False):
     """Follow each design's mode along its inputs, as :func:`~kin.groups.triad.triad_track`.
 
     Parameters
@@ -720,6 +720,10 @@ def track_designs(A, b, l, start, *, stride=32):
         Each design's binary lengths (per input for a reduction, e.g. class IV's).
     start : ndarray, shape (D, 3, 2)
         Points near the wanted mode at ``A[:, 0]``.
+    jit : bool, optional
+        Predict, polish and accept the inputs between the coarse ones with the compiled
+        functions of :mod:`kin.groups._triad_nb` (equal to the NumPy route to rounding),
+        when numba is installed.
 
     Returns
     -------
@@ -733,9 +737,10 @@ def track_designs(A, b, l, start, *, stride=32):
     status = np.full((Dn, N), 3)
     finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     alone = ~finite
+    nb = _kernel() if jit else None
     if finite.any():                              # a short path: all modes at every input
         rows = np.flatnonzero(finite)
-        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride if N > 2 * stride else 1)
+        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride if N > 2 * stride else 1, nb)
         P[rows[k]], th[rows[k]], status[rows[k]] = Pd, thd, 0
         alone[rows] = True
         alone[rows[k]] = False
@@ -745,9 +750,19 @@ def track_designs(A, b, l, start, *, stride=32):
     return P, th, status
 
 
-def _fill(A, b, L, start, stride):
+def _kernel():
+    """The compiled tracker (:mod:`kin.groups._triad_nb`), or None without numba."""
+    try:
+        from . import _triad_nb
+    except (ImportError, RuntimeError):        # no numba, or no writable cache directory
+        return None
+    return _triad_nb
+
+
+def _fill(A, b, L, start, stride, nb=None):
     """Phases 1 and 2 of the tracker for designs whose coarse inputs all follow and whose
-    every other input is accepted: their rows, ``P`` and ``theta`` (the rest are not done)."""
+    every other input is accepted: their rows, ``P`` and ``theta`` (the rest are not done).
+    With ``nb`` (:func:`_kernel`) phase 2 runs compiled."""
     Dn, N = A.shape[:2]
     c = _coarse(N, stride)
     Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start)
@@ -767,6 +782,8 @@ def _fill(A, b, L, start, stride):
     left = np.searchsorted(c, fine, side="right") - 1
     right = np.minimum(left + 1, len(c) - 1)
     kn = np.where(fine - c[left] <= c[right] - fine, left, right)
+    if nb is not None:
+        return _fill_compiled(nb, g, A, b - b[:, :1], L, (c, fine, kn), Pc, thc, sep)
     Pp, dth, sing = _predict(A[:, c[kn]], Pc[:, kn], A[:, fine], L[:, c[kn]], L[:, fine])
     bb = (b - b[:, :1])[:, None]
     Pf, thf, res = _polish(A[:, fine], bb, L[:, fine], Pp[..., 0, :], thc[:, kn] + dth)
@@ -777,6 +794,16 @@ def _fill(A, b, L, start, stride):
     thd = np.empty((len(g), N))
     Pd[:, c], thd[:, c] = Pc, thc
     Pd[:, fine], thd[:, fine] = Pf, _wrap(thf)
+    return g[done], Pd[done], thd[done]
+
+
+def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
+    """Phase 2 of :func:`_fill` by :func:`kin.groups._triad_nb.fill_fine`."""
+    Gn, N = A.shape[:2]
+    Pd, thd, done = np.empty((Gn, N, 3, 2)), np.empty((Gn, N)), np.empty(Gn, bool)
+    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.ascontiguousarray(a, np.int64))  # noqa: E731
+    nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
+                 SINGULAR_RTOL, Pd, thd, done)
     return g[done], Pd[done], thd[done]
 
 
@@ -851,7 +878,7 @@ class TriadStep(GroupStep):
         A = np.stack([G.point(k, self.A[..., i, :]) for i, k in enumerate(self.known)], axis=-2)  # (D, N, 3, 2)
         o = self.A[:, :, :1]                 # (D, 1, 1, 2): about the reference anchor, as alone
         b = (self.b - o)[:, 0]
-        P, th, status = track_designs(A - o, b, self.lengths[:, 0], b)
+        P, th, status = track_designs(A - o, b, self.lengths[:, 0], b, jit=self.jit)
         self._place(G, A, P + o, th)
         return Outcome(status == 0, {}, None)
 
