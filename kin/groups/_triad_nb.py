@@ -159,3 +159,21 @@ def fill_fine(A, bb, L, Pc, thc, sep, c, fine, kn, iters, tol, accept, rtol, Pd,
                     and _dist(Pd[g, f], Pc[g, k]) <= 0.5 * sep[g, k]):
                 done[g] = False
                 break
+
+
+@numba.njit(**_JIT)
+def polish_many(A, bb, l, p, th, iters, tol, rtol, P, tho, res):
+    """``triad._polish`` over K inputs: ``A`` and ``bb`` (K, 3, 2), ``l`` (K, 3), ``p``
+    (K, 2), ``th`` (K,); writes ``P`` (K, 3, 2), ``tho`` and ``res`` (K,)."""
+    w = np.empty(24)
+    for k in range(A.shape[0]):
+        tho[k], res[k] = _polish(A[k], bb[k], l[k], p[k, 0], p[k, 1], th[k], P[k], w, iters, tol, rtol)
+
+
+@numba.njit(**_JIT)
+def predict_many(A0, P0, A1, l0, l1, rtol, P, dth, sing):
+    """``triad._predict`` over K inputs (arrays (K, 3, 2) and (K, 3)); writes ``P``
+    (K, 3, 2), ``dth`` and ``sing`` (K,)."""
+    w = np.empty(24)
+    for k in range(A0.shape[0]):
+        dth[k], sing[k] = _predict(A0[k], P0[k], A1[k], l0[k], l1[k], P[k], w, rtol)

@@ -179,6 +179,32 @@ def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
     return P, th, res
 
 
+def _flat(a, shape):
+    return np.ascontiguousarray(np.broadcast_to(a, shape), float)
+
+
+def _polish_nb(nb):
+    """:func:`_polish` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.polish_many`."""
+    def polish(A, bb, l, p, th):
+        K = A.shape[0]
+        P, tho, res = np.empty((K, 3, 2)), np.empty(K), np.empty(K)
+        nb.polish_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), _flat(p, (K, 2)),
+                       _flat(th, (K,)), _NEWTON_ITERS, 1e-12, SINGULAR_RTOL, P, tho, res)
+        return P, tho, res
+    return polish
+
+
+def _predict_nb(nb):
+    """:func:`_predict` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.predict_many`."""
+    def predict(A0, P0, A1, l0, l1):
+        K = A0.shape[0]
+        P, dth, sing = np.empty((K, 3, 2)), np.empty(K), np.empty(K, bool)
+        nb.predict_many(_flat(A0, (K, 3, 2)), _flat(P0, (K, 3, 2)), _flat(A1, (K, 3, 2)), _flat(l0, (K, 3)),
+                        _flat(l1, (K, 3)), SINGULAR_RTOL, P, dth, sing)
+        return P, dth, sing
+    return predict
+
+
 def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
@@ -307,6 +333,12 @@ def triad_modes(A, b, l) -> TriadModes:
     >>> int(triad_modes(A, b, [0.593942, 0.561953, 0.53133]).n_modes)
     6
     """
+    return _modes(A, b, l)
+
+
+def _modes(A, b, l, nb=None) -> TriadModes:
+    """:func:`triad_modes`; with ``nb`` (:func:`_kernel`) the candidates are polished by
+    the compiled :func:`kin.groups._triad_nb.polish_many`."""
     A, single = _as_batch(A, (3, 2))
     b = np.asarray(b, dtype=float)
     l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
@@ -317,7 +349,8 @@ def triad_modes(A, b, l) -> TriadModes:
     ri, ki = np.nonzero(cand)                            # polish the candidates only
     per = bb.ndim == 3                                   # a reference per position
     p0 = _position_from_angle(A[ri], bc[ri] if per else bc, a[ri], l[ri], th0[ri, ki])
-    Pk, thk, resk = _polish(A[ri], bb[ri] if per else bb, l[ri], p0, th0[ri, ki])
+    Pk, thk, resk = (_polish if nb is None else _polish_nb(nb))(A[ri], bb[ri] if per else bb, l[ri], p0,
+                                                                 th0[ri, ki])
     P = np.full((N, MAX_MODES, 3, 2), np.nan)
     th = np.full((N, MAX_MODES), np.nan)
     res = np.full((N, MAX_MODES), np.inf)
@@ -686,12 +719,13 @@ def _coarse(N: int, stride: int) -> np.ndarray:
     return c if c[-1] == N - 1 else np.append(c, N - 1)
 
 
-def _coarse_follow(A, b, l, start):
+def _coarse_follow(A, b, l, start, nb=None):
     """All modes at each design's inputs ``A`` (D, n, 3, 2) and the mode followed from the
-    one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n)."""
+    one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n).  With ``nb``
+    (:func:`_kernel`) the polish and the predictions run compiled."""
     Dn, n = A.shape[:2]
     bn = np.broadcast_to(b[:, None], (Dn, n, 3, 2)).reshape(-1, 3, 2)
-    m = triad_modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3))
+    m = _modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3), nb)
     P = m.P.reshape(Dn, n, MAX_MODES, 3, 2)
     th = m.theta.reshape(Dn, n, MAX_MODES)
     valid = np.isfinite(th)
@@ -700,8 +734,9 @@ def _coarse_follow(A, b, l, start):
     j0 = np.where(np.isfinite(d0).any(axis=1), np.argmin(d0, axis=1), -1)
     Pi = np.where(valid[:, :-1, :, None, None], P[:, :-1], A[:, :-1, None])
     rep = lambda a: np.repeat(a[:, :, None], MAX_MODES, axis=2).reshape(-1, *a.shape[2:])  # noqa: E731
-    pred = _predict(rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]),
-                    rep(l[:, 1:]))[0].reshape(Dn, n - 1, MAX_MODES, 3, 2)
+    pred = (_predict if nb is None else _predict_nb(nb))(
+        rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]), rep(l[:, 1:]))[0].reshape(
+        Dn, n - 1, MAX_MODES, 3, 2)
     idx, status = follow_modes_batch(P, valid, pred, j0)
     return P, th, idx, status
 
@@ -765,7 +800,7 @@ def _fill(A, b, L, start, stride, nb=None):
     With ``nb`` (:func:`_kernel`) phase 2 runs compiled."""
     Dn, N = A.shape[:2]
     c = _coarse(N, stride)
-    Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start)
+    Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start, nb)
     good = np.all(ic >= 0, axis=1)
     if not good.any():
         return np.zeros(0, int), np.zeros((0, N, 3, 2)), np.zeros((0, N))
