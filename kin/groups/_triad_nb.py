@@ -1,15 +1,22 @@
 """The numba side of the batched triad tracker (:func:`kin.groups.triad.track_designs`):
-the Taylor prediction and Newton polish of every fine input, compiled.
+the coarse inputs' companion eigenvalues, candidate polish and mode predictions, and
+the Taylor prediction, Newton polish and acceptance of every other input, compiled.
 
 Imported only when the compiled route is wanted (:func:`kin.kernel.wanted`, passed down
 by :mod:`kin.design` as the step's ``jit``); the NumPy functions of
-:mod:`kin.groups.triad` stay the oracle and the route when the kernel is off.  Each
-function below does the NumPy route's operations in the same order, one design and one
-input at a time with scalars (no temporaries), so the floats agree to rounding (NumPy's
-and libm's ``cos``/``sin`` may differ by an ulp) and the acceptance tests give the same
-answers.  The prediction is the second-order Taylor step of the triad's rates (the
-Cramer-rule system of Vasechkin et al. 2017, extended to the triad), the polish Newton
-on its three closure equations (Hunt 1983 for the modes).
+:mod:`kin.groups.triad` stay the oracle and the route when the kernel is off.  The
+prediction, polish and acceptance do the NumPy route's operations in the same order,
+one design and one input at a time with scalars (no temporaries), so the floats agree
+to rounding (NumPy's and libm's ``cos``/``sin`` may differ by an ulp) and the tests
+give the same answers.  The prediction is the second-order Taylor step of the triad's
+rates (the Cramer-rule system of Vasechkin et al. 2017, extended to the triad), the
+polish Newton on its three closure equations (Hunt 1983 for the modes).  The
+eigenvalues are not LAPACK's operations: the companion matrix (already upper
+Hessenberg) is balanced (Parlett and Reinsch 1969) and reduced by Francis's
+double-shift QR (EISPACK's ``hqr``, Wilkinson and Reinsch 1971), a few times faster
+than a LAPACK call per 6×6 matrix; its roots differ from LAPACK's by rounding (a
+double root's by the square root of it), and the Newton polish that follows takes
+both to the same modes.
 """
 from __future__ import annotations
 
@@ -18,7 +25,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["fill_fine", "polish_many", "predict_many"]
+__all__ = ["fill_fine", "polish_many", "predict_many", "companion_roots"]
 
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -177,3 +184,203 @@ def predict_many(A0, P0, A1, l0, l1, rtol, P, dth, sing):
     w = np.empty(24)
     for k in range(A0.shape[0]):
         dth[k], sing[k] = _predict(A0[k], P0[k], A1[k], l0[k], l1[k], P[k], w, rtol)
+
+
+@numba.njit(**_JIT)
+def _balance(a, n):
+    """Balance ``a`` (1-based, n×n) by powers of 2 in place (Parlett and Reinsch 1969),
+    as before a Hessenberg QR: the eigenvalues stay, their rounding errors shrink."""
+    last = False
+    while not last:
+        last = True
+        for i in range(1, n + 1):
+            r = c = 0.0
+            for j in range(1, n + 1):
+                if j != i:
+                    c += abs(a[j, i])
+                    r += abs(a[i, j])
+            if c != 0.0 and r != 0.0:
+                g, f, s = r / 2.0, 1.0, c + r
+                while c < g:
+                    f *= 2.0
+                    c *= 4.0
+                g = r * 2.0
+                while c > g:
+                    f /= 2.0
+                    c /= 4.0
+                if (c + r) / f < 0.95 * s:
+                    last = False
+                    for j in range(1, n + 1):
+                        a[i, j] *= 1.0 / f
+                    for j in range(1, n + 1):
+                        a[j, i] *= f
+
+
+@numba.njit(**_JIT)
+def _small_sub(a, nn, anorm):
+    """The lowest ``l`` (1-based) of the active block of ``a`` whose subdiagonal entry
+    is negligible (zeroed), 1 if none."""
+    for l in range(nn, 1, -1):
+        s = abs(a[l - 1, l - 1]) + abs(a[l, l])
+        if s == 0.0:
+            s = anorm
+        if abs(a[l, l - 1]) + s == s:
+            a[l, l - 1] = 0.0
+            return l
+    return 1
+
+
+@numba.njit(**_JIT)
+def _two(a, nn, t, wr, wi):
+    """The two eigenvalues of the trailing 2×2 block ``nn - 1, nn`` into ``wr``, ``wi``."""
+    x, y, w = a[nn, nn], a[nn - 1, nn - 1], a[nn, nn - 1] * a[nn - 1, nn]
+    p = 0.5 * (y - x)
+    q = p * p + w
+    z = np.sqrt(abs(q))
+    x += t
+    if q >= 0.0:
+        z = p + (z if p >= 0.0 else -z)
+        wr[nn - 1] = wr[nn] = x + z
+        if z != 0.0:
+            wr[nn] = x - w / z
+        wi[nn - 1] = wi[nn] = 0.0
+    else:
+        wr[nn - 1] = wr[nn] = x + p
+        wi[nn] = z
+        wi[nn - 1] = -z
+
+
+@numba.njit(**_JIT)
+def _shift_start(a, nn, l, x, y, w):
+    """Francis's double shift (shifts from ``x``, ``y``, ``w``): the row ``m`` where the
+    sweep starts, and its first Householder vector ``p, q, r``."""
+    m = nn - 2
+    while True:
+        z = a[m, m]
+        r = x - z
+        s = y - z
+        p = (r * s - w) / a[m + 1, m] + a[m, m + 1]
+        q = a[m + 1, m + 1] - z - r - s
+        r = a[m + 2, m + 1]
+        s = abs(p) + abs(q) + abs(r)
+        p /= s
+        q /= s
+        r /= s
+        if m == l:
+            break
+        u = abs(a[m, m - 1]) * (abs(q) + abs(r))
+        v = abs(p) * (abs(a[m - 1, m - 1]) + abs(z) + abs(a[m + 1, m + 1]))
+        if u + v == v:
+            break
+        m -= 1
+    return m, p, q, r
+
+
+@numba.njit(**_JIT)
+def _sweep(a, nn, l, m, p, q, r):
+    """One implicit double-shift QR sweep over rows ``m..nn`` of the block ``l..nn``."""
+    for i in range(m + 2, nn + 1):
+        a[i, i - 2] = 0.0
+        if i != m + 2:
+            a[i, i - 3] = 0.0
+    x = 0.0
+    for k in range(m, nn):
+        if k != m:
+            p, q = a[k, k - 1], a[k + 1, k - 1]
+            r = a[k + 2, k - 1] if k != nn - 1 else 0.0
+            x = abs(p) + abs(q) + abs(r)
+            if x != 0.0:
+                p /= x
+                q /= x
+                r /= x
+        s = np.sqrt(p * p + q * q + r * r)
+        if p < 0.0:
+            s = -s
+        if s == 0.0:
+            continue
+        if k == m:
+            if l != m:
+                a[k, k - 1] = -a[k, k - 1]
+        else:
+            a[k, k - 1] = -s * x
+        p += s
+        x, y, z = p / s, q / s, r / s
+        q /= p
+        r /= p
+        for j in range(k, nn + 1):
+            p = a[k, j] + q * a[k + 1, j]
+            if k != nn - 1:
+                p += r * a[k + 2, j]
+                a[k + 2, j] -= p * z
+            a[k + 1, j] -= p * y
+            a[k, j] -= p * x
+        for i in range(l, min(nn, k + 3) + 1):
+            p = x * a[i, k] + y * a[i, k + 1]
+            if k != nn - 1:
+                p += z * a[i, k + 2]
+                a[i, k + 2] -= p * r
+            a[i, k + 1] -= p * q
+            a[i, k] -= p
+
+
+@numba.njit(**_JIT)
+def _hqr(a, n, wr, wi):
+    """The eigenvalues of the upper Hessenberg ``a`` (1-based, n×n, destroyed) into
+    ``wr``, ``wi`` (1-based) by Francis's double-shift QR (EISPACK's ``hqr``, Wilkinson
+    and Reinsch 1971); False if an eigenvalue took more than 60 sweeps."""
+    anorm = 0.0
+    for i in range(1, n + 1):
+        for j in range(max(i - 1, 1), n + 1):
+            anorm += abs(a[i, j])
+    nn, t = n, 0.0
+    while nn >= 1:
+        its = 0
+        while True:
+            l = _small_sub(a, nn, anorm)
+            x = a[nn, nn]
+            if l == nn:                                # one real eigenvalue
+                wr[nn], wi[nn] = x + t, 0.0
+                nn -= 1
+                break
+            if l == nn - 1:                            # a 2×2 block
+                _two(a, nn, t, wr, wi)
+                nn -= 2
+                break
+            if its == 60:
+                return False
+            y, w = a[nn - 1, nn - 1], a[nn, nn - 1] * a[nn - 1, nn]
+            if its == 10 or its == 20:                 # exceptional shift
+                t += x
+                for i in range(1, nn + 1):
+                    a[i, i] -= x
+                s = abs(a[nn, nn - 1]) + abs(a[nn - 1, nn - 2])
+                x = y = 0.75 * s
+                w = -0.4375 * s * s
+            its += 1
+            m, p, q, r = _shift_start(a, nn, l, x, y, w)
+            _sweep(a, nn, l, m, p, q, r)
+    return True
+
+
+@numba.njit(**_JIT)
+def companion_roots(comp, good, re, im):
+    """The eigenvalues of the 6×6 companion matrices ``comp`` (K, 6, 6) (upper Hessenberg),
+    balanced then by :func:`_hqr`, into ``re``, ``im`` (K, 6); 10 where not ``good`` (as
+    the NumPy route's stand-in matrix), NaN where the QR does not converge."""
+    a = np.zeros((7, 7))
+    wr, wi = np.empty(7), np.empty(7)
+    for k in range(comp.shape[0]):
+        if not good[k]:
+            re[k, :] = 10.0
+            im[k, :] = 0.0
+            continue
+        for i in range(6):
+            for j in range(6):
+                a[i + 1, j + 1] = comp[k, i, j]
+        _balance(a, 6)
+        if _hqr(a, 6, wr, wi):
+            re[k, :] = wr[1:]
+            im[k, :] = wi[1:]
+        else:
+            re[k, :] = np.nan
+            im[k, :] = np.nan

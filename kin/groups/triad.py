@@ -262,7 +262,7 @@ _BASIS = _tan_half_basis()
 _GRID = np.exp(1j * np.outer(np.arange(3, -4, -1), 2 * np.pi * np.arange(16) / 16))  # (7, 16)
 
 
-def _unit_circle_roots(coef):
+def _unit_circle_roots(coef, nb=None):
     """Angles of the roots of ``z³F(z)`` on the unit circle (the real modes).
 
     ``F`` is real on the circle, so with ``θ = σ + ψ`` and ``t = tan(ψ/2)`` the
@@ -271,7 +271,9 @@ def _unit_circle_roots(coef):
     that ``ψ = π`` (``t = ∞``) falls on the largest of the 16 samples of ``F``: the
     leading coefficient is then that sample and no root escapes to infinity.
     Returns candidate angles (N, 6), the candidate mask (roots within ~1e-3 of
-    the circle) and the per-position ``good`` mask.
+    the circle) and the per-position ``good`` mask.  With ``nb`` (:func:`_kernel`) the
+    eigenvalues come from the compiled balanced Hessenberg QR
+    (:func:`kin.groups._triad_nb.companion_roots`) instead of LAPACK's (to rounding).
     """
     N = coef.shape[0]
     samples = (coef @ _GRID).real                        # F at 2πk/16
@@ -287,7 +289,12 @@ def _unit_circle_roots(coef):
     comp[:, np.arange(1, 6), np.arange(5)] = 1.0
     good &= np.isfinite(comp).all(axis=(1, 2))
     comp[~good] = np.eye(6) * 10.0
-    t = np.linalg.eigvals(comp)                          # (N, 6) complex
+    if nb is None:
+        t = np.linalg.eigvals(comp)                      # (N, 6) complex
+    else:
+        re, im = np.empty((N, 6)), np.empty((N, 6))
+        nb.companion_roots(comp, good, re, im)
+        t = re + 1j * im
     cand = np.abs(t.imag) < 0.5 * _ON_CIRCLE * (1.0 + np.abs(t) ** 2)
     th0 = sigma[:, None] + 2.0 * np.arctan(t.real)
     return th0, cand & good[:, None], good
@@ -337,15 +344,15 @@ def triad_modes(A, b, l) -> TriadModes:
 
 
 def _modes(A, b, l, nb=None) -> TriadModes:
-    """:func:`triad_modes`; with ``nb`` (:func:`_kernel`) the candidates are polished by
-    the compiled :func:`kin.groups._triad_nb.polish_many`."""
+    """:func:`triad_modes`; with ``nb`` (:func:`_kernel`) the companion eigenvalues and the
+    candidates' polish are compiled (:mod:`kin.groups._triad_nb`)."""
     A, single = _as_batch(A, (3, 2))
     b = np.asarray(b, dtype=float)
     l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
     N = A.shape[0]
     bb = b - b[..., :1, :]
     coef, bc, a = _poly_coefficients(A, bb, l)
-    th0, cand, good = _unit_circle_roots(coef)
+    th0, cand, good = _unit_circle_roots(coef, nb)
     ri, ki = np.nonzero(cand)                            # polish the candidates only
     per = bb.ndim == 3                                   # a reference per position
     p0 = _position_from_angle(A[ri], bc[ri] if per else bc, a[ri], l[ri], th0[ri, ki])
