@@ -384,3 +384,60 @@ def companion_roots(comp, good, re, im):
         else:
             re[k, :] = np.nan
             im[k, :] = np.nan
+
+
+@numba.njit(**_JIT)
+def _gap(X, a, Y, b):
+    """``triad._dist`` of ``X[a]`` and ``Y[b]`` (points (k, 2)), summed as NumPy does."""
+    s = 0.0
+    for c in range(X.shape[1]):
+        for x in range(2):
+            s += (X[a, c, x] - Y[b, c, x]) ** 2
+    return np.sqrt(s)
+
+
+@numba.njit(**_JIT)
+def _next_mode(P, valid, pred, i, a, ratio):
+    """``follow_modes_batch``'s step of one path from mode ``a`` at position ``i``: the
+    matched mode at ``i + 1``, or -1."""
+    M = valid.shape[1]
+    d1, d2, k1 = np.inf, np.inf, -1
+    for b in range(M):
+        d = _gap(pred[i], a, P[i + 1], b) if valid[i + 1, b] else np.inf
+        if d != d:
+            d = np.inf
+        if d < d1 or k1 < 0:
+            d1, d2, k1 = d, d1 if k1 >= 0 else d2, b
+        elif d < d2:
+            d2 = d
+    sep = np.inf
+    for b in range(M):
+        if b != a and valid[i, a] and valid[i, b]:
+            q = _gap(P[i], a, P[i], b)
+            if q < sep:
+                sep = q
+    step = _gap(P[i], a, P[i + 1], k1)
+    ok = np.isfinite(d1) and d1 <= ratio * d2 and step <= ratio * sep and d1 <= ratio * sep
+    return k1 if ok and valid[i, a] else -1
+
+
+@numba.njit(**_JIT)
+def follow_batch(P, valid, pred, start, ratio, idx, status):
+    """``triad.follow_modes_batch`` along D paths: ``P`` (D, N, M, k, 2), ``valid`` (D, N,
+    M), ``pred`` (D, N-1, M, k, 2), ``start`` (D,); writes ``idx`` and ``status`` (D, N),
+    the candidates scored only along each path's followed mode."""
+    for d in range(P.shape[0]):
+        idx[d, :] = -1
+        status[d, :] = 3
+        status[d, 0] = 0
+        idx[d, 0] = start[d]
+        j = start[d]
+        for i in range(P.shape[1] - 1):
+            if j < 0:
+                break
+            j = _next_mode(P[d], valid[d], pred[d], i, j, ratio)
+            if j < 0:
+                status[d, i + 1] = 2
+            else:
+                idx[d, i + 1] = j
+                status[d, i + 1] = 0

@@ -729,7 +729,7 @@ def _coarse(N: int, stride: int) -> np.ndarray:
 def _coarse_follow(A, b, l, start, nb=None):
     """All modes at each design's inputs ``A`` (D, n, 3, 2) and the mode followed from the
     one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n).  With ``nb``
-    (:func:`_kernel`) the polish and the predictions run compiled."""
+    (:func:`_kernel`) the polish, the predictions and the following run compiled."""
     Dn, n = A.shape[:2]
     bn = np.broadcast_to(b[:, None], (Dn, n, 3, 2)).reshape(-1, 3, 2)
     m = _modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3), nb)
@@ -744,7 +744,12 @@ def _coarse_follow(A, b, l, start, nb=None):
     pred = (_predict if nb is None else _predict_nb(nb))(
         rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]), rep(l[:, 1:]))[0].reshape(
         Dn, n - 1, MAX_MODES, 3, 2)
-    idx, status = follow_modes_batch(P, valid, pred, j0)
+    if nb is None:
+        idx, status = follow_modes_batch(P, valid, pred, j0)
+    else:                                         # kin.groups._triad_nb.follow_batch
+        idx, status = np.empty(valid.shape[:2], np.int64), np.empty(valid.shape[:2], np.int64)
+        nb.follow_batch(np.ascontiguousarray(P), np.ascontiguousarray(valid), np.ascontiguousarray(pred),
+                        np.ascontiguousarray(j0, np.int64), 0.5, idx, status)
     return P, th, idx, status
 
 
