@@ -1,31 +1,31 @@
 """The numba side of the batched triad tracker (:func:`kin.groups.triad.track_designs`):
-the coarse inputs' companion eigenvalues, candidate polish and mode predictions, and
-the Taylor prediction, Newton polish and acceptance of every other input, compiled.
+all the modes at the coarse inputs (:func:`modes_many`), their predictions and following
+(:func:`predict_many`, :func:`follow_batch`), and the Taylor prediction, Newton polish
+and acceptance of every other input (:func:`fill_fine`), compiled.
 
 Imported only when the compiled route is wanted (:func:`kin.kernel.wanted`, passed down
 by :mod:`kin.design` as the step's ``jit``); the NumPy functions of
 :mod:`kin.groups.triad` stay the oracle and the route when the kernel is off.  The
-prediction, polish and acceptance do the NumPy route's operations in the same order,
-one design and one input at a time with scalars (no temporaries), so the floats agree
-to rounding (NumPy's and libm's ``cos``/``sin`` may differ by an ulp) and the tests
-give the same answers.  The prediction is the second-order Taylor step of the triad's
-rates (the Cramer-rule system of Vasechkin et al. 2017, extended to the triad), the
-polish Newton on its three closure equations (Hunt 1983 for the modes).  The
-eigenvalues are not LAPACK's operations: the companion matrix (already upper
-Hessenberg) is balanced (Parlett and Reinsch 1969) and reduced by Francis's
-double-shift QR (EISPACK's ``hqr``, Wilkinson and Reinsch 1971), a few times faster
-than a LAPACK call per 6×6 matrix; its roots differ from LAPACK's by rounding (a
-double root's by the square root of it), and the Newton polish that follows takes
-both to the same modes.
+prediction, polish, following and acceptance do the NumPy route's operations in the
+same order, one design and one input at a time with scalars (no temporaries), so the
+floats agree to rounding (NumPy's and libm's ``cos``/``sin`` may differ by an ulp) and
+the tests give the same answers.  The prediction is the second-order Taylor step of the
+triad's rates (the Cramer-rule system of Vasechkin et al. 2017, extended to the triad),
+the polish Newton on its three closure equations (Hunt 1983 for the modes).  The
+modes' polynomial is not the NumPy route's to the bit: its coefficients come from a
+direct 16-point DFT (not NumPy's FFT), and its roots are not LAPACK's: the companion
+matrix (already upper Hessenberg) is balanced (Parlett and Reinsch 1969) and reduced by
+Francis's double-shift QR (EISPACK's ``hqr``, Wilkinson and Reinsch 1971), faster than a
+LAPACK call per 6×6 matrix.  The roots differ from LAPACK's by rounding (a double
+root's by the square root of it), and the Newton polish that follows takes both to the
+same modes.
 """
 from __future__ import annotations
-
-import math
 
 import numba
 import numpy as np
 
-__all__ = ["fill_fine", "polish_many", "predict_many", "companion_roots"]
+__all__ = ["fill_fine", "modes_many", "predict_many", "follow_batch", "companion_roots"]
 
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -166,15 +166,6 @@ def fill_fine(A, bb, L, Pc, thc, sep, c, fine, kn, iters, tol, accept, rtol, Pd,
                     and _dist(Pd[g, f], Pc[g, k]) <= 0.5 * sep[g, k]):
                 done[g] = False
                 break
-
-
-@numba.njit(**_JIT)
-def polish_many(A, bb, l, p, th, iters, tol, rtol, P, tho, res):
-    """``triad._polish`` over K inputs: ``A`` and ``bb`` (K, 3, 2), ``l`` (K, 3), ``p``
-    (K, 2), ``th`` (K,); writes ``P`` (K, 3, 2), ``tho`` and ``res`` (K,)."""
-    w = np.empty(24)
-    for k in range(A.shape[0]):
-        tho[k], res[k] = _polish(A[k], bb[k], l[k], p[k, 0], p[k, 1], th[k], P[k], w, iters, tol, rtol)
 
 
 @numba.njit(**_JIT)
@@ -441,3 +432,135 @@ def follow_batch(P, valid, pred, start, ratio, idx, status):
             else:
                 idx[d, i + 1] = j
                 status[d, i + 1] = 0
+
+
+@numba.njit(**_JIT)
+def _linear(z, bc, a, l, i):
+    """``triad._linear_terms`` for the leg ``i + 1`` (0 or 1): ``w`` and ``k``."""
+    w = z * bc[i] - a[i]
+    k = (l[i + 1] ** 2 - l[0] ** 2 - abs(bc[i]) ** 2 - abs(a[i]) ** 2 + 2.0 * (z * bc[i] * np.conj(a[i])).real)
+    return w, k
+
+
+@numba.njit(**_JIT)
+def _shifted_poly(bc, a, l, Z, E, GRID, BASIS, q):
+    """``triad._poly_coefficients`` and the shift of ``_unit_circle_roots`` at one
+    position: the real polynomial in ``t`` (ascending) into ``q`` (7,); returns ``σ``.
+    ``Z`` (16,) the unit circle's samples, ``E`` (7, 16) the DFT's rows (z³ .. z⁻³),
+    ``GRID`` and ``BASIS`` the NumPy route's tables."""
+    F = np.empty(16)
+    for n in range(16):
+        w0, k0 = _linear(Z[n], bc, a, l, 0)
+        w1, k1 = _linear(Z[n], bc, a, l, 1)
+        D = w0.real * w1.imag - w0.imag * w1.real
+        Nx = 0.5 * (k0 * w1.imag - k1 * w0.imag)
+        Ny = 0.5 * (w0.real * k1 - w1.real * k0)
+        F[n] = Nx * Nx + Ny * Ny - l[0] ** 2 * D * D
+    coef = np.zeros(7, np.complex128)
+    for m in range(7):
+        for n in range(16):
+            coef[m] += F[n] * E[m, n]
+        coef[m] /= 16.0
+    best, kmax = -1.0, 0
+    for n in range(16):
+        s = 0.0
+        for m in range(7):
+            s += (coef[m] * GRID[m, n]).real
+        if abs(s) > best:
+            best, kmax = abs(s), n
+    sigma = 2 * np.pi * kmax / 16 - np.pi
+    for p in range(7):
+        q[p] = 0.0
+        for m in range(7):
+            q[p] += (coef[m] * np.exp(1j * (sigma * (3 - m))) * BASIS[m, p]).real
+    return sigma
+
+
+@numba.njit(**_JIT)
+def _roots(q, a, wr, wi):
+    """The roots of the real polynomial ``q`` (ascending, degree 6) by its companion
+    matrix (:func:`_hqr`, balanced) into ``wr``, ``wi`` (1-based); False if ``q`` is not
+    usable (a non-finite coefficient, a zero leading one) or the QR does not converge."""
+    lead = q[6]
+    if not (np.isfinite(lead) and abs(lead) > 0):
+        return False
+    a[:, :] = 0.0
+    for j in range(6):
+        a[1, j + 1] = -q[5 - j] / lead
+        if not np.isfinite(a[1, j + 1]):
+            return False
+    for i in range(1, 6):
+        a[i + 1, i] = 1.0
+    _balance(a, 6)
+    return _hqr(a, 6, wr, wi)
+
+
+@numba.njit(**_JIT)
+def _start_point(A, bc, a, l, th):
+    """``triad._position_from_angle``: P1 from the two linear equations at ``th`` (each
+    coordinate A1's where it is not finite)."""
+    z = np.exp(1j * th)
+    w0, k0 = _linear(z, bc, a, l, 0)
+    w1, k1 = _linear(z, bc, a, l, 1)
+    D = w0.real * w1.imag - w0.imag * w1.real
+    x = 0.5 * (k0 * w1.imag - k1 * w0.imag) / D + A[0, 0]
+    y = 0.5 * (w0.real * k1 - w1.real * k0) / D + A[0, 1]
+    return (x if np.isfinite(x) else A[0, 0]), (y if np.isfinite(y) else A[0, 1])
+
+
+@numba.njit(**_JIT)
+def _merge_sort(Pk, thk, valid, scale, P, th):
+    """``triad_modes``'s last steps at one position: a candidate that repeats an earlier
+    one (within 1e-7 of ``scale``) dropped, the rest sorted by angle into ``P`` (6, 3, 2)
+    and ``th`` (6,), NaN-padded."""
+    keep = np.zeros(6, np.bool_)
+    for j in range(6):
+        keep[j] = valid[j]
+        for i in range(j):
+            dP = (abs(Pk[j, 0, 0] - Pk[i, 0, 0]) + abs(Pk[j, 0, 1] - Pk[i, 0, 1])
+                  + abs(_wrap(thk[j] - thk[i])) * scale)
+            if valid[j] and valid[i] and dP <= 1e-7 * scale:
+                keep[j] = False
+    P[:] = np.nan
+    th[:] = np.nan
+    n = 0
+    for j in range(6):
+        if not keep[j]:
+            continue
+        r = n                                  # insertion by angle
+        while r > 0 and th[r - 1] > thk[j]:
+            th[r] = th[r - 1]
+            P[r] = P[r - 1]
+            r -= 1
+        th[r] = thk[j]
+        P[r] = Pk[j]
+        n += 1
+
+
+@numba.njit(**_JIT)
+def modes_many(A, bb, l, Z, E, GRID, BASIS, iters, tol, accept, rtol, P, th):
+    """``triad.triad_modes``'s points and angles at K positions: ``A``, ``bb`` (K, 3, 2),
+    ``l`` (K, 3); writes ``P`` (K, 6, 3, 2) and ``th`` (K, 6) (sorted by angle,
+    NaN-padded).  The polynomial's coefficients come from a direct 16-point DFT and its
+    roots from :func:`_roots` (rounding apart from NumPy's FFT and LAPACK), each root near
+    the unit circle polished by the NumPy route's Newton (:func:`_polish`)."""
+    q, a = np.empty(7), np.zeros((7, 7))
+    wr, wi, w = np.empty(7), np.empty(7), np.empty(24)
+    Pk, thk, valid = np.empty((6, 3, 2)), np.empty(6), np.empty(6, np.bool_)
+    bc, av = np.empty(2, np.complex128), np.empty(2, np.complex128)
+    for k in range(A.shape[0]):
+        for i in range(2):
+            bc[i] = bb[k, i + 1, 0] + 1j * bb[k, i + 1, 1]
+            av[i] = (A[k, i + 1, 0] - A[k, 0, 0]) + 1j * (A[k, i + 1, 1] - A[k, 0, 1])
+        sigma = _shifted_poly(bc, av, l[k], Z, E, GRID, BASIS, q)
+        ok = _roots(q, a, wr, wi)
+        for j in range(6):
+            t = wr[j + 1]
+            valid[j] = ok and abs(wi[j + 1]) < 0.5 * 1e-3 * (1.0 + (t * t + wi[j + 1] * wi[j + 1]))
+            if valid[j]:
+                px, py = _start_point(A[k], bc, av, l[k], sigma + 2.0 * np.arctan(t))
+                thj, res = _polish(A[k], bb[k], l[k], px, py, sigma + 2.0 * np.arctan(t), Pk[j], w, iters, tol, rtol)
+                thk[j] = _wrap(thj)
+                valid[j] = res <= accept
+        scale = max(l[k, 0], max(l[k, 1], l[k, 2]))
+        _merge_sort(Pk, thk, valid, scale, P[k], th[k])

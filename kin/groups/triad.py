@@ -183,17 +183,6 @@ def _flat(a, shape):
     return np.ascontiguousarray(np.broadcast_to(a, shape), float)
 
 
-def _polish_nb(nb):
-    """:func:`_polish` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.polish_many`."""
-    def polish(A, bb, l, p, th):
-        K = A.shape[0]
-        P, tho, res = np.empty((K, 3, 2)), np.empty(K), np.empty(K)
-        nb.polish_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), _flat(p, (K, 2)),
-                       _flat(th, (K,)), _NEWTON_ITERS, 1e-12, SINGULAR_RTOL, P, tho, res)
-        return P, tho, res
-    return polish
-
-
 def _predict_nb(nb):
     """:func:`_predict` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.predict_many`."""
     def predict(A0, P0, A1, l0, l1):
@@ -203,6 +192,16 @@ def _predict_nb(nb):
                         _flat(l1, (K, 3)), SINGULAR_RTOL, P, dth, sing)
         return P, dth, sing
     return predict
+
+
+def _modes_nb(nb, A, bb, l):
+    """The points and angles of :func:`triad_modes` at K positions (``bb = b - b_1`` per
+    position) by :func:`kin.groups._triad_nb.modes_many`."""
+    K = A.shape[0]
+    P, th = np.empty((K, MAX_MODES, 3, 2)), np.empty((K, MAX_MODES))
+    nb.modes_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), _Z16, _DFT, _GRID, _BASIS,
+                  _NEWTON_ITERS, 1e-12, _ACCEPT, SINGULAR_RTOL, P, th)
+    return P, th
 
 
 def _wrap(a):
@@ -260,9 +259,11 @@ def _tan_half_basis():
 
 _BASIS = _tan_half_basis()
 _GRID = np.exp(1j * np.outer(np.arange(3, -4, -1), 2 * np.pi * np.arange(16) / 16))  # (7, 16)
+_Z16 = np.exp(2j * np.pi * np.arange(16) / 16)                                        # (16,)
+_DFT = np.exp(-2j * np.pi * np.outer(np.arange(3, -4, -1), np.arange(16)) / 16)       # (7, 16)
 
 
-def _unit_circle_roots(coef, nb=None):
+def _unit_circle_roots(coef):
     """Angles of the roots of ``z³F(z)`` on the unit circle (the real modes).
 
     ``F`` is real on the circle, so with ``θ = σ + ψ`` and ``t = tan(ψ/2)`` the
@@ -271,9 +272,7 @@ def _unit_circle_roots(coef, nb=None):
     that ``ψ = π`` (``t = ∞``) falls on the largest of the 16 samples of ``F``: the
     leading coefficient is then that sample and no root escapes to infinity.
     Returns candidate angles (N, 6), the candidate mask (roots within ~1e-3 of
-    the circle) and the per-position ``good`` mask.  With ``nb`` (:func:`_kernel`) the
-    eigenvalues come from the compiled balanced Hessenberg QR
-    (:func:`kin.groups._triad_nb.companion_roots`) instead of LAPACK's (to rounding).
+    the circle) and the per-position ``good`` mask.
     """
     N = coef.shape[0]
     samples = (coef @ _GRID).real                        # F at 2πk/16
@@ -289,12 +288,7 @@ def _unit_circle_roots(coef, nb=None):
     comp[:, np.arange(1, 6), np.arange(5)] = 1.0
     good &= np.isfinite(comp).all(axis=(1, 2))
     comp[~good] = np.eye(6) * 10.0
-    if nb is None:
-        t = np.linalg.eigvals(comp)                      # (N, 6) complex
-    else:
-        re, im = np.empty((N, 6)), np.empty((N, 6))
-        nb.companion_roots(comp, good, re, im)
-        t = re + 1j * im
+    t = np.linalg.eigvals(comp)                          # (N, 6) complex
     cand = np.abs(t.imag) < 0.5 * _ON_CIRCLE * (1.0 + np.abs(t) ** 2)
     th0 = sigma[:, None] + 2.0 * np.arctan(t.real)
     return th0, cand & good[:, None], good
@@ -340,24 +334,17 @@ def triad_modes(A, b, l) -> TriadModes:
     >>> int(triad_modes(A, b, [0.593942, 0.561953, 0.53133]).n_modes)
     6
     """
-    return _modes(A, b, l)
-
-
-def _modes(A, b, l, nb=None) -> TriadModes:
-    """:func:`triad_modes`; with ``nb`` (:func:`_kernel`) the companion eigenvalues and the
-    candidates' polish are compiled (:mod:`kin.groups._triad_nb`)."""
     A, single = _as_batch(A, (3, 2))
     b = np.asarray(b, dtype=float)
     l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
     N = A.shape[0]
     bb = b - b[..., :1, :]
     coef, bc, a = _poly_coefficients(A, bb, l)
-    th0, cand, good = _unit_circle_roots(coef, nb)
+    th0, cand, good = _unit_circle_roots(coef)
     ri, ki = np.nonzero(cand)                            # polish the candidates only
     per = bb.ndim == 3                                   # a reference per position
     p0 = _position_from_angle(A[ri], bc[ri] if per else bc, a[ri], l[ri], th0[ri, ki])
-    Pk, thk, resk = (_polish if nb is None else _polish_nb(nb))(A[ri], bb[ri] if per else bb, l[ri], p0,
-                                                                 th0[ri, ki])
+    Pk, thk, resk = _polish(A[ri], bb[ri] if per else bb, l[ri], p0, th0[ri, ki])
     P = np.full((N, MAX_MODES, 3, 2), np.nan)
     th = np.full((N, MAX_MODES), np.nan)
     res = np.full((N, MAX_MODES), np.inf)
@@ -729,12 +716,16 @@ def _coarse(N: int, stride: int) -> np.ndarray:
 def _coarse_follow(A, b, l, start, nb=None):
     """All modes at each design's inputs ``A`` (D, n, 3, 2) and the mode followed from the
     one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n).  With ``nb``
-    (:func:`_kernel`) the polish, the predictions and the following run compiled."""
+    (:func:`_kernel`) the modes, the predictions and the following run compiled."""
     Dn, n = A.shape[:2]
     bn = np.broadcast_to(b[:, None], (Dn, n, 3, 2)).reshape(-1, 3, 2)
-    m = _modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3), nb)
-    P = m.P.reshape(Dn, n, MAX_MODES, 3, 2)
-    th = m.theta.reshape(Dn, n, MAX_MODES)
+    if nb is None:
+        m = triad_modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3))
+        P, th = m.P, m.theta
+    else:
+        P, th = _modes_nb(nb, A.reshape(-1, 3, 2), bn - bn[:, :1], l.reshape(-1, 3))
+    P = P.reshape(Dn, n, MAX_MODES, 3, 2)
+    th = th.reshape(Dn, n, MAX_MODES)
     valid = np.isfinite(th)
     d0 = np.where(valid[:, 0], _dist(P[:, 0], start[:, None]), np.inf)
     d0 = np.where(np.isnan(d0), np.inf, d0)
@@ -768,9 +759,11 @@ def track_designs(A, b, l, start, *, stride=32, jit=False):
     start : ndarray, shape (D, 3, 2)
         Points near the wanted mode at ``A[:, 0]``.
     jit : bool, optional
-        Predict, polish and accept the inputs between the coarse ones with the compiled
-        functions of :mod:`kin.groups._triad_nb` (equal to the NumPy route to rounding),
-        when numba is installed.
+        Run the tracker's two batched phases (all modes at the coarse inputs and their
+        following; the prediction, polish and acceptance of every other input) compiled,
+        by :mod:`kin.groups._triad_nb`, when numba is installed: the same modes and
+        statuses, the floats to rounding (its polynomial's DFT and companion QR are its
+        own, the Newton polish after them the NumPy route's).
 
     Returns
     -------
@@ -809,7 +802,7 @@ def _kernel():
 def _fill(A, b, L, start, stride, nb=None):
     """Phases 1 and 2 of the tracker for designs whose coarse inputs all follow and whose
     every other input is accepted: their rows, ``P`` and ``theta`` (the rest are not done).
-    With ``nb`` (:func:`_kernel`) phase 2 runs compiled."""
+    With ``nb`` (:func:`_kernel`) both phases run compiled."""
     Dn, N = A.shape[:2]
     c = _coarse(N, stride)
     Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start, nb)
