@@ -469,10 +469,12 @@ def _shifted_poly(bc, a, l, Z, E, GRID, BASIS, q):
         if abs(s) > best:
             best, kmax = abs(s), n
     sigma = 2 * np.pi * kmax / 16 - np.pi
+    for m in range(7):
+        coef[m] *= np.exp(1j * (sigma * (3 - m)))
     for p in range(7):
         q[p] = 0.0
         for m in range(7):
-            q[p] += (coef[m] * np.exp(1j * (sigma * (3 - m))) * BASIS[m, p]).real
+            q[p] += (coef[m] * BASIS[m, p]).real
     return sigma
 
 
