@@ -435,10 +435,18 @@ def follow_batch(P, valid, pred, start, ratio, idx, status):
 
 
 @numba.njit(**_JIT)
-def _linear(z, bc, a, l, i):
-    """``triad._linear_terms`` for the leg ``i + 1`` (0 or 1): ``w`` and ``k``."""
+def _k0(bc, a, l, i):
+    """The part of ``triad._linear_terms``'s ``k`` (leg ``i + 1``) that does not depend on
+    ``z`` (the same operations in the same order)."""
+    return l[i + 1] ** 2 - l[0] ** 2 - abs(bc[i]) ** 2 - abs(a[i]) ** 2
+
+
+@numba.njit(**_JIT)
+def _linear(z, bc, a, kc, i):
+    """``triad._linear_terms`` for the leg ``i + 1`` (0 or 1): ``w`` and ``k`` (``kc``:
+    :func:`_k0` of both legs)."""
     w = z * bc[i] - a[i]
-    k = (l[i + 1] ** 2 - l[0] ** 2 - abs(bc[i]) ** 2 - abs(a[i]) ** 2 + 2.0 * (z * bc[i] * np.conj(a[i])).real)
+    k = kc[i] + 2.0 * (z * bc[i] * np.conj(a[i])).real
     return w, k
 
 
@@ -449,9 +457,10 @@ def _shifted_poly(bc, a, l, Z, E, GRID, BASIS, q):
     ``Z`` (16,) the unit circle's samples, ``E`` (7, 16) the DFT's rows (z³ .. z⁻³),
     ``GRID`` and ``BASIS`` the NumPy route's tables."""
     F = np.empty(16)
+    kc = (_k0(bc, a, l, 0), _k0(bc, a, l, 1))
     for n in range(16):
-        w0, k0 = _linear(Z[n], bc, a, l, 0)
-        w1, k1 = _linear(Z[n], bc, a, l, 1)
+        w0, k0 = _linear(Z[n], bc, a, kc, 0)
+        w1, k1 = _linear(Z[n], bc, a, kc, 1)
         D = w0.real * w1.imag - w0.imag * w1.real
         Nx = 0.5 * (k0 * w1.imag - k1 * w0.imag)
         Ny = 0.5 * (w0.real * k1 - w1.real * k0)
@@ -502,8 +511,9 @@ def _start_point(A, bc, a, l, th):
     """``triad._position_from_angle``: P1 from the two linear equations at ``th`` (each
     coordinate A1's where it is not finite)."""
     z = np.exp(1j * th)
-    w0, k0 = _linear(z, bc, a, l, 0)
-    w1, k1 = _linear(z, bc, a, l, 1)
+    kc = (_k0(bc, a, l, 0), _k0(bc, a, l, 1))
+    w0, k0 = _linear(z, bc, a, kc, 0)
+    w1, k1 = _linear(z, bc, a, kc, 1)
     D = w0.real * w1.imag - w0.imag * w1.real
     x = 0.5 * (k0 * w1.imag - k1 * w0.imag) / D + A[0, 0]
     y = 0.5 * (w0.real * k1 - w1.real * k0) / D + A[0, 1]
