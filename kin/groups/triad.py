@@ -772,15 +772,21 @@ def track_designs(A, b, l, start, *, stride=32, jit=False):
     """
     Dn, N = A.shape[:2]
     L = np.broadcast_to(l[:, None] if l.ndim == 2 else l, (Dn, N, 3))
+    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
+    nb = _kernel() if jit else None
+    step = stride if N > 2 * stride else 1        # a short path: all modes at every input
+    if finite.all():                              # (no copies of the designs' arrays)
+        k, Pd, thd = _fill(A, b, L, start, step, nb)
+        if k.size == Dn:                          # every design filled: the common case
+            return Pd, thd, np.zeros((Dn, N), int)
     P = np.full((Dn, N, 3, 2), np.nan)
     th = np.full((Dn, N), np.nan)
     status = np.full((Dn, N), 3)
-    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     alone = ~finite
-    nb = _kernel() if jit else None
-    if finite.any():                              # a short path: all modes at every input
+    if finite.any():
         rows = np.flatnonzero(finite)
-        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride if N > 2 * stride else 1, nb)
+        if rows.size < Dn:
+            k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], step, nb)
         P[rows[k]], th[rows[k]], status[rows[k]] = Pd, thd, 0
         alone[rows] = True
         alone[rows[k]] = False
@@ -810,7 +816,8 @@ def _fill(A, b, L, start, stride, nb=None):
     if not good.any():
         return np.zeros(0, int), np.zeros((0, N, 3, 2)), np.zeros((0, N))
     g = np.flatnonzero(good)
-    A, b, L, ic = A[g], b[g], L[g], ic[g]
+    if g.size < Dn:
+        A, b, L, ic = A[g], b[g], L[g], ic[g]
     ar = np.arange(len(c))
     Pc = Pm[g][:, ar][np.arange(len(g))[:, None], ar, ic]            # (G, nc, 3, 2)
     thc = thm[g][np.arange(len(g))[:, None], ar, ic]
@@ -834,7 +841,7 @@ def _fill(A, b, L, start, stride, nb=None):
     thd = np.empty((len(g), N))
     Pd[:, c], thd[:, c] = Pc, thc
     Pd[:, fine], thd[:, fine] = Pf, _wrap(thf)
-    return g[done], Pd[done], thd[done]
+    return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
 
 
 def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
@@ -844,7 +851,7 @@ def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
     f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.ascontiguousarray(a, np.int64))  # noqa: E731
     nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
                  SINGULAR_RTOL, Pd, thd, done)
-    return g[done], Pd[done], thd[done]
+    return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
 
 
 #: triad/class IV tracker codes -> (Status, reason)
