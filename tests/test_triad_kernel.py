@@ -11,6 +11,7 @@ oracle, the NumPy route (:func:`kin.groups.triad.track_designs` with ``jit=False
   codes, points and angles within 1e-12.
 * The compiled companion eigenvalues (balanced Hessenberg QR) against LAPACK's on
   random degree-6 polynomials, with and without a double root.
+* The wiring: the compiled tracker is taken with the kernel on, never with it off.
 """
 from __future__ import annotations
 
@@ -144,3 +145,21 @@ def test_companion_roots_against_lapack(seed, double):
     # close random roots are ill-conditioned (LAPACK's error x 100); a double root's error is
     # the square root of rounding for any QR (LAPACK's is sometimes luckily smaller)
     assert (err(ours) <= 100 * err(ref) + (1e-6 if double else 1e-12) * scale).all()
+
+
+def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
+    """``solve_designs`` hands the triad's tracker the compiled route with the kernel on,
+    the NumPy route with it off (the step's ``jit``)."""
+    from multiloop.kin.groups import triad
+    seen = []
+    real = triad._kernel
+    monkeypatch.setattr(triad, "_kernel", lambda: seen.append(1) or real())
+    m = load_named("stephenson_3_triad")
+    cols, X = _population(m, 4, 0.003, 0)
+    x = np.linspace(0.0, 1.0, 96)
+    with kernel.using("off"):
+        solve_designs(m, cols, X, x)
+    assert not seen
+    with kernel.using("on"):
+        solve_designs(m, cols, X, x)
+    assert seen
