@@ -198,6 +198,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     if kp is not None and kp.covers(steps):
         return _compiled(sp, geo, G, kp, bound, steps, X)
     for k, step in zip(steps, bound):
+        step.jit = kp is not None                # a triad's compiled tracker, say
         okk = step.positions(G, X).ok
         G.invalidate(sp.steps[k].unknown, ~okk)
     G.unset_to_nan()

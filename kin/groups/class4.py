@@ -322,7 +322,7 @@ class Class4Step(GroupStep):
         ll = np.stack([np.broadcast_to(m[:, :1], (Dn, N)), np.broadcast_to(m[:, 1:], (Dn, N)), L], axis=-1)
         J0 = class4_points(Od[:, 0], r[:, 0], np.zeros((Dn, 2)))
         loc = np.stack([J0[:, 2], J0[:, 3], Od[:, 0, 1]], axis=1) - Od[:, 0, :1]
-        P, phi, status = track_designs(np.ascontiguousarray(anchors), b, ll, _rot(1.0, 0.0, loc))
+        P, phi, status = track_designs(np.ascontiguousarray(anchors), b, ll, _rot(1.0, 0.0, loc), jit=self.jit)
         ok = status == 0
         th1 = _wrap(np.arctan2(e[..., 1], e[..., 0]) - np.arctan2(P[..., 2, 1], P[..., 2, 0]))
         theta = np.stack([th1, _wrap(th1 + phi)], axis=-1)

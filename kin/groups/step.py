@@ -119,6 +119,9 @@ class GroupStep:
     kind = None
     #: its scalar function for the compiled kernel (:data:`kin.groups.registry.COMPILED`)
     compiled = None
+    #: whether a batch of designs takes the step's own compiled route, where it has one
+    #: (set by :func:`kin.design.solve_designs` from :func:`kin.kernel.wanted`)
+    jit = False
     #: the advice when a group of this kind is singular in the reference configuration
     singular_hint = None
 

@@ -179,6 +179,31 @@ def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
     return P, th, res
 
 
+def _flat(a, shape):
+    return np.ascontiguousarray(np.broadcast_to(a, shape), float)
+
+
+def _predict_nb(nb):
+    """:func:`_predict` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.predict_many`."""
+    def predict(A0, P0, A1, l0, l1):
+        K = A0.shape[0]
+        P, dth, sing = np.empty((K, 3, 2)), np.empty(K), np.empty(K, bool)
+        nb.predict_many(_flat(A0, (K, 3, 2)), _flat(P0, (K, 3, 2)), _flat(A1, (K, 3, 2)), _flat(l0, (K, 3)),
+                        _flat(l1, (K, 3)), SINGULAR_RTOL, P, dth, sing)
+        return P, dth, sing
+    return predict
+
+
+def _modes_nb(nb, A, bb, l):
+    """The points and angles of :func:`triad_modes` at K positions (``bb = b - b_1`` per
+    position) by :func:`kin.groups._triad_nb.modes_many`."""
+    K = A.shape[0]
+    P, th = np.empty((K, MAX_MODES, 3, 2)), np.empty((K, MAX_MODES))
+    nb.modes_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), _Z16, _DFT, _GRID, _BASIS,
+                  _NEWTON_ITERS, 1e-12, _ACCEPT, SINGULAR_RTOL, P, th)
+    return P, th
+
+
 def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
@@ -234,6 +259,8 @@ def _tan_half_basis():
 
 _BASIS = _tan_half_basis()
 _GRID = np.exp(1j * np.outer(np.arange(3, -4, -1), 2 * np.pi * np.arange(16) / 16))  # (7, 16)
+_Z16 = np.exp(2j * np.pi * np.arange(16) / 16)                                        # (16,)
+_DFT = np.exp(-2j * np.pi * np.outer(np.arange(3, -4, -1), np.arange(16)) / 16)       # (7, 16)
 
 
 def _unit_circle_roots(coef):
@@ -686,28 +713,39 @@ def _coarse(N: int, stride: int) -> np.ndarray:
     return c if c[-1] == N - 1 else np.append(c, N - 1)
 
 
-def _coarse_follow(A, b, l, start):
+def _coarse_follow(A, b, l, start, nb=None):
     """All modes at each design's inputs ``A`` (D, n, 3, 2) and the mode followed from the
-    one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n)."""
+    one nearest ``start`` (D, 3, 2): modes, ``idx`` and ``status`` (D, n).  With ``nb``
+    (:func:`_kernel`) the modes, the predictions and the following run compiled."""
     Dn, n = A.shape[:2]
     bn = np.broadcast_to(b[:, None], (Dn, n, 3, 2)).reshape(-1, 3, 2)
-    m = triad_modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3))
-    P = m.P.reshape(Dn, n, MAX_MODES, 3, 2)
-    th = m.theta.reshape(Dn, n, MAX_MODES)
+    if nb is None:
+        m = triad_modes(A.reshape(-1, 3, 2), bn, l.reshape(-1, 3))
+        P, th = m.P, m.theta
+    else:
+        P, th = _modes_nb(nb, A.reshape(-1, 3, 2), bn - bn[:, :1], l.reshape(-1, 3))
+    P = P.reshape(Dn, n, MAX_MODES, 3, 2)
+    th = th.reshape(Dn, n, MAX_MODES)
     valid = np.isfinite(th)
     d0 = np.where(valid[:, 0], _dist(P[:, 0], start[:, None]), np.inf)
     d0 = np.where(np.isnan(d0), np.inf, d0)
     j0 = np.where(np.isfinite(d0).any(axis=1), np.argmin(d0, axis=1), -1)
     Pi = np.where(valid[:, :-1, :, None, None], P[:, :-1], A[:, :-1, None])
     rep = lambda a: np.repeat(a[:, :, None], MAX_MODES, axis=2).reshape(-1, *a.shape[2:])  # noqa: E731
-    pred = _predict(rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]),
-                    rep(l[:, 1:]))[0].reshape(Dn, n - 1, MAX_MODES, 3, 2)
-    idx, status = follow_modes_batch(P, valid, pred, j0)
+    pred = (_predict if nb is None else _predict_nb(nb))(
+        rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]), rep(l[:, 1:]))[0].reshape(
+        Dn, n - 1, MAX_MODES, 3, 2)
+    if nb is None:
+        idx, status = follow_modes_batch(P, valid, pred, j0)
+    else:                                         # kin.groups._triad_nb.follow_batch
+        idx, status = np.empty(valid.shape[:2], np.int64), np.empty(valid.shape[:2], np.int64)
+        nb.follow_batch(np.ascontiguousarray(P), np.ascontiguousarray(valid), np.ascontiguousarray(pred),
+                        np.ascontiguousarray(j0, np.int64), 0.5, idx, status)
     return P, th, idx, status
 
 
 @quiet
-def track_designs(A, b, l, start, *, stride=32):
+def track_designs(A, b, l, start, *, stride=32, jit=False):
     """Follow each design's mode along its inputs, as :func:`~kin.groups.triad.triad_track`.
 
     Parameters
@@ -720,6 +758,12 @@ def track_designs(A, b, l, start, *, stride=32):
         Each design's binary lengths (per input for a reduction, e.g. class IV's).
     start : ndarray, shape (D, 3, 2)
         Points near the wanted mode at ``A[:, 0]``.
+    jit : bool, optional
+        Run the tracker's two batched phases (all modes at the coarse inputs and their
+        following; the prediction, polish and acceptance of every other input) compiled,
+        by :mod:`kin.groups._triad_nb`, when numba is installed: the same modes and
+        statuses, the floats to rounding (its polynomial's DFT and companion QR are its
+        own, the Newton polish after them the NumPy route's).
 
     Returns
     -------
@@ -728,14 +772,21 @@ def track_designs(A, b, l, start, *, stride=32):
     """
     Dn, N = A.shape[:2]
     L = np.broadcast_to(l[:, None] if l.ndim == 2 else l, (Dn, N, 3))
+    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
+    nb = _kernel() if jit else None
+    step = stride if N > 2 * stride else 1        # a short path: all modes at every input
+    if finite.all():                              # (no copies of the designs' arrays)
+        k, Pd, thd = _fill(A, b, L, start, step, nb)
+        if k.size == Dn:                          # every design filled: the common case
+            return Pd, thd, np.zeros((Dn, N), int)
     P = np.full((Dn, N, 3, 2), np.nan)
     th = np.full((Dn, N), np.nan)
     status = np.full((Dn, N), 3)
-    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     alone = ~finite
-    if finite.any():                              # a short path: all modes at every input
+    if finite.any():
         rows = np.flatnonzero(finite)
-        k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], stride if N > 2 * stride else 1)
+        if rows.size < Dn:
+            k, Pd, thd = _fill(A[rows], b[rows], L[rows], start[rows], step, nb)
         P[rows[k]], th[rows[k]], status[rows[k]] = Pd, thd, 0
         alone[rows] = True
         alone[rows[k]] = False
@@ -745,17 +796,28 @@ def track_designs(A, b, l, start, *, stride=32):
     return P, th, status
 
 
-def _fill(A, b, L, start, stride):
+def _kernel():
+    """The compiled tracker (:mod:`kin.groups._triad_nb`), or None without numba."""
+    try:
+        from . import _triad_nb
+    except (ImportError, RuntimeError):        # no numba, or no writable cache directory
+        return None
+    return _triad_nb
+
+
+def _fill(A, b, L, start, stride, nb=None):
     """Phases 1 and 2 of the tracker for designs whose coarse inputs all follow and whose
-    every other input is accepted: their rows, ``P`` and ``theta`` (the rest are not done)."""
+    every other input is accepted: their rows, ``P`` and ``theta`` (the rest are not done).
+    With ``nb`` (:func:`_kernel`) both phases run compiled."""
     Dn, N = A.shape[:2]
     c = _coarse(N, stride)
-    Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start)
+    Pm, thm, ic, sc = _coarse_follow(A[:, c], b, L[:, c], start, nb)
     good = np.all(ic >= 0, axis=1)
     if not good.any():
         return np.zeros(0, int), np.zeros((0, N, 3, 2)), np.zeros((0, N))
     g = np.flatnonzero(good)
-    A, b, L, ic = A[g], b[g], L[g], ic[g]
+    if g.size < Dn:
+        A, b, L, ic = A[g], b[g], L[g], ic[g]
     ar = np.arange(len(c))
     Pc = Pm[g][:, ar][np.arange(len(g))[:, None], ar, ic]            # (G, nc, 3, 2)
     thc = thm[g][np.arange(len(g))[:, None], ar, ic]
@@ -767,6 +829,8 @@ def _fill(A, b, L, start, stride):
     left = np.searchsorted(c, fine, side="right") - 1
     right = np.minimum(left + 1, len(c) - 1)
     kn = np.where(fine - c[left] <= c[right] - fine, left, right)
+    if nb is not None:
+        return _fill_compiled(nb, g, A, b - b[:, :1], L, (c, fine, kn), Pc, thc, sep)
     Pp, dth, sing = _predict(A[:, c[kn]], Pc[:, kn], A[:, fine], L[:, c[kn]], L[:, fine])
     bb = (b - b[:, :1])[:, None]
     Pf, thf, res = _polish(A[:, fine], bb, L[:, fine], Pp[..., 0, :], thc[:, kn] + dth)
@@ -777,7 +841,17 @@ def _fill(A, b, L, start, stride):
     thd = np.empty((len(g), N))
     Pd[:, c], thd[:, c] = Pc, thc
     Pd[:, fine], thd[:, fine] = Pf, _wrap(thf)
-    return g[done], Pd[done], thd[done]
+    return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
+
+
+def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
+    """Phase 2 of :func:`_fill` by :func:`kin.groups._triad_nb.fill_fine`."""
+    Gn, N = A.shape[:2]
+    Pd, thd, done = np.empty((Gn, N, 3, 2)), np.empty((Gn, N)), np.empty(Gn, bool)
+    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.ascontiguousarray(a, np.int64))  # noqa: E731
+    nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
+                 SINGULAR_RTOL, Pd, thd, done)
+    return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
 
 
 #: triad/class IV tracker codes -> (Status, reason)
@@ -851,7 +925,7 @@ class TriadStep(GroupStep):
         A = np.stack([G.point(k, self.A[..., i, :]) for i, k in enumerate(self.known)], axis=-2)  # (D, N, 3, 2)
         o = self.A[:, :, :1]                 # (D, 1, 1, 2): about the reference anchor, as alone
         b = (self.b - o)[:, 0]
-        P, th, status = track_designs(A - o, b, self.lengths[:, 0], b)
+        P, th, status = track_designs(A - o, b, self.lengths[:, 0], b, jit=self.jit)
         self._place(G, A, P + o, th)
         return Outcome(status == 0, {}, None)
 

@@ -1,0 +1,578 @@
+"""The numba side of the batched triad tracker (:func:`kin.groups.triad.track_designs`):
+all the modes at the coarse inputs (:func:`modes_many`), their predictions and following
+(:func:`predict_many`, :func:`follow_batch`), and the Taylor prediction, Newton polish
+and acceptance of every other input (:func:`fill_fine`), compiled.
+
+Imported only when the compiled route is wanted (:func:`kin.kernel.wanted`, passed down
+by :mod:`kin.design` as the step's ``jit``); the NumPy functions of
+:mod:`kin.groups.triad` stay the oracle and the route when the kernel is off.  The
+prediction, polish, following and acceptance do the NumPy route's operations in the
+same order, one design and one input at a time with scalars (no temporaries), so the
+floats agree to rounding (NumPy's and libm's ``cos``/``sin`` may differ by an ulp) and
+the tests give the same answers.  The prediction is the second-order Taylor step of the
+triad's rates (the Cramer-rule system of Vasechkin et al. 2017, extended to the triad),
+the polish Newton on its three closure equations (Hunt 1983 for the modes).  The
+modes' polynomial is not the NumPy route's to the bit: its coefficients come from a
+direct 16-point DFT (not NumPy's FFT), and its roots are not LAPACK's: the companion
+matrix (already upper Hessenberg) is balanced (Parlett and Reinsch 1969) and reduced by
+Francis's double-shift QR (EISPACK's ``hqr``, Wilkinson and Reinsch 1971), faster than a
+LAPACK call per 6×6 matrix.  The roots differ from LAPACK's by rounding (a double
+root's by the square root of it), and the Newton polish that follows takes both to the
+same modes.
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+__all__ = ["fill_fine", "modes_many", "predict_many", "follow_batch", "companion_roots"]
+
+_JIT = dict(cache=True, error_model="numpy", nogil=True)
+
+
+@numba.njit(**_JIT)
+def _solve3(a, b, c, d, e, f, g, h, i, r0, r1, r2, rtol):
+    """One 3×3 system by the adjugate (``triad._solve3c``): the solution and ``singular``."""
+    A_ = e * i - f * h
+    B_ = f * g - d * i
+    C_ = d * h - e * g
+    det = a * A_ + b * B_ + c * C_
+    inv = 1.0 / det
+    x0 = (r0 * A_ + r1 * (c * h - b * i) + r2 * (b * f - c * e)) * inv
+    x1 = (r0 * B_ + r1 * (a * i - c * g) + r2 * (c * d - a * f)) * inv
+    x2 = (r0 * C_ + r1 * (b * g - a * h) + r2 * (a * e - b * d)) * inv
+    scale = np.sqrt((a * a + b * b + c * c) * (d * d + e * e + f * f) * (g * g + h * h + i * i))
+    return x0, x1, x2, not (abs(det) > rtol * scale)
+
+
+@numba.njit(**_JIT)
+def _maximum(a, b):
+    """``np.maximum`` of two floats (a NaN propagates)."""
+    return a if (a >= b or a != a) else b
+
+
+@numba.njit(**_JIT)
+def _predict(A0, P0, A1, l0, l1, out, w, rtol):
+    """``triad._predict`` at one input: the points into ``out`` (3, 2); returns the
+    rotation increment and ``singular``.  ``w`` (24,): work."""
+    for i in range(3):
+        dx = P0[i, 0] - A0[i, 0]
+        dy = P0[i, 1] - A0[i, 1]
+        rx = P0[i, 0] - P0[0, 0]
+        ry = P0[i, 1] - P0[0, 1]
+        vx = A1[i, 0] - A0[i, 0]
+        vy = A1[i, 1] - A0[i, 1]
+        vl = l1[i] - l0[i]
+        w[8 * i], w[8 * i + 1], w[8 * i + 2], w[8 * i + 3] = dx, dy, rx, ry
+        w[8 * i + 4], w[8 * i + 5], w[8 * i + 6] = vx, vy, vl
+        w[8 * i + 7] = dx * vx + dy * vy + np.sqrt(dx * dx + dy * dy) * vl
+    qx, qy, om, sing = _solve3(w[0], w[1], w[1] * w[2] - w[0] * w[3], w[8], w[9], w[9] * w[10] - w[8] * w[11],
+                               w[16], w[17], w[17] * w[18] - w[16] * w[19], w[7], w[15], w[23], rtol)
+    o2 = om * om
+    for i in range(3):
+        dx, dy, rx, ry, vx, vy, vl = w[8 * i], w[8 * i + 1], w[8 * i + 2], w[8 * i + 3], w[8 * i + 4], \
+            w[8 * i + 5], w[8 * i + 6]
+        ex = (qx - om * ry) - vx
+        ey = (qy + om * rx) - vy
+        w[8 * i + 7] = dx * (0.0 + o2 * rx) + dy * (0.0 + o2 * ry) - ex * ex - ey * ey + vl * vl
+    ax, ay, eps, _ = _solve3(w[0], w[1], w[1] * w[2] - w[0] * w[3], w[8], w[9], w[9] * w[10] - w[8] * w[11],
+                             w[16], w[17], w[17] * w[18] - w[16] * w[19], w[7], w[15], w[23], rtol)
+    for i in range(3):
+        rx, ry = w[8 * i + 2], w[8 * i + 3]
+        out[i, 0] = (P0[i, 0] + (qx - om * ry)) + 0.5 * (ax - eps * ry - o2 * rx)
+        out[i, 1] = (P0[i, 1] + (qy + om * rx)) + 0.5 * (ay + eps * rx - o2 * ry)
+    return om + 0.5 * eps, sing
+
+
+@numba.njit(**_JIT)
+def _geom(A, bb, px, py, c, s, w):
+    """The rotated ``b_i - b_1`` and the legs ``P_i - A_i`` into ``w`` (12,)."""
+    for i in range(3):
+        rbx = c * bb[i, 0] - s * bb[i, 1]
+        rby = s * bb[i, 0] + c * bb[i, 1]
+        w[4 * i], w[4 * i + 1] = rbx, rby
+        w[4 * i + 2], w[4 * i + 3] = px + rbx - A[i, 0], py + rby - A[i, 1]
+
+
+@numba.njit(**_JIT)
+def _polish(A, bb, l, px, py, th, out, w, iters, tol, rtol):
+    """``triad._polish`` at one input: the points into ``out`` (3, 2); returns the
+    rotation and the relative residual.  ``w`` (24,): work."""
+    lmax = _maximum(_maximum(l[0], l[1]), l[2])
+    for _ in range(iters):
+        _geom(A, bb, px, py, np.cos(th), np.sin(th), w)
+        for i in range(3):
+            dx, dy = w[4 * i + 2], w[4 * i + 3]
+            w[12 + 4 * i], w[13 + 4 * i], w[14 + 4 * i] = dx, dy, dy * w[4 * i] - dx * w[4 * i + 1]
+            w[15 + 4 * i] = -0.5 * (dx * dx + dy * dy - l[i] * l[i])
+        ux, uy, ut, _ = _solve3(w[12], w[13], w[14], w[16], w[17], w[18], w[20], w[21], w[22],
+                                w[15], w[19], w[23], rtol)
+        if not (np.isfinite(ux) and np.isfinite(uy) and np.isfinite(ut)):
+            break                              # (the NumPy route repeats the same state)
+        px += ux
+        py += uy
+        th += ut
+        if np.abs(ux) + np.abs(uy) + np.abs(ut) * lmax <= tol * lmax:
+            break
+    _geom(A, bb, px, py, np.cos(th), np.sin(th), w)
+    res = -np.inf
+    for i in range(3):
+        res = _maximum(res, np.abs(np.sqrt(w[4 * i + 2] * w[4 * i + 2] + w[4 * i + 3] * w[4 * i + 3]) - l[i]))
+        out[i, 0] = px + w[4 * i]
+        out[i, 1] = py + w[4 * i + 1]
+    return th, res / lmax
+
+
+@numba.njit(**_JIT)
+def _dist(X, Y):
+    s = 0.0
+    for i in range(3):
+        for k in range(2):
+            s += (X[i, k] - Y[i, k]) ** 2
+    return np.sqrt(s)
+
+
+@numba.njit(**_JIT)
+def _wrap(a):
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@numba.njit(**_JIT)
+def fill_fine(A, bb, L, Pc, thc, sep, c, fine, kn, iters, tol, accept, rtol, Pd, thd, done):
+    """Phase 2 of ``triad._fill`` for G designs: each fine input predicted from its
+    nearest coarse input ``kn``, polished and accepted as the NumPy route does.
+
+    ``A`` (G, N, 3, 2), ``bb`` (G, 3, 2), ``L`` (G, N, 3), ``Pc`` (G, nc, 3, 2), ``thc``
+    and ``sep`` (G, nc), ``c`` (nc,) the coarse inputs, ``fine`` and ``kn`` (nf,) the
+    other inputs and their nearest coarse point.  Writes ``Pd`` (G, N, 3, 2), ``thd``
+    (G, N) and ``done`` (G,) (every fine input accepted; a design's rows stop at its
+    first refusal).
+    """
+    Gn = A.shape[0]
+    w = np.empty(24)
+    Pp = np.empty((3, 2))
+    for g in range(Gn):
+        for k in range(c.shape[0]):
+            Pd[g, c[k]] = Pc[g, k]
+            thd[g, c[k]] = thc[g, k]
+        done[g] = True
+        for j in range(fine.shape[0]):
+            f, k = fine[j], kn[j]
+            dth, sing = _predict(A[g, c[k]], Pc[g, k], A[g, f], L[g, c[k]], L[g, f], Pp, w, rtol)
+            th, res = _polish(A[g, f], bb[g], L[g, f], Pp[0, 0], Pp[0, 1], thc[g, k] + dth, Pd[g, f], w,
+                              iters, tol, rtol)
+            thd[g, f] = _wrap(th)
+            if not (res <= accept and not sing and _dist(Pd[g, f], Pp) <= 0.25 * sep[g, k]
+                    and _dist(Pd[g, f], Pc[g, k]) <= 0.5 * sep[g, k]):
+                done[g] = False
+                break
+
+
+@numba.njit(**_JIT)
+def predict_many(A0, P0, A1, l0, l1, rtol, P, dth, sing):
+    """``triad._predict`` over K inputs (arrays (K, 3, 2) and (K, 3)); writes ``P``
+    (K, 3, 2), ``dth`` and ``sing`` (K,)."""
+    w = np.empty(24)
+    for k in range(A0.shape[0]):
+        dth[k], sing[k] = _predict(A0[k], P0[k], A1[k], l0[k], l1[k], P[k], w, rtol)
+
+
+@numba.njit(**_JIT)
+def _balance(a, n):
+    """Balance ``a`` (1-based, n×n) by powers of 2 in place (Parlett and Reinsch 1969),
+    as before a Hessenberg QR: the eigenvalues stay, their rounding errors shrink."""
+    last = False
+    while not last:
+        last = True
+        for i in range(1, n + 1):
+            r = c = 0.0
+            for j in range(1, n + 1):
+                if j != i:
+                    c += abs(a[j, i])
+                    r += abs(a[i, j])
+            if c != 0.0 and r != 0.0:
+                g, f, s = r / 2.0, 1.0, c + r
+                while c < g:
+                    f *= 2.0
+                    c *= 4.0
+                g = r * 2.0
+                while c > g:
+                    f /= 2.0
+                    c /= 4.0
+                if (c + r) / f < 0.95 * s:
+                    last = False
+                    for j in range(1, n + 1):
+                        a[i, j] *= 1.0 / f
+                    for j in range(1, n + 1):
+                        a[j, i] *= f
+
+
+@numba.njit(**_JIT)
+def _small_sub(a, nn, anorm):
+    """The lowest ``l`` (1-based) of the active block of ``a`` whose subdiagonal entry
+    is negligible (zeroed), 1 if none."""
+    for l in range(nn, 1, -1):
+        s = abs(a[l - 1, l - 1]) + abs(a[l, l])
+        if s == 0.0:
+            s = anorm
+        if abs(a[l, l - 1]) + s == s:
+            a[l, l - 1] = 0.0
+            return l
+    return 1
+
+
+@numba.njit(**_JIT)
+def _two(a, nn, t, wr, wi):
+    """The two eigenvalues of the trailing 2×2 block ``nn - 1, nn`` into ``wr``, ``wi``."""
+    x, y, w = a[nn, nn], a[nn - 1, nn - 1], a[nn, nn - 1] * a[nn - 1, nn]
+    p = 0.5 * (y - x)
+    q = p * p + w
+    z = np.sqrt(abs(q))
+    x += t
+    if q >= 0.0:
+        z = p + (z if p >= 0.0 else -z)
+        wr[nn - 1] = wr[nn] = x + z
+        if z != 0.0:
+            wr[nn] = x - w / z
+        wi[nn - 1] = wi[nn] = 0.0
+    else:
+        wr[nn - 1] = wr[nn] = x + p
+        wi[nn] = z
+        wi[nn - 1] = -z
+
+
+@numba.njit(**_JIT)
+def _shift_start(a, nn, l, x, y, w):
+    """Francis's double shift (shifts from ``x``, ``y``, ``w``): the row ``m`` where the
+    sweep starts, and its first Householder vector ``p, q, r``."""
+    m = nn - 2
+    while True:
+        z = a[m, m]
+        r = x - z
+        s = y - z
+        p = (r * s - w) / a[m + 1, m] + a[m, m + 1]
+        q = a[m + 1, m + 1] - z - r - s
+        r = a[m + 2, m + 1]
+        s = abs(p) + abs(q) + abs(r)
+        p /= s
+        q /= s
+        r /= s
+        if m == l:
+            break
+        u = abs(a[m, m - 1]) * (abs(q) + abs(r))
+        v = abs(p) * (abs(a[m - 1, m - 1]) + abs(z) + abs(a[m + 1, m + 1]))
+        if u + v == v:
+            break
+        m -= 1
+    return m, p, q, r
+
+
+@numba.njit(**_JIT)
+def _sweep(a, nn, l, m, p, q, r):
+    """One implicit double-shift QR sweep over rows ``m..nn`` of the block ``l..nn``."""
+    for i in range(m + 2, nn + 1):
+        a[i, i - 2] = 0.0
+        if i != m + 2:
+            a[i, i - 3] = 0.0
+    x = 0.0
+    for k in range(m, nn):
+        if k != m:
+            p, q = a[k, k - 1], a[k + 1, k - 1]
+            r = a[k + 2, k - 1] if k != nn - 1 else 0.0
+            x = abs(p) + abs(q) + abs(r)
+            if x != 0.0:
+                p /= x
+                q /= x
+                r /= x
+        s = np.sqrt(p * p + q * q + r * r)
+        if p < 0.0:
+            s = -s
+        if s == 0.0:
+            continue
+        if k == m:
+            if l != m:
+                a[k, k - 1] = -a[k, k - 1]
+        else:
+            a[k, k - 1] = -s * x
+        p += s
+        x, y, z = p / s, q / s, r / s
+        q /= p
+        r /= p
+        for j in range(k, nn + 1):
+            p = a[k, j] + q * a[k + 1, j]
+            if k != nn - 1:
+                p += r * a[k + 2, j]
+                a[k + 2, j] -= p * z
+            a[k + 1, j] -= p * y
+            a[k, j] -= p * x
+        for i in range(l, min(nn, k + 3) + 1):
+            p = x * a[i, k] + y * a[i, k + 1]
+            if k != nn - 1:
+                p += z * a[i, k + 2]
+                a[i, k + 2] -= p * r
+            a[i, k + 1] -= p * q
+            a[i, k] -= p
+
+
+@numba.njit(**_JIT)
+def _hqr(a, n, wr, wi):
+    """The eigenvalues of the upper Hessenberg ``a`` (1-based, n×n, destroyed) into
+    ``wr``, ``wi`` (1-based) by Francis's double-shift QR (EISPACK's ``hqr``, Wilkinson
+    and Reinsch 1971); False if an eigenvalue took more than 60 sweeps."""
+    anorm = 0.0
+    for i in range(1, n + 1):
+        for j in range(max(i - 1, 1), n + 1):
+            anorm += abs(a[i, j])
+    nn, t = n, 0.0
+    while nn >= 1:
+        its = 0
+        while True:
+            l = _small_sub(a, nn, anorm)
+            x = a[nn, nn]
+            if l == nn:                                # one real eigenvalue
+                wr[nn], wi[nn] = x + t, 0.0
+                nn -= 1
+                break
+            if l == nn - 1:                            # a 2×2 block
+                _two(a, nn, t, wr, wi)
+                nn -= 2
+                break
+            if its == 60:
+                return False
+            y, w = a[nn - 1, nn - 1], a[nn, nn - 1] * a[nn - 1, nn]
+            if its == 10 or its == 20:                 # exceptional shift
+                t += x
+                for i in range(1, nn + 1):
+                    a[i, i] -= x
+                s = abs(a[nn, nn - 1]) + abs(a[nn - 1, nn - 2])
+                x = y = 0.75 * s
+                w = -0.4375 * s * s
+            its += 1
+            m, p, q, r = _shift_start(a, nn, l, x, y, w)
+            _sweep(a, nn, l, m, p, q, r)
+    return True
+
+
+@numba.njit(**_JIT)
+def companion_roots(comp, good, re, im):
+    """The eigenvalues of the 6×6 companion matrices ``comp`` (K, 6, 6) (upper Hessenberg),
+    balanced then by :func:`_hqr`, into ``re``, ``im`` (K, 6); 10 where not ``good`` (as
+    the NumPy route's stand-in matrix), NaN where the QR does not converge."""
+    a = np.zeros((7, 7))
+    wr, wi = np.empty(7), np.empty(7)
+    for k in range(comp.shape[0]):
+        if not good[k]:
+            re[k, :] = 10.0
+            im[k, :] = 0.0
+            continue
+        for i in range(6):
+            for j in range(6):
+                a[i + 1, j + 1] = comp[k, i, j]
+        _balance(a, 6)
+        if _hqr(a, 6, wr, wi):
+            re[k, :] = wr[1:]
+            im[k, :] = wi[1:]
+        else:
+            re[k, :] = np.nan
+            im[k, :] = np.nan
+
+
+@numba.njit(**_JIT)
+def _gap(X, a, Y, b):
+    """``triad._dist`` of ``X[a]`` and ``Y[b]`` (points (k, 2)), summed as NumPy does."""
+    s = 0.0
+    for c in range(X.shape[1]):
+        for x in range(2):
+            s += (X[a, c, x] - Y[b, c, x]) ** 2
+    return np.sqrt(s)
+
+
+@numba.njit(**_JIT)
+def _next_mode(P, valid, pred, i, a, ratio):
+    """``follow_modes_batch``'s step of one path from mode ``a`` at position ``i``: the
+    matched mode at ``i + 1``, or -1."""
+    M = valid.shape[1]
+    d1, d2, k1 = np.inf, np.inf, -1
+    for b in range(M):
+        d = _gap(pred[i], a, P[i + 1], b) if valid[i + 1, b] else np.inf
+        if d != d:
+            d = np.inf
+        if d < d1 or k1 < 0:
+            d1, d2, k1 = d, d1 if k1 >= 0 else d2, b
+        elif d < d2:
+            d2 = d
+    sep = np.inf
+    for b in range(M):
+        if b != a and valid[i, a] and valid[i, b]:
+            q = _gap(P[i], a, P[i], b)
+            if q < sep:
+                sep = q
+    step = _gap(P[i], a, P[i + 1], k1)
+    ok = np.isfinite(d1) and d1 <= ratio * d2 and step <= ratio * sep and d1 <= ratio * sep
+    return k1 if ok and valid[i, a] else -1
+
+
+@numba.njit(**_JIT)
+def follow_batch(P, valid, pred, start, ratio, idx, status):
+    """``triad.follow_modes_batch`` along D paths: ``P`` (D, N, M, k, 2), ``valid`` (D, N,
+    M), ``pred`` (D, N-1, M, k, 2), ``start`` (D,); writes ``idx`` and ``status`` (D, N),
+    the candidates scored only along each path's followed mode."""
+    for d in range(P.shape[0]):
+        idx[d, :] = -1
+        status[d, :] = 3
+        status[d, 0] = 0
+        idx[d, 0] = start[d]
+        j = start[d]
+        for i in range(P.shape[1] - 1):
+            if j < 0:
+                break
+            j = _next_mode(P[d], valid[d], pred[d], i, j, ratio)
+            if j < 0:
+                status[d, i + 1] = 2
+            else:
+                idx[d, i + 1] = j
+                status[d, i + 1] = 0
+
+
+@numba.njit(**_JIT)
+def _k0(bc, a, l, i):
+    """The part of ``triad._linear_terms``'s ``k`` (leg ``i + 1``) that does not depend on
+    ``z`` (the same operations in the same order)."""
+    return l[i + 1] ** 2 - l[0] ** 2 - abs(bc[i]) ** 2 - abs(a[i]) ** 2
+
+
+@numba.njit(**_JIT)
+def _linear(z, bc, a, kc, i):
+    """``triad._linear_terms`` for the leg ``i + 1`` (0 or 1): ``w`` and ``k`` (``kc``:
+    :func:`_k0` of both legs)."""
+    w = z * bc[i] - a[i]
+    k = kc[i] + 2.0 * (z * bc[i] * np.conj(a[i])).real
+    return w, k
+
+
+@numba.njit(**_JIT)
+def _shifted_poly(bc, a, l, Z, E, GRID, BASIS, q):
+    """``triad._poly_coefficients`` and the shift of ``_unit_circle_roots`` at one
+    position: the real polynomial in ``t`` (ascending) into ``q`` (7,); returns ``σ``.
+    ``Z`` (16,) the unit circle's samples, ``E`` (7, 16) the DFT's rows (z³ .. z⁻³),
+    ``GRID`` and ``BASIS`` the NumPy route's tables."""
+    F = np.empty(16)
+    kc = (_k0(bc, a, l, 0), _k0(bc, a, l, 1))
+    for n in range(16):
+        w0, k0 = _linear(Z[n], bc, a, kc, 0)
+        w1, k1 = _linear(Z[n], bc, a, kc, 1)
+        D = w0.real * w1.imag - w0.imag * w1.real
+        Nx = 0.5 * (k0 * w1.imag - k1 * w0.imag)
+        Ny = 0.5 * (w0.real * k1 - w1.real * k0)
+        F[n] = Nx * Nx + Ny * Ny - l[0] ** 2 * D * D
+    coef = np.zeros(7, np.complex128)
+    for m in range(7):
+        for n in range(16):
+            coef[m] += F[n] * E[m, n]
+        coef[m] /= 16.0
+    best, kmax = -1.0, 0
+    for n in range(16):
+        s = 0.0
+        for m in range(7):
+            s += (coef[m] * GRID[m, n]).real
+        if abs(s) > best:
+            best, kmax = abs(s), n
+    sigma = 2 * np.pi * kmax / 16 - np.pi
+    for m in range(7):
+        coef[m] *= np.exp(1j * (sigma * (3 - m)))
+    for p in range(7):
+        q[p] = 0.0
+        for m in range(7):
+            q[p] += (coef[m] * BASIS[m, p]).real
+    return sigma
+
+
+@numba.njit(**_JIT)
+def _roots(q, a, wr, wi):
+    """The roots of the real polynomial ``q`` (ascending, degree 6) by its companion
+    matrix (:func:`_hqr`, balanced) into ``wr``, ``wi`` (1-based); False if ``q`` is not
+    usable (a non-finite coefficient, a zero leading one) or the QR does not converge."""
+    lead = q[6]
+    if not (np.isfinite(lead) and abs(lead) > 0):
+        return False
+    a[:, :] = 0.0
+    for j in range(6):
+        a[1, j + 1] = -q[5 - j] / lead
+        if not np.isfinite(a[1, j + 1]):
+            return False
+    for i in range(1, 6):
+        a[i + 1, i] = 1.0
+    _balance(a, 6)
+    return _hqr(a, 6, wr, wi)
+
+
+@numba.njit(**_JIT)
+def _start_point(A, bc, a, l, th):
+    """``triad._position_from_angle``: P1 from the two linear equations at ``th`` (each
+    coordinate A1's where it is not finite)."""
+    z = np.exp(1j * th)
+    kc = (_k0(bc, a, l, 0), _k0(bc, a, l, 1))
+    w0, k0 = _linear(z, bc, a, kc, 0)
+    w1, k1 = _linear(z, bc, a, kc, 1)
+    D = w0.real * w1.imag - w0.imag * w1.real
+    x = 0.5 * (k0 * w1.imag - k1 * w0.imag) / D + A[0, 0]
+    y = 0.5 * (w0.real * k1 - w1.real * k0) / D + A[0, 1]
+    return (x if np.isfinite(x) else A[0, 0]), (y if np.isfinite(y) else A[0, 1])
+
+
+@numba.njit(**_JIT)
+def _merge_sort(Pk, thk, valid, scale, P, th):
+    """``triad_modes``'s last steps at one position: a candidate that repeats an earlier
+    one (within 1e-7 of ``scale``) dropped, the rest sorted by angle into ``P`` (6, 3, 2)
+    and ``th`` (6,), NaN-padded."""
+    keep = np.zeros(6, np.bool_)
+    for j in range(6):
+        keep[j] = valid[j]
+        for i in range(j):
+            dP = (abs(Pk[j, 0, 0] - Pk[i, 0, 0]) + abs(Pk[j, 0, 1] - Pk[i, 0, 1])
+                  + abs(_wrap(thk[j] - thk[i])) * scale)
+            if valid[j] and valid[i] and dP <= 1e-7 * scale:
+                keep[j] = False
+    P[:] = np.nan
+    th[:] = np.nan
+    n = 0
+    for j in range(6):
+        if not keep[j]:
+            continue
+        r = n                                  # insertion by angle
+        while r > 0 and th[r - 1] > thk[j]:
+            th[r] = th[r - 1]
+            P[r] = P[r - 1]
+            r -= 1
+        th[r] = thk[j]
+        P[r] = Pk[j]
+        n += 1
+
+
+@numba.njit(**_JIT)
+def modes_many(A, bb, l, Z, E, GRID, BASIS, iters, tol, accept, rtol, P, th):
+    """``triad.triad_modes``'s points and angles at K positions: ``A``, ``bb`` (K, 3, 2),
+    ``l`` (K, 3); writes ``P`` (K, 6, 3, 2) and ``th`` (K, 6) (sorted by angle,
+    NaN-padded).  The polynomial's coefficients come from a direct 16-point DFT and its
+    roots from :func:`_roots` (rounding apart from NumPy's FFT and LAPACK), each root near
+    the unit circle polished by the NumPy route's Newton (:func:`_polish`)."""
+    q, a = np.empty(7), np.zeros((7, 7))
+    wr, wi, w = np.empty(7), np.empty(7), np.empty(24)
+    Pk, thk, valid = np.empty((6, 3, 2)), np.empty(6), np.empty(6, np.bool_)
+    bc, av = np.empty(2, np.complex128), np.empty(2, np.complex128)
+    for k in range(A.shape[0]):
+        for i in range(2):
+            bc[i] = bb[k, i + 1, 0] + 1j * bb[k, i + 1, 1]
+            av[i] = (A[k, i + 1, 0] - A[k, 0, 0]) + 1j * (A[k, i + 1, 1] - A[k, 0, 1])
+        sigma = _shifted_poly(bc, av, l[k], Z, E, GRID, BASIS, q)
+        ok = _roots(q, a, wr, wi)
+        for j in range(6):
+            t = wr[j + 1]
+            valid[j] = ok and abs(wi[j + 1]) < 0.5 * 1e-3 * (1.0 + (t * t + wi[j + 1] * wi[j + 1]))
+            if valid[j]:
+                px, py = _start_point(A[k], bc, av, l[k], sigma + 2.0 * np.arctan(t))
+                thj, res = _polish(A[k], bb[k], l[k], px, py, sigma + 2.0 * np.arctan(t), Pk[j], w, iters, tol, rtol)
+                thk[j] = _wrap(thj)
+                valid[j] = res <= accept
+        scale = max(l[k, 0], max(l[k, 1], l[k, 2]))
+        _merge_sort(Pk, thk, valid, scale, P[k], th[k])

@@ -1,0 +1,165 @@
+"""The batched triad tracker's compiled route (``kin/groups/_triad_nb.py``) against its
+oracle, the NumPy route (:func:`kin.groups.triad.track_designs` with ``jit=False``).
+
+* :func:`kin.design.solve_designs` with ``kernel.using("off")`` and ``"on"`` for the
+  catalogue's Stephenson III triad and Stephenson III (class IV, reduced to a triad):
+  designs perturbed around the start, near and far (some out of reach, some through a
+  turning point), on short and long input ranges: the same ``ok`` pattern, poses within
+  1e-12 of the size.
+* :func:`track_designs` itself on random triads whose pins move and whose lengths vary
+  along the inputs (class IV's reduction), a non-finite pin among them: the same status
+  codes, points and angles within 1e-12.
+* The compiled companion eigenvalues (balanced Hessenberg QR) against LAPACK's on
+  random degree-6 polynomials, with and without a double root.
+* The wiring: the compiled tracker is taken with the kernel on, never with it off.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+numba = pytest.importorskip("numba")
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+from multiloop.catalogue.dimensional import design_space  # noqa: E402
+from multiloop.catalogue.named import load_named  # noqa: E402
+from multiloop.kin import kernel  # noqa: E402
+from multiloop.kin.design import solve_designs  # noqa: E402
+from multiloop.kin.groups.triad import track_designs, triad_modes  # noqa: E402
+from multiloop.kin.solve import plan_of  # noqa: E402
+
+NAMES = ["stephenson_3_triad", "stephenson_3"]
+
+
+def _population(m, D, rel, seed):
+    space = design_space(m, [p.name for p in m.points])
+    X = space.x0 + rel * m.size * np.random.default_rng(seed).standard_normal((D, space.size))
+    X[0] = space.x0
+    return space.names, X
+
+
+def _both(m, cols, X, x):
+    with kernel.using("off"):
+        a = solve_designs(m, cols, X, x)
+    with kernel.using("on"):
+        b = solve_designs(m, cols, X, x)
+    return a, b
+
+
+def _agree(m, a, b):
+    size = plan_of(m).size
+    np.testing.assert_array_equal(a.ok, b.ok)
+    a.th, b.th                                  # every pending angle row computed
+    Ta, Tb = a.store.T, b.store.T
+    np.testing.assert_array_equal(np.isnan(Ta), np.isnan(Tb))
+    scale = np.array([size, size, 1.0])[None, :, None, None]
+    assert np.nanmax(np.abs(Ta - Tb) / scale, initial=0.0) <= 1e-12
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("rel,span,N", [(0.003, 1.0, 96), (0.15, 1.0, 96), (0.05, 2 * np.pi, 200)])
+def test_designs_against_numpy(name, rel, span, N):
+    """Near designs on the benchmark's range; far ones (some never assemble, some lose
+    their mode); a whole turn (turning points on the way)."""
+    m = load_named(name)
+    cols, X = _population(m, 60, rel, 1)
+    a, b = _both(m, cols, X, np.linspace(0.0, span, N))
+    _agree(m, a, b)
+    assert a.ok.any()
+    if rel >= 0.1:
+        assert not a.ok.all()
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.sampled_from(NAMES), st.floats(0.0, 0.1), st.floats(0.2, 2 * np.pi), st.integers(20, 130),
+       st.integers(0, 10_000))
+def test_design_populations_against_numpy(name, rel, span, N, seed):
+    m = load_named(name)
+    cols, X = _population(m, 12, rel, seed)
+    _agree(m, *_both(m, cols, X, np.linspace(0.0, span, N)))
+
+
+def _random_triads(D, N, seed, move):
+    """D triads with six real modes at their start (Hunt 1983's example, perturbed),
+    pins moving along a random smooth path, lengths varying; started on a random mode."""
+    rng = np.random.default_rng(seed)
+    A0 = np.array([[0.250191, 0.794428], [0.551371, -0.549586], [-0.399667, 0.747107]])
+    b0 = np.array([[0, 0], [-0.989469, 0.642457], [0.594139, -0.06413]])
+    l0 = np.array([0.593942, 0.561953, 0.53133])
+    A = A0 + 0.02 * rng.standard_normal((D, 1, 3, 2))
+    b = b0 + 0.02 * rng.standard_normal((D, 3, 2))
+    l = l0 + 0.01 * rng.standard_normal((D, 1, 3))
+    t = np.linspace(0.0, 1.0, N)[None, :, None]
+    A = A + move * np.sin(t[..., None] * rng.uniform(1, 4, (D, 1, 3, 2)) + rng.uniform(0, 6, (D, 1, 3, 2)))
+    L = l + 0.3 * move * np.sin(t * rng.uniform(1, 4, (D, 1, 3)))
+    start = np.empty((D, 3, 2))
+    for d in range(D):
+        mm = triad_modes(A[d, 0], b[d], L[d, 0])
+        k = rng.integers(max(int(mm.n_modes), 1))
+        start[d] = mm.P[k] if mm.n_modes else b[d]
+    return A, b, L, start
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.0, 0.3), st.integers(3, 140))
+def test_track_designs_against_numpy(seed, move, N):
+    A, b, L, start = _random_triads(16, N, seed, move)
+    A[3, N // 2, 1, 0] = np.nan                  # a design with a non-finite pin
+    P0, th0, s0 = track_designs(A, b, L, start)
+    P1, th1, s1 = track_designs(A, b, L, start, jit=True)
+    np.testing.assert_array_equal(s0, s1)
+    np.testing.assert_array_equal(np.isnan(P0), np.isnan(P1))
+    assert np.nanmax(np.abs(P0 - P1), initial=0.0) <= 1e-12
+    assert np.nanmax(np.abs(th0 - th1), initial=0.0) <= 1e-12
+    assert (s0[3] != 0).any()
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 10_000), st.booleans())
+def test_companion_roots_against_lapack(seed, double):
+    """The compiled balanced Hessenberg QR against LAPACK's eigenvalues (numpy): simple
+    roots to rounding, a double root (a turning point's) about as well as LAPACK."""
+    from multiloop.kin.groups import _triad_nb as nb
+    rng = np.random.default_rng(seed)
+    K = 50
+    roots = rng.standard_normal((K, 6)) * np.exp(rng.uniform(-2, 2, (K, 1)))
+    if double:
+        roots[:, 1] = roots[:, 0]
+    q = np.array([np.poly(r)[::-1] for r in roots]) * rng.uniform(0.5, 2, (K, 1))   # ascending
+    comp = np.zeros((K, 6, 6))
+    comp[:, 0, :] = -q[:, 5::-1] / q[:, 6:7]
+    comp[:, np.arange(1, 6), np.arange(5)] = 1.0
+    good = np.ones(K, bool)
+    good[0] = False
+    re, im = np.empty((K, 6)), np.empty((K, 6))
+    nb.companion_roots(comp, good, re, im)
+    assert (re[0] == 10.0).all() and (im[0] == 0.0).all()
+    ref = np.linalg.eigvals(comp[1:])
+    ours = re[1:] + 1j * im[1:]
+
+    def err(z):                                  # the farthest true root from the computed ones
+        return np.abs(roots[1:, :, None] - z[:, None, :]).min(axis=2).max(axis=1)
+
+    scale = np.abs(roots[1:]).max(axis=1)
+    # close random roots are ill-conditioned (LAPACK's error x 100); a double root's error is
+    # the square root of rounding for any QR (LAPACK's is sometimes luckily smaller)
+    assert (err(ours) <= 100 * err(ref) + (1e-6 if double else 1e-12) * scale).all()
+
+
+def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
+    """``solve_designs`` hands the triad's tracker the compiled route with the kernel on,
+    the NumPy route with it off (the step's ``jit``)."""
+    from multiloop.kin.groups import triad
+    seen = []
+    real = triad._kernel
+    monkeypatch.setattr(triad, "_kernel", lambda: seen.append(1) or real())
+    m = load_named("stephenson_3_triad")
+    cols, X = _population(m, 4, 0.003, 0)
+    x = np.linspace(0.0, 1.0, 96)
+    with kernel.using("off"):
+        solve_designs(m, cols, X, x)
+    assert not seen
+    with kernel.using("on"):
+        solve_designs(m, cols, X, x)
+    assert seen
