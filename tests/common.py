@@ -9,6 +9,8 @@ import subprocess
 import sys
 import tempfile
 
+import numpy as np
+
 from hypothesis import strategies as st
 
 from multiloop.topo.model import Mechanism, chain_from_joint_lists
@@ -189,3 +191,38 @@ def stop(proc) -> None:
 #: a number and its unit in a verdict line (°, rad, m, mm or in): the page's verdict
 #: in other units has the words of ``check --json``'s and these numbers scaled
 QUANTITY = r"([-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?)(°| rad| mm| m| in)(?!\w)"
+
+
+# -- the compiled design route against the NumPy route (test_synthesis_kernel, test_triad_kernel)
+def design_population(m, D, rel, seed):
+    """D designs of ``m``: its start and designs moved by ``rel`` × its size (normal)."""
+    from multiloop.catalogue.dimensional import design_space
+    space = design_space(m, [p.name for p in m.points])
+    X = space.x0 + rel * m.size * np.random.default_rng(seed).standard_normal((D, space.size))
+    X[0] = space.x0
+    return space.names, X
+
+
+def both_routes(m, cols, X, inputs, outputs=None):
+    """``solve_designs`` by the NumPy route and by the compiled one."""
+    from multiloop.kin import kernel
+    from multiloop.kin.design import solve_designs
+    with kernel.using("off"):
+        a = solve_designs(m, cols, X, inputs, outputs=outputs)
+    with kernel.using("on"):
+        b = solve_designs(m, cols, X, inputs, outputs=outputs)
+    return a, b
+
+
+def routes_agree(m, a, b):
+    """The same ``ok``, the same NaN pattern, poses and angles within 1e-12 of the size."""
+    from multiloop.kin.solve import plan_of
+    size = plan_of(m).size
+    np.testing.assert_array_equal(a.ok, b.ok)
+    a.th, b.th                                  # every pending angle row computed
+    Ta, Tb = a.store.T, b.store.T
+    np.testing.assert_array_equal(np.isnan(Ta), np.isnan(Tb))
+    scale = np.array([size, size, 1.0])[None, :, None, None]
+    assert np.nanmax(np.abs(Ta - Tb) / scale, initial=0.0) <= 1e-12
+    np.testing.assert_array_equal(np.isnan(a.th), np.isnan(b.th))
+    assert np.nanmax(np.abs(a.th - b.th), initial=0.0) <= 1e-12

@@ -26,6 +26,7 @@ from multiloop.catalogue.dimensional.targets import FunctionTarget, MotionTarget
 from multiloop.catalogue.dimensional.synthesise import path_target  # noqa: E402
 from multiloop.catalogue.named import load_named, names  # noqa: E402
 from multiloop.kin import kernel  # noqa: E402
+from tests.common import both_routes, design_population, routes_agree  # noqa: E402
 from multiloop.kin.design import solve_designs  # noqa: E402
 from multiloop.kin.solve import plan_of, solve  # noqa: E402
 from multiloop.topo.errors import LinkageError  # noqa: E402
@@ -44,31 +45,10 @@ def _covered():
     return out
 
 
-def _both(m, cols, X, inputs, outputs=None):
-    with kernel.using("off"):
-        a = solve_designs(m, cols, X, inputs, outputs=outputs)
-    with kernel.using("on"):
-        b = solve_designs(m, cols, X, inputs, outputs=outputs)
-    return a, b
 
 
-def _agree(m, a, b):
-    size = plan_of(m).size
-    np.testing.assert_array_equal(a.ok, b.ok)
-    a.th, b.th                                  # every pending angle row computed
-    Ta, Tb = a.store.T, b.store.T
-    np.testing.assert_array_equal(np.isnan(Ta), np.isnan(Tb))
-    scale = np.array([size, size, 1.0])[None, :, None, None]
-    assert np.nanmax(np.abs(Ta - Tb) / scale, initial=0.0) <= 1e-12
-    np.testing.assert_array_equal(np.isnan(a.th), np.isnan(b.th))
-    assert np.nanmax(np.abs(a.th - b.th), initial=0.0) <= 1e-12
 
 
-def _population(m, D, rel, seed):
-    space = design_space(m, [p.name for p in m.points])
-    X = space.x0 + rel * m.size * np.random.default_rng(seed).standard_normal((D, space.size))
-    X[0] = space.x0
-    return space.names, X
 
 
 def _at(s, name):
@@ -89,22 +69,22 @@ def test_design_batch_against_numpy(name):
     """Every covered catalogue mechanism: 40 designs (5 % of the size around the start,
     so that some fail to assemble somewhere) at 60 inputs shared, then per design."""
     m = load_named(name)
-    cols, X = _population(m, 40, 0.05, 1)
+    cols, X = design_population(m, 40, 0.05, 1)
     x = _inputs(m, 60)
-    a, b = _both(m, cols, X, x)
-    _agree(m, a, b)
+    a, b = both_routes(m, cols, X, x)
+    routes_agree(m, a, b)
     per = x[None] + 0.01 * np.arange(40)[:, None, None]
-    _agree(m, *_both(m, cols, X, per))
+    routes_agree(m, *both_routes(m, cols, X, per))
     last = m.points[0].name if m.points else m.joint_names[-1]
-    a, b = _both(m, cols, X, x, outputs=[last])
-    _agree(m, a, b)
+    a, b = both_routes(m, cols, X, x, outputs=[last])
+    routes_agree(m, a, b)
     np.testing.assert_allclose(a.point(last), b.point(last), rtol=0, atol=1e-12 * m.size)
 
 
 def test_the_start_design_matches_solve():
     """The start design of a batch by the kernel is ``solve``'s motion (a third route)."""
     m = load_named("stephenson_1")
-    cols, X = _population(m, 3, 0.0, 0)
+    cols, X = design_population(m, 3, 0.0, 0)
     x = np.linspace(0.0, 2.0, 50)
     with kernel.using("on"):
         b = solve_designs(m, cols, X, x)
@@ -119,8 +99,8 @@ def test_the_start_design_matches_solve():
        st.floats(0.0, 0.3), st.integers(0, 10_000))
 def test_dyad_populations_against_numpy(name, rel, seed):
     m = load_named(name)
-    cols, X = _population(m, 12, rel, seed)
-    _agree(m, *_both(m, cols, X, _inputs(m, 33)))
+    cols, X = design_population(m, 12, rel, seed)
+    routes_agree(m, *both_routes(m, cols, X, _inputs(m, 33)))
 
 
 # -- the compiled matching ------------------------------------------------------

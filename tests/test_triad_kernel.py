@@ -22,39 +22,19 @@ numba = pytest.importorskip("numba")
 
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
-from multiloop.catalogue.dimensional import design_space  # noqa: E402
 from multiloop.catalogue.named import load_named  # noqa: E402
 from multiloop.kin import kernel  # noqa: E402
+from tests.common import both_routes, design_population, routes_agree  # noqa: E402
 from multiloop.kin.design import solve_designs  # noqa: E402
 from multiloop.kin.groups.triad import track_designs, triad_modes  # noqa: E402
-from multiloop.kin.solve import plan_of  # noqa: E402
 
 NAMES = ["stephenson_3_triad", "stephenson_3"]
 
 
-def _population(m, D, rel, seed):
-    space = design_space(m, [p.name for p in m.points])
-    X = space.x0 + rel * m.size * np.random.default_rng(seed).standard_normal((D, space.size))
-    X[0] = space.x0
-    return space.names, X
 
 
-def _both(m, cols, X, x):
-    with kernel.using("off"):
-        a = solve_designs(m, cols, X, x)
-    with kernel.using("on"):
-        b = solve_designs(m, cols, X, x)
-    return a, b
 
 
-def _agree(m, a, b):
-    size = plan_of(m).size
-    np.testing.assert_array_equal(a.ok, b.ok)
-    a.th, b.th                                  # every pending angle row computed
-    Ta, Tb = a.store.T, b.store.T
-    np.testing.assert_array_equal(np.isnan(Ta), np.isnan(Tb))
-    scale = np.array([size, size, 1.0])[None, :, None, None]
-    assert np.nanmax(np.abs(Ta - Tb) / scale, initial=0.0) <= 1e-12
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -63,9 +43,9 @@ def test_designs_against_numpy(name, rel, span, N):
     """Near designs on the benchmark's range; far ones (some never assemble, some lose
     their mode); a whole turn (turning points on the way)."""
     m = load_named(name)
-    cols, X = _population(m, 60, rel, 1)
-    a, b = _both(m, cols, X, np.linspace(0.0, span, N))
-    _agree(m, a, b)
+    cols, X = design_population(m, 60, rel, 1)
+    a, b = both_routes(m, cols, X, np.linspace(0.0, span, N))
+    routes_agree(m, a, b)
     assert a.ok.any()
     if rel >= 0.1:
         assert not a.ok.all()
@@ -76,8 +56,8 @@ def test_designs_against_numpy(name, rel, span, N):
        st.integers(0, 10_000))
 def test_design_populations_against_numpy(name, rel, span, N, seed):
     m = load_named(name)
-    cols, X = _population(m, 12, rel, seed)
-    _agree(m, *_both(m, cols, X, np.linspace(0.0, span, N)))
+    cols, X = design_population(m, 12, rel, seed)
+    routes_agree(m, *both_routes(m, cols, X, np.linspace(0.0, span, N)))
 
 
 def _random_triads(D, N, seed, move):
@@ -155,7 +135,7 @@ def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
     real = triad._kernel
     monkeypatch.setattr(triad, "_kernel", lambda: seen.append(1) or real())
     m = load_named("stephenson_3_triad")
-    cols, X = _population(m, 4, 0.003, 0)
+    cols, X = design_population(m, 4, 0.003, 0)
     x = np.linspace(0.0, 1.0, 96)
     with kernel.using("off"):
         solve_designs(m, cols, X, x)
