@@ -87,8 +87,9 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
 
 #: the page times each mouse move of a drag until the drawing's joints change (window.__mlFollow, ms)
 #: and each drop until the readout has the re-solved drawing and the check's report is
-#: back (window.__mlDrop: {ack, draw, check}, ms; ack: the server's new design arrived,
-#: the readout cleared until its motion is solved)
+#: back (window.__mlDrop: {ack, draw, check}, ms; ack: the readout changed (cleared, when
+#: the new design comes before its motion); draw: new positions in it; check: a new
+#: report's element in the page)
 EDIT_TIMER_JS = """() => {
   window.__mlFollow = []; window.__mlDrop = [];
   if (window.__mlEditTimer) { return; }
@@ -108,15 +109,18 @@ EDIT_TIMER_JS = """() => {
   }, true);
   document.addEventListener('pointerup', () => {
     const t0 = performance.now(), rec = {};
-    (async () => { let phase = 0;
+    const positions = () => { const r = deep('#ml-positions')[0]; return r && r.getAttribute('data-positions'); };
+    const before = positions(), oldCheck = deep('#ml-check-json')[0];
+    (async () => {
       while (performance.now() - t0 < 600000) { await frame();
-        const r = deep('#ml-positions')[0], has = r && r.getAttribute('data-positions');
-        if (phase == 0 && !has) { rec.ack = performance.now() - t0; phase = 1; }
-        if (phase == 1 && has) { rec.draw = performance.now() - t0; phase = 2; }
-        if (phase == 2 && deep('#ml-check-json').length) { rec.check = performance.now() - t0; break; }
+        const pos = positions();
+        if (rec.ack === undefined && pos !== before) { rec.ack = performance.now() - t0; }
+        if (rec.draw === undefined && pos && pos !== before) { rec.draw = performance.now() - t0; }
+        const json = deep('#ml-check-json')[0];
+        if (rec.draw !== undefined && json && json !== oldCheck) { rec.check = performance.now() - t0; break; }
         const msg = deep('#ml-message[data-error]')[0];
         if (msg) { rec.error = msg.textContent; break; }
-        if (phase == 0 && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; } }
+        if (rec.ack === undefined && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; } }
       window.__mlDrop.push(rec); })();
   }, true); }"""
 

@@ -24,6 +24,10 @@ ADDRESS = "127.0.0.1"
 #: the hint of the message for a mechanism that is not one of the menu's
 MENU_HINT = "choose a catalogue mechanism, a file given to serve, or upload one"
 
+#: an edit's new drawing waits this long for its motion and check, so that the page
+#: gets them in one message (a longer job: the drawing then, the check when it ends)
+EDIT_WAIT_MS = 250
+
 #: the message line with no message
 EMPTY_MESSAGE = html('<div id="ml-message"></div>')
 
@@ -177,6 +181,8 @@ class Workbench:
         self.check_doc = None                   # the open design's check, once computed
         self.job = None
         self.wake = None                        # wake(): poll soon, from a job's thread (set by the server)
+        self.later = None                       # later(ms, fn): fn in ms, held (set by the server)
+        self.held = None                        # an edit's showing, held until its job ends (or EDIT_WAIT_MS)
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
@@ -314,20 +320,38 @@ class Workbench:
             self.editor.reset(m)
         if key is None:
             self.designs[self.mechanism_name] = m
+        self.scene = scene
+        self.job = None
+        if m.drivers and m.has_geometry:
+            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
+        show = lambda: self._show(m, key, scene, structure)      # noqa: E731
+        self.held = show if edited and self.later is not None and self.job is not None else None
+        if self.held is None:
+            show()
+        else:           # an edit's drawing and check together, unless its job takes longer
+            self.later(EDIT_WAIT_MS, lambda: self._release(show))
+
+    def _show(self, m, key, scene, structure) -> None:
+        """The widgets of the design opened (``m``, its ``scene`` and ``structure``): its
+        drawing with the motion the server or the job has, the check panel waiting."""
         self._follow()
         self.address.follow(m, key)
-        self.scene = scene
         self.structure.text = structure
-        ready = _SWEEPS.get(key) if key is not None else None
-        self.shown_sweeps = ready is not None
-        self.view.show(scene, list(ready or ()), self.mechanism_name)
+        sweeps = (_SWEEPS.get(key) if key is not None else None) or getattr(self.job, "sweeps", None)
+        self.shown_sweeps = sweeps is not None
+        self.view.show(scene, list(sweeps or ()), self.mechanism_name)
         if not m.drivers:
             self.check.show(None, None, self.threshold)
         elif not m.has_geometry:
             self.check.busy("no geometry: nothing to move or check")
         else:
-            self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
-            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
+            self.check.busy("check: computing…" if sweeps else "motion and check: computing…", running=True)
+
+    def _release(self, show) -> None:
+        """Show an edit's design (``show``) if it is still the one held back."""
+        if self.held is show:
+            self.held = None
+            show()
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -342,7 +366,9 @@ class Workbench:
         if self.atlas is not None:
             self.atlas.opener.poll()
         job = self.job
-        if job is None:
+        if self.held is not None and not (job is not None and job.running):
+            self._release(self.held)
+        if job is None or self.held is not None:
             return
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
@@ -437,6 +463,13 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
                 wb.poll()
         doc.add_periodic_callback(poll, 150)
         wb.wake = lambda: doc.add_next_tick_callback(poll)      # a job's result shown at once
+
+        def later(ms, fn):
+            def run():
+                with held(doc):
+                    fn()
+            doc.add_timeout_callback(run, ms)
+        wb.later = later
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()
