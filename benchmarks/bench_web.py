@@ -101,6 +101,12 @@ EDIT_TIMER_JS = """() => {
   const joints = () => { const d = Bokeh.documents[0].get_model_by_name('ml-joints').data;
     return JSON.stringify([d.x, d.y]); };
   const frame = () => new Promise(res => requestAnimationFrame(() => res()));
+  // the page's elements are looked for only in the frames within 100 ms of a change of the
+  // document (a walk of every shadow root each frame took a core the server needs)
+  let changed = performance.now();
+  const doc = Bokeh.documents[0];
+  if (doc.on_change) { doc.on_change(() => { changed = performance.now(); }, true); }
+  else { changed = Infinity; }
   document.addEventListener('pointermove', (e) => {
     if (!(e.buttons & 1)) { return; }
     const t0 = performance.now(), before = joints();
@@ -113,14 +119,16 @@ EDIT_TIMER_JS = """() => {
     const before = positions(), oldCheck = deep('#ml-check-json')[0];
     (async () => {
       while (performance.now() - t0 < 600000) { await frame();
+        if (rec.ack === undefined && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; }
+        if (performance.now() - changed > 100) { continue; }
         const pos = positions();
         if (rec.ack === undefined && pos !== before) { rec.ack = performance.now() - t0; }
         if (rec.draw === undefined && pos && pos !== before) { rec.draw = performance.now() - t0; }
         const json = deep('#ml-check-json')[0];
         if (rec.draw !== undefined && json && json !== oldCheck) { rec.check = performance.now() - t0; break; }
         const msg = deep('#ml-message[data-error]')[0];
-        if (msg) { rec.error = msg.textContent; break; }
-        if (rec.ack === undefined && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; } }
+        if (msg) { rec.error = msg.textContent; break; } }
+      if (rec.check === undefined && rec.error === undefined) { rec.error = 'no new check 600 s after the drop'; }
       window.__mlDrop.push(rec); })();
   }, true); }"""
 
