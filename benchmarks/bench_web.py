@@ -88,8 +88,8 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
 #: the page times each mouse move of a drag until the drawing's joints change (window.__mlFollow, ms)
 #: and each drop until the readout has the re-solved drawing and the check's report is
 #: back (window.__mlDrop: {ack, draw, check}, ms; ack: the readout changed (cleared, when
-#: the new design comes before its motion); draw: new positions in it; check: a new
-#: report's element in the page)
+#: the new design comes before its motion); draw: new positions in it; check: the
+#: check's report, not its busy line, in the page with them)
 EDIT_TIMER_JS = """() => {
   window.__mlFollow = []; window.__mlDrop = [];
   if (window.__mlEditTimer) { return; }
@@ -116,7 +116,7 @@ EDIT_TIMER_JS = """() => {
   document.addEventListener('pointerup', () => {
     const t0 = performance.now(), rec = {};
     const positions = () => { const r = deep('#ml-positions')[0]; return r && r.getAttribute('data-positions'); };
-    const before = positions(), oldCheck = deep('#ml-check-json')[0];
+    const before = positions();
     (async () => {
       while (performance.now() - t0 < 600000) { await frame();
         if (rec.ack === undefined && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; }
@@ -124,8 +124,10 @@ EDIT_TIMER_JS = """() => {
         const pos = positions();
         if (rec.ack === undefined && pos !== before) { rec.ack = performance.now() - t0; }
         if (rec.draw === undefined && pos && pos !== before) { rec.draw = performance.now() - t0; }
-        const json = deep('#ml-check-json')[0];
-        if (rec.draw !== undefined && json && json !== oldCheck) { rec.check = performance.now() - t0; break; }
+        // the report (not the busy line) with the new drawing: an edit whose check did not
+        // change (a tracer point moved) leaves the report's element as it was
+        const status = deep('#ml-check-status')[0];
+        if (rec.draw !== undefined && status && status.tagName === 'H3') { rec.check = performance.now() - t0; break; }
         const msg = deep('#ml-message[data-error]')[0];
         if (msg) { rec.error = msg.textContent; break; } }
       if (rec.check === undefined && rec.error === undefined) { rec.error = 'no new check 600 s after the drop'; }
