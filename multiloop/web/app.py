@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from importlib import resources
 
 import numpy as np
@@ -25,7 +26,8 @@ ADDRESS = "127.0.0.1"
 MENU_HINT = "choose a catalogue mechanism, a file given to serve, or upload one"
 
 #: an edit's new drawing waits this long for its motion and check, so that the page
-#: gets them in one message (a longer job: the drawing then, the check when it ends)
+#: gets them in one message (a longer job: the drawing then, the check when it ends);
+#: only while the session's last check took less (a heavy design's drawing at once)
 EDIT_WAIT_MS = 250
 
 #: the message line with no message
@@ -183,6 +185,7 @@ class Workbench:
         self.wake = None                        # wake(): poll soon, from a job's thread (set by the server)
         self.later = None                       # later(ms, fn): fn in ms, held (set by the server)
         self.held = None                        # an edit's showing, held until its job ends (or EDIT_WAIT_MS)
+        self.last_job_s = 0.0                   # seconds the last check job took
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
@@ -325,7 +328,8 @@ class Workbench:
         if m.drivers and m.has_geometry:
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
         show = lambda: self._show(m, key, scene, structure)      # noqa: E731
-        self.held = show if edited and self.later is not None and self.job is not None else None
+        quick = self.last_job_s * 1000 < EDIT_WAIT_MS
+        self.held = show if edited and quick and self.later is not None and self.job is not None else None
         if self.held is None:
             show()
         else:           # an edit's drawing and check together, unless its job takes longer
@@ -383,6 +387,7 @@ class Workbench:
             self.say(job.error)
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
+            self.last_job_s = time.perf_counter() - job.started      # woken at its end: about its time
             self.check_doc = job.result
             self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold,
                             getattr(job, "report", None))
