@@ -200,7 +200,7 @@ class SynthesisView:
         self.drawing = TargetDrawing(self.fig, say)
         self.menus["start"].on_choice(lambda name: self._start_changed())
         self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
-        self.csv_units = div(csv_note(Units()), width=240)
+        self.csv_units = div(csv_note(Units()), width=360)
         self.target_units = Units()         # the units the uploaded target was read in
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
@@ -215,7 +215,8 @@ class SynthesisView:
         self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
                                 Row(w["top"], w["ties"]), visible=False)
         self.panel = Row(
-            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target, self.csv_units), Row(w["method"], w["seed"], w["budget"]),
+            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target), self.csv_units,
+                   Row(w["method"], w["seed"], w["budget"]),
                    Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
                    Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
                    Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
