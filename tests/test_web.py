@@ -799,7 +799,7 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         assert m[1] > 0
 
 
-def test_units_mm_read_an_uploaded_target_csv_as_the_si_file(page, tmp_path):
+def test_units_mm_read_an_uploaded_target_csv_as_the_si_file(browser, server, requests_seen, tmp_path):
     """In mm the line beside the target upload says the table is read in mm; a table of
     the SI file's numbers times 1000 is then the same target: the points the page holds
     (in m) are the SI file's, and the status line says mm.  The Structure tab has no
@@ -810,6 +810,7 @@ def test_units_mm_read_an_uploaded_target_csv_as_the_si_file(page, tmp_path):
     mm.write_text("x,y\n" + "\n".join(f"{1000 * x!r},{1000 * y!r}" for x, y in si.tolist()) + "\n")
     want = parse_table("x,y\n" + "\n".join(f"{x!r},{y!r}" for x, y in si.tolist()), (2, 3), "path", "si")
     structure = "() => (%s)('#ml-structure')[0].textContent" % DEEP_JS
+    page = _page(browser, server[0], requests_seen)           # a page of its own: no earlier test's state
     _pick(page, "four_bar")
     page.get_by_text("Structure", exact=True).click()
     page.wait_for_function(structure, timeout=120000)
@@ -829,10 +830,8 @@ def test_units_mm_read_an_uploaded_target_csv_as_the_si_file(page, tmp_path):
         got = page.evaluate("""() => { const d = Bokeh.documents[0].get_model_by_name('ml-target-upload').data;
             return [Array.from(d.x), Array.from(d.y)]; }""")
         np.testing.assert_allclose(np.array(got).T, want, rtol=1e-12)
-        page.get_by_role("button", name="Clear target").click()
     finally:
-        page.locator(".ml-length-unit select").select_option("m")
-        page.get_by_text("Mechanism", exact=True).first.click()
+        page.close()
 
 
 def _address_text(page) -> str:

@@ -64,8 +64,7 @@ links.data.xs = xs; links.data.ys = ys; links.change.emit();
 joints.data.x = jx; joints.data.y = jy; joints.change.emit();
 """
 
-#: the redraw glue: frame ``i`` of the sweep (its readout arguments in its tags) into the link and
-#: joint models and the readout element
+#: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
 REDRAW_JS = """
 if (sweep.data.nx.length == 0) { return; }       // the motion is not solved yet
 const i = Math.max(0, Math.min(cb_obj.value, sweep.data.nx.length - 1));
@@ -79,7 +78,7 @@ for (const ix of idx) {
 // in place, then one change signal each: a redraw in the browser, no patch to the server
 links.data.xs = xs; links.data.ys = ys; links.change.emit();
 joints.data.x = nx.slice(0, nj); joints.data.y = ny.slice(0, nj); joints.change.emit();
-const [label, unit, names, mech, scale] = sweep.tags;
+const [label, unit, names, mech, scale] = readout.tags;
 for (const c of cursors) { c.location = sweep.data.input[i] * scale; }
 const pos = {};
 names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
@@ -165,8 +164,8 @@ class MechanismView:
         self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
         self.driver = self.drivers.select
         self.player.slider.js_on_change("value", CustomJS(
-            args=dict(sweep=self.sweep, links=self.links, joints=self.joints, cursors=self.cursors),
-            code=REDRAW_JS))
+            args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
+                      cursors=self.cursors), code=REDRAW_JS))
         self.drivers.on_choice(lambda label: self.use_driver(self.drivers.choices.index(label)))
         self.status = div("")
         self.panel = Column(Row(self.driver, self.player.play, self.player.slider), self.status,
@@ -307,8 +306,7 @@ class MechanismView:
     def _unit_texts(self) -> None:
         """The readout's glue arguments and the status line, in the display units."""
         sw, u = self.current, self.units
-        # on the sweep's model, not the readout's: a change of a Div's tags renders it again
-        self.sweep.tags = [sw.joint, u.label(sw.unit), list(self.scene.node_names), self.name, u.scale(sw.unit)]
+        self.readout.tags = [sw.joint, u.label(sw.unit), list(self.scene.node_names), self.name, u.scale(sw.unit)]
         self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
                                 kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
                                 lo=u.shown(sw.x.min(), sw.unit), hi=u.shown(sw.x.max(), sw.unit),
