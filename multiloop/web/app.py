@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 from importlib import resources
 
 import numpy as np
@@ -24,11 +23,6 @@ ADDRESS = "127.0.0.1"
 
 #: the hint of the message for a mechanism that is not one of the menu's
 MENU_HINT = "choose a catalogue mechanism, a file given to serve, or upload one"
-
-#: an edit's new drawing waits this long for its motion and check, so that the page
-#: gets them in one message (a longer job: the drawing then, the check when it ends);
-#: only while the session's last check took less (a heavy design's drawing at once)
-EDIT_WAIT_MS = 250
 
 #: the message line with no message
 EMPTY_MESSAGE = html('<div id="ml-message"></div>')
@@ -183,9 +177,6 @@ class Workbench:
         self.check_doc = None                   # the open design's check, once computed
         self.job = None
         self.wake = None                        # wake(): poll soon, from a job's thread (set by the server)
-        self.later = None                       # later(ms, fn): fn in ms, held (set by the server)
-        self.held = None                        # an edit's showing, held until its job ends (or EDIT_WAIT_MS)
-        self.last_job_s = 0.0                   # seconds the last check job took
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
@@ -323,39 +314,20 @@ class Workbench:
             self.editor.reset(m)
         if key is None:
             self.designs[self.mechanism_name] = m
-        self.scene = scene
-        self.job = None
-        if m.drivers and m.has_geometry:
-            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
-        show = lambda: self._show(m, key, scene, structure)      # noqa: E731
-        quick = self.last_job_s * 1000 < EDIT_WAIT_MS
-        self.held = show if edited and quick and self.later is not None and self.job is not None else None
-        if self.held is None:
-            show()
-        else:           # an edit's drawing and check together, unless its job takes longer
-            self.later(EDIT_WAIT_MS, lambda: self._release(show))
-
-    def _show(self, m, key, scene, structure) -> None:
-        """The widgets of the design opened (``m``, its ``scene`` and ``structure``): its
-        drawing with the motion the server or the job has, the check panel waiting."""
         self._follow()
         self.address.follow(m, key)
+        self.scene = scene
         self.structure.text = structure
-        sweeps = (_SWEEPS.get(key) if key is not None else None) or getattr(self.job, "sweeps", None)
-        self.shown_sweeps = sweeps is not None
-        self.view.show(scene, list(sweeps or ()), self.mechanism_name)
+        ready = _SWEEPS.get(key) if key is not None else None
+        self.shown_sweeps = ready is not None
+        self.view.show(scene, list(ready or ()), self.mechanism_name)
         if not m.drivers:
             self.check.show(None, None, self.threshold)
         elif not m.has_geometry:
             self.check.busy("no geometry: nothing to move or check")
         else:
-            self.check.busy("check: computing…" if sweeps else "motion and check: computing…", running=True)
-
-    def _release(self, show) -> None:
-        """Show an edit's design (``show``) if it is still the one held back."""
-        if self.held is show:
-            self.held = None
-            show()
+            self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
+            self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -370,9 +342,7 @@ class Workbench:
         if self.atlas is not None:
             self.atlas.opener.poll()
         job = self.job
-        if self.held is not None and not (job is not None and job.running):
-            self._release(self.held)
-        if job is None or self.held is not None:
+        if job is None:
             return
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
@@ -387,7 +357,6 @@ class Workbench:
             self.say(job.error)
             self.check.busy(f"check failed: {job.error}")
         elif job.state == "done":
-            self.last_job_s = time.perf_counter() - job.started      # woken at its end: about its time
             self.check_doc = job.result
             self.check.show(job.result, self.view.current if self.view.sweeps else None, self.threshold,
                             getattr(job, "report", None))
@@ -468,13 +437,6 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
                 wb.poll()
         doc.add_periodic_callback(poll, 150)
         wb.wake = lambda: doc.add_next_tick_callback(poll)      # a job's result shown at once
-
-        def later(ms, fn):
-            def run():
-                with held(doc):
-                    fn()
-            doc.add_timeout_callback(run, ms)
-        wb.later = later
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()

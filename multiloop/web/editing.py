@@ -166,16 +166,14 @@ class Editor:
         self.lengths.use_units(units)
         self._fill()
 
-    def drag(self, name: str, xy) -> bool:
+    def drag(self, name: str, xy) -> None:
         """A handle dragged to ``xy`` in the drawing: the same edit as typed, and the
-        edit row then shows that point; whether the edit was made."""
+        edit row then shows that point."""
         at = self.history.at
         self.edit(name, xy)
-        if self.history.at == at:
-            return False
-        self.point.set(value=name)
-        self._fill()
-        return True
+        if self.history.at != at:
+            self.point.set(value=name)
+            self._fill()
 
     def step(self, k: int) -> None:
         """Undo (``k = -1``) or redo (``+1``) one edit."""

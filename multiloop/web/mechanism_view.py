@@ -139,8 +139,7 @@ class MechanismView:
     """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it.
     ``say`` shows the page's one-line message; ``cursors`` are the input cursors of the
     plots against the input; ``on_drag(name, (x, y))`` is called with a handle dragged
-    in the page (a joint or tracer point moved in the reference), and returns whether
-    it made an edit (its drawing may come later: the handles then stay where dropped)."""
+    in the page (a joint or tracer point moved in the reference)."""
 
     def __init__(self, say, cursors=(), on_drag=None):
         self.scene: Scene | None = None
@@ -227,19 +226,15 @@ class MechanismView:
             return
         moved = [] if got is None or got[0] != names or len(got[1]) != len(xs) or len(got[2]) != len(ys) else [
             i for i in range(len(names)) if (got[1][i], got[2][i]) != (xs[i], ys[i])]
-        scene, made = self.scene, False
+        scene = self.scene
         if len(moved) == 1 and self.on_drag is not None:
             i = moved[0]
             with held(self.handles.document):      # the new design's changes in one batch
-                made = self.on_drag(names[i], (got[1][i], got[2][i]))
+                self.on_drag(names[i], (got[1][i], got[2][i]))
         else:
             self.say(explain("dragged handles", expected="one handle of the design moved",
                              got=f"{len(moved)} moved" if got is not None and got[0] == names else "other handles"))
-        if self.scene is not scene:
-            return
-        if made:                           # an edit whose drawing comes later: the handles stay
-            self.handles_set = got
-        else:                              # nothing new shown: the handles go back
+        if self.scene is scene:            # nothing new shown: the handles go back
             self._put_handles()
 
     # ------------------------------------------------------------------ content
@@ -287,7 +282,6 @@ class MechanismView:
             return
         sw = self.sweeps[k]
         self.current = sw
-        self._unit_texts()                  # first: the glue redraws with these tags once the slider moves
         names = list(self.scene.node_names)
         self.sweep.data = dict(nx=sw.nodes[:, :, 0].tolist(), ny=sw.nodes[:, :, 1].tolist(), input=sw.x.tolist())
         n_pts = len(names) - self.scene.n_joints
@@ -298,6 +292,7 @@ class MechanismView:
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
         self.handles.tags = [i]                       # the frame of the handles (FOLLOW_JS)
+        self._unit_texts()
         self.draw_frame(i)
 
     def _labels(self) -> list[str]:
