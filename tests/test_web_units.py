@@ -138,7 +138,7 @@ def test_units_reach_an_atlas_designs_deviation_and_an_uploaded_target_table():
         sv = wb.synthesis
         sv.choose_start("four_bar")
         wb.units.lengths.select.value = "mm"          # as the page's menus set them
-        assert 'data-unit="mm"' in sv.csv_units.text and "read in mm" in sv.csv_units.text
+        assert sv.csv.button.label == "target CSV in mm, deg…"
         sv._upload("mm.csv", text_mm.encode())
         assert "read in mm" in sv.status.text
         want = parse_table(text_si, (2, 3), "path", "si.csv")
@@ -146,7 +146,7 @@ def test_units_reach_an_atlas_designs_deviation_and_an_uploaded_target_table():
         np.testing.assert_allclose(np.c_[sv.uploaded.data["x"], sv.uploaded.data["y"]], want[:, :2], rtol=1e-12)
         wb.units.lengths.select.value = "m"           # read once: a later switch changes nothing
         np.testing.assert_allclose(sv._target(wb._start("four_bar")), want, rtol=1e-12)
-        assert "read in m " in sv.csv_units.text
+        assert sv.csv.button.label == "target CSV in m, deg…"
         m = wb.mechanism
         sv.results = [AtlasDesign(m, 0.00123, 0.000456, "RRR", np.zeros((2, 2)), deviation=0.0042)]
         sv._list()

@@ -109,10 +109,10 @@ def stopped_text(r, units: Units) -> str:
     return r.stopped if dev is None else f"deviation {units.shown(dev, 'm'):.3g} {units.length}"
 
 
-def csv_note(units: Units) -> Html:
-    """The line beside the target upload: the units its table is read in."""
-    return html('<span id="ml-csv-units" data-unit="{u}">read in {u} (x, y; a third column, the input: '
-                "{a}, or {u} for a slider)</span>", u=units.length, a=units.angle)
+def csv_label(units: Units) -> str:
+    """The target upload's label: the units its table is read in (x and y in the length
+    unit; a third column, the input, in the angle unit, or the length unit for a slider)."""
+    return f"target CSV in {units.length}, {units.angle}…"
 
 
 def status_html(text: str, state: str | None = None) -> Html:
@@ -199,8 +199,7 @@ class SynthesisView:
         self.fig = self._figure()
         self.drawing = TargetDrawing(self.fig, say)
         self.menus["start"].on_choice(lambda name: self._start_changed())
-        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
-        self.csv_units = div(csv_note(Units()), width=360)
+        self.csv = Upload(csv_label(Units()), ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
         self.target_units = Units()         # the units the uploaded target was read in
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
@@ -215,8 +214,7 @@ class SynthesisView:
         self.atlas_box = Column(w["atlas"], Row(div("links (--links):", width=100), w["links"]),
                                 Row(w["top"], w["ties"]), visible=False)
         self.panel = Row(
-            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target), self.csv_units,
-                   Row(w["method"], w["seed"], w["budget"]),
+            Column(w["start"], self.atlas_box, w["point"], Row(self.csv.button, self.csv.target), Row(w["method"], w["seed"], w["budget"]),
                    Row(w["tol"], w["candidates"]), Row(w["shape_only"], w["full_rotation"]),
                    Row(w["min_transmission"], w["max_ratio"]), Row(w["length_low"], w["length_high"]),
                    Row(w["run"], w["cancel"], w["clear"]), self.progress, self.status, width=380),
@@ -253,7 +251,7 @@ class SynthesisView:
         self.ticks.args = dict(scale=units.scale("m"))
         self.fig.xaxis.axis_label, self.fig.yaxis.axis_label = f"x ({units.length})", f"y ({units.length})"
         self.drawing.use_units(units)
-        self.csv_units.text = csv_note(units)
+        self.csv.button.label = csv_label(units)
         self._table()
 
     def choose_start(self, name: str) -> None:
