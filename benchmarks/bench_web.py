@@ -87,8 +87,9 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
 
 #: the page times each mouse move of a drag until the drawing's joints change (window.__mlFollow, ms)
 #: and each drop until the readout has the re-solved drawing and the check's report is
-#: back (window.__mlDrop: {ack, draw, check}, ms; ack: the server's new design arrived,
-#: the readout cleared until its motion is solved)
+#: back (window.__mlDrop: {ack, draw, check}, ms; ack: the readout changed (cleared, when
+#: the new design comes before its motion); draw: new positions in it; check: the
+#: check's report, not its busy line, in the page with them)
 EDIT_TIMER_JS = """() => {
   window.__mlFollow = []; window.__mlDrop = [];
   if (window.__mlEditTimer) { return; }
@@ -100,6 +101,12 @@ EDIT_TIMER_JS = """() => {
   const joints = () => { const d = Bokeh.documents[0].get_model_by_name('ml-joints').data;
     return JSON.stringify([d.x, d.y]); };
   const frame = () => new Promise(res => requestAnimationFrame(() => res()));
+  // the page's elements are looked for only in the frames within 100 ms of a change of the
+  // document (a walk of every shadow root each frame took a core the server needs)
+  let changed = performance.now();
+  const doc = Bokeh.documents[0];
+  if (doc.on_change) { doc.on_change(() => { changed = performance.now(); }, true); }
+  else { changed = Infinity; }
   document.addEventListener('pointermove', (e) => {
     if (!(e.buttons & 1)) { return; }
     const t0 = performance.now(), before = joints();
@@ -108,15 +115,22 @@ EDIT_TIMER_JS = """() => {
   }, true);
   document.addEventListener('pointerup', () => {
     const t0 = performance.now(), rec = {};
-    (async () => { let phase = 0;
+    const positions = () => { const r = deep('#ml-positions')[0]; return r && r.getAttribute('data-positions'); };
+    const before = positions();
+    (async () => {
       while (performance.now() - t0 < 600000) { await frame();
-        const r = deep('#ml-positions')[0], has = r && r.getAttribute('data-positions');
-        if (phase == 0 && !has) { rec.ack = performance.now() - t0; phase = 1; }
-        if (phase == 1 && has) { rec.draw = performance.now() - t0; phase = 2; }
-        if (phase == 2 && deep('#ml-check-json').length) { rec.check = performance.now() - t0; break; }
+        if (rec.ack === undefined && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; }
+        if (performance.now() - changed > 100) { continue; }
+        const pos = positions();
+        if (rec.ack === undefined && pos !== before) { rec.ack = performance.now() - t0; }
+        if (rec.draw === undefined && pos && pos !== before) { rec.draw = performance.now() - t0; }
+        // the report (not the busy line) with the new drawing: an edit whose check did not
+        // change (a tracer point moved) leaves the report's element as it was
+        const status = deep('#ml-check-status')[0];
+        if (rec.draw !== undefined && status && status.tagName === 'H3') { rec.check = performance.now() - t0; break; }
         const msg = deep('#ml-message[data-error]')[0];
-        if (msg) { rec.error = msg.textContent; break; }
-        if (phase == 0 && performance.now() - t0 > 30000) { rec.error = 'no new design 30 s after the drop'; break; } }
+        if (msg) { rec.error = msg.textContent; break; } }
+      if (rec.check === undefined && rec.error === undefined) { rec.error = 'no new check 600 s after the drop'; }
       window.__mlDrop.push(rec); })();
   }, true); }"""
 

@@ -799,6 +799,40 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         assert m[1] > 0
 
 
+def test_units_mm_read_an_uploaded_target_csv_as_the_si_file(browser, server, requests_seen, tmp_path):
+    """In mm the target upload's button says the table is read in mm; a table of
+    the SI file's numbers times 1000 is then the same target: the points the page holds
+    (in m) are the SI file's, and the status line says mm.  The Structure tab has no
+    length to convert: its text is the same in m and in mm."""
+    from multiloop.catalogue.dimensional.targets import parse_table
+    si = np.array([[0.05 + 0.002 * i, 0.07 + 0.001 * (i % 5)] for i in range(20)])
+    mm = tmp_path / "target_mm.csv"
+    mm.write_text("x,y\n" + "\n".join(f"{1000 * x!r},{1000 * y!r}" for x, y in si.tolist()) + "\n")
+    want = parse_table("x,y\n" + "\n".join(f"{x!r},{y!r}" for x, y in si.tolist()), (2, 3), "path", "si")
+    structure = "() => (%s)('#ml-structure')[0].textContent" % DEEP_JS
+    page = _page(browser, server[0], requests_seen)           # a page of its own: no earlier test's state
+    _pick(page, "four_bar")
+    page.get_by_text("Structure", exact=True).click()
+    page.wait_for_function(structure, timeout=120000)
+    before = page.evaluate(structure)
+    try:
+        page.locator(".ml-length-unit select").select_option("mm")
+        page.get_by_text("Synthesis", exact=True).click()
+        page.locator(".ml-start select").select_option("four_bar", timeout=120000)
+        sync_api.expect(page.locator(".ml-csv button")).to_have_text("target CSV in mm, deg…", timeout=120000)
+        page.get_by_text("Structure", exact=True).click()
+        assert page.evaluate(structure) == before
+        page.get_by_text("Synthesis", exact=True).click()
+        upload(page, "ml-csv", mm)
+        sync_api.expect(page.locator("#ml-synthesis-status")).to_contain_text("20 rows (read in mm)",
+                                                                             timeout=120000)
+        got = page.evaluate("""() => { const d = Bokeh.documents[0].get_model_by_name('ml-target-upload').data;
+            return [Array.from(d.x), Array.from(d.y)]; }""")
+        np.testing.assert_allclose(np.array(got).T, want, rtol=1e-12)
+    finally:
+        page.close()
+
+
 def _address_text(page) -> str:
     """The mechanism file in the page's address (``?design=CODE``: zlib + base64url)."""
     import base64

@@ -119,3 +119,39 @@ def test_units_reach_the_synthesis_tab_its_errors_bounds_and_timing():
         assert float(row.group(1)) == pytest.approx(0.00123 / 0.0254, rel=1e-12)
     finally:
         wb.close()
+
+
+def test_units_reach_an_atlas_designs_deviation_and_an_uploaded_target_table():
+    """In mm an atlas design's deviation is shown in mm (the library's m times 1000); a
+    target table uploaded in mm is read in mm: the run's target is the SI file's (its
+    input column in deg for the four-bar's crank), the uploaded points drawn in m, and
+    the line beside the upload says so."""
+    from multiloop.catalogue.dimensional.targets import parse_table
+    from multiloop.web.app import Workbench
+    from multiloop.web.synthesis_view import AtlasDesign
+    si = np.array([[0.05 + 0.002 * i, 0.07 + 0.001 * (i % 5), 18.0 * i] for i in range(20)])
+    text_si = "x,y,input\n" + "\n".join(",".join(repr(float(v)) for v in r) for r in si)
+    text_mm = "x,y,input\n" + "\n".join(",".join(repr(float(v)) for v in (1000 * r[0], 1000 * r[1], r[2])) for r in si)
+    wb = Workbench(requested="four_bar")
+    try:
+        wb.tabs.active = 2                            # the tab is built when first shown
+        sv = wb.synthesis
+        sv.choose_start("four_bar")
+        wb.units.lengths.select.value = "mm"          # as the page's menus set them
+        assert sv.csv.button.label == "target CSV in mm, deg…"
+        sv._upload("mm.csv", text_mm.encode())
+        assert "read in mm" in sv.status.text
+        want = parse_table(text_si, (2, 3), "path", "si.csv")
+        np.testing.assert_allclose(sv._target(wb._start("four_bar")), want, rtol=1e-12)
+        np.testing.assert_allclose(np.c_[sv.uploaded.data["x"], sv.uploaded.data["y"]], want[:, :2], rtol=1e-12)
+        wb.units.lengths.select.value = "m"           # read once: a later switch changes nothing
+        np.testing.assert_allclose(sv._target(wb._start("four_bar")), want, rtol=1e-12)
+        assert sv.csv.button.label == "target CSV in m, deg…"
+        m = wb.mechanism
+        sv.results = [AtlasDesign(m, 0.00123, 0.000456, "RRR", np.zeros((2, 2)), deviation=0.0042)]
+        sv._list()
+        assert "<td>deviation 0.0042 m</td>" in sv.table.text
+        wb.units.lengths.select.value = "mm"
+        assert "<td>deviation 4.2 mm</td>" in sv.table.text
+    finally:
+        wb.close()

@@ -26,7 +26,7 @@ from .markup import Html, html, join
 from .mechanism_view import TICKS_JS
 from .menus import Menu, refusal
 from .target_drawing import TargetDrawing
-from .units import Units
+from .units import Units, table_in_si
 
 #: what a target upload is, in the hint of its size refusal
 TARGET_UPLOAD = "upload a target table of x, y rows (a few hundred points are plenty)"
@@ -40,7 +40,8 @@ NO_START = "none: the atlas chooses the topology"
 class AtlasDesign:
     """A design of the synthesis without a start, as a candidate of the list: the
     mechanism, its errors, its structure formula and ``achieved``, its tracer's path over
-    the driver's motion (drawn over the target)."""
+    the driver's motion (drawn over the target); ``deviation``: the retrieved curve's
+    largest deviation from the target (m), shown in the list's ``stopped`` column."""
 
     mechanism: object
     error_max: float
@@ -49,6 +50,7 @@ class AtlasDesign:
     achieved: np.ndarray
     seed: str = "atlas"
     stopped: str = ""
+    deviation: float | None = None
 
 
 def traced(m) -> np.ndarray:
@@ -90,7 +92,7 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
         P = traced(d.mechanism)
         i = [p.name for p in d.mechanism.points].index(options["point"])
         out.append(AtlasDesign(d.mechanism, d.error_max, d.error_rms, d.structure, P[i],
-                               stopped=f"deviation {d.deviation_max:.3g}"))
+                               deviation=float(d.deviation_max)))
     if not out:
         raise InputError(explain("target path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
@@ -98,6 +100,19 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
     job.partial = out
     job.report(1.0, min(d.error_rms for d in out))
     return out
+
+
+def stopped_text(r, units: Units) -> str:
+    """The ``stopped`` column of candidate ``r``: why its run stopped, or an atlas
+    design's deviation in the page's length unit."""
+    dev = getattr(r, "deviation", None)
+    return r.stopped if dev is None else f"deviation {units.shown(dev, 'm'):.3g} {units.length}"
+
+
+def csv_label(units: Units) -> str:
+    """The target upload's label: the units its table is read in (x and y in the length
+    unit; a third column, the input, in the angle unit, or the length unit for a slider)."""
+    return f"target CSV in {units.length}, {units.angle}…"
 
 
 def status_html(text: str, state: str | None = None) -> Html:
@@ -178,13 +193,14 @@ class SynthesisView:
         self.target = None
         self.job: Job | None = None
         self.results: list = []
-        self.uploaded = ColumnDataSource(dict(x=[], y=[]))
+        self.uploaded = ColumnDataSource(dict(x=[], y=[]), name="ml-target-upload")     # in m
         self.start_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.curves = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
         self.fig = self._figure()
         self.drawing = TargetDrawing(self.fig, say)
         self.menus["start"].on_choice(lambda name: self._start_changed())
-        self.csv = Upload("target CSV…", ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
+        self.csv = Upload(csv_label(Units()), ".csv,.txt", self._upload, say, "ml-csv", hint=TARGET_UPLOAD)
+        self.target_units = Units()         # the units the uploaded target was read in
         w["run"].on_click(lambda: self.run())
         w["cancel"].on_click(lambda: self.cancel())
         w["clear"].on_click(lambda: self._clear())
@@ -235,6 +251,7 @@ class SynthesisView:
         self.ticks.args = dict(scale=units.scale("m"))
         self.fig.xaxis.axis_label, self.fig.yaxis.axis_label = f"x ({units.length})", f"y ({units.length})"
         self.drawing.use_units(units)
+        self.csv.button.label = csv_label(units)
         self._table()
 
     def choose_start(self, name: str) -> None:
@@ -271,22 +288,27 @@ class SynthesisView:
         except LinkageError as exc:
             self.say(str(exc))
             return
-        self.target = a
-        self.uploaded.data = dict(x=a[:, 0].tolist(), y=a[:, 1].tolist())
+        self.target, self.target_units = a, self.units      # read in the page's units
+        xy = table_in_si(a[:, :2], self.units)
+        self.uploaded.data = dict(x=xy[:, 0].tolist(), y=xy[:, 1].tolist())
         self.drawing.clear()
-        self.status.text = status_html(f"target: {name}, {len(a)} rows")
+        self.status.text = status_html(f"target: {name}, {len(a)} rows (read in {self.units.length})")
 
     def _clear(self) -> None:
         self.target = None
         self.uploaded.data = dict(x=[], y=[])
         self.drawing.clear()
 
-    def _target(self) -> np.ndarray:
+    def _target(self, start=None) -> np.ndarray:
+        """The target in m (and deg): the stroke drawn, else the table uploaded (read in
+        the page's units then; its input in the angle unit unless ``start``'s first
+        driver is a slider)."""
         drawn = self.drawing.target()
         if drawn is not None:
             return drawn
         if self.target is not None:
-            return self.target
+            rotary = start is None or not start.drivers or start.is_rotary(0)
+            return table_in_si(self.target, self.target_units, rotary)
         raise InputError(explain("target path", expected="a drawn stroke or an uploaded CSV", got="none"))
 
     def _options(self) -> dict:
@@ -311,12 +333,13 @@ class SynthesisView:
         if self.job is not None and self.job.running:
             return
         try:
-            target, options = self._target(), self._options()
+            options = self._options()
             if not options["budget"] or options["budget"] <= 0:
                 raise InputError(explain("budget", expected="a positive number of seconds", got=str(options["budget"])))
             none = self.menus["start"].value == NO_START
             atlas = self._atlas_options(options) if none else None
             start = None if none else self.load_start(self.menus["start"].value)
+            target = self._target(start)
         except LinkageError as exc:
             self.say(str(exc))
             return
@@ -400,7 +423,7 @@ class SynthesisView:
                              "</td><td>{emax:.3g}</td><td>{erms:.3g}</td><td>{links}</td><td>{formula}</td>"
                              "<td>{seed}</td><td>{stopped}</td></tr>",
                              i=i, emax=u.shown(r.error_max, "m"), erms=u.shown(r.error_rms, "m"), links=len(m.links),
-                             formula=formula, seed=r.seed, stopped=r.stopped))
+                             formula=formula, seed=r.seed, stopped=stopped_text(r, u)))
         self.table.text = "" if not rows else html(
             '<table id="ml-candidates" data-unit="{unit}"><tr><th>#</th><th>error max ({unit})</th>'
             "<th>error RMS ({unit})</th><th>links</th><th>structure</th><th>seed</th><th>stopped</th></tr>{rows}"

@@ -2,10 +2,11 @@
 
 Files, exports and the ``check --json`` document keep the command line's units (m and
 deg); only what the page shows (the edit row, the player's readout, the check's verdict
-and events, plot axes and status lines, the Synthesis tab's errors, bounds and timing)
-and what is typed into it are converted, by one frozen
-:class:`Units` value.  A quantity is named by its command-line unit, ``"m"`` or
-``"deg"``, as :attr:`multiloop.web.scene.Sweep.unit` names a driver's.
+and events, plot axes and status lines, the Synthesis tab's errors, deviations, bounds
+and timing) and what is typed or uploaded into it (a target table, :func:`table_in_si`)
+are converted, by one frozen :class:`Units` value.  (The Structure tab shows counts
+and codes only: no length or angle.)  A quantity is named by its command-line unit,
+``"m"`` or ``"deg"``, as :attr:`multiloop.web.scene.Sweep.unit` names a driver's.
 
 Examples
 --------
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 
 from multiloop.topo.errors import InputError, explain
 
-__all__ = ["Units", "UnitsBar", "LENGTHS", "ANGLES"]
+__all__ = ["Units", "UnitsBar", "LENGTHS", "ANGLES", "table_in_si"]
 
 #: display units of a length: how many of them make a metre
 LENGTHS = {"mm": 1000.0, "m": 1.0, "in": 1.0 / 0.0254}
@@ -77,6 +78,25 @@ class Units:
         if not math.isfinite(v):
             raise InputError(explain(what, expected=f"a finite number (in {self.label(unit)})", got=repr(text)))
         return v / self.scale(unit)
+
+
+def table_in_si(table, units: Units, rotary: bool = True):
+    """A target table uploaded to the page (rows x, y and an optional input), read in
+    the page's ``units``: x and y in its length unit, the input in its angle unit
+    (``rotary``, a turning driver) or its length unit (a slider); returned in m and
+    deg (or m), as a table file of ``multiloop synthesise`` holds them.
+
+    Examples
+    --------
+    >>> table_in_si([[120.0, 30.0, 90.0]], Units("mm", "deg")).tolist()
+    [[0.12, 0.03, 90.0]]
+    """
+    import numpy as np
+    out = np.array(table, float)
+    out[:, :2] /= units.scale("m")
+    if out.shape[1] > 2:
+        out[:, 2] /= units.scale("deg" if rotary else "m")
+    return out
 
 
 class UnitsBar:
