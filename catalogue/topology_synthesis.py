@@ -284,10 +284,29 @@ def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> b
     return closed or motion.holds_span(x)
 
 
+def _error_is_the_motions(res: SynthesisResult, point: str) -> bool:
+    """Whether the polished error is the design's own: the tracer solved by the
+    certified motion (:func:`kin.solve.solve`) at the polished inputs meets the
+    polished targets within the reported error (to 1e-6 of the target's size).  The
+    polish evaluates a design at its inputs alone; a triad or class IV group then
+    starts its mode tracking far from the reference and may follow another assembly
+    mode than the motion reaches, so its error would not be the design's."""
+    st = solve(res.mechanism, np.asarray(res.inputs, float))
+    T = np.asarray(res.target, float)
+    P = st.point_positions[:, st.point_index(point)]
+    size = float(np.max(np.ptp(T, axis=0))) or 1.0
+    err = np.linalg.norm(P - T, axis=1) / size
+    return bool(np.all(np.isfinite(err)) and err.max() <= res.error_max + 1e-6)
+
+
 def _traced(m: Mechanism, point: str, inputs: np.ndarray, closed: bool) -> np.ndarray:
-    """The tracer densely: one turn from the reference for a closed target, else over
-    the inputs' span (for the chamfer score and the deviation)."""
-    lo, hi = (0.0, 2 * np.pi) if closed else (float(np.min(inputs)), float(np.max(inputs)))
+    """The tracer densely (for the chamfer score and the deviation): one turn from the
+    reference for a closed target met by a fully turning driver, else over the inputs'
+    span (a driver that does not turn fully meets a closed target's inputs on both
+    sides of its reference: a turn from the reference would trace only the part past
+    it, and the deviation would count the points before it as missed)."""
+    turns = closed and m.is_rotary(0) and (ev := motion_events(m)) is not None and ev.turns_fully
+    lo, hi = (0.0, 2 * np.pi) if turns else (float(np.min(inputs)), float(np.max(inputs)))
     st = solve(m, np.linspace(lo, hi, 2000))
     P = st.point_positions[:, st.point_index(point)]
     return P[np.all(np.isfinite(P), axis=1)]
@@ -315,7 +334,7 @@ def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, se
     and the design is written over that interval, :func:`.open_targets.on_interval`);
     with LInK's chamfer score and the dense deviation."""
     m, inputs, interval = res.mechanism, np.asarray(res.inputs, float), None
-    if not _reaches_targets(m, inputs, closed):
+    if not _reaches_targets(m, inputs, closed) or not _error_is_the_motions(res, point):
         return None
     if not closed:
         try:
