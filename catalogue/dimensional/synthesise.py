@@ -241,7 +241,10 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     else:                   # (the design does not assemble at its reference: nothing is reached)
         inside = False
     ok = ordered and inside and bool(st.ok[0, problem.M:].all())
-    r = problem.residuals(z, phi).reshape(len(phi), -1)
+    # the residuals of the same solve: its inputs walk the grid from the reference first,
+    # so a triad's or class IV group's mode is followed from the reference to ``phi``
+    T, size = problem.targets_for(Z)
+    r = problem.diff(problem.features(Z, st)[:, problem.M:], T, size).reshape(len(phi), -1)
     ang = None
     if isinstance(problem.target, MotionTarget):
         ang = np.degrees(np.abs(r[:, 2]))
