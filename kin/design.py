@@ -215,7 +215,8 @@ def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, bound, steps, X) -> De
     links = [i for k in steps for i in sp.steps[k].unknown]
     C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)
     G.adopt(links, C, S)
-    G.pending.update(int(k) for k in pend if k in set(links))
+    placed = set(links)
+    G.pending.update(int(k) for k in pend if k in placed)
     G.unset_to_nan()
     return DesignPoses(sp, geo, G, G.finite(links))
 
