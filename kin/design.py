@@ -236,6 +236,15 @@ def unbatched_steps(mechanism: Mechanism, plan=None) -> list[str]:
     return [st.label for st in sp.steps if st.closed is None or not type(st.closed).batched]
 
 
+def path_dependent_steps(mechanism: Mechanism, plan=None) -> list[str]:
+    """Labels of the plan's steps whose solution at an input depends on the inputs before
+    it (a triad's or class IV group's followed mode, Newton's previous solution): a
+    design must reach its inputs from the reference by steps no larger than a synthesis
+    grid's to be solved on the motion's own mode.  A dyad's branch is fixed by its sign."""
+    sp = plan_of(mechanism, plan)
+    return [st.label for st in sp.steps if st.solver not in ("driver", "dyad")]
+
+
 def branch_signs(mechanism: Mechanism, names, designs, plan=None) -> np.ndarray:
     """The assembly sign ``(D, n)`` (±1, NaN on a branch boundary) of every dyad step with
     one (RRR, RRP, RPR, actuated), in plan order, that :func:`solve_designs` gives each

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from multiloop.kin.design import (DesignPoses, branch_signs, design_mechanism, design_names, solve_designs,
-                                  unbatched_steps)
+from multiloop.kin.design import (DesignPoses, branch_signs, design_mechanism, design_names, path_dependent_steps,
+                                  solve_designs, unbatched_steps)
 from multiloop.kin import kernel
 from multiloop.kin.geometry import Geometry
 from multiloop.topo.assur import DriverStep, decompose
@@ -115,6 +115,7 @@ class Evaluator:
         self._cols = {n: i for i, n in enumerate(space.names)}
         self.deadline: float | None = None      # time.perf_counter() value, for per-design fallbacks
         self.slow = unbatched_steps(m)          # steps solved design by design
+        self.path_dependent = bool(path_dependent_steps(m))     # (inputs must be walked to from the reference)
 
     # -- decoding --------------------------------------------------------------
     def at(self, X: np.ndarray, name: str) -> np.ndarray:

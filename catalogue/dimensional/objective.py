@@ -561,10 +561,39 @@ class Problem:
         return self.residuals_batch(z[None, :], np.asarray(phi, float)[None, :])[0]
 
     def residuals_batch(self, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
-        """Residuals ``(P, N·c)`` of designs ``Z`` (P, n), each at its own ``PHI`` (P, N)."""
-        st = self.ev.poses(Z[:, :self.nx], PHI)
+        """Residuals ``(P, N·c)`` of designs ``Z`` (P, n), each at its own ``PHI`` (P, N).
+
+        A plan with a path-dependent step (a triad's or class IV group's mode) is solved
+        along :meth:`walk` from the reference to ``PHI``, so that its targets are met on
+        the mode the motion itself reaches, as :func:`~.synthesise.synthesise` and the
+        certified ``solve`` judge them, not on the mode nearest the reference's at the
+        first target."""
         T, size = self.targets_for(Z)
-        return self.diff(self.features(Z, st), T, size).reshape(Z.shape[0], -1)
+        if not self.ev.path_dependent:
+            st = self.ev.poses(Z[:, :self.nx], PHI)
+            return self.diff(self.features(Z, st), T, size).reshape(Z.shape[0], -1)
+        W, at = self.walk(PHI)
+        st = self.ev.poses(Z[:, :self.nx], W)
+        return self.diff(self.features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
+
+    def walk(self, PHI: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Driver values ``W`` (P, L) that walk from the reference (0) through each design's
+        ``PHI`` (P, N) in order by steps of at most the grid's spacing, and the columns
+        ``at`` (N,) with ``W[:, at] == PHI``.  The designs share the number of steps of
+        each stretch (the largest of the batch's); a stretch takes at most ``max_steps``
+        (default two turns of the grid), beyond which its steps grow."""
+        PHI = np.asarray(PHI, float)
+        P, N = PHI.shape
+        prev = np.concatenate([np.zeros((P, 1)), PHI[:, :-1]], axis=1)
+        gap = PHI - prev
+        span = np.max(np.abs(np.nan_to_num(gap, nan=0.0, posinf=0.0, neginf=0.0)), axis=0)
+        n = np.clip(np.ceil(span / self.delta - 1e-9), 1, max_steps or 2 * self.M).astype(int)
+        which = np.repeat(np.arange(N), n)
+        ends = np.cumsum(n)
+        frac = (np.arange(ends[-1]) - np.repeat(ends - n, n) + 1) / np.repeat(n, n)
+        W = prev[:, which] + gap[:, which] * frac
+        W[:, ends - 1] = PHI                      # (exactly, not by a fraction of 1)
+        return np.concatenate([np.zeros((P, 1)), W], axis=1), ends
 
 
 def grashof_margins(problem: Problem, X: np.ndarray) -> np.ndarray:

@@ -231,7 +231,10 @@ def _assess(problem: Problem, z: np.ndarray, phi: np.ndarray):
 
 def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     Z = z[None, :]
-    st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, phi]))
+    # the grid (what the motion reaches), then the targets' inputs: walked to from the
+    # reference when a step's mode depends on the path (as the polish's residuals are)
+    W, at = problem.walk(phi[None, :]) if problem.ev.path_dependent else (phi[None, :], np.arange(len(phi)))
+    st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, W[0]]))
     _, valid, cphi, full = problem.curve(st.ok[:, :problem.M])
     d = np.diff(phi)
     ordered = bool(np.all(d >= -1e-12) or np.all(d <= 1e-12))
@@ -240,11 +243,9 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
         inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
     else:                   # (the design does not assemble at its reference: nothing is reached)
         inside = False
-    ok = ordered and inside and bool(st.ok[0, problem.M:].all())
-    # the residuals of the same solve: its inputs walk the grid from the reference first,
-    # so a triad's or class IV group's mode is followed from the reference to ``phi``
+    ok = ordered and inside and bool(st.ok[0, problem.M + at].all())
     T, size = problem.targets_for(Z)
-    r = problem.diff(problem.features(Z, st)[:, problem.M:], T, size).reshape(len(phi), -1)
+    r = problem.diff(problem.features(Z, st)[:, problem.M + at], T, size).reshape(len(phi), -1)
     ang = None
     if isinstance(problem.target, MotionTarget):
         ang = np.degrees(np.abs(r[:, 2]))
