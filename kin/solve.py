@@ -811,23 +811,33 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     if ch is None or not ch.one_branch or len(m.drivers) != 1 or m.drivers[0].range is not None \
             or not kernel.wanted(X.shape[0]):
         return None
-    kp = kernel.kernel_plan(sp)
-    if not kp.complete:
+    call = cached(sp, ("motion", select), _motion_call, select)
+    if call is None:
         return None
+    kp, want_links, want_points, names = call
     M, nj = X.shape[0], m.n_joints
     T = np.empty((m.n_links, 3, M))
     P = np.empty((kp.hosts.size, 2, M))
     fail = np.zeros(M, np.int8)
     Xc = X if X.flags.c_contiguous and X.flags.writeable else np.array(X)   # (one compiled signature)
-    want_links, want_points = cached(sp, ("want", select), _wanted_rows, select)
     if kernel.run_motion(kp, Xc, T, P, fail, np.zeros(m.n_links, np.int8), want_links, want_points):
         return None
     for a in (T, P, fail):                   # fresh arrays: frozen in place, and given as views only
         a.flags.writeable = False            # (the views cannot be made writable again)
     Z, Q = T.transpose(2, 0, 1), P.transpose(2, 0, 1)
     return KinematicState.frozen_from(mechanism=m, inputs=X, positions=Q[:, :nj], angles=Z[:, :, 2],
-                                      status=_all_ok(M), point_names=tuple(p.name for p in m.points),
-                                      point_positions=Q[:, nj:] if m.points else None, poses=Z, codes=fail[:])
+                                      status=_all_ok(M), point_names=names,
+                                      point_positions=Q[:, nj:] if names else None, poses=Z, codes=fail[:])
+
+
+def _motion_call(sp: SolvePlan, select):
+    """What :func:`_compiled_motion` passes on every call for ``outputs=`` ``select``,
+    looked up once: the lowered plan, the wanted rows' masks and the tracer points'
+    names; None when a step is not compiled."""
+    kp = kernel.kernel_plan(sp)
+    if not kp.complete:
+        return None
+    return (kp, *_wanted_rows(sp, select), tuple(p.name for p in sp.mechanism.points))
 
 
 def _all_ok(M: int) -> np.ndarray:

@@ -81,7 +81,11 @@ class KinematicState(BatchStatus):
         if len(d) != len(_DEFAULTS) + len(_REQUIRED) or not _REQUIRED <= values.keys():
             raise TypeError(f"KinematicState.frozen_from: expected the fields {sorted(_REQUIRED)} and known ones, "
                             f"got {sorted(values)}")
-        obj.__post_init__()
+        for f, v in values.items():        # (the defaults hold no array)
+            if type(v) is np.ndarray and v.flags.writeable:
+                v = v.view()
+                v.flags.writeable = False
+                d[f] = v
         return obj
 
     def as_dict(self, formula: str | None = None, inputs_cli=None, derivatives: bool | None = None) -> dict:
