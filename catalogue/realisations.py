@@ -12,7 +12,8 @@ transmission angle of each RRR dyad, the triad angles; Artobolevsky's and Hain's
 convention) at least ``min_transmission`` from 0° and 180°.  The sample is screened on a
 grid of driver values, a batch of samples at once (16, then 32, then 64:
 :func:`kin.design.solve_designs`, one pass over the mechanism's compiled plan for all of
-them); the samples it keeps are then **certified** in order by the design check's
+them, by the compiled kernels and the triad's compiled tracker when numba is installed:
+:func:`kin.kernel.for_batches`); the samples it keeps are then **certified** in order by the design check's
 motion and angle extremes (:func:`kin.check.driver_angles`), whose continuation and
 event search find limits and angle extremes between grid points (no claim rests on the
 grid alone).
@@ -33,6 +34,7 @@ from multiloop.topo.model import Mechanism
 from multiloop.kin.check import driver_angles
 from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
+from multiloop.kin import kernel
 from multiloop.kin.design import solve_designs
 from multiloop.kin.geometry import design_matrix, design_names
 from multiloop.kin.solve import solve
@@ -95,7 +97,7 @@ def _screen(m: Mechanism, samples: list, specs, min_angle: float) -> np.ndarray:
     bounds: a quick necessary test."""
     names = design_names(m)
     X = design_matrix(names, samples)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), kernel.for_batches():
         warnings.simplefilter("ignore")
         st = solve_designs(m, names, X, _turn())
     keep = np.all(st.ok, axis=1)

@@ -34,7 +34,8 @@ is the NumPy path's, whatever the process loaded before, so the command line, th
 library and the web page give the same bits for the same input.  ``on`` always uses
 the kernel (if numba is installed); ``auto`` uses it once it is loaded in the process
 (:func:`load`) and loads it itself for a batch of at least :data:`LAZY_MIN` positions.
-:func:`using` sets the mode for a block.  The command line's batches never import
+:func:`using` sets the mode for a block, in its own thread (the other threads
+keep theirs).  The command line's batches never import
 numba, so its cold start does not grow.
 
 References
@@ -61,16 +62,18 @@ from .groups.step import trig_row
 from .memo import cached
 
 __all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "design_floats",
-           "run_designs", "compiled_batches", "load", "is_loaded", "wanted",
+           "run_designs", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 #: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
 MODES = ("auto", "on", "off")
 #: in mode "auto", a batch of at least this many positions loads numba itself
 LAZY_MIN = 2_000_000
+#: the process's mode (``MULTILOOP_KERNEL``) and whether it is the default one (unset);
+#: a :func:`using` block overrides both for its own thread only (:data:`_THREAD`)
 _MODE = [os.environ.get("MULTILOOP_KERNEL", "off")]
-#: whether the mode is the default one (``MULTILOOP_KERNEL`` unset, no :func:`using` block)
 _DEFAULT = ["MULTILOOP_KERNEL" not in os.environ]
+_THREAD = threading.local()
 _CODES = {key: i for i, key in enumerate(COMPILED)}
 _NB = "multiloop.kin._kernel_nb"
 
@@ -158,21 +161,29 @@ def kernel_plan(sp) -> KernelPlan:
 
 
 def mode() -> str:
-    """The kernel's mode: ``"auto"``, ``"on"`` or ``"off"`` (see the module's notes)."""
-    return _MODE[0]
+    """The kernel's mode in this thread: ``"auto"``, ``"on"`` or ``"off"`` (see the
+    module's notes)."""
+    return getattr(_THREAD, "mode", _MODE[0])
+
+
+def _is_default() -> bool:
+    return getattr(_THREAD, "default", _DEFAULT[0])
 
 
 @contextlib.contextmanager
 def using(m: str):
-    """Run a block with the kernel's mode ``m`` (one of :data:`MODES`)."""
+    """Run a block with the kernel's mode ``m`` (one of :data:`MODES`), in this thread
+    only: another thread's block (a web page's check beside a synthesis, a Dask
+    worker's tasks) neither sees it nor can leave it set."""
     if m not in MODES:
         raise ValueError(f"kernel mode: expected one of {MODES}, got {m!r}")
-    old = _MODE[0], _DEFAULT[0]
-    _MODE[0], _DEFAULT[0] = m, False
+    old = _THREAD.__dict__.copy()
+    _THREAD.mode, _THREAD.default = m, False
     try:
         yield
     finally:
-        _MODE[0], _DEFAULT[0] = old
+        _THREAD.__dict__.clear()
+        _THREAD.__dict__.update(old)
 
 
 def is_loaded() -> bool:
@@ -202,7 +213,7 @@ _LOADED: list = []
 
 def wanted(n_positions: int) -> bool:
     """Whether a batch of ``n_positions`` is solved by the kernel in the current mode."""
-    m = _MODE[0]
+    m = mode()
     if m == "off":
         return False
     if m == "on" or (m == "auto" and (is_loaded() or n_positions >= LAZY_MIN)):
@@ -216,9 +227,16 @@ def compiled_batches() -> bool:
     unset) whenever numba is installed: a search evaluates thousands of candidates, so
     numba's start-up pays for itself, and the search's result does not depend on what
     else the process ran.  Never in an explicit ``off``."""
-    if _MODE[0] == "off" and not _DEFAULT[0]:
+    if mode() == "off" and not _is_default():
         return False
     return load() is not None
+
+
+def for_batches():
+    """A context in which design batches run compiled when :func:`compiled_batches`
+    says so (``using("on")``), else as they are: synthesis's populations and the curve
+    atlas's screens."""
+    return using("on") if compiled_batches() else contextlib.nullcontext()
 
 
 _ONES: dict = {}

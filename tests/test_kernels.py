@@ -221,6 +221,40 @@ def test_modes():
         assert kernel.wanted(1)
 
 
+def test_a_mode_block_is_its_threads_own():
+    """Two threads in overlapping ``using`` blocks, left in the order that restored the
+    other's mode when the mode was one for the process (a Dask worker's two tasks, the
+    page's check beside a synthesis): each sees its own mode, the rest the default, and
+    the default is back once both have left."""
+    import threading
+    default = kernel.mode(), kernel.compiled_batches()
+    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+    seen = {}
+
+    def a():
+        with kernel.using("on"):
+            a_in.set()
+            b_in.wait(10)
+            seen["a"] = kernel.mode()
+        a_out.set()
+
+    def b():
+        a_in.wait(10)
+        with kernel.using("off"):
+            b_in.set()
+            a_out.wait(10)
+            seen["b"] = kernel.mode(), kernel.compiled_batches()
+            seen["main"] = main_mode[0]
+    main_mode = [None]
+    ta, tb = threading.Thread(target=a), threading.Thread(target=b)
+    ta.start(), tb.start()
+    b_in.wait(10)
+    main_mode[0] = kernel.mode()
+    ta.join(10), tb.join(10)
+    assert seen == {"a": "on", "b": ("off", False), "main": default[0]}
+    assert (kernel.mode(), kernel.compiled_batches()) == default
+
+
 def test_by_default_a_loaded_kernel_changes_no_bit():
     """The kernel agrees with the NumPy path to rounding only, so it is opt-in: with it
     loaded in the process, the default mode still gives the NumPy path's bits (the same

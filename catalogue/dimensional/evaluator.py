@@ -12,7 +12,6 @@ assembly branch (mode) of the design's own reference configuration.
 """
 from __future__ import annotations
 
-import contextlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -134,7 +133,7 @@ class Evaluator:
         driver value from the reference configuration (rad, or m for a P driver).
         """
         X = np.atleast_2d(np.asarray(X, float))
-        with kernel.using("on") if kernel.compiled_batches() else contextlib.nullcontext():
+        with kernel.for_batches():
             return solve_designs(self.mechanism, self.space.names, X, np.asarray(phi, float), outputs=outputs,
                                  deadline=self.deadline)
 

@@ -536,9 +536,16 @@ def _predict(A0, P0, A1, l0=None, l1=None):
     return P0 + r.vP + 0.5 * r.aP, r.omega + 0.5 * r.eps, r.singular
 
 
-def _full_follow(A, bb, l, P_start):
+def _full_follow(A, bb, l, P_start, nb=None):
     """All modes at every position of a short path, then :func:`follow_modes`
-    from the mode nearest ``P_start`` at A[0].  Returns P, theta, det, idx, status."""
+    from the mode nearest ``P_start`` at A[0].  Returns the modes (``P``, ``theta``),
+    idx, status.  With ``nb`` (:func:`_kernel`) the modes, the predictions and the
+    following run compiled (:func:`_coarse_follow`'s route: the same statuses)."""
+    if nb is not None:
+        P, th, idx, status = _coarse_follow(A[None], bb[None], l[None], np.asarray(P_start)[None], nb)
+        if idx[0, 0] < 0:
+            return _Modes(P[0], th[0]), np.full(A.shape[0], -1), np.ones(A.shape[0], int)
+        return _Modes(P[0], th[0]), idx[0], status[0]
     m = triad_modes(A, bb, l)
     valid = np.isfinite(m.theta)
     j0 = _nearest(m.P[0], valid[0], P_start)
@@ -559,7 +566,15 @@ def _full_follow(A, bb, l, P_start):
     return m, idx, status
 
 
-def _refine(A, b, l, c, kmax, todo, Pc, P, th, status) -> None:
+class _Modes(NamedTuple):
+    """The modes of :func:`_full_follow`'s compiled route: ``P`` (n, MAX_MODES, 3, 2) and
+    ``theta`` (n, MAX_MODES), NaN where a mode does not exist."""
+
+    P: np.ndarray
+    theta: np.ndarray
+
+
+def _refine(A, b, l, c, kmax, todo, Pc, P, th, status, nb=None) -> None:
     """Phase 3 of :func:`_track`: follow the refused coarse intervals ``todo`` (and the
     tail after ``c[kmax]``) at full resolution, in place; a loss inside an interval, or
     arriving in another mode than the coarse point's, loses the rest."""
@@ -569,7 +584,7 @@ def _refine(A, b, l, c, kmax, todo, Pc, P, th, status) -> None:
         hi = N - 1 if k >= kmax else c[k + 1]
         if status[lo] != 0:
             break                                      # lost before this interval
-        m, idx, st = _full_follow(A[lo:hi + 1], b, l[lo:hi + 1], P[lo])
+        m, idx, st = _full_follow(A[lo:hi + 1], b, l[lo:hi + 1], P[lo], nb)
         ok = idx >= 0
         rows = np.flatnonzero(ok)
         P[lo + rows] = m.P[rows, idx[ok]]
@@ -599,15 +614,16 @@ def _first_failure_final(P, th, status) -> None:
         th[i:] = np.nan
 
 
-def _track(A, b, l, start, stride):
-    """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`."""
+def _track(A, b, l, start, stride, nb=None):
+    """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`.
+    With ``nb`` (:func:`_kernel`) its all-modes phases run compiled."""
     N = A.shape[0]
     bb = b - b[0]
     P = np.full((N, 3, 2), np.nan)
     th = np.full(N, np.nan)
     status = np.full(N, 3)
     if stride <= 1 or N <= 2 * stride:
-        m, idx, st = _full_follow(A, b, l, start)
+        m, idx, st = _full_follow(A, b, l, start, nb)
         ok = idx >= 0
         P[ok] = m.P[np.flatnonzero(ok), idx[ok]]
         th[ok] = m.theta[np.flatnonzero(ok), idx[ok]]
@@ -616,7 +632,7 @@ def _track(A, b, l, start, stride):
     if c[-1] != N - 1:
         c = np.append(c, N - 1)
     # 1. coarse all-modes + following
-    mc, ic, sc = _full_follow(A[c], b, l[c], start)
+    mc, ic, sc = _full_follow(A[c], b, l[c], start, nb)
     if ic[0] < 0:
         return P, th, np.ones(N, int)
     good_c = ic >= 0
@@ -650,7 +666,7 @@ def _track(A, b, l, start, stride):
     todo = [k for k in np.flatnonzero(bad_int)]
     if kmax < len(c) - 1:
         todo.append(kmax)                              # c[kmax] .. N-1
-    _refine(A, b, l, c, kmax, sorted(set(todo)), Pc, P, th, status)
+    _refine(A, b, l, c, kmax, sorted(set(todo)), Pc, P, th, status, nb)
     _first_failure_final(P, th, status)
     return P, th, status
 
@@ -792,7 +808,7 @@ def track_designs(A, b, l, start, *, stride=32, jit=False):
         alone[rows[k]] = False
     for d in np.flatnonzero(alone):               # the single-design tracker, as alone
         if finite[d]:
-            P[d], th[d], status[d] = _track(A[d], b[d], L[d], start[d], stride)
+            P[d], th[d], status[d] = _track(A[d], b[d], L[d], start[d], stride, nb)
     return P, th, status
 
 
