@@ -135,21 +135,27 @@ def realise(inv: InversionRecord, seed: int, tries: int = 400, min_transmission:
     while done < tries:
         drawn = [sample_positions(inv, rng) for _ in range(min(size, tries - done))]
         size = min(2 * size, batch)
-        built = []
-        for k, at in enumerate(drawn):
-            try:
-                built.append((k, at, inversion(inv.joints, inv.frame, inv.joint, inv.driven,
-                                               name=f"atlas-n{inv.n}", at=at)))
-            except LinkageError:
-                continue
-        if built:
-            keep = _screen(built[0][2], [at for _, at, _ in built], specs, min_transmission)
-            for (k, _, m), ok in zip(built, keep):
-                low = _certified(m, min_transmission) if ok else None
+        first = next(((k, m) for k, m in ((k, _built(inv, at)) for k, at in enumerate(drawn)) if m is not None), None)
+        if first is not None:
+            # each sample's screen is its own (design by design): only the samples it keeps
+            # are built as mechanisms, in order (one that does not build is skipped, as before)
+            keep = _screen(first[1], drawn[first[0]:], specs, min_transmission)
+            for k in first[0] + np.flatnonzero(keep):
+                m = first[1] if k == first[0] else _built(inv, drawn[k])
+                low = None if m is None else _certified(m, min_transmission)
                 if low is not None:
-                    return Realisation(inv, m, seed, low, done + k + 1)
+                    return Realisation(inv, m, seed, low, done + int(k) + 1)
         done += len(drawn)
     return None
+
+
+def _built(inv: InversionRecord, at: dict) -> Mechanism | None:
+    """The mechanism of ``inv`` with the joint positions ``at``, or None when they make no
+    valid mechanism."""
+    try:
+        return inversion(inv.joints, inv.frame, inv.joint, inv.driven, name=f"atlas-n{inv.n}", at=at)
+    except LinkageError:
+        return None
 
 
 def coupler_curves(m: Mechanism, frame_driven: tuple[str, str], per_link: int,
