@@ -49,7 +49,7 @@ def test_a_design_whose_motion_misses_its_reported_error_is_refused():
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
 from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space  # noqa: E402
-from multiloop.catalogue.dimensional.objective import Problem  # noqa: E402
+from multiloop.catalogue.dimensional.objective import SHORT_WALK, Problem  # noqa: E402
 from multiloop.catalogue.dimensional.targets import PathTarget  # noqa: E402
 from multiloop.topo.errors import LinkageError  # noqa: E402
 
@@ -82,13 +82,19 @@ def test_the_polish_residuals_of_a_triad_are_its_certified_motions(seed, turns):
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.lists(st.floats(-6.0, 6.0), min_size=1, max_size=6), st.integers(1, 3))
+@given(st.lists(st.floats(-13.0, 13.0), min_size=1, max_size=6), st.integers(1, 3))
 def test_a_walk_starts_at_the_reference_and_meets_every_input_by_small_steps(values, P):
     _, pt, ev = _triad_evaluator()
     pr = Problem(ev, PathTarget(np.array([[0.0, 0.0], [1.0, 0.5], [0.3, 1.0]]), pt))
     PHI = np.array([values] * P) * (1.0 + np.arange(P)[:, None] / 7.0)
     W, at = pr.walk(PHI)
     assert np.all(W[:, 0] == 0.0) and np.array_equal(W[:, at], PHI)
-    assert np.all(np.abs(np.diff(W, axis=1)) <= pr.delta * (1 + 1e-9))
+    steps = np.abs(np.diff(W, axis=1))
+    assert np.all(steps <= 3 * pr.delta * (1 + 1e-9))
+    dense = np.sum(np.maximum(np.ceil(np.max(np.abs(np.diff(PHI, prepend=0.0, axis=1)), axis=0) / pr.delta - 1e-9), 1))
+    if dense + 1 <= SHORT_WALK:                          # short enough at the grid's spacing: taken so
+        assert np.all(steps <= pr.delta * (1 + 1e-9))
+    else:                                                # else as short as steps of 3 spacings allow
+        assert W.shape[1] <= max(SHORT_WALK, dense / 3 + 2 * len(values) + 1)
     W, at = pr.walk(np.array([[1e3, -1e3]]))           # far inputs: at most two turns' steps a stretch
     assert W.shape[1] == 1 + 2 * 2 * pr.M and np.array_equal(W[:, at], [[1e3, -1e3]])

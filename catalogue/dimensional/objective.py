@@ -99,6 +99,11 @@ def _wrap(a):
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
+#: the longest walk (:meth:`Problem.walk`) taken at the grid's spacing: the trackers'
+#: short path, every mode at every input (twice their coarse stride)
+SHORT_WALK = 64
+
+
 class Problem:
     """The objective of one task (path, function or motion) on one evaluator.
 
@@ -581,13 +586,22 @@ class Problem:
         ``PHI`` (P, N) in order by steps of at most the grid's spacing, and the columns
         ``at`` (N,) with ``W[:, at] == PHI``.  The designs share the number of steps of
         each stretch (the largest of the batch's); a stretch takes at most ``max_steps``
-        (default two turns of the grid), beyond which its steps grow."""
+        (default two turns of the grid), beyond which its steps grow.  A walk longer
+        than :data:`SHORT_WALK` inputs takes steps of up to three grid spacings to stay
+        within it: the triad and class IV trackers compute every mode at every input of
+        so short a path (:func:`multiloop.kin.groups.triad.track_designs`), which costs
+        a fifth of a longer path's coarse following and its refinements, and they still
+        never switch a mode silently (an ambiguous step loses the design)."""
         PHI = np.asarray(PHI, float)
         P, N = PHI.shape
         prev = np.concatenate([np.zeros((P, 1)), PHI[:, :-1]], axis=1)
         gap = PHI - prev
         span = np.max(np.abs(np.nan_to_num(gap, nan=0.0, posinf=0.0, neginf=0.0)), axis=0)
-        n = np.clip(np.ceil(span / self.delta - 1e-9), 1, max_steps or 2 * self.M).astype(int)
+        h = self.delta
+        room = SHORT_WALK - 1 - N                  # (inputs left for the steps between the targets)
+        if room > 0 and np.sum(np.maximum(np.ceil(span / h - 1e-9), 1)) + 1 > SHORT_WALK:
+            h *= min(3.0, max(1.0, float(np.sum(span)) / h / room))
+        n = np.clip(np.ceil(span / h - 1e-9), 1, max_steps or 2 * self.M).astype(int)
         which = np.repeat(np.arange(N), n)
         ends = np.cumsum(n)
         frac = (np.arange(ends[-1]) - np.repeat(ends - n, n) + 1) / np.repeat(n, n)
