@@ -713,7 +713,10 @@ def only_all(sp: SolvePlan, needed) -> bool:
 
 
 def _take(run: _Run, rows: np.ndarray) -> _Run:
-    reason = {i: run.reason[int(r)] for i, r in enumerate(rows) if int(r) in run.reason}
+    reason = {}
+    if run.reason:                          # (only the failed rows are visited)
+        hit = np.flatnonzero(np.isin(rows, np.fromiter(run.reason, np.int64, len(run.reason))))
+        reason = {int(i): run.reason[int(rows[i])] for i in hit}
     return _Run(run.G.take(rows), run.code[rows].copy(), reason, {})
 
 
