@@ -186,9 +186,10 @@ def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
 
 
 def test_changes_held_in_a_callback_are_written_as_one_message():
-    """glue.held: the changes made inside reach each connection of the session as one
-    PATCH-DOC message holding all of them (Bokeh's session writes one per change), a
-    property changed twice once; without a session, Bokeh's own unhold."""
+    """glue.held: the changes made inside reach each connection of the session as two
+    PATCH-DOC messages at most, the data sources' changes first, then the others
+    (Bokeh's session writes one per change), a property changed twice once; without a
+    session, Bokeh's own unhold."""
     import asyncio
     from types import SimpleNamespace
 
@@ -221,12 +222,19 @@ def test_changes_held_in_a_callback_are_written_as_one_message():
         a.text = "b"
         a.text = "c"
         b.data = dict(x=[2])
-    assert single == [] and len(written) == 1          # one message, none per change
-    events = written[0].content["events"]
-    assert [e["kind"] for e in events] == ["ModelChanged", "ColumnDataChanged"] and events[0]["new"] == "c"
+    assert single == [] and len(written) == 2          # two messages, none per change
+    first, second = (w.content["events"] for w in written)
+    assert [e["kind"] for e in first] == ["ColumnDataChanged"]          # the data first, though made last
+    assert [e["kind"] for e in second] == ["ModelChanged"] and second[0]["new"] == "c"
     async def written_out():                  # every write awaited, as the session does
         for p in session._pending_writes:
             await p
+    asyncio.run(written_out())
+    written.clear()
+    session._pending_writes = []
+    with held(doc):                          # only a Div changed: one message
+        a.text = "e"
+    assert len(written) == 1 and [e["kind"] for e in written[0].content["events"]] == ["ModelChanged"]
     asyncio.run(written_out())
     session._pending_writes = None            # no callback running: Bokeh's unhold
     with pytest.raises(RuntimeError):        # (its session refuses a change outside a callback)
