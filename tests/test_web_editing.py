@@ -185,7 +185,7 @@ def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
         w.close()
 
 
-def test_changes_held_in_a_callback_are_written_as_one_message():
+def test_changes_held_in_a_callback_are_written_as_two_messages_data_first():
     """glue.held: the changes made inside reach each connection of the session as two
     PATCH-DOC messages at most, the data sources' changes first, then the others
     (Bokeh's session writes one per change), a property changed twice once; without a

@@ -225,12 +225,13 @@ def on_upload(file_input, fn, fail) -> None:
 
 @contextmanager
 def held(doc):
-    """The changes made inside sent at its end in one message, two changes of one
-    property as one (``doc.hold("combine")``).  Bokeh's server writes one message per
-    change, and the page applies each on its own, drawing a frame between two (an edit
-    and its re-check made about 60 messages, and the frames between them were most of
-    the time the page took to show the new drawing).  ``doc`` None, or a document
-    without a server session (the tests' Workbench): nothing held."""
+    """The changes made inside sent at its end in two messages at most (the data
+    sources' changes, then the others: :func:`data_first`), two changes of one property
+    as one (``doc.hold("combine")``).  Bokeh's server writes one message per change, and
+    the page applies each on its own, drawing a frame between two (an edit and its
+    re-check made about 60 messages, and the frames between them were most of the time
+    the page took to show the new drawing).  ``doc`` None, or a document without a
+    server session (the tests' Workbench): nothing held."""
     if doc is None:
         yield
         return
