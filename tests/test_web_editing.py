@@ -240,3 +240,28 @@ def test_changes_held_in_a_callback_are_written_as_two_messages_data_first():
     with pytest.raises(RuntimeError):        # (its session refuses a change outside a callback)
         with held(doc):
             a.text = "d"
+
+
+def test_a_held_edit_shows_only_the_newest_design_and_its_own_check(wb):
+    """With the server's timer (``hold.later``) an edit's showing waits for its job: a
+    second edit before it is shown drops the first (its timer then does nothing), the
+    first's job is cancelled, and the page shows the second design with its own check
+    once its job ends; a units change meanwhile reaches the design shown."""
+    from multiloop.web.units import Units
+    timers = []
+    wb.hold.later = lambda ms, fn: timers.append(fn)
+    shown = wb.view.scene
+    _edit(wb, "B", 0.12, 0.08)
+    first_job, first = wb.job, wb.mechanism
+    _edit(wb, "B", 0.11, 0.07)
+    second_job, second = wb.job, wb.mechanism
+    assert first_job.cancelled and wb.view.scene is shown and len(timers) == 2
+    wb.view.use_units(Units("m", "rad"))
+    timers[0]()                                  # the first edit's timer: not the one held
+    assert wb.view.scene is shown
+    second_job.thread.join(timeout=600)
+    wb.poll()                                    # the job ended: the held design with its check
+    assert wb.view.scene.mechanism is second and wb.view.sweeps and wb.check_doc == second_job.result
+    assert wb.view.readout.text.endswith(" rad</span>") and wb.view.sweep.tags[1] == "rad" and first is not second
+    timers[1]()                                  # its own timer, after: nothing more
+    assert wb.view.scene.mechanism is second and wb.hold.show is None
