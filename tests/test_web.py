@@ -732,6 +732,34 @@ def test_structure_add_a_dyad_then_remove_the_last_group(page):
     assert set(_readout(page)["positions"]) == set(load_mechanism("four_bar").joint_names) | {"P"}
 
 
+def test_an_edit_that_removes_links_leaves_the_readout_alive(browser, server, requests_seen):
+    """Add a dyad, then remove it (the drawing's links 5, then 3): the page throws
+    nothing, and a switch to rad afterwards shows the readout in rad (a Div changed in
+    the message that resized the drawing's sources once painted half-updated glyphs,
+    threw, and the readout never changed again)."""
+    page = _page(browser, server[0], requests_seen)           # a page of its own: no earlier test's state
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        _pick(page, "four_bar")
+        page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
+        has = """([name, want]) => { const r = (%s)('#ml-positions')[0];
+            return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions')
+              && (name in JSON.parse(r.getAttribute('data-positions'))) == want; }""" % DEEP_JS
+        page.locator(".ml-dyad-at select").select_option("P")
+        page.locator(".ml-add-dyad button").click()
+        page.wait_for_function(has, arg=["dyad1_M", True], timeout=120000)
+        page.locator(".ml-remove-group button").click()
+        page.wait_for_function(has, arg=["dyad1_M", False], timeout=120000)
+        sync_api.expect(page.locator("#ml-positions")).to_have_text(re.compile(r"^O2 = -?\d+\.\d{3} deg$"))
+        page.locator(".ml-angle-unit select").select_option("rad")
+        sync_api.expect(page.locator("#ml-positions")).to_have_text(re.compile(r"^O2 = -?\d+\.\d{3} rad$"),
+                                                                    timeout=120000)
+        assert errors == []
+    finally:
+        page.close()
+
+
 def test_units_mm_show_a_slider_drivers_check_json_in_mm(page):
     """A cylinder-driven crane in mm: every event of its first driver shown equals
     ``check --json``'s (m) times 1000, and the readout's input is in mm."""

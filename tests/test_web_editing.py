@@ -185,10 +185,11 @@ def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
         w.close()
 
 
-def test_changes_held_in_a_callback_are_written_as_one_message():
-    """glue.held: the changes made inside reach each connection of the session as one
-    PATCH-DOC message holding all of them (Bokeh's session writes one per change), a
-    property changed twice once; without a session, Bokeh's own unhold."""
+def test_changes_held_in_a_callback_are_written_as_two_messages_data_first():
+    """glue.held: the changes made inside reach each connection of the session as two
+    PATCH-DOC messages at most, the data sources' changes first, then the others
+    (Bokeh's session writes one per change), a property changed twice once; without a
+    session, Bokeh's own unhold."""
     import asyncio
     from types import SimpleNamespace
 
@@ -221,14 +222,46 @@ def test_changes_held_in_a_callback_are_written_as_one_message():
         a.text = "b"
         a.text = "c"
         b.data = dict(x=[2])
-    assert single == [] and len(written) == 1          # one message, none per change
-    events = written[0].content["events"]
-    assert [e["kind"] for e in events] == ["ModelChanged", "ColumnDataChanged"] and events[0]["new"] == "c"
+    assert single == [] and len(written) == 2          # two messages, none per change
+    first, second = (w.content["events"] for w in written)
+    assert [e["kind"] for e in first] == ["ColumnDataChanged"]          # the data first, though made last
+    assert [e["kind"] for e in second] == ["ModelChanged"] and second[0]["new"] == "c"
     async def written_out():                  # every write awaited, as the session does
         for p in session._pending_writes:
             await p
+    asyncio.run(written_out())
+    written.clear()
+    session._pending_writes = []
+    with held(doc):                          # only a Div changed: one message
+        a.text = "e"
+    assert len(written) == 1 and [e["kind"] for e in written[0].content["events"]] == ["ModelChanged"]
     asyncio.run(written_out())
     session._pending_writes = None            # no callback running: Bokeh's unhold
     with pytest.raises(RuntimeError):        # (its session refuses a change outside a callback)
         with held(doc):
             a.text = "d"
+
+
+def test_a_held_edit_shows_only_the_newest_design_and_its_own_check(wb):
+    """With the server's timer (``hold.later``) an edit's showing waits for its job: a
+    second edit before it is shown drops the first (its timer then does nothing), the
+    first's job is cancelled, and the page shows the second design with its own check
+    once its job ends; a units change meanwhile reaches the design shown."""
+    from multiloop.web.units import Units
+    timers = []
+    wb.hold.later = lambda ms, fn: timers.append(fn)
+    shown = wb.view.scene
+    _edit(wb, "B", 0.12, 0.08)
+    first_job, first = wb.job, wb.mechanism
+    _edit(wb, "B", 0.11, 0.07)
+    second_job, second = wb.job, wb.mechanism
+    assert first_job.cancelled and wb.view.scene is shown and len(timers) == 2
+    wb.view.use_units(Units("m", "rad"))
+    timers[0]()                                  # the first edit's timer: not the one held
+    assert wb.view.scene is shown
+    second_job.thread.join(timeout=600)
+    wb.poll()                                    # the job ended: the held design with its check
+    assert wb.view.scene.mechanism is second and wb.view.sweeps and wb.check_doc == second_job.result
+    assert wb.view.readout.text.endswith(" rad</span>") and wb.view.sweep.tags[1] == "rad" and first is not second
+    timers[1]()                                  # its own timer, after: nothing more
+    assert wb.view.scene.mechanism is second and wb.hold.show is None

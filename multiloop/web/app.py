@@ -165,6 +165,7 @@ class Workbench:
         from .editing import Editor
         from .exports import ExportBar
         from .glue import Upload, div
+        from .holding import Hold
         from .later_tabs import LaterTabs
         from .mechanism_view import MechanismView
         from .menus import Menu
@@ -177,6 +178,7 @@ class Workbench:
         self.check_doc = None                   # the open design's check, once computed
         self.job = None
         self.wake = None                        # wake(): poll soon, from a job's thread (set by the server)
+        self.hold = Hold()                      # an edit's showing, held until its job ends (:mod:`.holding`)
         self.message = div(EMPTY_MESSAGE)
         self.check = CheckView(self.move_to, self.cancel_check)
         self.view = MechanismView(self.say, cursors=[self.check.cursor], on_drag=lambda *a: self.editor.drag(*a))
@@ -294,7 +296,8 @@ class Workbench:
         """Show ``m``: the reference drawing and the structure now, motion and check later
         (at once when the server has them for ``key``, a catalogue name or FILE); the job
         of the mechanism shown before is cancelled.  A design not ``edited`` starts the
-        editor's history."""
+        editor's history; an ``edited`` one is shown with its check when that ends within
+        :data:`~.holding.EDIT_WAIT_MS` (:class:`~.holding.Hold`)."""
         from multiloop.topo.errors import LinkageError
 
         from .jobs import Job
@@ -314,20 +317,12 @@ class Workbench:
             self.editor.reset(m)
         if key is None:
             self.designs[self.mechanism_name] = m
-        self._follow()
-        self.address.follow(m, key)
         self.scene = scene
-        self.structure.text = structure
-        ready = _SWEEPS.get(key) if key is not None else None
-        self.shown_sweeps = ready is not None
-        self.view.show(scene, list(ready or ()), self.mechanism_name)
-        if not m.drivers:
-            self.check.show(None, None, self.threshold)
-        elif not m.has_geometry:
-            self.check.busy("no geometry: nothing to move or check")
-        else:
-            self.check.busy("check: computing…" if ready else "motion and check: computing…", running=True)
+        self.job = None
+        if m.drivers and m.has_geometry:
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
+        # an edit's drawing and check together, unless its job takes longer
+        self.hold.open(lambda: _show_design(self, m, key, scene, structure), edited and self.job is not None)
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -342,7 +337,9 @@ class Workbench:
         if self.atlas is not None:
             self.atlas.opener.poll()
         job = self.job
-        if job is None:
+        if not (job is not None and job.running):
+            self.hold.release()
+        if job is None or self.hold.show is not None:
             return
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
@@ -381,6 +378,23 @@ class Workbench:
         self.stop_jobs()
         if self.atlas is not None:
             self.atlas.close()
+
+
+def _show_design(wb, m, key, scene, structure) -> None:
+    """The widgets of the design ``wb`` opened (``m``, its ``scene`` and ``structure``):
+    its drawing with the motion the server or the job has, the check panel waiting."""
+    wb._follow()
+    wb.address.follow(m, key)
+    wb.structure.text = structure
+    sweeps = (_SWEEPS.get(key) if key is not None else None) or getattr(wb.job, "sweeps", None)
+    wb.shown_sweeps = sweeps is not None
+    wb.view.show(scene, list(sweeps or ()), wb.mechanism_name)
+    if not m.drivers:
+        wb.check.show(None, None, wb.threshold)
+    elif not m.has_geometry:
+        wb.check.busy("no geometry: nothing to move or check")
+    else:
+        wb.check.busy("check: computing…" if sweeps else "motion and check: computing…", running=True)
 
 
 def _start_warm_up(files: dict, threshold: float):
@@ -437,6 +451,13 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
                 wb.poll()
         doc.add_periodic_callback(poll, 150)
         wb.wake = lambda: doc.add_next_tick_callback(poll)      # a job's result shown at once
+
+        def later(ms, fn):
+            def run():
+                with held(doc):
+                    fn()
+            doc.add_timeout_callback(run, ms)
+        wb.hold.later = later
 
         def rest(_event):               # a second message, after the drawing's
             wb.show_rest()

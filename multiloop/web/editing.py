@@ -166,14 +166,16 @@ class Editor:
         self.lengths.use_units(units)
         self._fill()
 
-    def drag(self, name: str, xy) -> None:
+    def drag(self, name: str, xy) -> bool:
         """A handle dragged to ``xy`` in the drawing: the same edit as typed, and the
-        edit row then shows that point."""
+        edit row then shows that point; whether the edit was made."""
         at = self.history.at
         self.edit(name, xy)
-        if self.history.at != at:
-            self.point.set(value=name)
-            self._fill()
+        if self.history.at == at:
+            return False
+        self.point.set(value=name)
+        self._fill()
+        return True
 
     def step(self, k: int) -> None:
         """Undo (``k = -1``) or redo (``+1``) one edit."""

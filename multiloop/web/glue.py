@@ -225,12 +225,13 @@ def on_upload(file_input, fn, fail) -> None:
 
 @contextmanager
 def held(doc):
-    """The changes made inside sent at its end in one message, two changes of one
-    property as one (``doc.hold("combine")``).  Bokeh's server writes one message per
-    change, and the page applies each on its own, drawing a frame between two (an edit
-    and its re-check made about 60 messages, and the frames between them were most of
-    the time the page took to show the new drawing).  ``doc`` None, or a document
-    without a server session (the tests' Workbench): nothing held."""
+    """The changes made inside sent at its end in two messages at most (the data
+    sources' changes, then the others: :func:`data_first`), two changes of one property
+    as one (``doc.hold("combine")``).  Bokeh's server writes one message per change, and
+    the page applies each on its own, drawing a frame between two (an edit and its
+    re-check made about 60 messages, and the frames between them were most of the time
+    the page took to show the new drawing).  ``doc`` None, or a document without a
+    server session (the tests' Workbench): nothing held."""
     if doc is None:
         yield
         return
@@ -247,8 +248,9 @@ async def _written() -> None:
 
 def _unhold_in_one_message(doc) -> None:
     """``doc.unhold()`` with the changes for each of the session's connections written
-    as one PATCH-DOC message (Bokeh's protocol takes a list of changes; its session
-    writes one per change).  Each change is dispatched as ``unhold`` does (the models'
+    as at most two PATCH-DOC messages (Bokeh's protocol takes a list of changes; its
+    session writes one per change): the data sources' changes first, then the others
+    (:func:`data_first`).  Each change is dispatched as ``unhold`` does (the models'
     Python callbacks, the echo to the page that made it suppressed); only the writing is
     gathered.  Without a session whose callback is running, plain ``unhold``."""
     session = getattr(getattr(doc, "session_context", None), "_session", None)
@@ -265,5 +267,26 @@ def _unhold_in_one_message(doc) -> None:
         for c in connections:
             del c.send_patch_document
     for c, events in batches.items():
-        if events:
-            session._pending_writes.append(c._socket.send_message(c.protocol.create("PATCH-DOC", events)))
+        for part in data_first(events):
+            session._pending_writes.append(c._socket.send_message(c.protocol.create("PATCH-DOC", part)))
+
+
+def data_first(events: list) -> list[list]:
+    """``events`` (one batch of changes, in order) as the messages to write: the changes
+    of the data sources, then the others, each in their order (empty ones left out).
+
+    The page applies a message's changes one after the other, at once; a data source's
+    new columns reach its glyphs a moment later (BokehJS updates a glyph's arrays
+    asynchronously), while a new text of a Div (or any widget that changes size) lays
+    out the whole page and paints the drawing at once.  In one message a Div changed
+    after a source whose length changed (an edit that adds or removes a link) painted
+    half-updated glyphs: the paint threw ("Out of bounds"), inside the Div's change
+    signal, and that model never signalled a change again (BokehJS's ``_changing``
+    flag stayed set): the readout kept its last text for the rest of the session.  In a
+    message of their own the sources' changes are complete on the glyphs before the
+    next message lays anything out; the frame glue (run by the slider's change, in the
+    second message) then reads the new frames and their readout arguments."""
+    from bokeh.models import ColumnarDataSource
+    data = [e for e in events if isinstance(getattr(e, "model", None), ColumnarDataSource)]
+    rest = [e for e in events if not isinstance(getattr(e, "model", None), ColumnarDataSource)]
+    return [part for part in (data, rest) if part]

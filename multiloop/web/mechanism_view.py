@@ -64,7 +64,8 @@ links.data.xs = xs; links.data.ys = ys; links.change.emit();
 joints.data.x = jx; joints.data.y = jy; joints.change.emit();
 """
 
-#: the redraw glue: frame ``i`` of the sweep into the link, joint and readout models
+#: the redraw glue: frame ``i`` of the sweep (its readout arguments in its tags) into the link and
+#: joint models and the readout element
 REDRAW_JS = """
 if (sweep.data.nx.length == 0) { return; }       // the motion is not solved yet
 const i = Math.max(0, Math.min(cb_obj.value, sweep.data.nx.length - 1));
@@ -78,7 +79,7 @@ for (const ix of idx) {
 // in place, then one change signal each: a redraw in the browser, no patch to the server
 links.data.xs = xs; links.data.ys = ys; links.change.emit();
 joints.data.x = nx.slice(0, nj); joints.data.y = ny.slice(0, nj); joints.change.emit();
-const [label, unit, names, mech, scale] = readout.tags;
+const [label, unit, names, mech, scale] = sweep.tags;
 for (const c of cursors) { c.location = sweep.data.input[i] * scale; }
 const pos = {};
 names.forEach((n, j) => { pos[n] = [nx[j], ny[j]]; });
@@ -139,7 +140,8 @@ class MechanismView:
     """Drawing + player of one session; :meth:`show` puts a scene and its sweeps on it.
     ``say`` shows the page's one-line message; ``cursors`` are the input cursors of the
     plots against the input; ``on_drag(name, (x, y))`` is called with a handle dragged
-    in the page (a joint or tracer point moved in the reference)."""
+    in the page (a joint or tracer point moved in the reference), and returns whether
+    it made an edit (its drawing may come later: the handles then stay where dropped)."""
 
     def __init__(self, say, cursors=(), on_drag=None):
         self.scene: Scene | None = None
@@ -163,8 +165,8 @@ class MechanismView:
         self.drivers = Menu("driver menu", say, title="driver", width=160, visible=False)
         self.driver = self.drivers.select
         self.player.slider.js_on_change("value", CustomJS(
-            args=dict(sweep=self.sweep, links=self.links, joints=self.joints, readout=self.readout,
-                      cursors=self.cursors), code=REDRAW_JS))
+            args=dict(sweep=self.sweep, links=self.links, joints=self.joints, cursors=self.cursors),
+            code=REDRAW_JS))
         self.drivers.on_choice(lambda label: self.use_driver(self.drivers.choices.index(label)))
         self.status = div("")
         self.panel = Column(Row(self.driver, self.player.play, self.player.slider), self.status,
@@ -226,15 +228,19 @@ class MechanismView:
             return
         moved = [] if got is None or got[0] != names or len(got[1]) != len(xs) or len(got[2]) != len(ys) else [
             i for i in range(len(names)) if (got[1][i], got[2][i]) != (xs[i], ys[i])]
-        scene = self.scene
+        scene, made = self.scene, False
         if len(moved) == 1 and self.on_drag is not None:
             i = moved[0]
             with held(self.handles.document):      # the new design's changes in one batch
-                self.on_drag(names[i], (got[1][i], got[2][i]))
+                made = self.on_drag(names[i], (got[1][i], got[2][i]))
         else:
             self.say(explain("dragged handles", expected="one handle of the design moved",
                              got=f"{len(moved)} moved" if got is not None and got[0] == names else "other handles"))
-        if self.scene is scene:            # nothing new shown: the handles go back
+        if self.scene is not scene:
+            return
+        if made:                           # an edit whose drawing comes later: the handles stay
+            self.handles_set = got
+        else:                              # nothing new shown: the handles go back
             self._put_handles()
 
     # ------------------------------------------------------------------ content
@@ -282,6 +288,7 @@ class MechanismView:
             return
         sw = self.sweeps[k]
         self.current = sw
+        self._unit_texts()                  # first: the glue redraws with these tags once the slider moves
         names = list(self.scene.node_names)
         self.sweep.data = dict(nx=sw.nodes[:, :, 0].tolist(), ny=sw.nodes[:, :, 1].tolist(), input=sw.x.tolist())
         n_pts = len(names) - self.scene.n_joints
@@ -292,7 +299,6 @@ class MechanismView:
         i = sw.reference_index
         self.player.frames(len(sw.x), i)
         self.handles.tags = [i]                       # the frame of the handles (FOLLOW_JS)
-        self._unit_texts()
         self.draw_frame(i)
 
     def _labels(self) -> list[str]:
@@ -301,7 +307,8 @@ class MechanismView:
     def _unit_texts(self) -> None:
         """The readout's glue arguments and the status line, in the display units."""
         sw, u = self.current, self.units
-        self.readout.tags = [sw.joint, u.label(sw.unit), list(self.scene.node_names), self.name, u.scale(sw.unit)]
+        # on the sweep's model, not the readout's: a change of a Div's tags renders it again
+        self.sweep.tags = [sw.joint, u.label(sw.unit), list(self.scene.node_names), self.name, u.scale(sw.unit)]
         self.status.text = html("{kind} of {joint}: {lo:.4g} … {hi:.4g} {unit}, {n} frames",
                                 kind="full rotation" if sw.full_rotation else "limited motion", joint=sw.joint,
                                 lo=u.shown(sw.x.min(), sw.unit), hi=u.shown(sw.x.max(), sw.unit),
