@@ -101,3 +101,22 @@ def test_target_forged_strokes_and_points_are_one_line(drawing):
     assert drawing.points.data["x"] == before[:, 0].tolist()
     with pytest.raises(Exception, match="a stroke of at least 2 points"):
         resample([0.0], [0.0])
+
+
+def test_a_stroke_from_the_page_is_not_echoed_back(drawing):
+    """The page's own strokes are not sent back (the server sets the source only when its
+    strokes differ from the page's by value): strokes that arrive as NumPy arrays were
+    echoed as lists, and an echo of stroke 1 reaching the page after its stroke 2 would
+    wipe stroke 2 for good (the server, given strokes 1 and 2, then sees its own value
+    and sends nothing).  Undo and Clear, which change the strokes, still set them."""
+    changes = []
+    drawing.strokes.on_change("data", lambda attr, old, new: changes.append(len(new["xs"])))
+    # (as the page's typed arrays arrive: NumPy arrays, which the server's lists never equal)
+    a, b = ([np.array(v) for v in _arc(0.0, 2.0)]), ([np.array(v) for v in _arc(2.2, 4.5)])
+    _stroke(drawing, a)
+    _stroke(drawing, a, b)
+    assert changes == [1, 2] and len(drawing.state.xs) == 2          # the page's two changes only
+    drawing.step_back()
+    assert changes == [1, 2, 1] and len(drawing.strokes.data["xs"]) == 1
+    drawing.clear()
+    assert changes == [1, 2, 1, 0]

@@ -92,6 +92,12 @@ class TargetState:
         return replace(self, closed=closed).with_strokes(self.xs, self.ys)
 
 
+def _strokes_of(data) -> tuple:
+    """The strokes of a ``ml-strokes`` data dict as ``(xs, ys)`` tuples of tuples, to
+    compare with a :class:`TargetState`'s."""
+    return tuple(tuple(v) for v in data.get("xs", [])), tuple(tuple(v) for v in data.get("ys", []))
+
+
 class TargetDrawing:
     """The drawn target of the synthesis figure ``fig``: its sources, tools and widgets
     (``widgets``: shape and timing menus, first and last input, Undo).  ``say`` shows the
@@ -185,7 +191,7 @@ class TargetDrawing:
         s = self.state
         try:
             xs, ys = list(data.get("xs", [])), list(data.get("ys", []))
-            if (tuple(tuple(v) for v in xs), tuple(tuple(v) for v in ys)) == (s.xs, s.ys):
+            if _strokes_of(data) == (s.xs, s.ys):
                 return                       # the server's own change
             new = s.with_strokes(xs, ys)
         except (InputError, TypeError, AttributeError) as exc:
@@ -218,6 +224,10 @@ class TargetDrawing:
         s = self.state
         self.undo.disabled = len(self.history) < 2
         self.shape.set(value="closed" if s.closed else "open")
-        self.strokes.data = dict(xs=[list(v) for v in s.xs], ys=[list(v) for v in s.ys])
+        if _strokes_of(self.strokes.data) != (s.xs, s.ys):
+            # (set only when the page's strokes differ by value: an echo of a stroke the
+            # page itself drew, arriving after the page's next stroke, would wipe that one
+            # for good, the server then seeing its own value again and sending nothing)
+            self.strokes.data = dict(xs=[list(v) for v in s.xs], ys=[list(v) for v in s.ys])
         P = np.empty((0, 2)) if s.points is None else s.points
         self.points.data = dict(x=P[:, 0].tolist(), y=P[:, 1].tolist())
