@@ -287,10 +287,10 @@ def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> b
 def _error_is_the_motions(res: SynthesisResult, point: str) -> bool:
     """Whether the polished error is the design's own: the tracer solved by the
     certified motion (:func:`kin.solve.solve`) at the polished inputs meets the
-    polished targets within the reported error (to 1e-6 of the target's size).  The
-    polish evaluates a design at its inputs alone; a triad or class IV group then
-    starts its mode tracking far from the reference and may follow another assembly
-    mode than the motion reaches, so its error would not be the design's."""
+    polished targets within the reported error (to 1e-6 of the target's size): the
+    polish's own solve (design batches, a triad's or class IV group's mode followed
+    along a walk from the reference, :meth:`.dimensional.objective.Problem.walk`)
+    checked by the second route before a design is returned."""
     st = solve(res.mechanism, np.asarray(res.inputs, float))
     T = np.asarray(res.target, float)
     P = st.point_positions[:, st.point_index(point)]

@@ -45,12 +45,6 @@ def _covered():
     return out
 
 
-
-
-
-
-
-
 def _at(s, name):
     """The positions (N, 2) of joint or tracer point ``name`` in a solved state."""
     if name in s.point_names:

@@ -402,8 +402,8 @@ class Problem:
         X = Z[:, :self.nx]
         tim = self.timing_for(Z)
         M = self.M
-        grid = np.broadcast_to(self.grid, (Z.shape[0], M))
-        st = self.ev.poses(X, self.grid if tim is None else np.concatenate([grid, tim], axis=1))
+        st = self.ev.poses(X, self.grid if tim is None else
+                           np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1))
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         ok = st.ok[:, :M]
@@ -597,11 +597,12 @@ class Problem:
         prev = np.concatenate([np.zeros((P, 1)), PHI[:, :-1]], axis=1)
         gap = PHI - prev
         span = np.max(np.abs(np.nan_to_num(gap, nan=0.0, posinf=0.0, neginf=0.0)), axis=0)
-        h = self.delta
+        cap = max_steps or 2 * self.M
+        n = np.clip(np.ceil(span / self.delta - 1e-9), 1, cap).astype(int)
         room = SHORT_WALK - 1 - N                  # (inputs left for the steps between the targets)
-        if room > 0 and np.sum(np.maximum(np.ceil(span / h - 1e-9), 1)) + 1 > SHORT_WALK:
-            h *= min(3.0, max(1.0, float(np.sum(span)) / h / room))
-        n = np.clip(np.ceil(span / h - 1e-9), 1, max_steps or 2 * self.M).astype(int)
+        if room > 0 and n.sum() + 1 > SHORT_WALK:
+            h = self.delta * min(3.0, max(1.0, float(np.sum(span)) / self.delta / room))
+            n = np.clip(np.ceil(span / h - 1e-9), 1, cap).astype(int)
         which = np.repeat(np.arange(N), n)
         ends = np.cumsum(n)
         frac = (np.arange(ends[-1]) - np.repeat(ends - n, n) + 1) / np.repeat(n, n)
