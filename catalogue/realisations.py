@@ -113,7 +113,8 @@ def _certified(m: Mechanism, min_angle: float) -> float | None:
     flagged at ``min_angle`` (the check's motion and exact angle extremes,
     :func:`kin.check.driver_angles`); None otherwise."""
     try:
-        dc = driver_angles(m)
+        with kernel.for_batches():
+            dc = driver_angles(m)
     except (LinkageError, ValueError, FloatingPointError):
         return None
     if not dc.full_rotation or dc.flagged(min_angle):

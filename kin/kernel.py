@@ -18,7 +18,9 @@ lowered by the same adapters, :func:`design_floats`): synthesis's populations
 (``tests/test_kernels.py``, ``tests/test_synthesis_kernel.py``) and solves what the
 kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
 the continuation walk, velocities and accelerations, and the reasons of the rows that
-fail.
+fail.  A triad's or class IV group's tracker along one design's path runs its all-modes
+phases compiled (:mod:`kin.groups._triad_nb`) in the same modes as the plan kernel
+(:func:`kin.kernel_mode.chooses`).
 
 Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships
 wheels for Linux, macOS and Windows, and it caches compiled code on disk
@@ -48,8 +50,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import os
-import sys
 import threading
 import warnings
 from dataclasses import dataclass
@@ -59,23 +59,14 @@ import numpy as np
 
 from .groups.registry import COMPILED
 from .groups.step import trig_row
+from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, turn_off, using
 from .memo import cached
 
 __all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "design_floats",
            "run_designs", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
-#: the kernel's modes (environment variable ``MULTILOOP_KERNEL``)
-MODES = ("auto", "on", "off")
-#: in mode "auto", a batch of at least this many positions loads numba itself
-LAZY_MIN = 2_000_000
-#: the process's mode (``MULTILOOP_KERNEL``) and whether it is the default one (unset);
-#: a :func:`using` block overrides both for its own thread only (:data:`_THREAD`)
-_MODE = [os.environ.get("MULTILOOP_KERNEL", "off")]
-_DEFAULT = ["MULTILOOP_KERNEL" not in os.environ]
-_THREAD = threading.local()
 _CODES = {key: i for i, key in enumerate(COMPILED)}
-_NB = "multiloop.kin._kernel_nb"
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,37 +151,6 @@ def kernel_plan(sp) -> KernelPlan:
     return cached(sp, "kernel", lambda sp, _: lower_plan(sp))
 
 
-def mode() -> str:
-    """The kernel's mode in this thread: ``"auto"``, ``"on"`` or ``"off"`` (see the
-    module's notes)."""
-    return getattr(_THREAD, "mode", _MODE[0])
-
-
-def _is_default() -> bool:
-    return getattr(_THREAD, "default", _DEFAULT[0])
-
-
-@contextlib.contextmanager
-def using(m: str):
-    """Run a block with the kernel's mode ``m`` (one of :data:`MODES`), in this thread
-    only: another thread's block (a web page's check beside a synthesis, a Dask
-    worker's tasks) neither sees it nor can leave it set."""
-    if m not in MODES:
-        raise ValueError(f"kernel mode: expected one of {MODES}, got {m!r}")
-    old = _THREAD.__dict__.copy()
-    _THREAD.mode, _THREAD.default = m, False
-    try:
-        yield
-    finally:
-        _THREAD.__dict__.clear()
-        _THREAD.__dict__.update(old)
-
-
-def is_loaded() -> bool:
-    """Whether the compiled kernel is loaded in this process."""
-    return _NB in sys.modules
-
-
 def load():
     """Import numba and the kernel (compiled on first use, then read from the disk
     cache); None when numba is not installed."""
@@ -202,7 +162,7 @@ def load():
         return None
     except RuntimeError as e:               # numba found no writable cache directory
         warnings.warn(f"compiled plans unavailable, the NumPy path solves: {e}", RuntimeWarning, stacklevel=2)
-        _MODE[0] = "off"
+        turn_off()
         return None
     _LOADED.append(_kernel_nb)
     return _kernel_nb
@@ -213,12 +173,7 @@ _LOADED: list = []
 
 def wanted(n_positions: int) -> bool:
     """Whether a batch of ``n_positions`` is solved by the kernel in the current mode."""
-    m = mode()
-    if m == "off":
-        return False
-    if m == "on" or (m == "auto" and (is_loaded() or n_positions >= LAZY_MIN)):
-        return load() is not None
-    return False
+    return chooses(n_positions) and load() is not None
 
 
 def compiled_batches() -> bool:
@@ -227,7 +182,7 @@ def compiled_batches() -> bool:
     unset) whenever numba is installed: a search evaluates thousands of candidates, so
     numba's start-up pays for itself, and the search's result does not depend on what
     else the process ran.  Never in an explicit ``off``."""
-    if mode() == "off" and not _is_default():
+    if mode() == "off" and not is_default():
         return False
     return load() is not None
 

@@ -579,7 +579,7 @@ def _solve_ranged(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     xr, reach = ch.reduce(x)
     rows = np.flatnonzero(reach)
     if rows.size:
-        sub, notes = _solve_monotone(sp, xr[rows], needed, kernels)
+        sub, notes = _solve_monotone(sp, ch, xr[rows], needed, kernels)
     else:
         sub, notes = _run(sp, np.zeros((1, 1)), needed, {}, kernels), None
     if notes is None and ch.crossings:
@@ -598,7 +598,7 @@ def _solve_ranged(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
     return run, notes or []
 
 
-def _solve_monotone(sp: SolvePlan, xr: np.ndarray, needed, kernels) -> tuple[_Run, list | None]:
+def _solve_monotone(sp: SolvePlan, ch: _Chart, xr: np.ndarray, needed, kernels) -> tuple[_Run, list | None]:
     """The chart coordinates ``xr`` (inside the certified motion) reached by one path that
     visits them sorted: from the reference down through the negative ones, then up
     through the others.  Within the chart a pose depends only on its coordinate (the
@@ -610,12 +610,33 @@ def _solve_monotone(sp: SolvePlan, xr: np.ndarray, needed, kernels) -> tuple[_Ru
     limit), from the path in the order asked."""
     u, inverse = np.unique(xr, return_inverse=True)
     order = np.concatenate([np.flatnonzero(u < 0)[::-1], np.flatnonzero(u >= 0)])
-    sub, _ = _solve_path(sp, u[order, None], needed, kernels)
-    if np.any(sub.code == Status.LIMIT):
-        return _solve_path(sp, xr[:, None], needed, kernels)
+    sub = _along_chart(sp, ch, u[order, None], needed, kernels)
+    if sub is None:
+        sub, _ = _solve_path(sp, u[order, None], needed, kernels)
+        if np.any(sub.code == Status.LIMIT):
+            return _solve_path(sp, xr[:, None], needed, kernels)
     rank = np.empty(len(order), int)
     rank[order] = np.arange(len(order))
     return _take(sub, rank[inverse]), None
+
+
+def _along_chart(sp: SolvePlan, ch: _Chart, X: np.ndarray, needed, kernels) -> _Run | None:
+    """The chart coordinates ``X`` (K, 1) reached by one path from the reference through
+    them in order, sampled as :func:`_solve_path` samples it, solved in one pass with every
+    group on its reference branch: the chart's certified walk found no crossing on the
+    motion (so no group changes branch) and no limit inside it, which is what the walk
+    along the path would certify again; a tracked group follows its mode along the
+    samples (its tracker refuses an ambiguous step).  The same samples, branches and
+    arithmetic as the walk's single round.  None when the chart has a crossing or a row
+    fails (the walk along the path, :func:`_solve_path`, then decides)."""
+    if ch.crossings:
+        return None
+    scale = _scale(sp)
+    P, idx = _fill(np.vstack([np.zeros((1, X.shape[1])), X / scale]), _PATH_STEP)
+    run = _run(sp, P * scale, needed, {}, kernels)
+    if np.any(run.code != 0):
+        return None
+    return _take(run, idx[1:])
 
 
 def _turn_drivers(sp: SolvePlan, run: _Run, turns: np.ndarray) -> None:

@@ -120,7 +120,8 @@ def test_the_screen_keeps_the_same_samples_compiled_and_in_numpy():
     installed: the triad's compiled tracker, the single-design tracker's hand-backs
     included) keeps the same samples as the NumPy route (an explicit ``off``), on the
     triad and the class IV six-bars and a Watt/Stephenson class II one; and the kept
-    realisation is the same."""
+    realisation is the same (its certification, the check's motion and angle extremes,
+    runs compiled too: the same seed and tries, the smallest angle to rounding)."""
     from multiloop.catalogue.realisations import _built, _screen, sample_positions
     from multiloop.kin import kernel
     from multiloop.kin.check.transmission import angle_specs
@@ -143,7 +144,8 @@ def test_the_screen_keeps_the_same_samples_compiled_and_in_numpy():
             r1 = realise(inv, 5, tries=60)
             assert (r0 is None) == (r1 is None)
             if r0 is not None:
-                assert (r0.seed, r0.tries, r0.min_angle) == (r1.seed, r1.tries, r1.min_angle)
+                assert (r0.seed, r0.tries) == (r1.seed, r1.tries)
+                assert r1.min_angle == pytest.approx(r0.min_angle, rel=0, abs=1e-9)
 
 
 @needs_nauty

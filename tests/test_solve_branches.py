@@ -11,7 +11,9 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from dataclasses import replace
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -19,7 +21,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from multiloop.kin.result import Status, json_ready
-from multiloop.kin.solve import solve
+from multiloop.catalogue.named import load_named
+from multiloop.kin import solve as solve_module
+from multiloop.kin.solve import plan_of, solve
 from multiloop.topo.errors import InputError
 from multiloop.topo.io import load
 from test_assur import stephenson3_triad
@@ -153,6 +157,44 @@ def test_hypothesis_triad_large_steps_match_a_fine_continuation(deg):
     both = coarse.ok & fine.ok[rows]
     assert np.allclose(coarse.positions[both], fine.positions[rows][both], atol=1e-9)
     assert np.array_equal(coarse.ok, fine.ok[rows])
+
+
+def _walked(m, deg, **kw):
+    """``solve`` by the certified walk along the path (the one-pass route refused)."""
+    with mock.patch.object(solve_module, "_along_chart", return_value=None):
+        return _solve(m, deg, **kw)
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.sampled_from(["stephenson_3", "stephenson_3_triad"]),
+       st.lists(st.floats(-720.0, 720.0), min_size=1, max_size=8))
+def test_hypothesis_a_tracked_motion_without_crossings_is_solved_in_one_pass_as_the_walk_solves_it(name, deg):
+    """A class III or IV mechanism whose chart has no crossing: the path through the
+    inputs solved in one pass on the reference branches gives the walk's statuses,
+    positions and velocities (to rounding)."""
+    m = load_named(name)
+    one, walked = _solve(m, deg, derivatives=True), _walked(m, deg, derivatives=True)
+    assert list(one.status) == list(walked.status)
+    size = plan_of(m).size
+    for a, b in ((one.positions, walked.positions), (one.velocities, walked.velocities)):
+        assert np.allclose(a, b, rtol=0, atol=1e-12 * size, equal_nan=True)
+
+
+def test_the_one_pass_is_taken_inside_the_chart_and_refused_at_a_crossing():
+    """The one pass solves a triad's turn (no crossing on its chart), and is refused
+    where the chart has a crossing (the walk then marks the rows beside it)."""
+    original, calls = solve_module._along_chart, []
+
+    def spy(*args):
+        calls.append(original(*args))
+        return calls[-1]
+    m = load_named("stephenson_3_triad")
+    with mock.patch.object(solve_module, "_along_chart", spy):
+        _solve(m, [10.0, 200.0])
+    assert calls and calls[-1] is not None
+    sp = plan_of(m)
+    crossed = replace(solve_module._chart(sp, True, np.zeros(1)), crossings=((1.0, 1),))
+    assert original(sp, crossed, np.array([[0.5], [2.0]]), list(range(len(sp.steps))), True) is None
 
 
 def test_runaway_inputs_are_reduced_or_refused():

@@ -26,8 +26,9 @@ import numpy as np
 from multiloop.topo.assur import GroupKind
 
 from .base import cramer, is_singular, quiet
-from .triad import MAX_MODES, _as_batch, _rot, _track, _wrap, track_designs, triad_modes
+from .triad import MAX_MODES, _as_batch, _kernel, _rot, _track, _wrap, track_designs, triad_modes
 from ..continuation import Probe
+from ..kernel_mode import chooses
 from ..poses import known_on
 from ..result import Status
 from .newton import jacobian_rates
@@ -203,7 +204,7 @@ def class4_rates(O, J, vO, aO=None) -> Class4Rates:
 
 
 @quiet
-def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
+def class4_track(O, r, m, start, *, stride=32, jit=False) -> Class4Track:
     """Follow one assembly mode of a class IV group along a batch of positions.
 
     Parameters
@@ -214,7 +215,7 @@ def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
     start : array_like, shape (2,)
         Rotations (θ1, θ2) near the wanted mode at ``O[0]`` (``(0, 0)`` = the
         reference configuration).
-    stride : int, optional
+    stride, jit : optional
         As in :func:`kin.groups.triad.triad_track`.
 
     Returns
@@ -239,7 +240,7 @@ def class4_track(O, r, m, start, *, stride=32) -> Class4Track:
     loc = np.stack([J0[2], J0[3], O[0, 1]]) - O[0, 0]
     c, s_ = np.cos(-th0[0]), np.sin(-th0[0])
     loc = _rot(c, s_, loc)
-    P, phi, status = _track(np.ascontiguousarray(anchors), b, ll, loc, stride)
+    P, phi, status = _track(np.ascontiguousarray(anchors), b, ll, loc, stride, _kernel() if jit else None)
     ok = status == 0
     th1 = _wrap(np.arctan2(e[:, 1], e[:, 0]) - np.arctan2(P[:, 2, 1], P[:, 2, 0]))
     theta = np.stack([th1, _wrap(th1 + phi)], axis=-1)
@@ -291,7 +292,7 @@ class Class4Step(GroupStep):
         if good.any():
             idx = np.flatnonzero(good)
             o = Oref[0]                      # solved about the reference pivot: translation-invariant
-            res = class4_track(O[idx] - o, self.r, self.lengths, np.zeros(2))
+            res = class4_track(O[idx] - o, self.r, self.lengths, np.zeros(2), jit=chooses(N))
             J[idx], th[idx], ok[idx] = res.J + o, res.theta, res.ok
             for k in np.flatnonzero(~res.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(res.status[k]), (Status.MODE_LOST, "class IV mode lost"))

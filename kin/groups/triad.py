@@ -38,6 +38,7 @@ from multiloop.topo.assur import GroupKind
 
 from .base import SINGULAR_RTOL, quiet
 from ..continuation import Probe
+from ..kernel_mode import chooses
 from ..poses import known_on
 from ..result import Status
 from .newton import jacobian_rates
@@ -672,7 +673,7 @@ def _track(A, b, l, start, stride, nb=None):
 
 
 @quiet
-def triad_track(A, b, l, start, *, stride=32) -> TriadTrack:
+def triad_track(A, b, l, start, *, stride=32, jit=False) -> TriadTrack:
     """Follow one assembly mode of a triad along a batch of anchor positions.
 
     Parameters
@@ -687,6 +688,11 @@ def triad_track(A, b, l, start, *, stride=32) -> TriadTrack:
         are Newton-polished from a Taylor prediction and accepted only if they
         stay well inside their mode's basin (else that interval is redone at
         full resolution).  ``stride=1``: all modes at every position.
+    jit : bool, optional
+        Run the all-modes phases (the modes at the coarse positions and their
+        following, and any interval redone at full resolution) compiled, by
+        :mod:`kin.groups._triad_nb`, when numba is installed: the same modes and
+        statuses, the floats to rounding (as :func:`track_designs`).
 
     Returns
     -------
@@ -709,7 +715,7 @@ def triad_track(A, b, l, start, *, stride=32) -> TriadTrack:
     A = np.asarray(A, dtype=float)
     b = np.asarray(b, dtype=float)
     l = np.broadcast_to(np.asarray(l, dtype=float), A.shape[:-1])
-    P, th, status = _track(A, b, l, np.asarray(start, dtype=float), stride)
+    P, th, status = _track(A, b, l, np.asarray(start, dtype=float), stride, _kernel() if jit else None)
     ok = status == 0
     det = np.full(A.shape[0], np.nan)
     if ok.any():
@@ -921,7 +927,7 @@ class TriadStep(GroupStep):
         if good.any():
             idx = np.flatnonzero(good)
             o = self.A[0]                    # solved about the reference anchor: translation-invariant
-            r = triad_track(A[idx] - o, self.b - o, self.lengths, self.b - o)
+            r = triad_track(A[idx] - o, self.b - o, self.lengths, self.b - o, jit=chooses(N))
             P[idx], th[idx], ok[idx] = r.P + o, r.theta, r.ok
             for k in np.flatnonzero(~r.ok):
                 why[int(idx[k])] = TRACK_STATUS.get(int(r.status[k]), (Status.MODE_LOST, "triad mode lost"))
