@@ -267,10 +267,28 @@ def run_motion(kp: KernelPlan, X: np.ndarray, T: np.ndarray, P: np.ndarray, fail
     failed rows.  The work rows (cos and sin tables) are this thread's scratch arrays
     (:func:`_scratch`).  The lean route of :func:`kin.solve.solve` for a whole motion;
     :func:`run_positions` serves every other caller."""
-    M, nl = X.shape[0], T.shape[0]
-    return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig, kp.frame, X,
-                               _scratch("W", (4 * X.shape[1], M)), _scratch("C", (nl, M)), _scratch("S", (nl, M)),
+    W, C, S = _motion_work(X.shape[1], T.shape[0], X.shape[0])
+    return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig, kp.frame, X, W, C, S,
                                T, fail, pend, want_links, kp.hosts, kp.offs, want_points, P)
+
+
+def _motion_work(n_drivers: int, n_links: int, M: int) -> tuple:
+    """:func:`run_motion`'s three work arrays (this thread's scratch), looked up once for
+    a run of small calls of the same shape (a loop of solves of one batch size, where
+    the lookups cost a third of the kernel's own time); a large batch looks them up each
+    time (no view kept of a buffer that a larger batch has since replaced)."""
+    key = (n_drivers, n_links, M)
+    hit = getattr(_SCRATCH, "motion", None)
+    if hit is not None and hit[0] == key:
+        return hit[1]
+    work = (_scratch("W", (4 * n_drivers, M)), _scratch("C", (n_links, M)), _scratch("S", (n_links, M)))
+    if max(4 * n_drivers, n_links) * M <= SMALL_BATCH:
+        _SCRATCH.motion = (key, work)
+    return work
+
+
+#: the largest work array (floats) whose views :func:`_motion_work` keeps between calls
+SMALL_BATCH = 1 << 16
 
 
 class KernelRun(NamedTuple):
