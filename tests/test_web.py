@@ -669,6 +669,10 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     n0 = page.evaluate(STROKES_JS)
     _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 2.0)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
+    # the server's answer to the first stroke (its target points) before the second: the
+    # page's figure settles (its ranges follow the data) before the mouse draws on it
+    page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('ml-target-points').data.x.length > 0",
+                           timeout=120000)
     _stroke_in(page, page.evaluate(TARGET_BOX_JS), 2.2, 4.5)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=120000)
     page.locator(".ml-target-undo button").click()
