@@ -338,7 +338,8 @@ def _walk_on(sp: SolvePlan, kernels, P_scaled: np.ndarray) -> Walk:
 
 @dataclass(frozen=True)
 class _Chart:
-    """The motion of a one-driver mechanism of closed-form groups, from the reference.
+    """The motion of driver ``k`` from the reference (the only driver, or one of several
+    moved while the others are held at the reference).
 
     ``lo`` ≤ input ≤ ``hi`` is reachable (±inf when periodic); ``period`` is 2π or 4π
     for an R driver that turns without limit; ``flips[k]`` are the inputs (sorted) where
@@ -355,6 +356,7 @@ class _Chart:
     is_r: bool
     lo_req: float                     # the P driver's inputs the chart was built for (±inf: R)
     hi_req: float
+    k: int = 0                        # the driver moved
 
     @property
     def one_branch(self) -> bool:
@@ -391,9 +393,9 @@ class _Chart:
         return np.where(n % 2 == 0, 1.0, -1.0)
 
 
-def _walk_dir(sp: SolvePlan, kernels, extent: float, sign: float) -> Walk:
+def _walk_dir(sp: SolvePlan, kernels, extent: float, sign: float, k: int = 0) -> Walk:
     n = int(np.ceil(extent / 0.02)) + 1
-    return _walk_on(sp, kernels, sign * np.linspace(0.0, extent, n)[:, None])
+    return _walk_on(sp, kernels, DriverMotion.held(sp.mechanism, k).inputs(sign * np.linspace(0.0, extent, n)))
 
 
 def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
@@ -402,19 +404,19 @@ def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
     return walk.s[-1] * scale if is_r else max(walk.s[-1] * scale, asked)
 
 
-def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart:
-    """Walk up and down from the reference (one driver; scaled inputs)."""
-    is_r = sp.mechanism.is_rotary(0)
-    scale = _scale(sp)[0]
+def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float, d: int = 0) -> _Chart:
+    """Walk driver ``d`` up and down from the reference (the others held; scaled inputs)."""
+    is_r = sp.mechanism.is_rotary(d)
+    scale = _scale(sp)[d]
     flips: dict = {}
     crossings, limits = [], {}
     ext_up = 2 * np.pi if is_r else max(hi_req / scale, 0.0)
-    up = _walk_dir(sp, kernels, ext_up, 1.0) if ext_up > 0 else None
+    up = _walk_dir(sp, kernels, ext_up, 1.0, d) if ext_up > 0 else None
     period = None
     if is_r and up.block is None:
         odd = [k for k, f in up.flips.items() if len(f) % 2]
         if odd:
-            up = _walk_dir(sp, kernels, 4 * np.pi, 1.0)
+            up = _walk_dir(sp, kernels, 4 * np.pi, 1.0, d)
             odd = [k for k, f in up.flips.items() if len(f) % 2]
         period = (2 * np.pi if len(up.s) and up.s[-1] < 3 * np.pi else 4 * np.pi) if not odd else None
     hi = np.inf if period else (up.block[0] * scale if up is not None and up.block else
@@ -428,7 +430,7 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
     lo = -np.inf if period else 0.0
     ext_dn = 2 * np.pi if is_r else max(-lo_req / scale, 0.0)
     if not period and ext_dn > 0:
-        dn = _walk_dir(sp, kernels, ext_dn, -1.0)
+        dn = _walk_dir(sp, kernels, ext_dn, -1.0, d)
         lo = -dn.block[0] * scale if dn.block else -_walked(dn, scale, -lo_req, is_r)
         if dn.block:
             limits["lo"] = dn.block[2]
@@ -437,13 +439,15 @@ def _build_chart(sp: SolvePlan, kernels, lo_req: float, hi_req: float) -> _Chart
         crossings += [(-x * scale, k) for x, k in dn.crossings]
     return _Chart(lo, hi, period, MappingProxyType({k: tuple(sorted(f)) for k, f in flips.items()}),
                   tuple(sorted(crossings)), MappingProxyType(limits), is_r,
-                  lo_req if not is_r else -np.inf, hi_req if not is_r else np.inf)
+                  lo_req if not is_r else -np.inf, hi_req if not is_r else np.inf, d)
 
 
-def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
-    """The cached chart of ``sp`` covering the inputs ``x`` (built on first use)."""
+def _chart(sp: SolvePlan, kernels, x: np.ndarray, k: int = 0) -> _Chart:
+    """The cached chart of driver ``k`` of ``sp`` covering its inputs ``x`` (built on
+    first use; one per driver of a mechanism with several)."""
     memo = memo_of(sp)
-    ch = memo.get("chart")
+    key = "chart" if len(sp.mechanism.drivers) == 1 else ("chart", k)
+    ch = memo.get(key)
     if ch is not None and ch.covers(x):
         return ch
     if not ch or ch.is_r:
@@ -451,7 +455,7 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray) -> _Chart:
     else:
         lo_req = min(ch.lo_req, float(x.min(initial=0.0)))
         hi_req = max(ch.hi_req, float(x.max(initial=0.0)))
-    ch = memo["chart"] = _build_chart(sp, kernels, lo_req, hi_req)
+    ch = memo[key] = _build_chart(sp, kernels, lo_req, hi_req, k)
     return ch
 
 
@@ -479,9 +483,19 @@ def _fmt_x(sp: SolvePlan, k: int, v: float) -> str:
 
 
 def _chartable(sp: SolvePlan, kernels) -> bool:
-    if len(sp.mechanism.drivers) != 1 or not kernels:
+    if not kernels:
         return False
     return all(st.solver in ("driver", "dyad") and st.closed is not None for st in sp.steps)
+
+
+def _moving_driver(X: np.ndarray) -> int | None:
+    """The driver whose input moves in ``X`` (M, n_drivers): the only one, or the one
+    column of several that is not all at the reference (the others held, as a check
+    moves each driver in turn); None when none or several move."""
+    if X.shape[1] == 1:
+        return 0
+    moving = np.flatnonzero(np.any(X != 0.0, axis=0))
+    return int(moving[0]) if moving.size == 1 else None
 
 
 def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
@@ -490,19 +504,19 @@ def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
     idx = np.flatnonzero(bad)
     sub = _run(sp, X[idx], range(len(sp.steps)), {}, kernels)
     for j, n in enumerate(idx):
-        x = float(X[n, 0])
+        x = float(X[n, ch.k])
         if sub.code[j] == Status.OK:
             run.code[n] = Status.OTHER_CIRCUIT
-            run.reason[int(n)] = (f"other circuit: assembles at {_fmt_x(sp, 0, x)}, but no motion from the "
-                                  f"reference reaches it (the motion stops at {_fmt_x(sp, 0, ch.lo)} "
-                                  f"and {_fmt_x(sp, 0, ch.hi)})")
+            run.reason[int(n)] = (f"other circuit: assembles at {_fmt_held(sp, ch.k, x)}, but no motion from the "
+                                  f"reference reaches it (the motion stops at {_fmt_held(sp, ch.k, ch.lo)} "
+                                  f"and {_fmt_held(sp, ch.k, ch.hi)})")
             continue
         side = _nearer_limit(ch, x)
         k = ch.limits.get(side)
         where = ch.hi if side == "hi" else ch.lo
         label = sp.steps[k].label if k is not None else "the mechanism"
         run.code[n] = Status.LIMIT
-        run.reason[int(n)] = f"{label}: unreachable: limit at {_fmt_x(sp, 0, where)} (out of reach beyond it)"
+        run.reason[int(n)] = f"{label}: unreachable: limit at {_fmt_held(sp, ch.k, where)} (out of reach beyond it)"
     run.G.invalidate(range(sp.mechanism.n_links), bad)
 
 
@@ -518,7 +532,7 @@ def _nearer_limit(ch: _Chart, x: float) -> str:
     return "hi" if up <= dn else "lo"
 
 
-def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, period=None) -> list[str]:
+def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, period=None, d: int = 0) -> list[str]:
     """Notes for the crossings that the path between consecutive output rows passes."""
     notes = []
     for c, k in crossings:
@@ -535,26 +549,27 @@ def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, 
             if len(notes) >= 20:
                 return notes + ["… more crossings not listed"]
             where = "the reference" if n == 0 else f"row {n - 1}"
-            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_x(sp, 0, at[n])} "
+            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_held(sp, d, at[n])} "
                          f"(between {where} and row {n}); the motion keeps the mode of the reference"
                          f"{' (the sign of the assembly branch changes there)' if flipped else ''}")
     return notes
 
 
-def _mark_crossings(sp, run: _Run, xr, reach, crossings, scale) -> None:
+def _mark_crossings(sp, run: _Run, xr, reach, crossings, scale, d: int = 0) -> None:
     for c, k in crossings:
         near = np.flatnonzero(reach & (np.abs(xr - c) <= _AT_CROSSING * scale))
         for n in near:
             run.code[n] = Status.SINGULAR
             run.reason[int(n)] = (f"{sp.steps[k].label}: singular position (its assembly branches meet "
-                                  f"at {_fmt_x(sp, 0, c)})")
+                                  f"at {_fmt_held(sp, d, c)})")
         run.G.invalidate(range(sp.mechanism.n_links), np.isin(np.arange(len(xr)), near))
 
 
-def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
-    """One driver, closed-form groups: the cached chart gives each input's branch."""
-    x = X[:, 0]
-    ch = _chart(sp, kernels, x)
+def _solve_chart(sp: SolvePlan, X, needed, kernels, k: int = 0) -> tuple[_Run, list]:
+    """One driver moving (``k``, the others held), closed-form groups: the cached chart
+    of its motion gives each input's branch."""
+    x = X[:, k]
+    ch = _chart(sp, kernels, x, k)
     if ch.one_branch:
         return _run(sp, X, needed, {}, kernels), []
     xr, reach = ch.reduce(x)
@@ -564,9 +579,9 @@ def _solve_chart(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
         _mark_unreachable(sp, ch, run, X, ~reach, kernels)
     notes = []
     if ch.crossings:
-        _mark_crossings(sp, run, xr, reach, ch.crossings, _scale(sp)[0])
+        _mark_crossings(sp, run, xr, reach, ch.crossings, _scale(sp)[k], k)
         xs = np.concatenate([[0.0], x if ch.period else xr])
-        notes = _crossing_notes(sp, ch.crossings, xs, reach, ch.flips, ch.period)
+        notes = _crossing_notes(sp, ch.crossings, xs, reach, ch.flips, ch.period, k)
     return run, notes
 
 
@@ -723,10 +738,19 @@ def _solve_path(sp: SolvePlan, X, needed, kernels) -> tuple[_Run, list]:
 def _fmt_path(sp: SolvePlan, P: np.ndarray, s_nodes: np.ndarray, scale: np.ndarray, s: float) -> str:
     """The inputs at parameter ``s`` of the path ``P`` (scaled), as text; with several
     drivers each is named (``boom_slide = 0 m, stick_slide = 0.825 m``)."""
-    x = np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale
+    return _fmt_inputs(sp, np.array([np.interp(s, s_nodes, P[:, j]) for j in range(P.shape[1])]) * scale)
+
+
+def _fmt_inputs(sp: SolvePlan, x) -> str:
+    """The inputs ``x`` (n_drivers,) as text; with several drivers each is named."""
     if len(x) == 1:
         return _fmt_x(sp, 0, x[0])
     return ", ".join(f"{d.joint} = {_fmt_x(sp, j, v)}" for j, (d, v) in enumerate(zip(sp.mechanism.drivers, x)))
+
+
+def _fmt_held(sp: SolvePlan, k: int, x: float) -> str:
+    """Driver ``k`` at ``x`` with the others at the reference, as text (:func:`_fmt_inputs`)."""
+    return _fmt_inputs(sp, DriverMotion.held(sp.mechanism, k).inputs(x)[0])
 
 
 def only_all(sp: SolvePlan, needed) -> bool:
@@ -813,8 +837,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     kernels = method != "newton"            # closed forms allowed
     if assemble:
         run, notes = _run(sp, X, needed, {}, kernels), []
-    elif _chartable(sp, kernels):
-        run, notes = _solve_chart(sp, X, needed, kernels)
+    elif _chartable(sp, kernels) and (k := _moving_driver(X)) is not None:
+        run, notes = _solve_chart(sp, X, needed, kernels, k)
     elif len(m.drivers) == 1 and kernels:
         run, notes = _solve_ranged(sp, X, needed, kernels)
     else:
