@@ -394,8 +394,12 @@ class _Chart:
 
 
 def _walk_dir(sp: SolvePlan, kernels, extent: float, sign: float, k: int = 0) -> Walk:
-    n = int(np.ceil(extent / 0.02)) + 1
-    return _walk_on(sp, kernels, DriverMotion.held(sp.mechanism, k).inputs(sign * np.linspace(0.0, extent, n)))
+    """The walk of driver ``k`` from the reference to ``sign × extent`` (scaled), kept
+    with the plan: a chart widened on its other side walks only that side again."""
+    def walked(sp, _):
+        n = int(np.ceil(extent / 0.02)) + 1
+        return _walk_on(sp, kernels, DriverMotion.held(sp.mechanism, k).inputs(sign * np.linspace(0.0, extent, n)))
+    return cached(sp, ("walk", k, sign, extent, bool(kernels)), walked)
 
 
 def _walked(walk, scale: float, asked: float, is_r: bool) -> float:
