@@ -22,7 +22,9 @@ says so and exits 0, so that ``multiloop bench`` goes on.
 (8 moves of 2 px each, then the drop; the joint is the one whose ring lies farthest from
 the others on the screen).  The page times itself (``performance.now``, EDIT_TIMER_JS):
 each mouse move to the animation frame in which the drawing shows the joint moved
-(*follow*, goal 50 ms), and the drop to the frame in which the re-solved drawing is in
+(*follow*, goal 50 ms: the moves past Bokeh's tap threshold, 5 px from the press, where the
+pan starts; the moves within it wait for the pan to start, their slowest is printed
+apart), and the drop to the frame in which the re-solved drawing is in
 the readout (*drawing*) and to the frame in which the new check's report is in the page
 (*check*, goal 300 ms).  It prints the median and the maximum per mechanism.
 
@@ -91,7 +93,7 @@ def load_once(browser, exe: str, settle: float, mechanism: str | None) -> dict:
 #: the new design comes before its motion); draw: new positions in it; check: the
 #: check's report, not its busy line, in the page with them)
 EDIT_TIMER_JS = """() => {
-  window.__mlFollow = []; window.__mlDrop = [];
+  window.__mlFollow = []; window.__mlFollowPre = []; window.__mlDrop = [];
   if (window.__mlEditTimer) { return; }
   window.__mlEditTimer = true;
   const deep = (sel) => { const out = []; const walk = (root) => {
@@ -107,11 +109,17 @@ EDIT_TIMER_JS = """() => {
   const doc = Bokeh.documents[0];
   if (doc.on_change) { doc.on_change(() => { changed = performance.now(); }, true); }
   else { changed = Infinity; }
+  // a move within Bokeh's tap threshold of the press (UIGestures.move_threshold, 5 px) is not
+  // a drag yet: the drawing can only follow from the move that starts the pan
+  let down = null;
+  document.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; }, true);
   document.addEventListener('pointermove', (e) => {
     if (!(e.buttons & 1)) { return; }
     const t0 = performance.now(), before = joints();
+    const pre = down != null && Math.hypot(e.clientX - down[0], e.clientY - down[1]) <= 5;
     (async () => { while (performance.now() - t0 < 5000) { await frame();
-      if (joints() != before) { window.__mlFollow.push(performance.now() - t0); return; } } })();
+      if (joints() != before) { (pre ? window.__mlFollowPre : window.__mlFollow).push(performance.now() - t0);
+        return; } } })();
   }, true);
   document.addEventListener('pointerup', () => {
     const t0 = performance.now(), rec = {};
@@ -198,6 +206,7 @@ def edit_latency_of(page, name: str, edits: int, timeout_ms: int) -> dict:
             break
         _checked(page, name, timeout_ms)
     return dict(joint=joint, follow=page.evaluate("() => window.__mlFollow"),
+                follow_pre=page.evaluate("() => window.__mlFollowPre"),
                 drop=page.evaluate("() => window.__mlDrop"))
 
 
@@ -214,12 +223,14 @@ def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None
     try:
         page.goto(url)
         page.wait_for_selector("#ml-positions[data-index]", state="attached", timeout=60000)
-        print(f"{'mechanism':24s} {'joint':8s} follow (ms) median max  n | drawing (ms) median max | "
-              "check (ms) median max")
+        print(f"{'mechanism':24s} {'joint':8s} follow (ms) median max  n | before the pan, max  n | "
+              "drawing (ms) median max | check (ms) median max")
         for name in names:
             r = edit_latency_of(page, name, edits, int(1000 * timeout_s))
             drops = r["drop"]
+            pre = r["follow_pre"]
             print(f"{name:24s} {r['joint'][:8]:8s} {_stats(r['follow'])} {len(r['follow']):3d} | "
+                  f"{max(pre) if pre else float('nan'):12.1f} {len(pre):3d} | "
                   f"{_stats([d.get('draw') for d in drops])} | {_stats([d.get('check') for d in drops])}",
                   flush=True)
     finally:
