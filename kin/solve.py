@@ -57,7 +57,7 @@ from .result import MESSAGES, Status
 from .rigid import transport
 from .state import KinematicState
 
-__all__ = ["solve", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH",
+__all__ = ["solve", "solved_alone", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH",
            "motion_events", "check_finite_inputs"]
 
 #: the solvers of the groups (the first is the default): closed forms where a kind has one, or Newton
@@ -490,6 +490,14 @@ def _chartable(sp: SolvePlan, kernels) -> bool:
     if not kernels:
         return False
     return all(st.solver in ("driver", "dyad") and st.closed is not None for st in sp.steps)
+
+
+def solved_alone(plan) -> bool:
+    """Whether :func:`solve` solves each input of a batch that moves one driver (the
+    others held at the reference) on its own: a plan of drivers and closed-form dyads,
+    whose branch at an input the driver's chart gives (no path is followed to it, so the
+    other inputs of the batch change none of its values)."""
+    return isinstance(plan, SolvePlan) and _chartable(plan, True)
 
 
 def _moving_driver(X: np.ndarray) -> int | None:

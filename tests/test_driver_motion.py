@@ -137,3 +137,25 @@ def test_turns_fully_agrees_with_the_checks_full_rotation():
         assert motion_events(m).turns_fully == full, m.name
         seen.add(full)
     assert seen == {True, False}
+
+
+@pytest.mark.parametrize("name", ["four_bar", "radial_engine_5cyl", "excavator", "stephenson_3_triad"])
+def test_a_side_solves_its_inputs_alone_only_where_the_path_changes_none_of_their_values(name):
+    """A side of the check's motion (kin.check.sweep.Side) solves the inputs it is asked
+    for alone when the plan solves each on its own branch (drivers and closed-form dyads:
+    ``solved_alone``), and along the grid's path from the reference otherwise (a triad):
+    the values are the path's bit for bit, with derivatives."""
+    from unittest import mock
+
+    from multiloop.kin.check import sweep
+    m = load_named(name)
+    _, _, mo = _motion(m, decompose(m), compile_plan(m, decompose(m)), 0)
+    side = mo.segments[0].side
+    assert sweep.solved_alone(side.plan) == (name != "stephenson_3_triad")
+    x = np.linspace(0.0, 0.9, 7) * (mo.segments[0].x[-1] if mo.segments[0].n else 1.0)
+    alone, rows = side.at(x[::-1], derivatives=True)
+    with mock.patch.object(sweep, "solved_alone", return_value=False):
+        path, path_rows = side.at(x[::-1], derivatives=True)
+    for f in ("positions", "velocities", "accelerations"):
+        assert np.array_equal(getattr(alone, f)[rows], getattr(path, f)[path_rows], equal_nan=True)
+    assert list(alone.status[rows]) == list(path.status[path_rows])

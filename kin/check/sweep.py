@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from multiloop.kin.motion import DriverMotion
-from multiloop.kin.solve import solve
+from multiloop.kin.solve import solve, solved_alone
 from multiloop.topo.model import Mechanism
 
 __all__ = ["Side", "XTOL"]
@@ -89,7 +89,10 @@ class Side:
                          input_rates=self.motion.rates() if derivatives else None)
 
     def at(self, xs, derivatives: bool = False):
-        """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.
+        """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.  A
+        plan whose every input is solved on its own (:func:`kin.solve.solved_alone`: the
+        branch of each from the chart) solves ``xs`` alone: the path's grid would change
+        none of their values.
 
         Returns ``(state, rows)`` with ``state`` solved along the path and ``rows[i]``
         the row of ``xs[i]``.
@@ -97,7 +100,7 @@ class Side:
         xs = np.asarray(xs, float).reshape(-1)
         far = np.max(np.abs(xs)) if xs.size else 0.0
         g = self.grid[:: self.stride]
-        g = g[np.abs(g) < far]
+        g = g[np.abs(g) < far] if not solved_alone(self.plan) else g[:0]   # (each input on its own branch)
         path = np.concatenate([g, xs])
         order = np.argsort(np.abs(path), kind="stable")
         st = self.solve(path[order], derivatives)
