@@ -67,6 +67,7 @@ def test_bad_options_are_refused_before_a_build(small_default, capsys, monkeypat
 
 def test_the_default_parts_are_the_documented_first_atlas():
     """docs/synthesis.md recommends 4 links with 64 realisations, 6 links (multiple joints
-    too) with 24 and 8 simple-joint links with 4."""
+    too) with 24, 8 simple-joint links with 4 and the other 8-link ones (multiple joints)
+    with 2."""
     assert [(o.n, o.F, o.simple_joints, k) for o, k in default_atlas.DEFAULT_PARTS] == \
-        [(4, 1, False, 64), (6, 1, False, 24), (8, 1, True, 4)]
+        [(4, 1, False, 64), (6, 1, False, 24), (8, 1, True, 4), (8, 1, False, 2)]
