@@ -27,6 +27,7 @@ from multiloop.kin import solve as solve_module
 from multiloop.kin.solve import plan_of, solve
 from multiloop.topo.errors import InputError
 from multiloop.topo.io import load
+from multiloop.topo.model import MechanismBuilder
 from test_assur import stephenson3_triad
 
 DATA = Path(__file__).parent / "data" / "branches"
@@ -226,6 +227,45 @@ def test_hypothesis_one_driver_moved_of_several_is_solved_on_its_chart_as_the_wa
         assert np.allclose(a[ok], b[ok], rtol=0, atol=1e-12 * size)
     for why in charted.status[~ok]:                 # the limit named with every driver's input
         assert all(d.joint in why for d in m.drivers) or "out of range" in why
+
+
+def _five_bar(B):
+    """Two cranks (O1, O2) and two rods meeting at B: a mechanism with two R drivers."""
+    b = MechanismBuilder(name="five-bar")
+    b.add_link("ground", frame=True)
+    for n, lk, at in [("O1", ("ground", "c1"), (0.0, 0.0)), ("A", ("c1", "r1"), (0.0, 1.0)),
+                      ("B", ("r1", "r2"), B), ("D", ("r2", "c2"), (3.0, 1.2)), ("O2", ("c2", "ground"), (3.0, 0.0))]:
+        b.add_joint(n, "R", lk, at=at)
+    b.add_driver("O1")
+    b.add_driver("O2")
+    return b.build()
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.floats(1.0, 2.0), st.floats(1.3, 2.8), st.integers(0, 1),
+       st.lists(st.floats(-9.0, 9.0), min_size=1, max_size=6))
+def test_hypothesis_a_held_crank_of_several_reaches_what_the_walk_reaches_and_other_turns(bx, by, k, x):
+    """A five-bar, one crank turned and the other held: every input that the certified
+    walk from the reference reaches is reached on the crank's chart with the same pose; an
+    input the chart reaches beyond is the same angle a whole number of turns away that the
+    walk reaches (a limited R driver reaches an input modulo 360°, as with one driver)."""
+    m = _five_bar((bx, by))
+    X = np.zeros((len(x), 2))
+    X[:, k] = x
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        charted = solve(m, X)
+        with mock.patch.object(solve_module, "_moving_driver", return_value=None):
+            walked = [solve(m, X[i:i + 1]) for i in range(len(X))]
+            for i, w in enumerate(walked):
+                if w.ok[0]:
+                    assert charted.ok[i]
+                    assert np.allclose(charted.positions[i], w.positions[0], rtol=0, atol=1e-12 * 4)
+                elif charted.ok[i]:
+                    turns = [X[i:i + 1] - 2 * np.pi * t * np.eye(2)[k] for t in range(-3, 4) if t]
+                    alone = [solve(m, Y) for Y in turns]
+                    assert any(a.ok[0] and np.allclose(a.positions[0], charted.positions[i], rtol=0, atol=1e-9)
+                               for a in alone)
 
 
 def test_runaway_inputs_are_reduced_or_refused():
