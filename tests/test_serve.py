@@ -197,11 +197,33 @@ def _workbench():
     return Workbench({}, (), 40.0)
 
 
-def test_the_page_cancels_a_running_check_and_its_thread_ends():
+def _held_sweeps(monkeypatch, name: str):
+    """The page's job for mechanism ``name`` held in its motions until it is cancelled
+    (its ``cancel`` polled, as every solve of the real sweeps polls it): a test then acts
+    on a job that is running, whatever the machine's speed.  Returns the event set once
+    the job is inside."""
+    import threading
+
+    from multiloop.web import app
+    inside, real = threading.Event(), app._sweeps
+
+    def sweeps(m, key, cancel):
+        if m.name != name:
+            return real(m, key, cancel)
+        inside.set()
+        while True:
+            cancel()                     # raises once the job is cancelled
+            time.sleep(0.005)
+    monkeypatch.setattr(app, "_sweeps", sweeps)
+    return inside
+
+
+def test_the_page_cancels_a_running_check_and_its_thread_ends(monkeypatch):
+    inside = _held_sweeps(monkeypatch, "excavator_bucket")
     wb = _workbench()
     wb.open_name("excavator_bucket")
     job = wb.job
-    time.sleep(0.5)
+    assert inside.wait(120.0)            # a net: the wait is on the job's state
     assert job.running and not wb.check.stop.disabled
     _click(wb.check.stop)                          # the Cancel button
     job.thread.join(timeout=120.0)   # waits on the thread; the bound is a net
@@ -210,11 +232,12 @@ def test_the_page_cancels_a_running_check_and_its_thread_ends():
     assert "check cancelled" in wb.check.verdict.text and wb.check.stop.disabled and wb.job is None
 
 
-def test_opening_another_mechanism_cancels_the_old_check():
+def test_opening_another_mechanism_cancels_the_old_check(monkeypatch):
+    inside = _held_sweeps(monkeypatch, "excavator_bucket")
     wb = _workbench()
     wb.open_name("excavator_bucket")
     old = wb.job
-    time.sleep(0.3)
+    assert inside.wait(120.0)
     wb.pick.value = "crank_slider"                 # the page's mechanism menu
     old.thread.join(timeout=120.0)   # waits on the thread; the bound is a net
     assert not old.thread.is_alive() and old.state == "cancelled"
