@@ -36,6 +36,18 @@ from .rigid import move_point
 __all__ = ["KinematicState", "doc_csv", "doc_text", "failure_text"]
 
 
+
+def _read_only(d: dict, fields) -> None:
+    """Each still-writable array among ``fields`` of the instance dict ``d`` replaced by
+    its read-only view, in place (a frozen dataclass's own ``__setattr__`` refuses)."""
+    for f in fields:                       # (keys replaced, none added: safe while iterating d)
+        v = d[f]
+        if type(v) is np.ndarray and v.flags.writeable:
+            v = v.view()
+            v.flags.writeable = False
+            d[f] = v
+
+
 @dataclass(frozen=True)
 class KinematicState(BatchStatus):
     mechanism: Mechanism
@@ -60,12 +72,7 @@ class KinematicState(BatchStatus):
     codes: np.ndarray | None = None         # (N,) int8 kin.result.Status per position
 
     def __post_init__(self) -> None:
-        d = self.__dict__
-        for f, v in d.items():
-            if type(v) is np.ndarray and v.flags.writeable:
-                v = v.view()
-                v.flags.writeable = False
-                d[f] = v                   # (frozen: the dataclass's own __setattr__ refuses)
+        _read_only(self.__dict__, self.__dict__)
 
     @classmethod
     def frozen_from(cls, **values) -> "KinematicState":
@@ -81,11 +88,7 @@ class KinematicState(BatchStatus):
         if len(d) != len(_DEFAULTS) + len(_REQUIRED) or not _REQUIRED <= values.keys():
             raise TypeError(f"KinematicState.frozen_from: expected the fields {sorted(_REQUIRED)} and known ones, "
                             f"got {sorted(values)}")
-        for f, v in values.items():        # (the defaults hold no array)
-            if type(v) is np.ndarray and v.flags.writeable:
-                v = v.view()
-                v.flags.writeable = False
-                d[f] = v
+        _read_only(d, values)              # (the defaults hold no array)
         return obj
 
     def as_dict(self, formula: str | None = None, inputs_cli=None, derivatives: bool | None = None) -> dict:
