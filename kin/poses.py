@@ -58,6 +58,11 @@ def known_on(group, joint: str) -> str:
     raise KeyError(joint)  # pragma: no cover
 
 
+def _at_rows(a, rows: np.ndarray):
+    """A batch's array at ``rows`` (a value common to the batch as it is)."""
+    return a[rows] if np.ndim(a) else a
+
+
 class Poses:
     """Working store of link poses: one preallocated ``(n_links, 3, *shape)`` array.
 
@@ -122,7 +127,9 @@ class Poses:
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))
         out.c, out.s = ([None if a is None else a[rows] for a in getattr(self, name)] for name in ("c", "s"))
-        out.points = [{} for _ in self.points]
+        # the points computed while solving, at these rows (not computed again: the same values)
+        out.points = [{key: (_at_rows(px, rows), _at_rows(py, rows)) for key, (px, py) in kept.items()}
+                      for kept in self.points]
         return out
 
     # -- reading -------------------------------------------------------------------

@@ -774,11 +774,12 @@ def _take(run: _Run, rows: np.ndarray) -> _Run:
     if run.reason:                          # (only the failed rows are visited)
         hit = np.flatnonzero(np.isin(rows, np.fromiter(run.reason, np.int64, len(run.reason))))
         reason = {int(i): run.reason[int(rows[i])] for i in hit}
-    return _Run(run.G.take(rows), run.code[rows].copy(), reason, {})
+    return _Run(run.G.take(rows), run.code[rows].copy(), reason, {}, None if run.direct is None else run.direct[rows])
 
 
 def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rates=None,
-          only=None, outputs=None, plan=None, method: str = "auto", assemble: bool = False) -> KinematicState:
+          only=None, outputs=None, plan=None, method: str = "auto", assemble: bool = False,
+          rows=None) -> KinematicState:
     """Positions (and velocities, accelerations) of a mechanism over a batch of inputs.
 
     Parameters
@@ -809,6 +810,13 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         Solve every input independently, each dyad on the branch sign of the
         reference (no continuation: positions on other circuits come back ``ok``).
         Never the default.
+    rows : array_like of int, optional
+        The rows of ``inputs`` whose results are wanted (at least one), in the order
+        wanted.  The batch is still solved as a whole (the other inputs lie on the path
+        and guide it: a tracked group's pose at an input can depend on the way there), so
+        these rows' poses and statuses are the whole batch's; the rest (points, and
+        derivatives above all) is computed from them at these rows alone, the same to
+        rounding.
 
     Returns
     -------
@@ -843,7 +851,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else cached(sp, ("needed", wanted), needed_steps, wanted)
     select = None if outputs is None else cached(sp, ("select", wanted), _selection, outputs)
-    if not (assemble or derivatives or method == "newton") and len(needed) == len(sp.steps) \
+    keep = None if rows is None else _rows_of(rows, X.shape[0])
+    if not (assemble or derivatives or method == "newton" or keep is not None) and len(needed) == len(sp.steps) \
             and (state := _compiled_motion(sp, X, select)) is not None:
         return state                        # the compiled plan alone
     kernels = method != "newton"            # closed forms allowed
@@ -856,7 +865,18 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
     else:
         run, notes = _solve_path(sp, X, needed, kernels)
     _mark_out_of_range(sp, X, run)
+    if keep is not None:
+        run, X, single = _take(run, keep), X[keep], False
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
+
+
+def _rows_of(rows, n: int) -> np.ndarray:
+    """``rows`` (``solve(..., rows=)``) as row indices of a batch of ``n`` inputs."""
+    r = np.asarray(rows)
+    if r.ndim != 1 or not r.size or r.dtype.kind not in "iu" or r.min() < 0 or r.max() >= n:
+        raise InputError(explain("rows", expected=f"a list of row indices of the {n} inputs (0 … {n - 1})",
+                                 got=repr(rows) if r.size <= 8 else f"{r.size} values from {r.min()} to {r.max()}"))
+    return r.astype(np.int64)
 
 
 def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicState | None:

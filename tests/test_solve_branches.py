@@ -182,6 +182,33 @@ def test_hypothesis_a_tracked_motion_without_crossings_is_solved_in_one_pass_as_
         assert np.allclose(a, b, rtol=0, atol=1e-12 * size, equal_nan=True)
 
 
+@settings(max_examples=15, deadline=None)
+@given(st.sampled_from(["stephenson_3", "stephenson_3_triad", "four_bar", "excavator", "watt_2"]),
+       st.lists(st.floats(-400.0, 400.0), min_size=1, max_size=12), st.data())
+def test_hypothesis_rows_of_a_batch_are_its_own_rows_with_derivatives_at_them_alone(name, deg, data):
+    """``solve(..., rows=)`` solves the whole batch as one path and gives the rows asked
+    for, in their order: poses and statuses identical to the whole batch's rows (the
+    other inputs still guide a tracked group), points and derivatives computed at these
+    rows alone and equal to rounding (each depends on its own pose alone)."""
+    m = load_named(name)
+    X = np.radians(np.asarray(deg, float))
+    if len(m.drivers) > 1:
+        X = np.column_stack([X] + [np.zeros_like(X)] * (len(m.drivers) - 1))
+    rows = data.draw(st.lists(st.integers(0, len(deg) - 1), min_size=1, max_size=2 * len(deg)))
+    whole, some = _solve(m, np.degrees(X), derivatives=True), _solve(m, np.degrees(X), derivatives=True, rows=rows)
+    assert list(some.status) == [whole.status[r] for r in rows]
+    assert np.array_equal(whole.poses[rows], some.poses, equal_nan=True)
+    size = plan_of(m).size
+    for name_ in ("positions", "velocities", "accelerations", "point_positions"):
+        a, b = getattr(whole, name_), getattr(some, name_)
+        assert (a is None) == (b is None)
+        if a is not None:
+            assert np.allclose(a[rows], b, rtol=1e-12, atol=1e-12 * size, equal_nan=True), name_
+    for bad in ([len(deg)], [], [[0]], [0.5]):
+        with pytest.raises(InputError, match="rows"):
+            _solve(m, np.degrees(X), rows=bad)
+
+
 def test_the_one_pass_is_taken_inside_the_chart_and_refused_at_a_crossing():
     """The one pass solves a triad's turn (no crossing on its chart), and is refused
     where the chart has a crossing (the walk then marks the rows beside it)."""

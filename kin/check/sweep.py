@@ -79,14 +79,15 @@ class Side:
     def inputs(self, x) -> np.ndarray:
         return self.motion.inputs(x)
 
-    def solve(self, x, derivatives: bool = False):
-        """The solver's state along ``x`` (a path that must start at the reference)."""
+    def solve(self, x, derivatives: bool = False, rows=None):
+        """The solver's state along ``x`` (a path that must start at the reference); of
+        its ``rows`` alone when given (``kin.solve.solve``'s ``rows``)."""
         if self.cancel is not None:
             self.cancel()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return solve(self.mechanism, self.motion.inputs(x), derivatives=derivatives, plan=self.plan,
-                         input_rates=self.motion.rates() if derivatives else None)
+                         input_rates=self.motion.rates() if derivatives else None, rows=rows)
 
     def at(self, xs, derivatives: bool = False):
         """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.  A
@@ -95,7 +96,8 @@ class Side:
         none of their values.
 
         Returns ``(state, rows)`` with ``state`` solved along the path and ``rows[i]``
-        the row of ``xs[i]``.
+        the row of ``xs[i]`` (the path's grid values guide the solver only: the state
+        holds the rows of ``xs``, and its derivatives are computed there alone).
         """
         xs = np.asarray(xs, float).reshape(-1)
         far = np.max(np.abs(xs)) if xs.size else 0.0
@@ -103,10 +105,14 @@ class Side:
         g = g[np.abs(g) < far] if not solved_alone(self.plan) else g[:0]   # (each input on its own branch)
         path = np.concatenate([g, xs])
         order = np.argsort(np.abs(path), kind="stable")
-        st = self.solve(path[order], derivatives)
         where = np.empty_like(order)
         where[order] = np.arange(order.size)
-        rows = where[g.size:]
+        if g.size:
+            st = self.solve(path[order], derivatives, rows=where[g.size:])
+            rows = np.arange(xs.size)
+        else:
+            st = self.solve(path[order], derivatives)
+            rows = where
         if self.signs is not None and rows.size:
             st = self._guard(st, rows, xs)
         return st, rows
