@@ -439,6 +439,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
     from bokeh.models import CustomJS
 
     from .atlas_design import CARD_CLICK_JS
+    from .layout_batch import LAYOUT_BATCH_JS
     from .glue import held
 
     def page(doc):
@@ -465,6 +466,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
         doc.on_event(DocumentReady, rest)
         doc.js_on_event(DocumentReady, wb.editor.keys)
         doc.js_on_event(DocumentReady, CustomJS(code=CARD_CLICK_JS))
+        doc.js_on_event(DocumentReady, CustomJS(code=LAYOUT_BATCH_JS))
         watch.add(doc.session_context.id, wb.stop_jobs)
 
         def closed(ctx):                # the session's callbacks are removed by Bokeh itself

@@ -18,7 +18,7 @@ from bokeh.plotting import figure
 
 from multiloop.kin.check.verdict import verdict
 
-from .glue import div
+from .glue import div, floats
 from .markup import html, join
 from .scene import PALETTE, Sweep
 from .units import Units
@@ -149,6 +149,7 @@ class CheckView:
         lo, hi = u.shown(sw.x.min(), sw.unit), u.shown(sw.x.max(), sw.unit)
         self.fig.x_range.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
         A = np.where(np.isfinite(sw.angles), sw.angles, np.nan) * sa
-        self.curves.data = dict(xs=[(sw.x * self.scale).tolist()] * A.shape[1],
-                                ys=[A[:, c].tolist() for c in range(A.shape[1])], name=list(sw.angle_names),
+        x = floats(sw.x * self.scale)
+        self.curves.data = dict(xs=[x] * A.shape[1], ys=[floats(A[:, c]) for c in range(A.shape[1])],
+                                name=list(sw.angle_names),
                                 colour=[PALETTE[c % len(PALETTE)] for c in range(A.shape[1])])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 from contextlib import contextmanager
 
+import numpy as np
 from bokeh.models import Button, CustomJS, Div, FileInput, Slider, Toggle
 
 from multiloop.inputs import MAX_UPLOAD, MECHANISM_UPLOAD, check_upload_size
@@ -20,7 +21,7 @@ from multiloop.topo.errors import InputError, explain
 
 from .markup import Html, html, join
 
-__all__ = ["Player", "Download", "Upload", "progress_html", "div", "upload_bytes", "on_upload", "held"]
+__all__ = ["Player", "Download", "Upload", "progress_html", "div", "floats", "upload_bytes", "on_upload", "held"]
 
 #: the play toggle's glue: step the slider every ``interval`` ms while the toggle is on,
 #: from the end back to the start (one timer per slider, stopped with the toggle)
@@ -169,6 +170,13 @@ def progress_html(fraction: float) -> Html:
     """A progress bar (``<progress id="ml-progress">``) at ``fraction`` of 1."""
     v = int(round(1000 * min(max(fraction, 0.0), 1.0)))
     return html('<progress id="ml-progress" value="{v}" max="1000" style="width:300px"></progress>', v=v)
+
+
+def floats(a) -> np.ndarray:
+    """A fresh C-contiguous float64 copy of ``a``: a data source's column that Bokeh
+    sends to the page as one binary buffer (a list is written and read as JSON, number
+    by number)."""
+    return np.array(a, dtype=float, order="C")
 
 
 def div(text: str = "", **kw) -> Div:

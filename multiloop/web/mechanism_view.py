@@ -22,7 +22,7 @@ from bokeh.models import (Column, ColumnDataSource, CustomJS, CustomJSTickFormat
                           Range1d, Row)
 from bokeh.plotting import figure
 
-from .glue import Player, div, held
+from .glue import Player, div, floats, held
 from .markup import Html, html
 from .menus import Menu
 from .scene import Scene, Sweep
@@ -67,9 +67,14 @@ joints.data.x = jx; joints.data.y = jy; joints.change.emit();
 #: the redraw glue: frame ``i`` of the sweep (its readout arguments in its tags) into the link and
 #: joint models and the readout element
 REDRAW_JS = """
-if (sweep.data.nx.length == 0) { return; }       // the motion is not solved yet
-const i = Math.max(0, Math.min(cb_obj.value, sweep.data.nx.length - 1));
-const nx = sweep.data.nx[i], ny = sweep.data.ny[i], nj = joints.data.name.length;
+const frames = sweep.data.input.length;
+if (frames == 0) { return; }                     // the motion is not solved yet
+const i = Math.max(0, Math.min(cb_obj.value, frames - 1));
+// nx, ny: (frames, nodes) arrays, sent as binary and flat here: frame i is row i (copied by
+// index: Bokeh's n-d arrays do not take subarray or slice)
+const n = sweep.data.nx.length / frames, nx = new Array(n), ny = new Array(n);
+for (let j = 0; j < n; j++) { nx[j] = sweep.data.nx[i * n + j]; ny[j] = sweep.data.ny[i * n + j]; }
+const nj = joints.data.name.length;
 const idx = links.data.idx, xs = [], ys = [];
 for (const ix of idx) {
   const cx = ix.map(j => nx[j]), cy = ix.map(j => ny[j]);
@@ -290,10 +295,12 @@ class MechanismView:
         self.current = sw
         self._unit_texts()                  # first: the glue redraws with these tags once the slider moves
         names = list(self.scene.node_names)
-        self.sweep.data = dict(nx=sw.nodes[:, :, 0].tolist(), ny=sw.nodes[:, :, 1].tolist(), input=sw.x.tolist())
+        # arrays, not lists: Bokeh sends them as binary buffers (lists of a 5-cylinder engine's
+        # motion took 30 ms to write as JSON, and the page as long to read)
+        self.sweep.data = dict(nx=floats(sw.nodes[:, :, 0]), ny=floats(sw.nodes[:, :, 1]), input=floats(sw.x))
         n_pts = len(names) - self.scene.n_joints
-        self.paths.data = dict(xs=[sw.nodes[:, self.scene.n_joints + p, 0].tolist() for p in range(n_pts)],
-                               ys=[sw.nodes[:, self.scene.n_joints + p, 1].tolist() for p in range(n_pts)])
+        self.paths.data = dict(xs=[floats(sw.nodes[:, self.scene.n_joints + p, 0]) for p in range(n_pts)],
+                               ys=[floats(sw.nodes[:, self.scene.n_joints + p, 1]) for p in range(n_pts)])
         self.player.disabled = False
         self._fit(sw.nodes)
         i = sw.reference_index
