@@ -473,12 +473,19 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
         && doc.get_model_by_name('ml-frame').value == h.tags[0]; }""" % x0
     page.wait_for_function(following, timeout=60000)
     _shot(page, "web_drag.png", tmp_path_factory)              # during the drag: the links stretch
+    layouts = "() => Object.assign({}, window.__mlLayoutBatch)"
+    before = page.evaluate(layouts)
     t0 = time.perf_counter()
     page.mouse.up()
     edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
-        return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions'); }}"""
+        return r && r.getAttribute('data-mechanism') == 'edited: four_bar' && r.getAttribute('data-positions')
+          && ({DEEP_JS})('#ml-check-status[data-ok]').length > 0; }}"""
     page.wait_for_function(edited, timeout=60000)
     print(f"\ndrop to the re-solved drawing: {1000 * (time.perf_counter() - t0):.0f} ms")
+    # the new drawing and its check changed several texts, laid out once per message (layout_batch)
+    after = page.evaluate(layouts)
+    laid, deferred = after["laid"] - before["laid"], after["deferred"] - before["deferred"]
+    assert 1 <= laid < deferred, (before, after)
     _, _, x1, y1 = page.evaluate(HANDLE_JS, ["B"])        # the server's handles: the new reference
     assert x1 > x0 and y1 < y0                              # right and down on the screen
     r = _readout(page)

@@ -168,6 +168,34 @@ def test_an_edits_motion_and_check_wake_the_page_when_ready(wb):
     assert wb.check_doc == job.result and wb.job is None
 
 
+def _settled(wb):
+    while wb.job is not None:
+        wb.job.thread.join(timeout=600)
+        wb.poll()
+    r = wb.view.fig.x_range, wb.view.fig.y_range
+    return r[0].start, r[0].end, r[1].start, r[1].end
+
+
+def test_an_edit_keeps_the_view_it_was_dragged_in_while_its_motion_fits_it():
+    """A small drag leaves the drawing's ranges as they are (the handle stays under the
+    pointer); an edit whose motion leaves the view, or another design opened, fits the
+    view again."""
+    w = Workbench(requested="four_bar")
+    try:
+        view = _settled(w)
+        _drag(w, "B", 0.135, 0.0735)
+        assert w.mechanism_name == "edited: four_bar" and _settled(w) == view
+        _drag(w, "B", 0.30, 0.20)                       # its motion now runs out of the view
+        grown = _settled(w)
+        assert grown[1] > view[1] and grown[3] > view[3]
+        x0, x1, y0, y1 = grown
+        assert x0 <= 0.30 <= x1 and y0 <= 0.20 <= y1
+        w.pick.value = "four_bar"                       # the catalogue design again: fitted again
+        assert _settled(w) == view
+    finally:
+        w.close()
+
+
 def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
     """dyad_prp's slider is 4.9e5 sizes away at the ends of its motion: the drawing's
     ranges stay around the mechanism (before, ±40 km: every ring on one pixel, and a drag

@@ -322,7 +322,7 @@ class Workbench:
         if m.drivers and m.has_geometry:
             self.job = Job(lambda job: _motion_and_check(job, m, self.threshold, key), "check", self.wake)
         # an edit's drawing and check together, unless its job takes longer
-        self.hold.open(lambda: _show_design(self, m, key, scene, structure), edited and self.job is not None)
+        self.hold.open(lambda: _show_design(self, m, key, scene, structure, edited), edited and self.job is not None)
 
     def cancel_check(self) -> None:
         """The check panel's Cancel: the running motion / check job stops at its next solve."""
@@ -343,7 +343,7 @@ class Workbench:
             return
         if not self.shown_sweeps and getattr(job, "sweeps", None) is not None:
             self.shown_sweeps = True
-            self.view.show(self.scene, job.sweeps, self.mechanism_name)
+            self.view.show(self.scene, job.sweeps, self.mechanism_name, keep_view=self.view.keep_view)
             self.check.busy("check: computing…", running=True)
         if job.running:
             return
@@ -380,15 +380,16 @@ class Workbench:
             self.atlas.close()
 
 
-def _show_design(wb, m, key, scene, structure) -> None:
+def _show_design(wb, m, key, scene, structure, edited: bool = False) -> None:
     """The widgets of the design ``wb`` opened (``m``, its ``scene`` and ``structure``):
-    its drawing with the motion the server or the job has, the check panel waiting."""
+    its drawing with the motion the server or the job has (an ``edited`` design in the
+    view of the one before, when it fits), the check panel waiting."""
     wb._follow()
     wb.address.follow(m, key)
     wb.structure.text = structure
     sweeps = (_SWEEPS.get(key) if key is not None else None) or getattr(wb.job, "sweeps", None)
     wb.shown_sweeps = sweeps is not None
-    wb.view.show(scene, list(sweeps or ()), wb.mechanism_name)
+    wb.view.show(scene, list(sweeps or ()), wb.mechanism_name, keep_view=edited)
     if not m.drivers:
         wb.check.show(None, None, wb.threshold)
     elif not m.has_geometry:

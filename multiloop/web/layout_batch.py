@@ -28,13 +28,14 @@ const doc = Bokeh.documents[0];
 const roots = ((Bokeh.index && Bokeh.index.roots) ? [...Bokeh.index.roots] : [])
   .filter(v => typeof v.compute_layout === 'function');
 if (!doc || typeof doc.apply_json_patch !== 'function' || roots.length === 0) { return; }
-window.__mlLayoutBatch = true;
+// layouts put off while a message was applied, and layouts then computed (read by the tests)
+const counts = window.__mlLayoutBatch = {deferred: 0, laid: 0};
 let applying = 0;
 const asked = new Map();                 // root view -> its own compute_layout, asked for
 for (const view of roots) {
   const own = view.compute_layout;
   view.compute_layout = function (...args) {
-    if (applying > 0) { asked.set(view, own); return; }
+    if (applying > 0) { asked.set(view, own); counts.deferred += 1; return; }
     return own.apply(view, args);
   };
 }
@@ -47,7 +48,7 @@ doc.apply_json_patch = function (...args) {
     if (applying === 0 && asked.size > 0) {
       const layouts = [...asked];
       asked.clear();
-      for (const [view, own] of layouts) { own.call(view); }
+      for (const [view, own] of layouts) { counts.laid += 1; own.call(view); }
     }
   }
 };

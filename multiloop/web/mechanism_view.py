@@ -39,6 +39,9 @@ TICKS_JS = "return String(Number((tick * scale).toPrecision(6)));"
 #: mechanism else stays within 1.11 sizes)
 FIT_SIZES = 4.0
 
+#: an edited design keeps the view when its motion fills at least this share of it on one axis
+KEEP_FILL = 0.5
+
 #: a drag in the drawing (the point-draw tool active): at its start the player goes to
 #: the reference frame (``handles.tags[0]``, where the handles are); then the joints
 #: and links follow the handles (in the browser only: the server re-solves on the drop)
@@ -150,6 +153,7 @@ class MechanismView:
 
     def __init__(self, say, cursors=(), on_drag=None):
         self.scene: Scene | None = None
+        self.keep_view = False           # the design shown is an edit: its view kept when it fits
         self.say, self.on_drag = say, on_drag
         self.units = Units()
         #: the drag handles, at the reference; what the server set last (names, x, y)
@@ -249,10 +253,11 @@ class MechanismView:
             self._put_handles()
 
     # ------------------------------------------------------------------ content
-    def show(self, scene: Scene, sweeps: list[Sweep], name: str = "") -> None:
+    def show(self, scene: Scene, sweeps: list[Sweep], name: str = "", keep_view: bool = False) -> None:
         """Draw ``scene`` (named ``name`` on the page) and make its sweeps the player's
-        frames (driver 0 first)."""
-        self.scene, self.sweeps, self.name = scene, sweeps, name
+        frames (driver 0 first); ``keep_view`` (an edit): in the drawing's view as it is
+        when the new motion fits it well (:meth:`_fit`)."""
+        self.scene, self.sweeps, self.name, self.keep_view = scene, sweeps, name, keep_view
         self._put_handles()
         if not sweeps:
             self.readout.text = html('<span id="ml-positions" data-mechanism="{name}"></span>', name=name)
@@ -261,7 +266,7 @@ class MechanismView:
             self.sweep.data = dict(nx=[], ny=[], input=[])
             self.player.disabled = True
             self.handles.tags = []
-            self._fit(scene.reference)
+            self._fit(scene.reference, min_fill=0.0)      # (the motion, once solved, fills the view)
         m = scene.mechanism
         self.links.data = dict(xs=[[] for _ in scene.links], ys=[[] for _ in scene.links],
                                colour=[c for _, _, c, _ in scene.links], name=[n for n, _, _, _ in scene.links],
@@ -334,9 +339,11 @@ class MechanismView:
         self._unit_texts()
         self.draw_frame(int(self.player.slider.value))
 
-    def _fit(self, nodes: np.ndarray) -> None:
+    def _fit(self, nodes: np.ndarray, min_fill: float | None = None) -> None:
         """Ranges around every finite position of ``nodes`` within :data:`FIT_SIZES` sizes of
-        the reference's centre (still drawn beyond), equal scales on both axes."""
+        the reference's centre (still drawn beyond), equal scales on both axes; for an
+        edited design (``keep_view``) the view as it is when they fit it (:meth:`_fits`,
+        ``min_fill`` :data:`KEEP_FILL` unless given)."""
         P = nodes.reshape(-1, 2)
         P = P[np.all(np.isfinite(P), axis=1)]
         ref = self.scene.reference[np.all(np.isfinite(self.scene.reference), axis=1)] if self.scene else P[:0]
@@ -347,11 +354,22 @@ class MechanismView:
         if not len(P):
             return
         lo, hi = P.min(axis=0), P.max(axis=0)
+        if self.keep_view and self._fits(lo, hi, KEEP_FILL if min_fill is None else min_fill):
+            return
         c, half = (lo + hi) / 2, max(float(np.max(hi - lo)) * 0.55, 1e-9)
         aspect = (self.fig.width - 60) / (self.fig.height - 70)        # plot area, about
         hx, hy = (half * aspect, half) if aspect >= 1 else (half, half / aspect)
         self.fig.x_range.update(start=c[0] - hx, end=c[0] + hx, reset_start=c[0] - hx, reset_end=c[0] + hx)
         self.fig.y_range.update(start=c[1] - hy, end=c[1] + hy, reset_start=c[1] - hy, reset_end=c[1] + hy)
+
+    def _fits(self, lo: np.ndarray, hi: np.ndarray, min_fill: float) -> bool:
+        """Whether the box ``lo``–``hi`` lies in the view and fills at least ``min_fill``
+        of it on one axis: an edited design then stays in the view it was dragged in (the
+        handle stays under the pointer, and the page lays out nothing again for new axes)."""
+        xr, yr = self.fig.x_range, self.fig.y_range
+        inside = xr.start <= lo[0] and hi[0] <= xr.end and yr.start <= lo[1] and hi[1] <= yr.end
+        fill = max((hi[0] - lo[0]) / (xr.end - xr.start), (hi[1] - lo[1]) / (yr.end - yr.start))
+        return bool(inside and fill >= min_fill)
 
     def draw_frame(self, i: int) -> None:
         """Server-side redraw of frame ``i`` (loading, a click on a plot); the same output as the glue."""
