@@ -240,11 +240,25 @@ def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None
         srv.stdout.close()
 
 
+def _far_handle(view) -> tuple[str, float]:
+    """The handle the browser's drag takes (FAR_HANDLE_JS: farthest from its nearest
+    neighbour; equal scales on both axes, so in data units too) and the data units of
+    one pixel of the drawing (its plot area, about)."""
+    import numpy as np
+    d = view.handles.data
+    P = np.column_stack([d["x"], d["y"]])
+    gap = np.hypot(*(P[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(gap, np.inf)
+    xr = view.fig.x_range
+    return d["name"][int(np.argmax(gap.min(axis=1)))], (xr.end - xr.start) / (view.fig.width - 60)
+
+
 def server_latency_of(name: str, edits: int) -> dict:
     """``edits`` edits of catalogue mechanism ``name`` in a session without a browser (a
-    :class:`~multiloop.web.app.Workbench` in a Bokeh document, as a page's): its last
-    joint moved by ±1e-3 of the size, as a drag does; seconds of the edit's handler, of
-    the job (the sweeps, then the check) and of showing its results (the session's poll)."""
+    :class:`~multiloop.web.app.Workbench` in a Bokeh document, as a page's): the handle
+    the browser's drag takes moved as the drag moves it (16 px right and 8 px down, then
+    back); seconds of the edit's handler, of the job (the sweeps, then the check) and of
+    showing its results (the session's poll)."""
     from bokeh.document import Document
 
     from multiloop.web.app import Workbench
@@ -257,12 +271,14 @@ def server_latency_of(name: str, edits: int) -> dict:
             wb.poll()
     try:
         settle()
-        joint = wb.mechanism.joints[-1]
+        joint, px = _far_handle(wb.view)
         out = dict(handler=[], job=[], show=[])
         for k in range(edits):
-            x, y = joint.at
+            d = wb.view.handles.data
+            i = d["name"].index(joint)
+            sign = 1 if k % 2 == 0 else -1
             t0 = time.perf_counter()
-            wb.editor.drag(joint.name, (x + (1e-3 if k % 2 == 0 else 0.0) * wb.mechanism.size, y))
+            wb.editor.drag(joint, (d["x"][i] + sign * 16 * px, d["y"][i] - sign * 8 * px))
             t1 = time.perf_counter()
             wb.job.thread.join()
             t2 = time.perf_counter()

@@ -14,8 +14,11 @@ from __future__ import annotations
 __all__ = ["EDIT_WAIT_MS", "Hold"]
 
 #: an edit's new drawing waits this long for its motion and check, so that the page
-#: gets them in one message (a longer job: the drawing then, the check when it ends)
-EDIT_WAIT_MS = 250
+#: gets them in one message (a longer job: the drawing then, the check when it ends).
+#: Two messages cost the page about twice one: at 250 ms the Stephenson III pair's and
+#: the excavators' checks came apart and landed 390-630 ms after the drop, at 450 ms
+#: together in 250-350 ms (``benchmarks/bench_web.py --edit-latency``)
+EDIT_WAIT_MS = 450
 
 
 class Hold:
