@@ -811,12 +811,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         reference (no continuation: positions on other circuits come back ``ok``).
         Never the default.
     rows : array_like of int, optional
-        The rows of ``inputs`` whose results are wanted (at least one), in the order
-        wanted.  The batch is still solved as a whole (the other inputs lie on the path
-        and guide it: a tracked group's pose at an input can depend on the way there), so
-        these rows' poses and statuses are the whole batch's; the rest (points, and
-        derivatives above all) is computed from them at these rows alone, the same to
-        rounding.
+        The rows of ``inputs`` wanted: the batch is solved as one path (the poses and
+        statuses of these rows are the whole batch's), the rest is computed at them alone.
 
     Returns
     -------
@@ -856,18 +852,24 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
             and (state := _compiled_motion(sp, X, select)) is not None:
         return state                        # the compiled plan alone
     kernels = method != "newton"            # closed forms allowed
-    if assemble:
-        run, notes = _run(sp, X, needed, {}, kernels), []
-    elif _chartable(sp, kernels) and (k := _moving_driver(X)) is not None:
-        run, notes = _solve_chart(sp, X, needed, kernels, k)
-    elif len(m.drivers) == 1 and kernels:
-        run, notes = _solve_ranged(sp, X, needed, kernels)
-    else:
-        run, notes = _solve_path(sp, X, needed, kernels)
+    run, notes = _solve_batch(sp, X, needed, kernels, assemble)
     _mark_out_of_range(sp, X, run)
     if keep is not None:
         run, X, single = _take(run, keep), X[keep], False
     return _finish(sp, X, run, needed, notes, single, derivatives, input_rates, kernels, select)
+
+
+def _solve_batch(sp: SolvePlan, X: np.ndarray, needed, kernels: bool, assemble: bool) -> tuple[_Run, list]:
+    """The route a batch takes: each input alone (``assemble``), on the chart of the one
+    driver it moves, along the certified motion of a single driver, or by the walk along
+    the path through the inputs."""
+    if assemble:
+        return _run(sp, X, needed, {}, kernels), []
+    if _chartable(sp, kernels) and (k := _moving_driver(X)) is not None:
+        return _solve_chart(sp, X, needed, kernels, k)
+    if len(sp.mechanism.drivers) == 1 and kernels:
+        return _solve_ranged(sp, X, needed, kernels)
+    return _solve_path(sp, X, needed, kernels)
 
 
 def _rows_of(rows, n: int) -> np.ndarray:
