@@ -196,6 +196,31 @@ def test_an_edit_keeps_the_view_it_was_dragged_in_while_its_motion_fits_it():
         w.close()
 
 
+@pytest.mark.parametrize("name, point", [("excavator", "stick_cyl_base"), ("stephenson_3_triad", "O2"),
+                                         ("four_bar", "B"), ("crank_slider", None)])
+def test_the_pages_check_of_an_edit_is_the_librarys_check_of_that_design_alone(name, point):
+    """The page's motion frames are solved on the check's own plan (its drivers' charts
+    walked once); its check of an edited design is still ``check`` of a fresh copy of
+    that design, solved alone, to the bit."""
+    import json
+    from dataclasses import replace
+
+    from multiloop.kin.check import check
+    w = Workbench(requested=name)
+    try:
+        _settled(w)
+        point = point or w.mechanism.joints[-1].name
+        x, y = w.mechanism.joint(point).at
+        _drag(w, point, x + 0.02 * w.mechanism.size, y - 0.01 * w.mechanism.size)
+        _settled(w)
+        alone = replace(w.mechanism)
+        assert alone == w.mechanism and alone is not w.mechanism
+        want = check(alone, min_transmission=w.threshold).as_dict()
+        assert json.dumps(w.check_doc, sort_keys=True) == json.dumps(want, sort_keys=True)
+    finally:
+        w.close()
+
+
 def test_a_slider_running_off_to_an_asymptote_does_not_shrink_the_drawing():
     """dyad_prp's slider is 4.9e5 sizes away at the ends of its motion: the drawing's
     ranges stay around the mechanism (before, ±40 km: every ring on one pixel, and a drag

@@ -119,7 +119,9 @@ def check_plan(m: Mechanism):
     :func:`~kin.solve.plan_of`'s, so that other solves of ``m`` leave its memo as the
     check alone makes it).  The motion and the angle extremes of each driver are kept
     beside it (:func:`_kept_motion`, :func:`_kept_angles`): a page that draws the
-    motion (``driver_angles``) and then checks the same design computes them once."""
+    motion (``driver_angles``) and then checks the same design computes them once, and
+    may solve its frames on this plan too (within the charts the check's walks build,
+    which they then reuse; the check's results stay those of the check alone)."""
     return _PLANS.get(m, lambda: compile_plan(m, decompose(m)))
 
 

@@ -120,14 +120,18 @@ def _nodes(st) -> np.ndarray:
 
 
 def _solve(m: Mechanism, k: int, x: np.ndarray, cancel=None):
+    """Driver ``k``'s inputs ``x`` (the others held) solved on the check's plan: the
+    charts its walks build for the motion's limits serve the frames too (on a plan of
+    their own they were walked twice: 50-100 ms of an excavator's re-check)."""
+    from multiloop.kin.check.core import check_plan
     from multiloop.kin.motion import DriverMotion
-    from multiloop.kin.solve import plan_of, solve
+    from multiloop.kin.solve import solve
     if cancel is not None:
         cancel()
     X = DriverMotion.held(m, k).inputs(x)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return solve(m, X, plan=plan_of(m))
+        return solve(m, X, plan=check_plan(m))
 
 
 def _angles(m: Mechanism, states) -> tuple[np.ndarray, tuple[str, ...]]:
