@@ -228,7 +228,7 @@ def test_a_mode_block_is_its_threads_own():
     the default is back once both have left."""
     import threading
     default = kernel.mode(), kernel.compiled_batches()
-    a_in, b_in, a_out = threading.Event(), threading.Event(), threading.Event()
+    a_in, b_in, a_out, main_read = threading.Event(), threading.Event(), threading.Event(), threading.Event()
     seen = {}
 
     def a():
@@ -243,6 +243,7 @@ def test_a_mode_block_is_its_threads_own():
         with kernel.using("off"):
             b_in.set()
             a_out.wait(10)
+            main_read.wait(10)          # the main thread's mode read inside both blocks (not raced)
             seen["b"] = kernel.mode(), kernel.compiled_batches()
             seen["main"] = main_mode[0]
     main_mode = [None]
@@ -250,6 +251,7 @@ def test_a_mode_block_is_its_threads_own():
     ta.start(), tb.start()
     b_in.wait(10)
     main_mode[0] = kernel.mode()
+    main_read.set()
     ta.join(10), tb.join(10)
     assert seen == {"a": "on", "b": ("off", False), "main": default[0]}
     assert (kernel.mode(), kernel.compiled_batches()) == default
