@@ -29,7 +29,8 @@ the readout (*drawing*) and to the frame in which the new check's report is in t
 (*check*, goal 300 ms).  It prints the median and the maximum per mechanism.
 
 ``--server`` measures the server's share of the same re-check without a browser: per
-mechanism, ``--edits`` edits in a session (the last joint moved by 1e-3 of the size),
+mechanism, ``--edits`` edits in a session (the handle the browser's drag takes, moved as
+far as the drag moves it),
 the edit's handler, the job (every driver's sweep, then the check) and the showing of
 its results, in ms (median and maximum).
 """
