@@ -242,16 +242,20 @@ def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None
 
 
 def _far_handle(view) -> tuple[str, float]:
-    """The handle the browser's drag takes (FAR_HANDLE_JS: farthest from its nearest
-    neighbour; equal scales on both axes, so in data units too) and the data units of
-    one pixel of the drawing (its plot area, about)."""
+    """The handle the browser's drag takes (FAR_HANDLE_JS: of those 20 px or more inside
+    the plot, the one farthest from its nearest neighbour; equal scales on both axes, so
+    in data units too) and the data units of one pixel of the drawing (its plot area,
+    about)."""
     import numpy as np
     d = view.handles.data
     P = np.column_stack([d["x"], d["y"]])
     gap = np.hypot(*(P[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
     np.fill_diagonal(gap, np.inf)
-    xr = view.fig.x_range
-    return d["name"][int(np.argmax(gap.min(axis=1)))], (xr.end - xr.start) / (view.fig.width - 60)
+    xr, yr = view.fig.x_range, view.fig.y_range
+    px = (xr.end - xr.start) / (view.fig.width - 60)
+    m = 20 * px
+    inside = ((P[:, 0] > xr.start + m) & (P[:, 0] < xr.end - m) & (P[:, 1] > yr.start + m) & (P[:, 1] < yr.end - m))
+    return d["name"][int(np.argmax(np.where(inside, gap.min(axis=1), -1.0)))], px
 
 
 def server_latency_of(name: str, edits: int) -> dict:

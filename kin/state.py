@@ -36,7 +36,6 @@ from .rigid import move_point
 __all__ = ["KinematicState", "doc_csv", "doc_text", "failure_text"]
 
 
-
 def _read_only(d: dict, fields) -> None:
     """Each still-writable array among ``fields`` of the instance dict ``d`` replaced by
     its read-only view, in place (a frozen dataclass's own ``__setattr__`` refuses)."""
