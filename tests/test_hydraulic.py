@@ -246,3 +246,42 @@ def test_forces_command_gives_each_driver(capsys):
     assert np.all(b > 1000.0)
     b = np.array(d["outer_cyl_slide"]["balancing"])
     assert b.min() < 0.0 < b.max()
+
+
+def test_angles_another_cylinder_moves_are_constant_and_not_zoomed(monkeypatch):
+    """The excavator's angles that the moved cylinder does not change (the stick and
+    bucket linkages while the boom cylinder moves) are constant to rounding over its
+    motion: they are reported as constant (max − min ≤ FLAT × size), and no zoom search
+    is spent on their rounding noise (every golden-section bracket is of a column that
+    varies).  The varying angles keep their exact extremes (the tests above)."""
+    from multiloop.kin.check import events, sweep
+    zoomed = []
+    golden = sweep.Side.golden
+
+    def counting(self, a, b, value, derivatives=False):
+        zoomed.append(np.size(a))
+        return golden(self, a, b, value, derivatives)
+    monkeypatch.setattr(sweep.Side, "golden", counting)
+    rep = check(load_named("excavator"))
+    constant = [(dc.joint, a.joint) for dc in rep.drivers for a in dc.angles
+                if a.extreme is not None and a.extreme.max - a.extreme.min <= 180.0 * events.FLAT]
+    varying = [a for dc in rep.drivers for a in dc.angles
+               if a.extreme is not None and a.extreme.max - a.extreme.min > 1e-6]
+    assert ("boom_cyl_slide", "T") in constant and ("stick_cyl_slide", "bucket_link_pin") in constant
+    assert varying and len(constant) + len(varying) == sum(len(dc.angles) for dc in rep.drivers)
+    # brackets refined: interior grid extremes of the varying angles and the ratio only
+    assert sum(zoomed) <= 2 * len(varying) + 2 * len(rep.drivers)
+
+
+def test_constant_columns_to_rounding():
+    """FLAT is relative to a column's size (at least 1): rounding noise is constant, a
+    variation of 1e-9 is not, a column without a finite value is (it has no bracket)."""
+    from multiloop.kin.check.events import FLAT, _constant
+    rng = np.random.default_rng(3)
+    n = 40
+    V = np.column_stack([1.3 + 4e-16 * rng.standard_normal(n), 1.3 + 1e-9 * np.sin(np.arange(n)),
+                         np.full(n, np.nan), 1e6 * (1 + 1e-15 * rng.standard_normal(n)),
+                         1e6 + 1e-3 * np.arange(n), 2e-16 * rng.standard_normal(n)])
+    V[5, 0] = np.nan
+    assert _constant(V).tolist() == [True, False, True, True, False, True]
+    assert FLAT < 1e-9

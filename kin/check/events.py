@@ -80,11 +80,30 @@ def _unique(xs, motion: Motion, tol: float = 1e-8) -> list[float]:
     return out
 
 
+#: a column whose grid values differ by no more than this times its size (at least 1) is
+#: constant to rounding: its grid's extremes are its extremes, and a zoom search would
+#: only chase the rounding of its samples
+FLAT = 1e-12
+
+
+def _constant(V) -> np.ndarray:
+    """Whether each column of ``V`` (N, q) is constant to :data:`FLAT` over its finite
+    values (a quantity that the moved driver does not change: on a mechanism with
+    several drivers, the angles of the parts another driver moves)."""
+    ok = np.isfinite(V)
+    hi = np.max(np.where(ok, V, -np.inf), axis=0, initial=-np.inf)
+    lo = np.min(np.where(ok, V, np.inf), axis=0, initial=np.inf)
+    size = np.maximum(np.maximum(np.abs(hi), np.abs(lo)), 1.0)
+    return ~ok.any(axis=0) | (hi - lo <= FLAT * size)
+
+
 def _candidates(seg, V, sign):
-    """(lo, hi, col) brackets of interior grid minima of ``sign * V``."""
+    """(lo, hi, col) brackets of interior grid minima of ``sign * V`` (none in a column
+    constant to rounding, :func:`_constant`)."""
     W = sign * V
     a, b, c = W[:-2], W[1:-1], W[2:]
     hit = np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & (b <= a) & (b <= c) & ((b < a) | (b < c))
+    hit &= ~_constant(V)
     i, col = np.nonzero(hit)
     return seg.x[i], seg.x[i + 2], col
 
