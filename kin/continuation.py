@@ -203,8 +203,11 @@ def _vertex(evaluate, P, s_nodes, flips, g, s_star: float, h: float) -> float:
 
 def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, rounds: int = 16):
     """The limit of group ``g`` in ``[a, b]`` (assembled at ``a``, not at ``b``) to the
-    precision of its reach margin: a zoom search on the sign of the margin, ``n`` points
-    per evaluation (the bracket shrinks ``n + 1``-fold a round), down to rounding."""
+    precision of its reach margin: a zoom search on the sign of the margin less its
+    rounding (``a`` stays where the margin exceeds its rounding, so that the group
+    assembles there whatever the rounding of the other inputs: the end of a usable
+    range), ``n`` points per evaluation (the bracket shrinks ``n + 1``-fold a round),
+    down to rounding."""
     for _ in range(rounds):
         if b - a <= 4.0 * np.finfo(float).eps * max(abs(a), abs(b), 1.0):
             break
@@ -212,7 +215,7 @@ def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, 
         pr = _probe_at(evaluate, P, s_nodes, flips, g, q)
         if pr.margin is None:
             return a, b
-        pos = np.flatnonzero(~(pr.margin > 0))
+        pos = np.flatnonzero(~(pr.margin > (0.0 if pr.tol is None else pr.tol)))
         if pos.size == 0:
             a = q[-1]
             continue

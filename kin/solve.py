@@ -58,7 +58,7 @@ from .rigid import transport
 from .state import KinematicState
 
 __all__ = ["solve", "solved_alone", "compile_plan", "plan_of", "SolvePlan", "StepPlan", "METHODS", "MAX_PATH",
-           "motion_events", "check_finite_inputs"]
+           "motion_events", "check_finite_inputs", "held_text"]
 
 #: the solvers of the groups (the first is the default): closed forms where a kind has one, or Newton
 METHODS = ("auto", "closed_form", "newton")
@@ -463,18 +463,23 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray, k: int = 0) -> _Chart:
     return ch
 
 
-def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None) -> DriverMotion | None:
-    """The certified motion of a one-driver mechanism (:class:`~kin.motion.DriverMotion`):
-    its ends, whether it turns fully, every crossing and the groups at its limits, found
-    by the certified walk (:mod:`kin.continuation`), none read off a grid.  ``extent``
-    (m) bounds the search of a P driver (default: the mechanism's size).  None for a
-    mechanism with several drivers."""
+def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None,
+                  k: int | None = None) -> DriverMotion | None:
+    """The certified motion of a one-driver mechanism, or of its driver ``k`` moved with
+    the others held at the reference (:class:`~kin.motion.DriverMotion`): its ends,
+    whether it turns fully, every crossing and the groups at its limits, found by the
+    certified walk (:mod:`kin.continuation`), none read off a grid.  ``extent`` (m)
+    bounds the search of a P driver: ± a length (default: the mechanism's size), or the
+    pair (low, high) of its inputs (a driver's ``range``).  None for a mechanism with
+    several drivers when ``k`` is not given."""
     sp = plan_of(mechanism, plan)
-    if len(sp.mechanism.drivers) != 1:
+    if k is None and len(sp.mechanism.drivers) != 1:
         return None
-    span = sp.size if extent is None else float(extent)
-    ch = _chart(sp, True, np.array([-span, span]))
-    return DriverMotion(sp.mechanism, 0, ch.lo, ch.hi, ch.period,
+    k = 0 if k is None else k
+    span = sp.size if extent is None else extent
+    ends = np.array([min(span[0], 0.0), max(span[1], 0.0)] if np.ndim(span) else [-float(span), float(span)])
+    ch = _chart(sp, True, ends, k)
+    return DriverMotion(sp.mechanism, k, ch.lo, ch.hi, ch.period,
                         tuple((c, sp.steps[k].label) for c, k in ch.crossings),
                         MappingProxyType({side: sp.steps[k].label for side, k in ch.limits.items()}))
 
@@ -519,16 +524,16 @@ def _mark_unreachable(sp, ch: _Chart, run: _Run, X, bad, kernels) -> None:
         x = float(X[n, ch.k])
         if sub.code[j] == Status.OK:
             run.code[n] = Status.OTHER_CIRCUIT
-            run.reason[int(n)] = (f"other circuit: assembles at {_fmt_held(sp, ch.k, x)}, but no motion from the "
-                                  f"reference reaches it (the motion stops at {_fmt_held(sp, ch.k, ch.lo)} "
-                                  f"and {_fmt_held(sp, ch.k, ch.hi)})")
+            run.reason[int(n)] = (f"other circuit: assembles at {held_text(sp, ch.k, x)}, but no motion from the "
+                                  f"reference reaches it (the motion stops at {held_text(sp, ch.k, ch.lo)} "
+                                  f"and {held_text(sp, ch.k, ch.hi)})")
             continue
         side = _nearer_limit(ch, x)
         k = ch.limits.get(side)
         where = ch.hi if side == "hi" else ch.lo
         label = sp.steps[k].label if k is not None else "the mechanism"
         run.code[n] = Status.LIMIT
-        run.reason[int(n)] = f"{label}: unreachable: limit at {_fmt_held(sp, ch.k, where)} (out of reach beyond it)"
+        run.reason[int(n)] = f"{label}: unreachable: limit at {held_text(sp, ch.k, where)} (out of reach beyond it)"
     run.G.invalidate(range(sp.mechanism.n_links), bad)
 
 
@@ -561,7 +566,7 @@ def _crossing_notes(sp, crossings, xs: np.ndarray, ok: np.ndarray, flips: dict, 
             if len(notes) >= 20:
                 return notes + ["… more crossings not listed"]
             where = "the reference" if n == 0 else f"row {n - 1}"
-            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {_fmt_held(sp, d, at[n])} "
+            notes.append(f"{sp.steps[k].label}: its two assembly branches meet at input {held_text(sp, d, at[n])} "
                          f"(between {where} and row {n}); the motion keeps the mode of the reference"
                          f"{' (the sign of the assembly branch changes there)' if flipped else ''}")
     return notes
@@ -573,7 +578,7 @@ def _mark_crossings(sp, run: _Run, xr, reach, crossings, scale, d: int = 0) -> N
         for n in near:
             run.code[n] = Status.SINGULAR
             run.reason[int(n)] = (f"{sp.steps[k].label}: singular position (its assembly branches meet "
-                                  f"at {_fmt_held(sp, d, c)})")
+                                  f"at {held_text(sp, d, c)})")
         run.G.invalidate(range(sp.mechanism.n_links), np.isin(np.arange(len(xr)), near))
 
 
@@ -760,7 +765,7 @@ def _fmt_inputs(sp: SolvePlan, x) -> str:
     return ", ".join(f"{d.joint} = {_fmt_x(sp, j, v)}" for j, (d, v) in enumerate(zip(sp.mechanism.drivers, x)))
 
 
-def _fmt_held(sp: SolvePlan, k: int, x: float) -> str:
+def held_text(sp: SolvePlan, k: int, x: float) -> str:
     """Driver ``k`` at ``x`` with the others at the reference, as text (:func:`_fmt_inputs`)."""
     return _fmt_inputs(sp, DriverMotion.held(sp.mechanism, k).inputs(x)[0])
 

@@ -285,3 +285,32 @@ def test_constant_columns_to_rounding():
     V[5, 0] = np.nan
     assert _constant(V).tolist() == [True, False, True, True, False, True]
     assert FLAT < 1e-9
+
+
+@pytest.mark.parametrize("name", ["excavator", "excavator_bucket"])
+def test_held_cylinder_limits_come_from_the_certified_walk_and_match_the_solver(name):
+    """Each cylinder of a machine with several (the others held) has its assembly limits
+    from the certified walk (``motion_events(..., k=)``, over its range), named by the
+    group that stops it; the same limit found the other way, by bisecting where ``solve``
+    stops assembling, agrees to 1e-12 of the size, and the limit itself assembles."""
+    from scipy.optimize import bisect
+
+    from multiloop.kin.solve import motion_events
+    m = load_named(name)
+    rep = check(m)
+    for k, dc in enumerate(rep.drivers):
+        ev = motion_events(m, extent=m.drivers[k].range, k=k)
+        for side, lim, bind in zip(("hi", "lo"), dc.limits, dc.binds):
+            if bind != "assembly":
+                continue
+            assert lim == getattr(ev, side) and side in ev.limits
+            assert any(ev.limits[side] in g for g in dc.limit_groups)
+
+            def ok(x):
+                X = np.zeros((1, len(m.drivers)))
+                X[0, k] = x
+                return 1.0 if solve(m, X).ok[0] else -1.0
+            assert ok(lim) == 1.0
+            far = lim + (0.1 if lim > 0 else -0.1) * m.size
+            other = bisect(ok, 0.5 * lim, far, xtol=1e-14 * m.size, maxiter=200)
+            assert abs(other - lim) <= 1e-12 * m.size

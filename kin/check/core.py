@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 
 from multiloop.kin.memo import cached
-from multiloop.kin.solve import compile_plan, solve
+from multiloop.kin.solve import compile_plan, held_text, solve
 from multiloop.topo.assur import decompose
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind, Mechanism
@@ -165,8 +165,8 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
             continue
         label = ev.limits.get("hi" if seg.side.sign > 0 else "lo") if ev is not None else None
         if label is not None:                # the group the certified walk stopped at
-            unit = f"{np.degrees(seg.limit):.6g}°" if rotary else f"{seg.limit:.6g} m"
-            limit_groups.append(f"{label}: unreachable: limit at {unit} (out of reach beyond it)")
+            limit_groups.append(f"{label}: unreachable: limit at {held_text(plan, k, seg.limit)} "
+                                "(out of reach beyond it)")
             continue
         st, r = seg.side.at([seg.side.grid[seg.n]])      # the first failed grid value
         limit_groups.append(str(st.status[r[0]]))

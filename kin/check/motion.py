@@ -16,7 +16,7 @@ import numpy as np
 
 from multiloop.kin.groups.registry import has_closed_form
 from multiloop.kin.motion import DriverMotion
-from multiloop.kin.solve import motion_events
+from multiloop.kin.solve import motion_events, solved_alone
 from multiloop.topo.errors import AssemblyError, explain
 from multiloop.topo.model import Mechanism
 
@@ -203,10 +203,12 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     heavy = any(not has_closed_form(kd) for kd in kinds)
     samples, stride = (8, 4) if heavy else (32, 1)
     chunk = 8 if heavy else None
-    # the certified walk searches ± the size, or to the ends of the range when it is wider
-    extent = None if rotary or rng is None else max(m.size, -rng[0], rng[1])
-    dm = motion_events(m, plan, extent=extent) if len(m.drivers) == 1 else DriverMotion.held(m, k)
-    hi, lo = (dm.hi, dm.lo) if dm.certified and not dm.turns_fully else (None, None)
+    # the certified walk searches ± the size, or the range
+    extent = None if rotary or rng is None else (float(rng[0]), float(rng[1]))
+    certified = len(m.drivers) == 1 or solved_alone(plan)     # (several drivers: the chart its solves walk)
+    dm = motion_events(m, plan, extent=extent, k=k) if certified else DriverMotion.held(m, k)
+    # the certified stops: where the walk met an assembly limit (not the end of its search)
+    hi, lo = (dm.hi if "hi" in dm.limits else None, dm.lo if "lo" in dm.limits else None)
     seg_f = _segment(_side(dm, plan, +1, heavy, samples, stride, branch, cancel), chunk, hi)
     if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
