@@ -155,7 +155,7 @@ def _guarded(side: Side, st) -> Side:
     return replace(side, signs=np.sign(side.branch(st)))
 
 
-def _side(dm: DriverMotion, plan, sign: int, heavy: bool, samples: int, stride: int, branch,
+def _side(dm: DriverMotion, plan, sign: int, heavy: bool, samples: int, branch,
           cancel=None) -> Side:
     """The grid of one side: to 361° (R) or ± the size (P), or to the end of the driver's
     ``range`` on that side at the same spacing (a range end at the reference: that value).
@@ -173,7 +173,7 @@ def _side(dm: DriverMotion, plan, sign: int, heavy: bool, samples: int, stride: 
         span = min(span, n * h)
     steps = int(np.ceil(span / h - 1e-9))
     grid = sign * (np.linspace(0.0, span, steps + 1) if steps else np.zeros(1))
-    return Side(dm, plan, sign, grid, samples, stride, branch, cancel=cancel, each=heavy)
+    return Side(dm, plan, sign, grid, samples, branch=branch, cancel=cancel, each=heavy)
 
 
 def _bounded(seg: Segment, rng, sign: int) -> Segment:
@@ -198,10 +198,11 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     rng = m.drivers[k].range
     # a group without a closed-form or all-modes kernel is tracked by Newton at about a
     # millisecond per position: its mechanism gets a coarser P grid, fewer samples per
-    # zoom iteration (same 1e-10 tolerance, more iterations), the solver's own 2° path
-    # steps between the grid's values, and its brackets refined one at a time (Side.each)
+    # zoom iteration (same 1e-10 tolerance, more iterations), and its brackets refined
+    # one at a time (Side.each); every path leads in at the solver's own 2° step
+    # (Side.stride)
     heavy = any(not has_closed_form(kd) for kd in kinds)
-    samples, stride = (8, 4) if heavy else (32, 1)
+    samples = 8 if heavy else 32
     chunk = 8 if heavy else None
     # the certified walk searches ± the size, or the range
     extent = None if rotary or rng is None else (float(rng[0]), float(rng[1]))
@@ -209,11 +210,11 @@ def driver_motion(m: Mechanism, plan, k: int, kinds=(), branch=None, cancel=None
     dm = motion_events(m, plan, extent=extent, k=k) if certified else DriverMotion.held(m, k)
     # the certified stops: where the walk met an assembly limit (not the end of its search)
     hi, lo = (dm.hi if "hi" in dm.limits else None, dm.lo if "lo" in dm.limits else None)
-    seg_f = _segment(_side(dm, plan, +1, heavy, samples, stride, branch, cancel), chunk, hi)
+    seg_f = _segment(_side(dm, plan, +1, heavy, samples, branch, cancel), chunk, hi)
     if rotary and rng is None and seg_f.limit is None:
         st = seg_f.state
         i360 = R_STEPS
         periodic = bool(np.nanmax(np.abs(st.positions[i360] - st.positions[0])) <= 1e-9 * m.size)
         return Motion.of(dm, True, (seg_f,), periodic)
-    seg_b = _segment(_side(dm, plan, -1, heavy, samples, stride, branch, cancel), chunk, lo)
+    seg_b = _segment(_side(dm, plan, -1, heavy, samples, branch, cancel), chunk, lo)
     return Motion.of(dm, False, (_bounded(seg_f, rng, +1), _bounded(seg_b, rng, -1)), False)
