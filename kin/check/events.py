@@ -55,7 +55,7 @@ def roots(motion: Motion, Q, derivatives: bool = False, rel_tol: float = 1e-6) -
         if i.size == 0:
             continue
         x = seg.x
-        lo, hi = seg.side.bisect(x[i], x[i + 1], lambda s, r: _pick(Q(s), r, c), derivatives)
+        lo, hi = seg.side.bisect(x[i], x[i + 1], lambda s, r: _pick(Q(s), r, c), derivatives, smooth=True)
         mid = 0.5 * (lo + hi)
         st, r = seg.side.at(mid, derivatives)
         val = np.abs(_pick(Q(st), r, c))

@@ -29,7 +29,15 @@ __all__ = ["Side", "XTOL"]
 
 #: bracket width at which a refinement stops (rad, or fraction of the size for P drivers)
 XTOL = 1e-10
-_GOLD = 0.5 * (np.sqrt(5.0) - 1.0)
+#: a zoom whose samples are this many XTOL apart finishes by its model's step (the
+#: secant's root, the parabola's vertex) and one window of ± XTOL around it
+FINISH = 1e6
+#: ... a kink's corner, whose lines are extrapolated, when they are this many XTOL apart
+FINISH_KINK = 2e4
+#: the model fits when the neighbouring samples' differences agree with it to this
+MODEL_FIT = 0.1
+#: a window's values within this of its smallest (relative, at least 1) agree to rounding
+FLAT_ROUNDING = 1e-13
 #: every 4th grid value (2° or 1 % of the size): the solver's own lead-in step
 _STRIDE = 4
 
@@ -149,20 +157,28 @@ class Side:
         status[r] = "branch jump of the solver on an uneven path (discarded)"
         return replace(st, status=status, **upd)
 
-    def _sample(self, lo, hi, value, derivatives):
-        """``value`` at ``samples`` equispaced interior points of every bracket."""
+    def _sample(self, lo, hi, value, derivatives, ends: bool = False):
+        """``value`` at ``samples`` equispaced interior points of every bracket: ``(x,
+        v)``; with ``ends``, ``(x, value at lo, v)``."""
         t = np.arange(0, self.samples + 1) / (self.samples + 1)
         x = lo[:, None] + (hi - lo)[:, None] * t
         st, r = self.at(x.ravel(), derivatives)      # lo too: the path approaches gradually
-        return x[:, 1:], value(st, r.reshape(x.shape))[:, 1:]
+        v = value(st, r.reshape(x.shape))
+        return (x[:, 1:], v[:, 0], v[:, 1:]) if ends else (x[:, 1:], v[:, 1:])
 
-    def bisect(self, lo, hi, value, derivatives: bool = False, xtol: float | None = None):
+    def bisect(self, lo, hi, value, derivatives: bool = False, xtol: float | None = None,
+               smooth: bool = False):
         """Roots of sign changes, one per bracket, vectorised (zoom search).
 
         Each iteration samples ``samples`` interior points of every bracket in one solve
         and keeps the first sub-interval where the sign changes, so the bracket
         shrinks ``samples + 1`` times per solve (the sign test of bisection, applied to
-        ``samples`` points at once).
+        ``samples`` points at once).  A ``smooth`` quantity, once its samples are
+        :data:`FINISH` × ``xtol`` apart and the four around the change lie on a line
+        (:data:`MODEL_FIT`), is finished by the secant's root between the two that
+        bracket it: the next solve samples ± ``xtol`` around it, and a sign change
+        inside that window is the final bracket, as certain as any zoom step's (a window
+        without one falls back to the zoom of the bracket it came from).
 
         Parameters
         ----------
@@ -171,9 +187,10 @@ class Side:
         value : callable (state, rows) -> array of the shape of ``rows``
             The quantity of bracket i at ``state`` rows ``rows[i]``; NaN counts as
             the sign of ``hi`` (the failing side of a limit).
-
         xtol : float, optional
             Bracket width to stop at (default :attr:`xtol`).
+        smooth : bool
+            ``value`` is continuous with a simple root (not a step such as "assembled").
 
         Returns
         -------
@@ -184,31 +201,71 @@ class Side:
         if lo.size == 0:
             return lo, hi
         if self.each and lo.size > 1:
-            parts = self._each(self.bisect, lo, hi, value, derivatives)
+            parts = self._each(self.bisect, lo, hi, value, derivatives, smooth=smooth)
             return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
-        st, r = self.at(lo, derivatives)
-        s_lo = np.sign(value(st, r))
         rows = np.arange(lo.size)
         tol = self.xtol if xtol is None else xtol
+        M = self.samples
+        s_lo = back = None          # sign at lo; a window's fallback bracket (lo, hi), or None
         while np.max(np.abs(hi - lo)) > tol:
             if np.all(np.abs(hi - lo) <= 4 * np.spacing(np.maximum(np.abs(lo), np.abs(hi)))):
                 break                            # as narrow as the floating point allows
-            x, v = self._sample(lo, hi, value, derivatives)
+            x, v0, v = self._sample(lo, hi, value, derivatives, ends=True)
+            if s_lo is None:
+                s_lo = np.sign(v0)
             same = (np.sign(v) == s_lo[:, None]) & np.isfinite(v)
             # first sample on the other side (or none: the root is in the last sub-interval)
-            M = self.samples
             first = np.where(~same.all(axis=1), np.argmin(same, axis=1), M)
             new_lo = np.where(first > 0, x[rows, np.maximum(first - 1, 0)], lo)
             hi = np.where(first < M, x[rows, np.minimum(first, M - 1)], hi)
             lo = new_lo
+            miss = np.zeros(lo.size, bool)
+            if back is not None:                 # a window without its sign change: zoom on
+                miss = back[2] & ((np.sign(v0) != s_lo) | same.all(axis=1))
+                lo, hi = np.where(miss, back[0], lo), np.where(miss, back[1], hi)
+            back = self._secant(lo, hi, x, v, first, tol, ~miss) if smooth else None
+            if back is not None:
+                lo, hi = back[3], back[4]
         return lo, hi
+
+    def _secant(self, lo, hi, x, v, first, tol, fresh):
+        """The brackets (``fresh``: just zoomed, both ends samples ``x`` with finite
+        values ``v`` of opposite sign) whose samples were :data:`FINISH` × ``tol``
+        apart, replaced by the window ± ``tol`` around their secant root: ``(lo, hi,
+        replaced, window lo, window hi)``, or None."""
+        M = self.samples
+        rows = np.arange(lo.size)
+        h = (x[:, -1] - x[:, 0]) / (M - 1)
+        f0, f1 = v[rows, np.clip(first - 1, 0, M - 1)], v[rows, np.clip(first, 0, M - 1)]
+        j = np.clip(first - 2, 0, M - 4)          # four samples around the change
+        f = [v[rows, j + d] for d in range(4)]
+        with np.errstate(all="ignore"):
+            d = [f[k + 1] - f[k] for k in range(3)]
+            straight = (np.abs(d[0] - d[1]) <= MODEL_FIT * np.abs(d[1])) & (np.abs(d[2] - d[1]) <= MODEL_FIT * np.abs(d[1]))
+            can = fresh & (np.abs(hi - lo) > tol) & (np.abs(h) <= FINISH * tol) & (first > 0) & (first < M) \
+                & np.all(np.isfinite(f), axis=0) & (f0 * f1 < 0) & straight
+            if not can.any():
+                return None
+            r = lo - f0 * (hi - lo) / (f1 - f0)
+        w_lo, w_hi = _window(r, lo, hi, tol)
+        return lo, hi, can, np.where(can, w_lo, lo), np.where(can, w_hi, hi)
 
     def golden(self, a, b, value, derivatives: bool = False):
         """Minimum of ``value`` in each bracket ``[a_i, b_i]`` (zoom search).
 
         Each iteration samples ``samples`` interior points of every bracket in one solve
-        and keeps the two sub-intervals around the smallest sample.  ``value`` as in
-        :meth:`bisect`.  Returns the abscissae (K,).
+        and keeps the two sub-intervals around the smallest sample.  Once the samples
+        are :data:`FINISH` × :attr:`xtol` apart, a bracket whose smallest sample and its
+        four neighbours lie on a convex parabola (equal second differences,
+        :data:`MODEL_FIT`: a kink fails it) is finished by the parabola's vertex: the
+        next solve samples ± :attr:`xtol` around it, and keeps the two sub-intervals
+        around its smallest sample when that is inside the window or the window's values
+        agree to rounding (:data:`FLAT_ROUNDING`: the value is known, and no sampling
+        places it better); else it falls back to the zoom of the bracket it came from.
+        The vertex locates a smooth minimum to about ε|f| / (f'' h) (h the samples'
+        spacing), closer than the values alone can (the arc is flat to rounding within
+        about √(2ε|f| / f'')).  ``value`` as in :meth:`bisect`.  Returns the abscissae
+        (K,).
         """
         a = np.array(a, float)
         b = np.array(b, float)
@@ -217,14 +274,62 @@ class Side:
         if self.each and a.size > 1:
             return np.concatenate(self._each(self.golden, a, b, value, derivatives))
         rows = np.arange(a.size)
+        M = self.samples
+        back = None
         while np.max(np.abs(b - a)) > self.xtol:
             x, v = self._sample(a, b, value, derivatives)
-            i = np.argmin(np.where(np.isfinite(v), v, np.inf), axis=1)
+            v = np.where(np.isfinite(v), v, np.inf)
+            i = np.argmin(v, axis=1)
             xl = np.concatenate([a[:, None], x, b[:, None]], axis=1)
             a, b = xl[rows, i], xl[rows, i + 2]
+            miss = np.zeros(a.size, bool)
+            if back is not None:              # a window whose smallest sample is at its edge: zoom on
+                vmin = v[rows, i]
+                flat = np.all(v - vmin[:, None] <= FLAT_ROUNDING * np.maximum(np.abs(vmin), 1.0)[:, None], axis=1)
+                miss = back[2] & ((i == 0) | (i == M - 1)) & ~flat
+                a, b = np.where(miss, back[0], a), np.where(miss, back[1], b)
+            back = self._vertex(a, b, x, v, i, ~miss)
+            if back is not None:
+                a, b = back[3], back[4]
         return 0.5 * (a + b)
 
-    def _each(self, refine, lo, hi, value, derivatives) -> list:
+    def _vertex(self, a, b, x, v, i, fresh):
+        """The brackets ``[a, b]`` (``fresh``: just zoomed around sample ``i``) where
+        :meth:`golden` finishes, replaced by a window around the model's minimum: the
+        vertex of the parabola through samples i − 1, i, i + 1 where the five samples
+        around i lie on one (:data:`FINISH`), or the corner of two lines through three
+        samples on each side of i where they lie on two (a kink: |g| where g crosses
+        zero, an angle folded at 90°; :data:`FINISH_KINK`): ``(a, b, replaced, window a,
+        window b)``, or None."""
+        M = self.samples
+        rows = np.arange(a.size)
+        h = (x[:, -1] - x[:, 0]) / (M - 1)
+        at = lambda d: v[rows, np.clip(i + d, 0, M - 1)]       # noqa: E731
+        f = {d: at(d) for d in range(-3, 4)}
+        fit = lambda p, q: np.abs(p - q) <= MODEL_FIT * np.abs(q)    # noqa: E731
+        with np.errstate(all="ignore"):
+            dd = [f[d - 1] - 2.0 * f[d] + f[d + 1] for d in (-1, 0, 1)]
+            j = np.clip(i - 2, 0, M - 5)              # five samples around the smallest
+            d5 = [v[rows, j + k - 1] - 2.0 * v[rows, j + k] + v[rows, j + k + 1] for k in (1, 2, 3)]
+            arc = (i > 0) & (i < M - 1) & (dd[1] > 0) & fit(d5[0], d5[1]) & fit(d5[2], d5[1]) \
+                & (np.abs(h) <= FINISH * self.xtol)
+            left, right = f[-1] - f[-2], f[2] - f[1]         # slopes × h on either side
+            kink = (i > 2) & (i < M - 3) & (left < 0) & (right > 0) & fit(f[-2] - f[-3], left) \
+                & fit(f[3] - f[2], right) & (np.abs(h) <= FINISH_KINK * self.xtol) & ~arc
+            ok = fresh & (np.abs(b - a) > self.xtol) & np.all(np.isfinite(list(f.values())), axis=0)
+            arc, kink = arc & ok, kink & ok
+            if not (arc.any() or kink.any()):
+                return None
+            xi = x[rows, i]
+            xv = xi - h * (f[1] - f[-1]) / (2.0 * dd[1])
+            # the lines f[-1] + left·t and f[1] + right·(t − 2), t in samples from i − 1
+            xk = xi + h * ((f[1] - f[-1] - 2.0 * right) / (left - right) - 1.0)
+            c = np.where(arc, xv, xk)
+            can = (arc | kink) & np.isfinite(c)
+        w_a, w_b = _window(c, a, b, self.xtol)
+        return a, b, can, np.where(can, w_a, a), np.where(can, w_b, b)
+
+    def _each(self, refine, lo, hi, value, derivatives, **options) -> list:
         """``refine`` (:meth:`bisect` or :meth:`golden`) on each bracket alone, in turn.
 
         Every solve follows the path from the reference; one through a single bracket
@@ -237,5 +342,13 @@ class Side:
         for i in range(K):
             def alone(st, r, i=i):
                 return value(st, np.broadcast_to(r, (K,) + np.shape(r)[1:]))[i:i + 1]
-            out.append(refine(lo[i:i + 1], hi[i:i + 1], alone, derivatives))
+            out.append(refine(lo[i:i + 1], hi[i:i + 1], alone, derivatives, **options))
         return out
+
+
+def _window(c, lo, hi, half):
+    """``[c − half, c + half]`` within the bracket ``(lo, hi)``, in its orientation."""
+    a, b = np.minimum(lo, hi), np.maximum(lo, hi)
+    w_lo, w_hi = np.clip(c - half, a, b), np.clip(c + half, a, b)
+    flip = hi < lo
+    return np.where(flip, w_hi, w_lo), np.where(flip, w_lo, w_hi)
