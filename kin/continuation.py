@@ -49,7 +49,7 @@ KAPPA = 4.0
 #: the bound on |margin''| over an interval: CURV_SAFETY × the larger of its ends' values
 CURV_SAFETY = 2.0
 #: a bracket of a limit is split into this many parts a round (a zoom search)
-LIMIT_ZOOM = 8
+LIMIT_ZOOM = 32
 
 
 @dataclass(frozen=True)
@@ -201,7 +201,7 @@ def _vertex(evaluate, P, s_nodes, flips, g, s_star: float, h: float) -> float:
     return s_star + e if abs(e) < h else s_star
 
 
-def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 8, rounds: int = 16):
+def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 64, rounds: int = 16):
     """The limit of group ``g`` in ``[a, b]`` (assembled at ``a``, not at ``b``) to the
     precision of its reach margin: a zoom search on the sign of the margin less its
     rounding (``a`` stays where the margin exceeds its rounding, so that the group
