@@ -48,8 +48,10 @@ DELTA = 1e-6
 KAPPA = 4.0
 #: the bound on |margin''| over an interval: CURV_SAFETY × the larger of its ends' values
 CURV_SAFETY = 2.0
+#: an uncertified interval is split into this many parts a round
+REFINE_SPLIT = 4
 #: a bracket of a limit is split into this many parts a round (a zoom search)
-LIMIT_ZOOM = 32
+LIMIT_ZOOM = 128
 
 
 @dataclass(frozen=True)
@@ -342,7 +344,8 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
         if refine.any():
             zoom = zoom[: len(s) - 1] & refine[: len(s) - 1]
             refine = refine[: len(s) - 1]
-            mid = 0.5 * (s[:-1] + s[1:])[refine & ~zoom]
+            u = np.arange(1, REFINE_SPLIT) / REFINE_SPLIT
+            mid = (s[:-1][refine & ~zoom, None] + np.diff(s)[refine & ~zoom, None] * u).ravel()
             t = np.arange(1, LIMIT_ZOOM) / LIMIT_ZOOM
             sub = (s[:-1][zoom, None] + np.diff(s)[zoom, None] * t).ravel()
             s = np.sort(np.concatenate([s, mid, sub]))
