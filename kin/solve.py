@@ -463,7 +463,7 @@ def _chart(sp: SolvePlan, kernels, x: np.ndarray, k: int = 0) -> _Chart:
     return ch
 
 
-def motion_events(mechanism: Mechanism, plan=None, extent: float | None = None,
+def motion_events(mechanism: Mechanism, plan=None, extent: float | tuple[float, float] | None = None,
                   k: int | None = None) -> DriverMotion | None:
     """The certified motion of a one-driver mechanism, or of its driver ``k`` moved with
     the others held at the reference (:class:`~kin.motion.DriverMotion`): its ends,
