@@ -109,8 +109,9 @@ class Side:
         """
         xs = np.asarray(xs, float).reshape(-1)
         far = np.max(np.abs(xs)) if xs.size else 0.0
+        alone = solved_alone(self.plan)
         g = self.grid[:: self.stride]
-        g = g[np.abs(g) < far] if not solved_alone(self.plan) else g[:0]   # (each input on its own branch)
+        g = g[np.abs(g) < far] if not alone else g[:0]   # (each input on its own branch)
         path = np.concatenate([g, xs])
         order = np.argsort(np.abs(path), kind="stable")
         where = np.empty_like(order)
@@ -121,12 +122,13 @@ class Side:
         else:
             st = self.solve(path[order], derivatives)
             rows = where
-        if self.signs is not None and rows.size:
+        if self.signs is not None and rows.size and not alone:     # (no path, no jump to guard)
             st = self._guard(st, rows, xs)
         return st, rows
 
     def _guard(self, st, rows, xs):
-        """Rows whose dyad branches differ from the dense grid's around them are failed.
+        """Rows whose dyad branches differ from the dense grid's around them are failed
+        (a path-following plan's; a plan solved on its chart follows no path).
 
         The solver keeps each dyad's branch by prediction from the previous two path
         points; on a path with uneven steps (grid, then a tiny bracket) that prediction
