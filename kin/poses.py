@@ -319,7 +319,8 @@ def _key(rx, ry):
 
 
 class PoseRates:
-    """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd."""
+    """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd
+    (``Zdd`` None: velocities only, every acceleration returned is None)."""
 
     def __init__(self, sp, Z, Zd, Zdd):
         self.sp, self.Z, self.Zd, self.Zdd = sp, Z, Zd, Zdd
@@ -328,16 +329,18 @@ class PoseRates:
     def point(self, link: str, r):
         """Position, velocity, acceleration of ``link``'s material point at reference ``r``."""
         k = self.idx[link]
+        acc = (None, None) if self.Zdd is None else (self.Zdd[:, k, :2], self.Zdd[:, k, 2])
         return move_point(self.Z[:, k, :2], self.Z[:, k, 2], np.asarray(r, float) - self.sp.origins[k],
-                          self.Zd[:, k, :2], self.Zd[:, k, 2], self.Zdd[:, k, :2], self.Zdd[:, k, 2])
+                          self.Zd[:, k, :2], self.Zd[:, k, 2], *acc)
 
     def direction(self, link: str, v):
         k = self.idx[link]
-        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], self.Zdd[:, k, 2]
+        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], None if self.Zdd is None else self.Zdd[:, k, 2]
 
     def set(self, link: str, P, vP, aP, w, e) -> None:
         """Rates of ``link`` from those of its point at P and its ω, ε."""
         k = self.idx[link]
-        self.Zd[:, k, :2], self.Zdd[:, k, :2] = transport(self.Z[:, k, :2] - P, vP, aP, w, e)
-        self.Zd[:, k, 2] = w
-        self.Zdd[:, k, 2] = e
+        v, a = transport(self.Z[:, k, :2] - P, vP, aP, w, e)
+        self.Zd[:, k, :2], self.Zd[:, k, 2] = v, w
+        if self.Zdd is not None:
+            self.Zdd[:, k, :2], self.Zdd[:, k, 2] = a, e

@@ -782,7 +782,7 @@ def _take(run: _Run, rows: np.ndarray) -> _Run:
     return _Run(run.G.take(rows), run.code[rows].copy(), reason, {}, None if run.direct is None else run.direct[rows])
 
 
-def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rates=None,
+def solve(mechanism: Mechanism, inputs, *, derivatives: bool | str = False, input_rates=None,
           only=None, outputs=None, plan=None, method: str = "auto", assemble: bool = False,
           rows=None) -> KinematicState:
     """Positions (and velocities, accelerations) of a mechanism over a batch of inputs.
@@ -793,9 +793,11 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool = False, input_rate
         With geometry, a frame and drivers.
     inputs : float or array_like, shape (N,) or (N, n_drivers)
         Driver values (rad for R drivers, m for P drivers) from the reference.
-    derivatives : bool
+    derivatives : bool or "velocities"
         Also velocities and accelerations (for ``input_rates``, zero input
-        acceleration): the analogues d/dφ, d²/dφ² for one driver at unit rate.
+        acceleration): the analogues d/dφ, d²/dφ² for one driver at unit rate;
+        ``"velocities"``: the velocities alone (the accelerations None; the same
+        velocities, bit for bit).
     input_rates : array_like (n_drivers,), optional
         Input speeds (default 1 for every driver).
     only : iterable of str, optional
@@ -1050,7 +1052,8 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     Z = G.to_Z()
     Zd = Zdd = rates_in = None
     if derivatives:
-        rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links)
+        rates_in, Zd, Zdd = _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links,
+                                         derivatives != "velocities")
     direct = run.direct if all_ok and select is None else None      # the kernel's points, still valid
     state = _state(sp, X, G, Z, Zd, Zdd, status, rates_in, tuple(notes), code, select, direct)
     if single and code[0] != 0:
@@ -1063,23 +1066,21 @@ def _finish(sp, X, run: _Run, needed, notes, single, derivatives, input_rates, k
     return state
 
 
-def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links):
+def _derivatives(sp, Z, needed, okm, input_rates, kernels, solved_links, accelerations: bool = True):
+    """Pose rates (and accelerations, unless ``accelerations`` is False: ``Zdd`` None)."""
     m = sp.mechanism
     nd = len(m.drivers)
     rates_in = np.ones(nd) if input_rates is None else np.asarray(input_rates, float).reshape(nd)
-    Zd = np.zeros_like(Z)
-    Zdd = np.zeros_like(Z)
-    R = PoseRates(sp, Z, Zd, Zdd)
+    R = PoseRates(sp, Z, np.zeros_like(Z), np.zeros_like(Z) if accelerations else None)
     for k in needed:
         _step(sp.steps[k], kernels).rates(R, rates_in)
-    Zd, Zdd = R.Zd, R.Zdd
     solved = set(solved_links)
     unsolved = [k for k in range(m.n_links) if k not in solved and m.link_names[k] != m.frame]
-    Zd[:, unsolved] = np.nan
-    Zdd[:, unsolved] = np.nan
-    Zd[~okm] = np.nan
-    Zdd[~okm] = np.nan
-    return rates_in, Zd, Zdd
+    for D in (R.Zd, R.Zdd):
+        if D is not None:
+            D[:, unsolved] = np.nan
+            D[~okm] = np.nan
+    return rates_in, R.Zd, R.Zdd
 
 
 def _fmt_input(m: Mechanism, x) -> str:
@@ -1121,17 +1122,20 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     pos = _points(sp, G, "joints", None if select is None else select[0]) \
         if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
+    aa = (lambda h: (None, None)) if Zdd is None else (lambda h: (Zdd[:, h, :2], Zdd[:, h, 2]))  # noqa: E731
     if Zd is not None:
         host = np.asarray(sp.joint_host)
-        vel, acc = transport(pos - Z[:, host, :2], Zd[:, host, :2], Zdd[:, host, :2], Zd[:, host, 2], Zdd[:, host, 2])
-        om, ep = Zd[:, :, 2].copy(), Zdd[:, :, 2].copy()
+        a0, e0 = aa(host)
+        vel, acc = transport(pos - Z[:, host, :2], Zd[:, host, :2], a0, Zd[:, host, 2], e0)
+        om, ep = Zd[:, :, 2].copy(), None if Zdd is None else Zdd[:, :, 2].copy()
     ppos = pvel = pacc = None
     if m.points:
         ph = np.asarray(sp.point_host)
         ppos = _points(sp, G, "points", None if select is None else select[1]) \
             if direct is None else direct[:, nj:]
         if Zd is not None:
-            pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], Zdd[:, ph, :2], Zd[:, ph, 2], Zdd[:, ph, 2])
+            a0, e0 = aa(ph)
+            pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], a0, Zd[:, ph, 2], e0)
     return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,
                           rates_in, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,

@@ -144,7 +144,7 @@ def test_a_side_solves_its_inputs_alone_only_where_the_path_changes_none_of_thei
     """A side of the check's motion (kin.check.sweep.Side) solves the inputs it is asked
     for alone when the plan solves each on its own branch (drivers and closed-form dyads:
     ``solved_alone``), and along the grid's path from the reference otherwise (a triad):
-    the values are the path's bit for bit, with derivatives."""
+    the values are the path's bit for bit, with velocities."""
     from unittest import mock
 
     from multiloop.kin.check import sweep
@@ -156,6 +156,7 @@ def test_a_side_solves_its_inputs_alone_only_where_the_path_changes_none_of_thei
     alone, rows = side.at(x[::-1], derivatives=True)
     with mock.patch.object(sweep, "solved_alone", return_value=False):
         path, path_rows = side.at(x[::-1], derivatives=True)
-    for f in ("positions", "velocities", "accelerations"):
+    for f in ("positions", "velocities", "omegas"):
         assert np.array_equal(getattr(alone, f)[rows], getattr(path, f)[path_rows], equal_nan=True)
+    assert alone.accelerations is None and path.accelerations is None      # (the check reads velocities only)
     assert list(alone.status[rows]) == list(path.status[path_rows])

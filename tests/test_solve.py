@@ -471,3 +471,29 @@ def test_several_drivers_out_of_phase_continue_without_failure():
         warnings.simplefilter("ignore")
         st = solve(m, vals)
     assert st.success, st.message
+
+
+@pytest.mark.parametrize("name", ["four_bar", "crank_slider", "dyad_prp", "dyad_rpp", "dyad_rpr", "dyad_rrp",
+                                  "stephenson_3_triad", "excavator", "knitting_needle_drive", "linkage_24"])
+def test_velocities_alone_are_the_full_derivatives_velocities_bit_for_bit(name):
+    """``derivatives="velocities"`` skips the accelerations (None) and gives the very
+    velocities, angular velocities and point velocities of ``derivatives=True`` (every
+    group kind's rates, the driver's, an actuated cylinder's, a triad's Jacobian), also
+    for several drivers moving and with ``rows=``."""
+    from multiloop.catalogue.named import load_named
+    m = load_named(name)
+    rng = np.random.default_rng(5)
+    nd = len(m.drivers)
+    span = np.array([0.6 if m.is_rotary(k) else 0.05 * m.size for k in range(nd)])
+    X = np.cumsum(rng.uniform(-1, 1, (40, nd)) * span / 20, axis=0)
+    rates = rng.uniform(0.5, 2.0, nd)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for rows in (None, [3, 17, 39]):
+            a = solve(m, X, derivatives=True, input_rates=rates, rows=rows)
+            b = solve(m, X, derivatives="velocities", input_rates=rates, rows=rows)
+            assert b.accelerations is None and b.epsilons is None and b.pose_accelerations is None
+            for f in ("velocities", "omegas", "point_velocities", "pose_rates", "positions"):
+                x, y = getattr(a, f), getattr(b, f)
+                assert (x is None and y is None) or np.array_equal(x, y, equal_nan=True), f
+            assert np.any(np.isfinite(b.velocities))

@@ -89,13 +89,14 @@ class Side:
 
     def solve(self, x, derivatives: bool = False, rows=None):
         """The solver's state along ``x`` (a path that must start at the reference); of
-        its ``rows`` alone when given (``kin.solve.solve``'s ``rows``)."""
+        its ``rows`` alone when given (``kin.solve.solve``'s ``rows``).  ``derivatives``:
+        the velocities (the check reads no acceleration)."""
         if self.cancel is not None:
             self.cancel()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return solve(self.mechanism, self.motion.inputs(x), derivatives=derivatives, plan=self.plan,
-                         input_rates=self.motion.rates() if derivatives else None, rows=rows)
+            return solve(self.mechanism, self.motion.inputs(x), derivatives="velocities" if derivatives else False,
+                         plan=self.plan, input_rates=self.motion.rates() if derivatives else None, rows=rows)
 
     def at(self, xs, derivatives: bool = False):
         """State along the grid up to max |xs| with ``xs`` inserted; rows of ``xs``.  A

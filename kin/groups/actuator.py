@@ -193,7 +193,7 @@ class ActuatorStep(GroupStep):
         g = self._guide(R, input_rates)
         vA1 = vA + g                                  # B − A = R(θ) d(s): the slide moves B
         w = rrr_rates(A, C, B, vA1, vC).w2
-        aA1 = aA + 2.0 * w[:, None] * perp(g)         # Coriolis term of the slide
+        aA1 = None if aA is None else aA + 2.0 * w[:, None] * perp(g)         # Coriolis term of the slide
         r = rrr_rates(A, C, B, vA1, vC, aA1, aC)
         R.set(lay.near, A, vA, aA, r.w2, r.e2)
         R.set(lay.far, B, r.vB, r.aB, r.w2, r.e2)

@@ -129,7 +129,8 @@ class DriverStepSolver(GroupStep):
         ko = R.idx[self.other]
         if self.u is None:
             P, vP, aP = R.point(self.host, self.r)
-            R.set(self.link, P, vP, aP, R.Zd[:, ko, 2] + self.sign * rate, R.Zdd[:, ko, 2].copy())
+            R.set(self.link, P, vP, aP, R.Zd[:, ko, 2] + self.sign * rate,
+                  None if R.Zdd is None else R.Zdd[:, ko, 2].copy())
             return
         P, vP, aP = R.point(self.other, self.r)      # the known link's point at the joint
         u, w, e = R.direction(self.other, self.u)
@@ -137,5 +138,5 @@ class DriverStepSolver(GroupStep):
         rel = Q - P
         w2 = w[:, None]
         vQ = vP + w2 * perp(rel) + self.sign * rate * u
-        aQ = aP + e[:, None] * perp(rel) - w2 * w2 * rel + 2.0 * w2 * self.sign * rate * perp(u)
+        aQ = None if aP is None else aP + e[:, None] * perp(rel) - w2 * w2 * rel + 2.0 * w2 * self.sign * rate * perp(u)
         R.set(self.link, Q, vQ, aQ, w, e)
