@@ -794,10 +794,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool | str = False, inpu
     inputs : float or array_like, shape (N,) or (N, n_drivers)
         Driver values (rad for R drivers, m for P drivers) from the reference.
     derivatives : bool or "velocities"
-        Also velocities and accelerations (for ``input_rates``, zero input
-        acceleration): the analogues d/dφ, d²/dφ² for one driver at unit rate;
-        ``"velocities"``: the velocities alone (the accelerations None; the same
-        velocities, bit for bit).
+        Also velocities and accelerations (for ``input_rates``, zero input acceleration:
+        d/dφ, d²/dφ² for one driver at unit rate); ``"velocities"``: those alone.
     input_rates : array_like (n_drivers,), optional
         Input speeds (default 1 for every driver).
     only : iterable of str, optional
