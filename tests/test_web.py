@@ -613,6 +613,26 @@ def test_share_an_edited_design_and_a_damaged_code_in_a_fresh_browser_context(pa
         ctx.close()
 
 
+def test_share_the_address_names_the_first_design_once_the_page_is_ready(browser, server):
+    """A page opened with its token alone shows the first mechanism, and its address
+    names it (``?mechanism=NAME``) once the page is ready: the first design's tags come
+    with the page, not as a change (picking that same mechanism again changed nothing, and
+    the address stayed without it)."""
+    from urllib.parse import parse_qs, urlsplit
+    url, _, _ = server
+    ctx = browser.new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        fresh = ctx.new_page()
+        fresh.goto(url)
+        _wait_frames(fresh)
+        name = fresh.locator("#ml-positions").get_attribute("data-mechanism")
+        fresh.wait_for_function(f"() => location.search.includes('mechanism={name}')", timeout=120000)
+        query = parse_qs(urlsplit(fresh.url).query)
+        assert query.get("mechanism") == [name] and query.get("token") == parse_qs(urlsplit(url).query).get("token")
+    finally:
+        ctx.close()
+
+
 def _edited_four_bar():
     from multiloop.web.editing import moved
     return moved(load_mechanism("four_bar"), "B", (0.12, 0.08))

@@ -468,6 +468,7 @@ def _page_maker(files: dict, atlases, threshold: float, watch, warm, shown):
         doc.js_on_event(DocumentReady, wb.editor.keys)
         doc.js_on_event(DocumentReady, CustomJS(code=CARD_CLICK_JS))
         doc.js_on_event(DocumentReady, CustomJS(code=LAYOUT_BATCH_JS))
+        doc.js_on_event(DocumentReady, wb.address.glue)
         watch.add(doc.session_context.id, wb.stop_jobs)
 
         def closed(ctx):                # the session's callbacks are removed by Bokeh itself

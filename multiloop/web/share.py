@@ -44,10 +44,12 @@ WHAT = "design (the address's ?design=)"
 
 _CODE = re.compile(r"[A-Za-z0-9_-]+={0,2}")
 
-#: the address's glue: tags [code, name] from the server; ?design=CODE (or
-#: ?mechanism=NAME, or neither) replaces those arguments, every other one kept as it is
+#: the address's glue: tags [code, name] from the server (``model``, the address's Div);
+#: ?design=CODE (or ?mechanism=NAME, or neither) replaces those arguments, every other one
+#: kept as it is.  Run on every change of the tags and once the page is ready (the first
+#: design's tags come with the page, not as a change).
 ADDRESS_JS = """
-const [code, name] = cb_obj.tags;
+const [code, name] = model.tags;
 const keep = window.location.search.replace(/^\\?/, '').split('&')
   .filter(p => p && !p.startsWith('design=') && !p.startsWith('mechanism='));
 if (code) { keep.push('design=' + code); } else if (name) { keep.push('mechanism=' + encodeURIComponent(name)); }
@@ -158,7 +160,9 @@ class Address:
     def __init__(self):
         from bokeh.models import CustomJS, Div
         self.model = Div(visible=False, tags=["", ""], name="ml-address")
-        self.model.js_on_change("tags", CustomJS(code=ADDRESS_JS))
+        #: the glue, also run by the page once it is ready (``doc.js_on_event(DocumentReady, …)``)
+        self.glue = CustomJS(args=dict(model=self.model), code=ADDRESS_JS)
+        self.model.js_on_change("tags", self.glue)
 
     def follow(self, m, key: str | None) -> None:
         """Design ``m`` is shown: ``?mechanism=KEY`` for a menu name ``key``, else
