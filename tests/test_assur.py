@@ -391,3 +391,26 @@ def test_a_mechanism_is_decomposed_once_and_an_equal_copy_alike(monkeypatch):
     copy = dataclasses.replace(m)
     assert copy is not m and assur.decompose(copy).formula == first.formula
     assert assur.decompose(copy, check_rigidity=False).formula == first.formula
+
+
+@pytest.mark.parametrize("name", ["four_bar", "stephenson_3_triad", "excavator_bucket", "knitting_needle_drive"])
+def test_a_moved_point_keeps_the_plan_of_its_structure_with_its_own_mechanism(name):
+    """``decompose`` keeps plans by structure too: a design with a joint moved (the web
+    page's drag) gets the plan its structure had, bound to itself, and it equals a
+    decomposition from scratch; another structure (here a joint renamed) is decomposed
+    anew."""
+    from dataclasses import replace
+
+    from multiloop.catalogue.named import load_named
+    from multiloop.topo.assur import _decompose
+    m = load_named(name)
+    first = decompose(m)
+    j = m.joints[-1]
+    moved = replace(m, joints=tuple(replace(x, at=(x.at[0] + 1e-3, x.at[1])) if x is j else x for x in m.joints))
+    plan = decompose(moved)
+    assert plan.mechanism is moved and plan == _decompose(moved, True)
+    assert plan.steps is first.steps                  # reused, not decomposed again
+    assert j.name not in {d.joint for d in m.drivers}
+    renamed = replace(m, joints=tuple(replace(x, name=x.name + "_") if x is j else x for x in m.joints))
+    other = decompose(renamed)          # another structure: decomposed anew
+    assert other == _decompose(renamed, True) and other.steps != first.steps
