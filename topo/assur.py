@@ -425,29 +425,33 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
     plans of the last 16 mechanisms are kept, by identity (a mechanism and
     its plan are frozen, and the rigidity test's generic geometry is seeded): a page
     that draws, solves and checks one design decomposes it once.  A plan depends on
-    the structure alone (links, joints' kinds and links, drivers, frame; no
-    coordinate), so a mechanism of the same structure as one of the last 16 (a point
-    moved: the page's drag) gets that plan with its own mechanism.
+    no coordinate, so a mechanism that differs from one of the last 16 in its
+    coordinates alone (a point moved: the page's drag) gets that plan with its own
+    mechanism.
     """
     return _DECOMPOSED.get(mechanism, lambda: _by_structure(mechanism, check_rigidity), check_rigidity)
 
 
 #: the plans of the last 16 mechanisms decomposed (by identity and check_rigidity)
 _DECOMPOSED = Recent(16)
-#: the plans of the last 16 structures decomposed (:func:`_structure`, check_rigidity)
+#: the plans of the last 16 mechanisms decomposed, by their coordinate-free form (:func:`_structure`)
 _STRUCTURES: dict = {}
 
 
 def _structure(m: Mechanism) -> tuple:
-    """What a plan depends on: the frame, the links, each joint's kind and links, and the
-    drivers' joints (in order)."""
-    return (m.frame, m.link_names, tuple((j.name, j.kind, tuple(j.links)) for j in m.joints),
-            tuple(d.joint for d in m.drivers))
+    """What a plan may depend on: the mechanism without its joints' and points'
+    coordinates and guide directions, and the group-kind rules registered so far."""
+    bare = replace(m, joints=tuple(replace(j, at=None, axis=None) for j in m.joints),
+                   points=tuple(replace(p, at=None) for p in m.points))
+    return bare, tuple(_KIND_RULES)
 
 
 def _by_structure(m: Mechanism, check_rigidity: bool) -> AssurPlan:
     key = (_structure(m), check_rigidity)
-    plan = _STRUCTURES.get(key)
+    try:
+        plan = _STRUCTURES.get(key)
+    except TypeError:                        # a field that cannot be hashed: no reuse
+        return _decompose(m, check_rigidity)
     if plan is None:
         plan = _decompose(m, check_rigidity)
         if len(_STRUCTURES) >= 16:
