@@ -14,7 +14,7 @@ import numpy as np
 
 from .rigid import move_point, rotate, transport
 
-__all__ = ["Poses", "PoseRates", "unit", "normal", "columns", "angle_of", "known_on"]
+__all__ = ["Poses", "PoseRates", "rates_of", "unit", "normal", "columns", "angle_of", "known_on"]
 
 
 def angle_of(v):
@@ -318,6 +318,13 @@ def _key(rx, ry):
     return (rx, ry) if isinstance(rx, float) else (rx.tobytes(), ry.tobytes())
 
 
+def rates_of(D, k):
+    """Link (or links) ``k``'s point rates and angular rates ``(D[:, k, :2], D[:, k, 2])``
+    of the pose rates ``D`` (N, n_links, 3); ``(None, None)`` when ``D`` is None (the
+    accelerations of a velocities-only solve)."""
+    return (None, None) if D is None else (D[:, k, :2], D[:, k, 2])
+
+
 class PoseRates:
     """Velocities/accelerations of material points from the pose arrays Z, Zd, Zdd
     (``Zdd`` None: velocities only, every acceleration returned is None)."""
@@ -329,13 +336,12 @@ class PoseRates:
     def point(self, link: str, r):
         """Position, velocity, acceleration of ``link``'s material point at reference ``r``."""
         k = self.idx[link]
-        acc = (None, None) if self.Zdd is None else (self.Zdd[:, k, :2], self.Zdd[:, k, 2])
         return move_point(self.Z[:, k, :2], self.Z[:, k, 2], np.asarray(r, float) - self.sp.origins[k],
-                          self.Zd[:, k, :2], self.Zd[:, k, 2], *acc)
+                          *rates_of(self.Zd, k), *rates_of(self.Zdd, k))
 
     def direction(self, link: str, v):
         k = self.idx[link]
-        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], None if self.Zdd is None else self.Zdd[:, k, 2]
+        return rotate(v, self.Z[:, k, 2]), self.Zd[:, k, 2], rates_of(self.Zdd, k)[1]
 
     def set(self, link: str, P, vP, aP, w, e) -> None:
         """Rates of ``link`` from those of its point at P and its ω, ε."""

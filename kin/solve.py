@@ -52,7 +52,7 @@ from .groups.registry import closed_form_step, newton_step, singular_hint
 from .groups.step import SINGULAR
 from .memo import cached, memo_of
 from .motion import DriverMotion
-from .poses import PoseRates, Poses
+from .poses import PoseRates, Poses, rates_of
 from .result import MESSAGES, Status
 from .rigid import transport
 from .state import KinematicState
@@ -1120,11 +1120,10 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
     pos = _points(sp, G, "joints", None if select is None else select[0]) \
         if direct is None else direct[:, :nj]
     vel = acc = om = ep = None
-    aa = (lambda h: (None, None)) if Zdd is None else (lambda h: (Zdd[:, h, :2], Zdd[:, h, 2]))  # noqa: E731
     if Zd is not None:
         host = np.asarray(sp.joint_host)
-        a0, e0 = aa(host)
-        vel, acc = transport(pos - Z[:, host, :2], Zd[:, host, :2], a0, Zd[:, host, 2], e0)
+        (v0, w0), (a0, e0) = rates_of(Zd, host), rates_of(Zdd, host)
+        vel, acc = transport(pos - Z[:, host, :2], v0, a0, w0, e0)
         om, ep = Zd[:, :, 2].copy(), None if Zdd is None else Zdd[:, :, 2].copy()
     ppos = pvel = pacc = None
     if m.points:
@@ -1132,8 +1131,8 @@ def _state(sp: SolvePlan, X, G: "Poses", Z, Zd, Zdd, status, rates_in, notes, co
         ppos = _points(sp, G, "points", None if select is None else select[1]) \
             if direct is None else direct[:, nj:]
         if Zd is not None:
-            a0, e0 = aa(ph)
-            pvel, pacc = transport(ppos - Z[:, ph, :2], Zd[:, ph, :2], a0, Zd[:, ph, 2], e0)
+            (v0, w0), (a0, e0) = rates_of(Zd, ph), rates_of(Zdd, ph)
+            pvel, pacc = transport(ppos - Z[:, ph, :2], v0, a0, w0, e0)
     return KinematicState(m, X, pos, Z[:, :, 2], status, vel, acc, om, ep,
                           rates_in, point_names=tuple(p.name for p in m.points),
                           point_positions=ppos, point_velocities=pvel, point_accelerations=pacc,

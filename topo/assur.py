@@ -60,7 +60,7 @@ from .errors import DecompositionError, MobilityError, explain
 from .graphs import n_pairs, pin_pairs
 from .mobility import actual_mobility
 from .model import JointKind, Mechanism
-from .recent import Recent
+from .recent import Kept, Recent
 
 __all__ = ["DriverStep", "AssurGroup", "AssurPlan", "decompose", "DYAD_KINDS", "GroupKind",
            "DyadLayout", "TriadLayout", "Class4Layout", "ActuatorLayout", "add_kind_rule", "remove_kind_rule"]
@@ -435,7 +435,7 @@ def decompose(mechanism: Mechanism, *, check_rigidity: bool = True) -> AssurPlan
 #: the plans of the last 16 mechanisms decomposed (by identity and check_rigidity)
 _DECOMPOSED = Recent(16)
 #: the plans of the last 16 mechanisms decomposed, by their coordinate-free form (:func:`_structure`)
-_STRUCTURES: dict = {}
+_STRUCTURES = Kept(16)
 
 
 def _structure(m: Mechanism) -> tuple:
@@ -447,16 +447,10 @@ def _structure(m: Mechanism) -> tuple:
 
 
 def _by_structure(m: Mechanism, check_rigidity: bool) -> AssurPlan:
-    key = (_structure(m), check_rigidity)
     try:
-        plan = _STRUCTURES.get(key)
+        plan = _STRUCTURES.get((_structure(m), check_rigidity), lambda: _decompose(m, check_rigidity))
     except TypeError:                        # a field that cannot be hashed: no reuse
         return _decompose(m, check_rigidity)
-    if plan is None:
-        plan = _decompose(m, check_rigidity)
-        if len(_STRUCTURES) >= 16:
-            del _STRUCTURES[next(iter(_STRUCTURES))]
-        _STRUCTURES[key] = plan
     return plan if plan.mechanism is m else replace(plan, mechanism=m)
 
 

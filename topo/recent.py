@@ -12,18 +12,42 @@ lives; the oldest entry goes first once ``kept`` are held.
 >>> recent, a = Recent(2), Frozen()
 >>> recent.get(a, lambda: 42), recent.get(a, lambda: 0)
 (42, 42)
+
+:class:`Kept` keeps values by an equal key instead (a design's coordinate-free form):
+
+>>> kept = Kept(2)
+>>> kept.get(("crank", 1), lambda: 42), kept.get(("crank", 1), lambda: 0)
+(42, 42)
 """
 from __future__ import annotations
 
-__all__ = ["Recent"]
+__all__ = ["Recent", "Kept"]
 
 
-class Recent:
-    """The values made for the last ``kept`` objects, by identity (and an optional key)."""
+class Kept:
+    """The values made for the last ``kept`` keys, by value (equal keys share one value;
+    a key must be hashable)."""
 
     def __init__(self, kept: int):
         self.kept = int(kept)
         self._items: dict = {}
+
+    def get(self, key, make):
+        """The value kept for ``key``, else ``make()``, kept (the oldest goes first)."""
+        hit = self._items.get(key)
+        if hit is None:
+            hit = self._keep(key, make())
+        return hit
+
+    def _keep(self, key, value):
+        if len(self._items) >= self.kept:
+            del self._items[next(iter(self._items))]
+        self._items[key] = value
+        return value
+
+
+class Recent(Kept):
+    """The values made for the last ``kept`` objects, by identity (and an optional key)."""
 
     def get(self, obj, make, *key):
         """The value kept for ``obj`` (and ``key``), else ``make()``, kept."""
@@ -31,8 +55,4 @@ class Recent:
         hit = self._items.get(k)
         if hit is not None and hit[0] is obj:
             return hit[1]
-        value = make()
-        if len(self._items) >= self.kept:
-            del self._items[next(iter(self._items))]
-        self._items[k] = (obj, value)       # holds obj: its id stays unique while kept
-        return value
+        return self._keep(k, (obj, make()))[1]     # holds obj: its id stays unique while kept

@@ -97,13 +97,12 @@ def _constant(V) -> np.ndarray:
     return ~ok.any(axis=0) | (hi - lo <= FLAT * size)
 
 
-def _candidates(seg, V, sign):
-    """(lo, hi, col) brackets of interior grid minima of ``sign * V`` (none in a column
-    constant to rounding, :func:`_constant`)."""
+def _candidates(seg, V, sign, live):
+    """(lo, hi, col) brackets of interior grid minima of ``sign * V`` in the columns
+    ``live`` (not those constant to rounding, :func:`_constant`)."""
     W = sign * V
     a, b, c = W[:-2], W[1:-1], W[2:]
-    hit = np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & (b <= a) & (b <= c) & ((b < a) | (b < c))
-    hit &= ~_constant(V)
+    hit = np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & (b <= a) & (b <= c) & ((b < a) | (b < c)) & live
     i, col = np.nonzero(hit)
     return seg.x[i], seg.x[i + 2], col
 
@@ -152,8 +151,9 @@ def extremes(motion: Motion, Q, derivatives: bool = False, events=(), beside=_BE
         ncol = V.shape[1]
         if ncol == 0:
             continue
-        lo1, hi1, c1 = _candidates(seg, V, 1.0)
-        lo2, hi2, c2 = _candidates(seg, V, -1.0)
+        live = ~_constant(V)
+        lo1, hi1, c1 = _candidates(seg, V, 1.0, live)
+        lo2, hi2, c2 = _candidates(seg, V, -1.0, live)
         col = np.concatenate([c1, c2])
         sign = np.concatenate([np.ones(c1.size), -np.ones(c2.size)])
         sh = (-1,) + (1,)

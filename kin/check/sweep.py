@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -209,7 +210,7 @@ class Side:
         rows = np.arange(lo.size)
         tol = self.xtol if xtol is None else xtol
         M = self.samples
-        s_lo = back = None          # sign at lo; a window's fallback bracket (lo, hi), or None
+        s_lo = back = None          # sign at lo; the last model step's window (_Window), or None
         while np.max(np.abs(hi - lo)) > tol:
             if np.all(np.abs(hi - lo) <= 4 * np.spacing(np.maximum(np.abs(lo), np.abs(hi)))):
                 break                            # as narrow as the floating point allows
@@ -224,18 +225,18 @@ class Side:
             lo = new_lo
             miss = np.zeros(lo.size, bool)
             if back is not None:                 # a window without its sign change: zoom on
-                miss = back[2] & ((np.sign(v0) != s_lo) | same.all(axis=1))
-                lo, hi = np.where(miss, back[0], lo), np.where(miss, back[1], hi)
+                miss = back.replaced & ((np.sign(v0) != s_lo) | same.all(axis=1))
+                lo, hi = back.fallback(miss, lo, hi)
             back = self._secant(lo, hi, x, v, first, tol, ~miss) if smooth else None
             if back is not None:
-                lo, hi = back[3], back[4]
+                lo, hi = back.lo, back.hi
         return lo, hi
 
     def _secant(self, lo, hi, x, v, first, tol, fresh):
         """The brackets (``fresh``: just zoomed, both ends samples ``x`` with finite
         values ``v`` of opposite sign) whose samples were :data:`FINISH` × ``tol``
-        apart, replaced by the window ± ``tol`` around their secant root: ``(lo, hi,
-        replaced, window lo, window hi)``, or None."""
+        apart, replaced by the window ± ``tol`` around their secant root (a
+        :class:`_Window`), or None."""
         M = self.samples
         rows = np.arange(lo.size)
         h = (x[:, -1] - x[:, 0]) / (M - 1)
@@ -244,14 +245,13 @@ class Side:
         f = [v[rows, j + d] for d in range(4)]
         with np.errstate(all="ignore"):
             d = [f[k + 1] - f[k] for k in range(3)]
-            straight = (np.abs(d[0] - d[1]) <= MODEL_FIT * np.abs(d[1])) & (np.abs(d[2] - d[1]) <= MODEL_FIT * np.abs(d[1]))
+            straight = _fits(d[0], d[1]) & _fits(d[2], d[1])
             can = fresh & (np.abs(hi - lo) > tol) & (np.abs(h) <= FINISH * tol) & (first > 0) & (first < M) \
                 & np.all(np.isfinite(f), axis=0) & (f0 * f1 < 0) & straight
             if not can.any():
                 return None
             r = lo - f0 * (hi - lo) / (f1 - f0)
-        w_lo, w_hi = _window(r, lo, hi, tol)
-        return lo, hi, can, np.where(can, w_lo, lo), np.where(can, w_hi, hi)
+        return _Window.around(r, lo, hi, tol, can)
 
     def golden(self, a, b, value, derivatives: bool = False):
         """Minimum of ``value`` in each bracket ``[a_i, b_i]`` (zoom search).
@@ -289,11 +289,11 @@ class Side:
             if back is not None:              # a window whose smallest sample is at its edge: zoom on
                 vmin = v[rows, i]
                 flat = np.all(v - vmin[:, None] <= FLAT_ROUNDING * np.maximum(np.abs(vmin), 1.0)[:, None], axis=1)
-                miss = back[2] & ((i == 0) | (i == M - 1)) & ~flat
-                a, b = np.where(miss, back[0], a), np.where(miss, back[1], b)
+                miss = back.replaced & ((i == 0) | (i == M - 1)) & ~flat
+                a, b = back.fallback(miss, a, b)
             back = self._vertex(a, b, x, v, i, ~miss)
             if back is not None:
-                a, b = back[3], back[4]
+                a, b = back.lo, back.hi
         return 0.5 * (a + b)
 
     def _vertex(self, a, b, x, v, i, fresh):
@@ -302,35 +302,31 @@ class Side:
         vertex of the parabola through samples i − 1, i, i + 1 where the five samples
         around i lie on one (:data:`FINISH`), or the corner of two lines through three
         samples on each side of i where they lie on two (a kink: |g| where g crosses
-        zero, an angle folded at 90°; :data:`FINISH_KINK`): ``(a, b, replaced, window a,
-        window b)``, or None."""
+        zero, an angle folded at 90°; :data:`FINISH_KINK`): a :class:`_Window`, or None."""
         M = self.samples
         rows = np.arange(a.size)
         h = (x[:, -1] - x[:, 0]) / (M - 1)
-        at = lambda d: v[rows, np.clip(i + d, 0, M - 1)]       # noqa: E731
-        f = {d: at(d) for d in range(-3, 4)}
-        fit = lambda p, q: np.abs(p - q) <= MODEL_FIT * np.abs(q)    # noqa: E731
+        f = {d: v[rows, np.clip(i + d, 0, M - 1)] for d in range(-3, 4)}
         with np.errstate(all="ignore"):
-            dd = [f[d - 1] - 2.0 * f[d] + f[d + 1] for d in (-1, 0, 1)]
+            den = f[-1] - 2.0 * f[0] + f[1]            # the second difference at i
             j = np.clip(i - 2, 0, M - 5)              # five samples around the smallest
             d5 = [v[rows, j + k - 1] - 2.0 * v[rows, j + k] + v[rows, j + k + 1] for k in (1, 2, 3)]
-            arc = (i > 0) & (i < M - 1) & (dd[1] > 0) & fit(d5[0], d5[1]) & fit(d5[2], d5[1]) \
+            arc = (i > 0) & (i < M - 1) & (den > 0) & _fits(d5[0], d5[1]) & _fits(d5[2], d5[1]) \
                 & (np.abs(h) <= FINISH * self.xtol)
             left, right = f[-1] - f[-2], f[2] - f[1]         # slopes × h on either side
-            kink = (i > 2) & (i < M - 3) & (left < 0) & (right > 0) & fit(f[-2] - f[-3], left) \
-                & fit(f[3] - f[2], right) & (np.abs(h) <= FINISH_KINK * self.xtol) & ~arc
+            kink = (i > 2) & (i < M - 3) & (left < 0) & (right > 0) & _fits(f[-2] - f[-3], left) \
+                & _fits(f[3] - f[2], right) & (np.abs(h) <= FINISH_KINK * self.xtol) & ~arc
             ok = fresh & (np.abs(b - a) > self.xtol) & np.all(np.isfinite(list(f.values())), axis=0)
             arc, kink = arc & ok, kink & ok
             if not (arc.any() or kink.any()):
                 return None
             xi = x[rows, i]
-            xv = xi - h * (f[1] - f[-1]) / (2.0 * dd[1])
+            xv = xi - h * (f[1] - f[-1]) / (2.0 * den)
             # the lines f[-1] + left·t and f[1] + right·(t − 2), t in samples from i − 1
             xk = xi + h * ((f[1] - f[-1] - 2.0 * right) / (left - right) - 1.0)
             c = np.where(arc, xv, xk)
             can = (arc | kink) & np.isfinite(c)
-        w_a, w_b = _window(c, a, b, self.xtol)
-        return a, b, can, np.where(can, w_a, a), np.where(can, w_b, b)
+        return _Window.around(c, a, b, self.xtol, can)
 
     def _each(self, refine, lo, hi, value, derivatives, **options) -> list:
         """``refine`` (:meth:`bisect` or :meth:`golden`) on each bracket alone, in turn.
@@ -349,9 +345,33 @@ class Side:
         return out
 
 
-def _window(c, lo, hi, half):
-    """``[c − half, c + half]`` within the bracket ``(lo, hi)``, in its orientation."""
-    a, b = np.minimum(lo, hi), np.maximum(lo, hi)
-    w_lo, w_hi = np.clip(c - half, a, b), np.clip(c + half, a, b)
-    flip = hi < lo
-    return np.where(flip, w_hi, w_lo), np.where(flip, w_lo, w_hi)
+
+def _fits(p, q) -> np.ndarray:
+    """Whether the samples' differences ``p`` agree with the model's ``q`` (:data:`MODEL_FIT`)."""
+    return np.abs(p - q) <= MODEL_FIT * np.abs(q)
+
+
+class _Window(NamedTuple):
+    """The brackets a zoom's model step replaced (``replaced``; the others as they were)
+    by a window around its root or extreme: the new brackets ``(lo, hi)`` and, to fall
+    back to, the ones before (``before_lo``, ``before_hi``)."""
+
+    before_lo: np.ndarray
+    before_hi: np.ndarray
+    replaced: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @classmethod
+    def around(cls, c, lo, hi, half, replaced) -> "_Window":
+        """``[c − half, c + half]`` within each bracket ``(lo, hi)``, in its orientation,
+        where ``replaced``."""
+        a, b = np.minimum(lo, hi), np.maximum(lo, hi)
+        w_lo, w_hi = np.clip(c - half, a, b), np.clip(c + half, a, b)
+        flip = hi < lo
+        w_lo, w_hi = np.where(flip, w_hi, w_lo), np.where(flip, w_lo, w_hi)
+        return cls(lo, hi, replaced, np.where(replaced, w_lo, lo), np.where(replaced, w_hi, hi))
+
+    def fallback(self, miss, lo, hi):
+        """``(lo, hi)`` with the brackets ``miss`` back to those before the window."""
+        return np.where(miss, self.before_lo, lo), np.where(miss, self.before_hi, hi)
