@@ -83,7 +83,8 @@ class Poses:
     def __init__(self, sp, M, store=None):
         self.shape = (M,) if isinstance(M, int) else tuple(int(v) for v in M)
         self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else int(np.prod(self.shape))
-        self.reasons = len(self.shape) == 1          # per-position failure texts (one design)
+        self.reasons = len(self.shape) == 1          # one design (per-position failure texts)
+        self.explain = self.reasons                  # the failures' texts are written
         nl = self.m.n_links
         self.idx = {x: i for i, x in enumerate(self.m.link_names)}
         self.T = np.empty((nl, 3, *self.shape)) if store is None else store
@@ -123,6 +124,7 @@ class Poses:
         out = object.__new__(Poses)
         out.sp, out.m, out.M, out.idx, out.frame_k, out.org = self.sp, self.m, len(rows), self.idx, self.frame_k, self.org
         out.shape, out.reasons, out.pending, out.derived = (len(rows),), self.reasons, set(), set(self.derived)
+        out.explain = self.explain
         out.T = self.T[:, :, rows]
         out.x, out.y, out.th = ([None if a is None else out.T[k, i] for k, a in enumerate(getattr(self, name))]
                                 for i, name in enumerate(("x", "y", "th")))

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -76,6 +77,11 @@ class StepPlan:
     label: str
     closed: object = None             # its closed-form step (kin.groups.step protocol), if any
     newton: object = None             # Newton with continuation: any step
+
+    @cached_property
+    def known(self) -> np.ndarray:
+        """The links its equations involve that an earlier step solves (its inputs)."""
+        return np.setdiff1d(self.system.involved, self.unknown)
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,15 +223,17 @@ class _Run:
     direct: np.ndarray | None = None  # (M, n_joints + n_points, 2) from the kernel, valid while every code is 0
 
 
-def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
+def _run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False,
+         explain: bool = True) -> _Run:
     """Solve the steps ``steps`` at the inputs ``X`` (M, n_drivers), the closed-form dyads
     on the branch ``reference sign × signs[k]`` (default 1): by the compiled kernel when
-    it covers them (:mod:`kin.kernel`), else by the NumPy path (:func:`_numpy_run`)."""
+    it covers them (:mod:`kin.kernel`), else by the NumPy path (:func:`_numpy_run`).
+    ``explain=False``: the failures' texts are not written (a walk reads its probes alone)."""
     if kernels and not probe:
         run = _compiled_run(sp, X, steps, signs, kernels)
         if run is not None:
             return run
-    return _numpy_run(sp, X, steps, signs, kernels, probe)
+    return _numpy_run(sp, X, steps, signs, kernels, probe, explain)
 
 
 def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> _Run | None:
@@ -254,17 +262,19 @@ def _compiled_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels) -> 
     return _Run(G, fail, {int(bad[i]): text for i, text in sub.reason.items()}, {})
 
 
-def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False) -> _Run:
+def _numpy_run(sp: SolvePlan, X: np.ndarray, steps, signs: dict, kernels, probe: bool = False,
+               explain: bool = True) -> _Run:
     """:func:`_run` by the NumPy kernels of the steps (each vectorised over the batch):
     the compiled kernel's oracle, and the solver of every step it does not cover."""
     M = X.shape[0]
     G = Poses(sp, M)
+    G.explain = G.explain and explain
     code = np.zeros(M, np.int8)
     reason: dict[int, str] = {}
     probes = {}
     for k in steps:
         st = sp.steps[k]
-        up = G.finite(np.setdiff1d(st.system.involved, st.unknown)) if probe else None
+        up = G.finite(st.known) if probe else None
         okk, why, pr = _step(st, kernels).positions(G, X, signs.get(k, 1.0), probe)
         if probe:
             probes[k] = replace(pr, up=up)
@@ -332,7 +342,8 @@ def _walk_on(sp: SolvePlan, kernels, P_scaled: np.ndarray) -> Walk:
     groups = [k for k in steps if sp.steps[k].solver != "driver"]
 
     def evaluate(Xs, signs):
-        return _with_curvatures(sp, _run(sp, Xs * scale, steps, signs, kernels, probe=True), kernels, scale)
+        return _with_curvatures(sp, _run(sp, Xs * scale, steps, signs, kernels, probe=True, explain=False),
+                                kernels, scale)
     return walk(evaluate, P_scaled, groups)
 
 

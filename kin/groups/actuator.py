@@ -124,7 +124,7 @@ class ActuatorStep(GroupStep):
         cx, cy = G.point_xy(self.k3, self.C)
         bx, by, ok, det, _ = rrr_xy(ax, ay, cx, cy, L, lc, self.sign * factor)
         why, pr = {}, None
-        if probe or (G.reasons and not ok.all()):
+        if probe or (G.explain and not ok.all()):
             pr = self._probe(G, (ax, ay), (cx, cy), (bx, by), L, ok, why, probe)
         # the actuator's halves turn by the rotation taking d(s) to B − A (|d| = |B − A| = L)
         rx, ry = bx - ax, by - ay
@@ -137,7 +137,7 @@ class ActuatorStep(GroupStep):
         G.place_dir_xy(self.k2, cx, cy, self.C, bx - cx, by - cy, self.dir2)
         G.keep_point(self.kf, self.B, bx, by)
         G.keep_point(self.k2, self.B, bx, by)
-        return dyad_outcome(ok, why, det, L * lc, False, pr, probe, G.reasons)
+        return dyad_outcome(ok, why, det, L * lc, False, pr, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`actuator_place`."""
@@ -154,7 +154,7 @@ class ActuatorStep(GroupStep):
         A, C, B = (columns(p, q, G.M) for p, q in (a, c, b))
         AC = C - A
         dd = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
-        for n in np.flatnonzero(~ok):
+        for n in (np.flatnonzero(~ok) if G.explain else ()):
             if np.isfinite(dd[n]):
                 rel = f"> {L[n]:.6g} + {lc:.6g}" if dd[n] > L[n] + lc else f"< |{L[n]:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH, f"no assembly: |{lay.outer1}{lay.outer2}| = {dd[n]:.6g} "

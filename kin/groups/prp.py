@@ -204,7 +204,7 @@ class PRPStep(GroupStep):
                          G.point(self.k2, self.P2), G.direction(self.k2, self.u2), self.h2)
         G.place_like(lay.link1, r.B, self.B, self.k1)
         G.place_like(lay.link2, r.B, self.B, self.k2)
-        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`prp_place`."""

@@ -207,7 +207,7 @@ class RPPStep(GroupStep):
         r = rpp_position(A, G.point(self.kq, self.Q), G.direction(self.kq, self.u), self.alpha, self.h)
         G.place_like(lay.link2, r.Q, self.Q, self.kq)
         G.place_like(lay.link1, A, self.A, self.kq)
-        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.reasons)
+        return dyad_outcome(r.ok, {}, r.det, 1.0, True, None, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rpp_place`."""

@@ -239,7 +239,7 @@ class RPRStep(GroupStep):
             d = np.hypot(rel[:, 0], rel[:, 1])
             pr = Probe(ok.copy(), 2.0 * np.abs(rs.s), np.stack([fs, Xp, Yp], axis=1), margin=d * d - self.h ** 2,
                        lip=rel[:, None], tol=margin_tol(Xp, Yp, abs(self.h), squared=True), lip_scale=d)
-        if G.reasons and not ok.all():
+        if G.explain and not ok.all():
             dist = np.hypot(*(Yp - Xp).T)
             for n in np.flatnonzero(~ok):
                 if np.isfinite(dist[n]):
@@ -247,7 +247,7 @@ class RPRStep(GroupStep):
                                    f"offset {abs(self.h):.6g} (out of reach)")
         G.place_dir(self.guide, Xp, self.X, u, self.u)
         G.place_like(self.block, Yp, self.Y, self.guide)
-        return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe, G.reasons)
+        return dyad_outcome(ok, why, rs.det, self.size, False, pr, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rpr_place`."""

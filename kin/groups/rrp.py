@@ -260,7 +260,7 @@ class RRPStep(GroupStep):
             margin = self.la - np.abs(loc[:, 1] - self.h)
             pr = Probe(ok.copy(), gap, np.stack([B, A, P], axis=1), margin=margin, lip=loc[:, None],
                        tol=margin_tol(A, P, self.la + abs(self.h)))
-        if G.reasons and not ok.all():
+        if G.explain and not ok.all():
             dist = np.abs(np.sum((A - P) * normal(u), axis=-1) - self.h)
             for n in np.flatnonzero(~ok):
                 if np.isfinite(dist[n]):
@@ -268,7 +268,7 @@ class RRPStep(GroupStep):
                                    f"{lay.inner}, longer than {lay.link1} ({self.la:.6g}) (out of reach)")
         G.place_dir(lay.link1, A, self.A, B - A, self.B - self.A)
         G.place_like(lay.link2, B, self.B, self.kp)
-        return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe, G.reasons)
+        return dyad_outcome(ok, why, rs.det, self.la, False, pr, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rrp_place`."""

@@ -332,7 +332,7 @@ class RRRStep(GroupStep):
         cx, cy = G.point_xy(self.k2, self.C)
         bx, by, ok, det, exact = rrr_xy(ax, ay, cx, cy, la, lc, self.sign * factor)
         why, pr = {}, None
-        if probe or (G.reasons and not ok.all()):
+        if probe or (G.explain and not ok.all()):
             A, C, B = (columns(u, v, G.M) for u, v in ((ax, ay), (cx, cy), (bx, by)))
             AC = C - A
             d = np.sqrt(AC[:, 0] * AC[:, 0] + AC[:, 1] * AC[:, 1])
@@ -343,7 +343,7 @@ class RRRStep(GroupStep):
             margin = np.minimum((la + lc) ** 2 - d2, d2 - (la - lc) ** 2)
             pr = Probe(ok.copy(), gap, np.stack([B, A, C], axis=1), margin=margin, lip=AC[:, None],
                        tol=margin_tol(A, C, la + lc, squared=True), lip_scale=d)
-        for n in (np.flatnonzero(~ok) if G.reasons else ()):
+        for n in (np.flatnonzero(~ok) if G.explain else ()):
             if np.isfinite(d[n]):
                 rel = f"> {la:.6g} + {lc:.6g}" if d[n] > la + lc else f"< |{la:.6g} − {lc:.6g}|"
                 why[int(n)] = (Status.OUT_OF_REACH,
@@ -358,7 +358,7 @@ class RRRStep(GroupStep):
             G.place_k(self.l2, *at2, *_rotation(bx - cx, by - cy, self.rot2, self.dir2, exact))
         G.keep_point(self.l1, self.B, bx, by)
         G.keep_point(self.l2, self.B, bx, by)
-        return dyad_outcome(ok, why, det, la * lc, False, pr, probe, G.reasons)
+        return dyad_outcome(ok, why, det, la * lc, False, pr, probe, G.explain)
 
     def lower(self, origins) -> Lowered | None:
         """Flat numbers of :func:`rrr_place`."""
