@@ -50,8 +50,12 @@ KAPPA = 4.0
 CURV_SAFETY = 2.0
 #: an uncertified interval is split into this many parts a round
 REFINE_SPLIT = 4
-#: a bracket of a limit is split into this many parts a round (a zoom search)
+#: a bracket of a limit is split into this many parts a round (a zoom search) ...
 LIMIT_ZOOM = 128
+#: ... and sampled at the secant root of its reach margin ± the bracket × 10⁻ᵏ, k = 1…
+#: LIMIT_DIGITS: a margin crosses zero linearly at a limit, so the bracket that holds
+#: the root shrinks to about the secant's error (quadratic in the bracket) a round
+LIMIT_DIGITS = 12
 
 
 @dataclass(frozen=True)
@@ -203,26 +207,51 @@ def _vertex(evaluate, P, s_nodes, flips, g, s_star: float, h: float) -> float:
     return s_star + e if abs(e) < h else s_star
 
 
-def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, n: int = 64, rounds: int = 16):
+def _toward_root(a: float, b: float, fa: float, fb: float, n: int) -> np.ndarray:
+    """Sample points of a limit's bracket ``[a, b]`` (sorted, inside it): ``n − 1``
+    equispaced, and, when the margin less its rounding is ``fa > 0`` at ``a`` and
+    ``fb ≤ 0`` at ``b`` (finite), the secant root ``r`` and ``r ± (b − a) × 10⁻ᵏ``
+    (k = 1 … :data:`LIMIT_DIGITS`).  The equispaced points alone are a zoom search
+    (the bracket shrinks ``n``-fold); the cluster finds a smooth root's neighbourhood."""
+    w = b - a
+    q = a + w * np.arange(1, n) / n
+    if np.isfinite(fa) and np.isfinite(fb) and fa > 0.0 >= fb and w > 0.0:
+        r = a + w * fa / (fa - fb)
+        off = w * 10.0 ** -np.arange(1, LIMIT_DIGITS + 1)
+        q = np.concatenate([q, [r], r - off, r + off])
+    return np.unique(q[(q > a) & (q < b)])
+
+
+def _excess(pr: Probe) -> np.ndarray:
+    """The reach margin less its rounding (positive: assembled with its branches apart)."""
+    return pr.margin - (0.0 if pr.tol is None else pr.tol)
+
+
+def _limit_root(evaluate, P, s_nodes, flips, g, a: float, b: float, ends=(np.nan, np.nan),
+                n: int = LIMIT_ZOOM, rounds: int = 16):
     """The limit of group ``g`` in ``[a, b]`` (assembled at ``a``, not at ``b``) to the
-    precision of its reach margin: a zoom search on the sign of the margin less its
-    rounding (``a`` stays where the margin exceeds its rounding, so that the group
-    assembles there whatever the rounding of the other inputs: the end of a usable
-    range), ``n`` points per evaluation (the bracket shrinks ``n + 1``-fold a round),
-    down to rounding."""
+    precision of its reach margin: a search on the sign of the margin less its rounding
+    (``a`` stays where the margin exceeds its rounding, so that the group assembles
+    there whatever the rounding of the other inputs: the end of a usable range) at the
+    points of :func:`_toward_root` (``ends``: that excess at ``a`` and ``b``, when
+    known), down to rounding."""
+    fa, fb = ends
     for _ in range(rounds):
         if b - a <= 4.0 * np.finfo(float).eps * max(abs(a), abs(b), 1.0):
             break
-        q = a + (b - a) * np.arange(1, n + 1) / (n + 1)
+        q = _toward_root(a, b, fa, fb, n)
+        if q.size == 0:
+            break
         pr = _probe_at(evaluate, P, s_nodes, flips, g, q)
         if pr.margin is None:
             return a, b
-        pos = np.flatnonzero(~(pr.margin > (0.0 if pr.tol is None else pr.tol)))
+        f = _excess(pr)
+        pos = np.flatnonzero(~(f > 0.0))
         if pos.size == 0:
-            a = q[-1]
+            a, fa = q[-1], f[-1]
             continue
         j = int(pos[0])
-        a, b = (q[j - 1] if j > 0 else a), q[j]
+        (a, fa), (b, fb) = ((q[j - 1], f[j - 1]) if j > 0 else (a, fa)), (q[j], f[j])
     return a, b
 
 
@@ -289,6 +318,48 @@ def _crossing(evaluate, P, s_nodes, flips, handled, crossings, pr, s, i, g, delt
     return None
 
 
+def _classify(probes, groups, s, handled, kappa, floor, refine_limits, zoom_tracked):
+    """One round's problems over every group (:func:`_problems`): the first event at the
+    floor ``(interval, group, is_limit)`` or None, the intervals to refine, the limits'
+    brackets to zoom (``at_limit``: the margin's excess at their ends), each group's
+    intervals at the floor with their limit flags, and the first interval with a limit."""
+    width = np.diff(s)
+    event = None
+    refine = np.zeros(len(s) - 1, bool)
+    zoom = np.zeros(len(s) - 1, bool)
+    at_limit, ready, stop = {}, {}, len(s)
+    for g in groups:
+        lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
+        tracked = probes[g].gap is None and probes[g].margin is None
+        if not refine_limits and tracked:
+            continue                     # a tracked group: its own tracker reports failures
+        stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
+        lim_floor = lim & ((width <= floor) | (tracked and probes[g].refined and not zoom_tracked))
+        at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
+        ready[g] = (at_floor, lim[at_floor])
+        if at_floor.size and (event is None or at_floor[0] < event[0]):
+            event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
+        refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
+        zoom_g = lim & (width > floor) & ~lim_floor
+        zoom |= zoom_g
+        if probes[g].margin is not None:
+            f = _excess(probes[g])
+            at_limit.update({i: (f[i], f[i + 1]) for i in np.flatnonzero(zoom_g).tolist() if i not in at_limit})
+    return event, refine, zoom, at_limit, ready, stop
+
+
+def _refined(s, refine, zoom, at_limit) -> np.ndarray:
+    """The samples ``s`` with the intervals ``refine`` split :data:`REFINE_SPLIT`-fold and
+    a limit's brackets (``zoom``) sampled by :func:`_toward_root` (``at_limit``)."""
+    zoom = zoom[: len(s) - 1] & refine[: len(s) - 1]
+    refine = refine[: len(s) - 1]
+    u = np.arange(1, REFINE_SPLIT) / REFINE_SPLIT
+    mid = (s[:-1][refine & ~zoom, None] + np.diff(s)[refine & ~zoom, None] * u).ravel()
+    sub = np.concatenate([_toward_root(s[i], s[i + 1], *at_limit.get(i, (np.nan, np.nan)), LIMIT_ZOOM)
+                          for i in np.flatnonzero(zoom)] or [s[:0]])
+    return np.sort(np.concatenate([s, mid, sub]))
+
+
 def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
          delta: float = DELTA, kappa: float = KAPPA, max_rounds: int = 400,
          refine_limits: bool = True, zoom_tracked: bool = True) -> Walk:
@@ -310,28 +381,16 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
     handled: dict = {g: [] for g in groups}
     crossings = []
     tail = s[:0]                             # samples set aside past a limit (_set_aside)
+    asked = None                             # the samples and flips the probes were solved at
     for rounds in range(1, max_rounds + 1):
-        signs = {g: sign_factor(flips[g], s) for g in groups}
-        probes = evaluate(_at(P, s_nodes, s), signs)
-        width = np.diff(s)
-        event = None                         # (interval, group, is_limit)
-        refine = np.zeros(len(s) - 1, bool)
-        zoom = np.zeros(len(s) - 1, bool)     # a limit's bracket: split in LIMIT_ZOOM
-        ready = {}                           # group -> (intervals at the floor, their limit flags)
-        stop = len(s)                        # the first interval with a limit
-        for g in groups:
-            lim, unc, flat = _problems(probes[g], s, handled[g], kappa)
-            tracked = probes[g].gap is None and probes[g].margin is None
-            if not refine_limits and tracked:
-                continue                     # a tracked group: its own tracker reports failures
-            stop = min([stop, *np.flatnonzero(lim)[:1].tolist()])
-            lim_floor = lim & ((width <= floor) | (tracked and probes[g].refined and not zoom_tracked))
-            at_floor = np.flatnonzero(lim_floor | (unc & ((width <= floor) | flat)))
-            ready[g] = (at_floor, lim[at_floor])
-            if at_floor.size and (event is None or at_floor[0] < event[0]):
-                event = (int(at_floor[0]), g, bool(lim[at_floor[0]]))
-            refine |= (lim | unc) & (width > floor) & ~lim_floor & ~flat
-            zoom |= lim & (width > floor) & ~lim_floor
+        # a round after an event that changed no sign (a crossing kept, a touch at the
+        # path's end) has the same samples and signs: its probes are the last round's
+        now = (s.tobytes(), tuple(tuple(flips[g]) for g in groups))
+        if now != asked:
+            signs = {g: sign_factor(flips[g], s) for g in groups}
+            probes, asked = evaluate(_at(P, s_nodes, s), signs), now
+        event, refine, zoom, at_limit, ready, stop = _classify(probes, groups, s, handled, kappa, floor,
+                                                               refine_limits, zoom_tracked)
         if stop + 2 < len(s):
             tail, s, refine, zoom, event, ready = _set_aside(stop, s, tail, refine, zoom, event, ready)
         # the last group's crossings change no other probe (nor its own reach margin): the
@@ -342,13 +401,7 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             if event[2] and event[0] + 2 < len(s):
                 s = s[: event[0] + 2]         # nothing beyond the first limit matters
         if refine.any():
-            zoom = zoom[: len(s) - 1] & refine[: len(s) - 1]
-            refine = refine[: len(s) - 1]
-            u = np.arange(1, REFINE_SPLIT) / REFINE_SPLIT
-            mid = (s[:-1][refine & ~zoom, None] + np.diff(s)[refine & ~zoom, None] * u).ravel()
-            t = np.arange(1, LIMIT_ZOOM) / LIMIT_ZOOM
-            sub = (s[:-1][zoom, None] + np.diff(s)[zoom, None] * t).ravel()
-            s = np.sort(np.concatenate([s, mid, sub]))
+            s = _refined(s, refine, zoom, at_limit)
             continue
         if event is None:
             if tail.size:                    # the limit is gone: walk on
@@ -361,7 +414,8 @@ def walk(evaluate: Callable, P: np.ndarray, groups, *, floor: float = FLOOR,
             if any(a <= s[i] < b for a, b in handled[g][done:]):
                 continue                     # inside a run resolved this round
             if is_limit:                     # (a tracked group has no margin to zoom on)
-                a, b = (_limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1])
+                a, b = (_limit_root(evaluate, P, s_nodes, flips, g, s[i], s[i + 1],
+                                    tuple(_excess(probes[g])[i:i + 2]))
                         if probes[g].margin is not None else (s[i], s[i + 1]))
                 return Walk(s[: i + 2], _frozen(flips), tuple(crossings), (a, b, g), rounds)
             block = _crossing(evaluate, P, s_nodes, flips, handled, crossings, probes[g], s, i, g, delta)

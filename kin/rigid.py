@@ -22,13 +22,25 @@ def rotate(v, theta):
     """``R(θ) v`` for ``v`` (2,) or (..., 2) and ``θ`` (...)."""
     v = np.asarray(v, float)
     c, s = np.cos(theta), np.sin(theta)
-    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
+    x, y = v[..., 0], v[..., 1]
+    return _pair(c * x - s * y, s * x + c * y)
 
 
 def perp(v):
     """The left normal ``(−v_y, v_x)`` of (..., 2) vectors."""
     v = np.asarray(v)
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+    out = np.empty(v.shape, np.result_type(v, float))
+    np.negative(v[..., 1], out=out[..., 0])
+    out[..., 1] = v[..., 0]
+    return out
+
+
+def _pair(x, y) -> np.ndarray:
+    """``(x, y)`` of equal shapes as one (..., 2) array (``np.stack``'s result, built
+    without its per-call overhead: these run per group and per solve)."""
+    out = np.empty(np.shape(x) + (2,))
+    out[..., 0], out[..., 1] = x, y
+    return out
 
 
 def transport(rho, v0=None, a0=None, omega=None, eps=None):

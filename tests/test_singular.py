@@ -403,6 +403,34 @@ def test_a_dead_zone_below_the_floor_is_a_change_point():
     assert any(abs(math.remainder(x - (math.pi - th0), 2 * math.pi)) < 1e-6 for x, _ in ev.crossings)
 
 
+def test_a_limit_is_bracketed_at_its_margins_secant_in_few_evaluations():
+    """kin.continuation: a limit's bracket is sampled at the secant root of the reach
+    margin as well as 128-fold, so a smooth margin ``(L − s)(1 + c s)`` (c in [−0.9, 3])
+    walked from 0 is bracketed at L to rounding in 7.5 evaluations on average (the
+    128-fold zoom alone, with its last zoom of 64 points a call, took 10.8: this test
+    fails on it), and the bracket holds the root (``a`` short of L by at most the
+    margin's rounding over its slope)."""
+    from multiloop.kin.continuation import Probe, walk
+    rng = np.random.default_rng(1)
+    counts = []
+    for _ in range(40):
+        L, c = rng.uniform(0.05, 0.95), rng.uniform(-0.9, 3.0)
+        calls = []
+
+        def evaluate(X, signs, L=L, c=c, calls=calls):
+            s = X[:, 0]
+            margin = (L - s) * (1.0 + c * s)
+            calls.append(s.size)
+            lip = np.zeros((s.size, 1, 2))
+            lip[:, 0, 0] = (1.0 + 2.0 * abs(c)) * s        # |Δ margin| ≤ |Δ lip| on [0, 1]
+            return {1: Probe(margin > 0, margin=margin, lip=lip, tol=np.full(s.size, 1e-15))}
+        a, b, group = walk(evaluate, np.linspace(0.0, 1.0, 51)[:, None], [1]).block
+        assert group == 1 and a < b
+        assert -1e-15 <= L - a <= 1e-14 and abs(b - L) <= 1e-14
+        counts.append(len(calls))
+    assert np.mean(counts) <= 8.5, counts
+
+
 def test_a_grid_that_touches_a_limit_on_every_row_settles():
     """A multi-driver grid whose values reach an assembly limit exactly (the excavator's
     usable ranges, ends included) touches it once a row: every touch is a crossing of the

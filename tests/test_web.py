@@ -35,7 +35,7 @@ else:
 from multiloop.inputs import load_mechanism  # noqa: E402
 from multiloop.kin.solve import solve  # noqa: E402
 from multiloop.topo.assur import decompose  # noqa: E402
-from tests.common import QUANTITY, start_serve, stop  # noqa: E402
+from tests.common import QUANTITY, start_serve, stderr_of, stop  # noqa: E402
 
 CATALOGUE = Path(__file__).resolve().parents[1] / "catalogue" / "mechanisms"
 
@@ -515,6 +515,37 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     page.keyboard.press("Control+z")
     at_b = _at_joint_js("B", 1e-12)
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
+
+
+def test_drag_on_two_cylinders_is_checked_on_two_cores_as_check_json(page, server):
+    """Drag a joint of excavator_bucket (two cylinders): the page's check of the edited
+    design is ``check``'s document of ``moved(excavator_bucket, joint, new)``, bit for bit,
+    with one cylinder moved by the server's second process (multiloop.web.second_core:
+    the server's log names it)."""
+    from multiloop.kin.check import check
+    from multiloop.web.editing import moved
+    _, _, proc = server
+    _pick(page, "excavator_bucket")
+    page.get_by_text("Mechanism", exact=True).first.click()
+    page.wait_for_selector("#ml-check-json[data-mechanism=excavator_bucket]", state="attached", timeout=120000)
+    original = load_mechanism("excavator_bucket")
+    sx, sy, x0, y0 = page.evaluate(HANDLE_JS, ["bucket_link_pin"])
+    before = len(stderr_of(proc))
+    page.mouse.move(sx, sy)
+    page.mouse.down()
+    for k in range(1, 9):
+        page.mouse.move(sx + k, sy + k)
+    page.mouse.up()
+    edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
+        return r && r.getAttribute('data-mechanism') == 'edited: excavator_bucket' && r.getAttribute('data-positions')
+          && ({DEEP_JS})('#ml-check-status[data-ok]').length > 0; }}"""
+    page.wait_for_function(edited, timeout=120000)
+    _, _, x1, y1 = page.evaluate(HANDLE_JS, ["bucket_link_pin"])
+    assert (x1, y1) != (x0, y0)
+    shown = json.loads(page.locator("#ml-check-json").text_content())
+    assert shown == check(moved(original, "bucket_link_pin", (x1, y1))).as_dict()
+    log = stderr_of(proc)[before:]
+    assert "job check: drivers thumb_cyl_slide moved on the second core" in log, log[-2000:]
 
 
 @contextlib.contextmanager

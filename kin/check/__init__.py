@@ -5,8 +5,8 @@ stable JSON of ``multiloop check --json`` and :func:`format_report` its text for
 """
 from __future__ import annotations
 
-from .core import check, driver_angles
+from .core import check, driver_angles, driver_check
 from .report import CheckReport
 from .text import format_report
 
-__all__ = ["check", "driver_angles", "CheckReport", "format_report"]
+__all__ = ["check", "driver_check", "driver_angles", "CheckReport", "format_report"]

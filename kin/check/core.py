@@ -33,7 +33,7 @@ from .transmission import angle_specs, angle_values, signed_dets_of
 from .verdict import verdict
 from .workspace import workspace as workspace_of
 
-__all__ = ["check", "driver_angles", "watched", "signed_dets"]
+__all__ = ["check", "driver_check", "driver_angles", "watched", "signed_dets"]
 
 
 def watched(m: Mechanism) -> tuple[tuple[str, str, str | None], ...]:
@@ -294,17 +294,43 @@ def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
     DriverAngles
     """
     m = mechanism
-    if not 0 <= k < len(m.drivers):
-        raise InputError(explain("driver index", expected=f"0…{len(m.drivers) - 1}" if m.drivers
-                                 else "a mechanism with a driver", got=repr(k)))
+    _driver_index(m, k)
     plan = check_plan(m)
     _, _, mo = _kept_motion(m, plan, k)
     return DriverAngles(m.drivers[k].joint, mo.rotary, mo.full_rotation, mo.limits,
                         _kept_angles(plan, k, mo, angle_specs(plan.assur)))
 
 
+def _driver_index(m: Mechanism, k: int) -> None:
+    """Refuse ``k`` when it is not the index of one of ``m``'s drivers."""
+    if not 0 <= k < len(m.drivers):
+        raise InputError(explain("driver index", expected=f"0…{len(m.drivers) - 1}" if m.drivers
+                                 else "a mechanism with a driver", got=repr(k)))
+
+
+def driver_check(mechanism: Mechanism, k: int, *, output: str | None = None, positions=None,
+                 cancel=None) -> DriverCheck:
+    """What :func:`check` computes while driver ``k`` moves (the others held at the
+    reference): its motion, limits, branch points, dead centres, angle extremes and
+    velocity ratio, with ``output`` and ``positions`` (that driver's values) as there.
+    A check's drivers are independent of one another, so they may be computed apart
+    (in other processes, on other cores) and given to :func:`check`
+    (``driver_checks=``): the report is the same, bit for bit.
+
+    Raises
+    ------
+    InputError
+        ``k`` is not the index of a driver.
+    """
+    m = mechanism
+    _driver_index(m, k)
+    plan = check_plan(m)
+    return _driver_check(m, plan.assur, plan, k, angle_specs(plan.assur), watched(m), output, positions, cancel)
+
+
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,
-          at=None, positions=None, workspace: str | None = None, cancel=None) -> "CheckReport":
+          at=None, positions=None, workspace: str | None = None, cancel=None,
+          driver_checks=None) -> "CheckReport":
     """Design check of a mechanism over its whole motion (docs/check.md).
 
     Parameters
@@ -331,6 +357,10 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
         Called with no argument before every solve of a driver's motion and once
         after the drivers; it stops the check by raising (its exception propagates),
         e.g. when the user of an interactive caller cancels.
+    driver_checks : tuple of DriverCheck, optional
+        The drivers' checks computed already, one per driver in order
+        (:func:`driver_check` with the same ``output`` and ``positions``, e.g. in
+        other processes): they are used as they are.
 
     Returns
     -------
@@ -351,8 +381,15 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
     if unknown:
         raise ParameterError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))),
                              "positions")
-    dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
-                for k, d in enumerate(m.drivers))
+    if driver_checks is None:
+        dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
+                    for k, d in enumerate(m.drivers))
+    else:
+        dcs = tuple(driver_checks)
+        if [dc.joint for dc in dcs] != [d.joint for d in m.drivers]:
+            raise ParameterError(explain("driver_checks", expected="one per driver, in order: "
+                                         + ", ".join(d.joint for d in m.drivers),
+                                         got=", ".join(dc.joint for dc in dcs) or "none"), "driver_checks")
     if cancel is not None:                  # before the workspace and the last solve
         cancel()
     x0 = np.zeros(len(m.drivers)) if at is None else np.asarray(at, float).reshape(len(m.drivers))

@@ -192,9 +192,9 @@ class ActuatorStep(GroupStep):
         B = R.point(lay.far, self.B)[0]
         g = self._guide(R, input_rates)
         vA1 = vA + g                                  # B − A = R(θ) d(s): the slide moves B
-        w = rrr_rates(A, C, B, vA1, vC).w2
-        aA1 = None if aA is None else aA + 2.0 * w[:, None] * perp(g)         # Coriolis term of the slide
-        r = rrr_rates(A, C, B, vA1, vC, aA1, aC)
+        r = rrr_rates(A, C, B, vA1, vC)
+        if aA is not None:                            # Coriolis term of the slide
+            r = rrr_rates(A, C, B, vA1, vC, aA + 2.0 * r.w2[:, None] * perp(g), aC)
         R.set(lay.near, A, vA, aA, r.w2, r.e2)
         R.set(lay.far, B, r.vB, r.aB, r.w2, r.e2)
         R.set(lay.link2, C, vC, aC, r.w3, r.e3)

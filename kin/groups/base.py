@@ -173,8 +173,10 @@ def xy(a):
 
 
 def stack(x, y):
-    """Stack components into a ``(..., 2)`` array."""
-    return np.stack(np.broadcast_arrays(x, y), axis=-1)
+    """Stack components into a ``(..., 2)`` array (broadcast to one shape)."""
+    out = np.empty(np.broadcast_shapes(np.shape(x), np.shape(y)) + (2,))
+    out[..., 0], out[..., 1] = x, y
+    return out
 
 
 def cramer(c1x, c1y, c2x, c2y, bx, by):

@@ -90,6 +90,36 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
     return out
 
 
+def _drivers(job, m, key):
+    """Set ``job.sweeps``, the sweeps of every driver of ``m`` (shown at once:
+    ``job.notify``), and return, when the second core (:mod:`.second_core`) takes a share
+    of the drivers, the check of every driver (``check``'s ``driver_checks``); else None,
+    and the check moves the drivers itself after the sweeps."""
+    from multiloop.kin.check import driver_check
+
+    from .scene import sweep_driver
+    from .second_core import SECOND_CORE
+    ks, wait = ((), None) if key is not None and key in _SWEEPS else SECOND_CORE.drivers(m, job)
+    dcs = None
+    if wait is None:
+        job.sweeps = _sweeps(m, key, job.poll)
+    else:
+        from .jobs import LOG
+        LOG.info("job %s: drivers %s moved on the second core", job.name, ", ".join(m.drivers[k].joint for k in ks))
+
+        def both(k):
+            return sweep_driver(m, k, cancel=job.poll), driver_check(m, k, cancel=job.poll)
+        done = {k: both(k) for k in range(len(m.drivers)) if k not in ks}
+        done.update(zip(ks, wait() or [both(k) for k in ks]))    # (the child failed: moved here)
+        job.sweeps = tuple(done[k][0] for k in range(len(m.drivers)))
+        dcs = tuple(done[k][1] for k in range(len(m.drivers)))
+        if key is not None:
+            _SWEEPS[key] = job.sweeps
+    job.report(1 / 2)
+    job.notify()
+    return dcs
+
+
 def _motion_and_check(job, m, threshold, key=None):
     """Worker: the sweeps of every driver, then the check (its JSON document; the
     report itself in ``job.report``, for its verdict in the page's units); both
@@ -98,14 +128,17 @@ def _motion_and_check(job, m, threshold, key=None):
     warming = _WARMING.get(key)
     while warming is not None and not warming.wait(0.1):
         job.poll()
-    job.sweeps = _sweeps(m, key, job.poll)
-    job.report(1 / 2)
-    job.notify()
     if key is not None and (key, threshold) in _CHECKS:
+        from .second_core import SECOND_CORE
+        SECOND_CORE.prepare(m)
+        job.sweeps = _sweeps(m, key, job.poll)
+        job.report(1 / 2)
+        job.notify()
         doc, job.report = _CHECKS[key, threshold]
         return doc
     from multiloop.kin.check import check
-    job.report = check(m, min_transmission=threshold, cancel=job.poll)
+    dcs = _drivers(job, m, key)
+    job.report = check(m, min_transmission=threshold, cancel=job.poll, driver_checks=dcs)
     doc = job.report.as_dict()
     if key is not None:
         _CHECKS[key, threshold] = (doc, job.report)
@@ -117,7 +150,8 @@ def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
     from the child process ``child`` (:mod:`.prepare`) when there is one, else here;
     ``ready`` is set once its drawing and motion are there (or failed) and
     ``_WARMING[name]`` once the warm-up ends.  Then, after the first page was shown
-    (``shown``), import what the other mechanisms and the synthesis use."""
+    (``shown``), start the second core (:mod:`.second_core`) and import what the other
+    mechanisms and the synthesis use."""
     try:
         if child is not None:
             from .prepare import results
@@ -137,6 +171,8 @@ def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
         ready.set()                         # a session never waits for a failed warm-up
         _WARMING.pop(name).set()
     shown.wait(timeout=20)
+    from .second_core import SECOND_CORE
+    SECOND_CORE.start()                     # (its own imports meanwhile, in the child)
     from multiloop.kin.check import check  # noqa: F401 - imported for the sessions' next jobs
     from multiloop.topo.assur import decompose  # noqa: F401
 
