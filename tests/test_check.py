@@ -456,8 +456,8 @@ def test_smooth_roots_and_extremes_finish_in_three_solver_calls(monkeypatch):
     m = four_bar(0.2, 1.8, 1.5, 2.0, 0.7)
     dc = check(m).drivers[0]
     assert dict(dc.dead_centres)["rocker"] and calls
-    assert [n for n, _ in calls] == ["bisect", "golden", "golden"]     # roots, angles, ratio
-    assert [k for _, k in calls] == [3, 3, 4]
+    assert [n for n, _ in calls] == ["bisect", "golden", "golden"]     # roots, ratio, angles
+    assert [k for _, k in calls] == [3, 4, 3]
 
 
 def test_a_kink_is_zoomed_to_the_end():
@@ -468,3 +468,37 @@ def test_a_kink_is_zoomed_to_the_end():
     dc = check(m).drivers[0]
     ext = [a.extreme for a in dc.angles if a.quantity == "pressure"]
     assert ext and all(abs(e.min) <= 1e-9 for e in ext)
+
+
+@pytest.mark.parametrize("name", ["excavator", "knuckle_boom_crane", "stephenson_3_triad"])
+def test_drivers_checked_apart_give_check_s_report_bit_for_bit(name):
+    """A check's drivers are independent: each computed on its own copy of the design (as
+    another process would, from a pickle), with its angles computed apart too
+    (``driver_angles``), the report is ``check``'s, bit for bit."""
+    import pickle
+
+    from multiloop.catalogue.named import load_named
+    from multiloop.kin.check import driver_angles, driver_check
+    m = load_named(name)
+
+    def copy():
+        return pickle.loads(pickle.dumps(m))
+    dcs = []
+    for k in range(len(m.drivers)):
+        angles = driver_angles(copy(), k).angles
+        calls = []
+        dcs.append(pickle.loads(pickle.dumps(driver_check(copy(), k, angles=lambda a=angles: calls.append(1) or a))))
+        assert calls == [1]
+    apart = check(copy(), driver_checks=tuple(dcs)).as_dict()
+    assert json.dumps(apart, sort_keys=True) == json.dumps(check(m).as_dict(), sort_keys=True)
+
+
+def test_driver_checks_of_other_drivers_are_refused_by_name():
+    from multiloop.catalogue.named import load_named
+    from multiloop.kin.check import driver_check
+    from multiloop.topo.errors import ParameterError
+    m = load_named("excavator_bucket")
+    with pytest.raises(ParameterError, match="bucket_cyl_slide, thumb_cyl_slide"):
+        check(m, driver_checks=(driver_check(m, 1),))
+    with pytest.raises(Exception, match="driver index"):
+        driver_check(m, 2)

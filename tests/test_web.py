@@ -517,19 +517,22 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     page.wait_for_function(at_b, arg=list(original.joint("B").at), timeout=60000)
 
 
-def test_drag_on_two_cylinders_is_checked_on_two_cores_as_check_json(page, server):
-    """Drag a joint of excavator_bucket (two cylinders): the page's check of the edited
-    design is ``check``'s document of ``moved(excavator_bucket, joint, new)``, bit for bit,
-    with one cylinder moved by the server's second process (multiloop.web.second_core:
-    the server's log names it)."""
+@pytest.mark.parametrize("name, joint, share", [
+    ("excavator_bucket", "bucket_link_pin", "drivers thumb_cyl_slide moved on the second core"),
+    ("stephenson_3_triad", "P1", "the angles of O1 on the second core")])
+def test_drag_is_checked_on_two_cores_as_check_json(page, server, name, joint, share):
+    """Drag a joint of a design: the page's check of the edited design is ``check``'s
+    document of ``moved(design, joint, new)``, bit for bit, with a share of its work
+    done by the server's second process (multiloop.web.second_core: every other
+    cylinder of excavator_bucket, the triad six-bar's angles; the server's log names it)."""
     from multiloop.kin.check import check
     from multiloop.web.editing import moved
     _, _, proc = server
-    _pick(page, "excavator_bucket")
+    _pick(page, name)
     page.get_by_text("Mechanism", exact=True).first.click()
-    page.wait_for_selector("#ml-check-json[data-mechanism=excavator_bucket]", state="attached", timeout=120000)
-    original = load_mechanism("excavator_bucket")
-    sx, sy, x0, y0 = page.evaluate(HANDLE_JS, ["bucket_link_pin"])
+    page.wait_for_selector(f"#ml-check-json[data-mechanism={name}]", state="attached", timeout=120000)
+    original = load_mechanism(name)
+    sx, sy, x0, y0 = page.evaluate(HANDLE_JS, [joint])
     before = len(stderr_of(proc))
     page.mouse.move(sx, sy)
     page.mouse.down()
@@ -537,15 +540,15 @@ def test_drag_on_two_cylinders_is_checked_on_two_cores_as_check_json(page, serve
         page.mouse.move(sx + k, sy + k)
     page.mouse.up()
     edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
-        return r && r.getAttribute('data-mechanism') == 'edited: excavator_bucket' && r.getAttribute('data-positions')
+        return r && r.getAttribute('data-mechanism') == 'edited: {name}' && r.getAttribute('data-positions')
           && ({DEEP_JS})('#ml-check-status[data-ok]').length > 0; }}"""
     page.wait_for_function(edited, timeout=120000)
-    _, _, x1, y1 = page.evaluate(HANDLE_JS, ["bucket_link_pin"])
+    _, _, x1, y1 = page.evaluate(HANDLE_JS, [joint])
     assert (x1, y1) != (x0, y0)
     shown = json.loads(page.locator("#ml-check-json").text_content())
-    assert shown == check(moved(original, "bucket_link_pin", (x1, y1))).as_dict()
+    assert shown == check(moved(original, joint, (x1, y1))).as_dict()
     log = stderr_of(proc)[before:]
-    assert "job check: drivers thumb_cyl_slide moved on the second core" in log, log[-2000:]
+    assert f"job check: {share}" in log, log[-2000:]
 
 
 @contextlib.contextmanager

@@ -43,6 +43,7 @@ def core(monkeypatch_module):
     c = SecondCore()
     c.start()
     assert c.proc is not None, "the machine has one core or MULTILOOP_SECOND_CORE=0"
+    assert c.ready.wait(120)                # (a hang guard: the child's imports and warm-up)
     monkeypatch_module.setattr("multiloop.web.second_core.SECOND_CORE", c)
     yield c
     c.proc.stdin.close()
@@ -60,9 +61,11 @@ def test_every_other_driver_goes_to_the_child():
     assert theirs(1) == () and theirs(2) == (1,) and theirs(3) == (1,) and theirs(4) == (1, 3)
 
 
-@pytest.mark.parametrize("name", ["excavator", "excavator_bucket", "knuckle_boom_crane"])
+@pytest.mark.parametrize("name", ["excavator", "excavator_bucket", "knuckle_boom_crane", "stephenson_3_triad",
+                                  "four_bar"])
 def test_a_job_on_two_cores_gives_check_s_report_and_the_sweeps_bit_for_bit(core, name):
-    """An edited design's job with the child moving its share: the document is
+    """An edited design's job with the child doing its share (every other driver; the
+    angles' extremes of a design with one driver): the document is
     ``check(...).as_dict()`` and every sweep equals the one moved in this process."""
     from multiloop.web import app
     from multiloop.web.scene import sweep_driver
@@ -71,6 +74,7 @@ def test_a_job_on_two_cores_gives_check_s_report_and_the_sweeps_bit_for_bit(core
     m2 = moved(m, j.name, (j.at[0] + 0.004 * m.size, j.at[1]))
     job = _Job()
     doc = app._motion_and_check(job, m2, 40.0, None)
+    assert core.task is None                 # the child's share was taken (and answered)
     assert json.dumps(doc, sort_keys=True) == json.dumps(check(m2).as_dict(), sort_keys=True)
     for k, sw in enumerate(job.sweeps):
         alone = sweep_driver(m2, k)
@@ -98,7 +102,7 @@ def test_a_failed_child_leaves_the_drivers_to_the_job(monkeypatch):
     c = SecondCore()
     monkeypatch.setattr("multiloop.web.second_core.SECOND_CORE", c)
     m = load_named("excavator_bucket")
-    assert c.drivers(m, _Job()) == ((), None)
+    assert c.drivers(m, _Job())[1] is None and c.angles(load_named("four_bar"), _Job()) is None
     doc = app._motion_and_check(_Job(), m, 40.0, None)
     assert doc == check(m).as_dict()
 

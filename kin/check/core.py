@@ -152,7 +152,7 @@ def _angles(mo, specs) -> tuple[AngleResult, ...]:
     return tuple(AngleResult(sp.joint, sp.quantity, sp.group, e) for sp, e in zip(specs, ext))
 
 
-def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> DriverCheck:
+def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None, angles=None) -> DriverCheck:
     d = m.drivers[k]
     dj = m.joint(d.joint)
     rotary = m.is_rotary(k)
@@ -181,7 +181,6 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
     else:
         bps += [(x, why) for seg in mo.segments for x, why in seg.singular]
     dead = found[len(groups):] or [[] for _ in ww]
-    angles = _kept_angles(plan, k, mo, specs)
     out = _output(m, w, output, driver_link)
     if output is None and out is not None:
         # the default output must move with this driver: the last watched link that does
@@ -206,6 +205,7 @@ def _driver_check(m, ap, plan, k, specs, w, output, positions, cancel=None) -> D
                       and _grows_at_limit(seg, lambda st: _ratio(st, out)))
     ratio_ext = (extremes(mo, lambda s: np.abs(_ratio(s, out))[:, None], derivatives=True, events=crossings,
                           beside=(1e-5, 1e-4))[0] if out else None)
+    angles = (angles() if angles is not None else None) or _kept_angles(plan, k, mo, specs)
     return DriverCheck(d.joint, rotary, mo.full_rotation, mo.periodic, mo.limits,
                        tuple(limit_groups), _distinct(bps),
                        tuple((lk, tuple(sorted(x))) for (lk, _, _), x in zip(ww, dead)),
@@ -272,7 +272,7 @@ def _reachable(mo, x) -> bool:
     return lo <= x <= hi
 
 
-def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
+def driver_angles(mechanism: Mechanism, k: int = 0, cancel=None) -> DriverAngles:
     """The range of motion of driver ``k`` and the exact extremes of every monitored
     angle over it: the same motion and the same values as :func:`check`'s, without the
     branch points, dead centres, velocity ratio, instant centres and Grashof classes.
@@ -288,6 +288,8 @@ def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
         With geometry, a frame and drivers (the others are held at the reference).
     k : int
         Index of the driver in ``mechanism.drivers``.
+    cancel : callable, optional
+        Called before every solve; it stops the computation by raising (as :func:`check`'s).
 
     Returns
     -------
@@ -296,7 +298,7 @@ def driver_angles(mechanism: Mechanism, k: int = 0) -> DriverAngles:
     m = mechanism
     _driver_index(m, k)
     plan = check_plan(m)
-    _, _, mo = _kept_motion(m, plan, k)
+    _, _, mo = _kept_motion(m, plan, k, cancel)
     return DriverAngles(m.drivers[k].joint, mo.rotary, mo.full_rotation, mo.limits,
                         _kept_angles(plan, k, mo, angle_specs(plan.assur)))
 
@@ -309,13 +311,16 @@ def _driver_index(m: Mechanism, k: int) -> None:
 
 
 def driver_check(mechanism: Mechanism, k: int, *, output: str | None = None, positions=None,
-                 cancel=None) -> DriverCheck:
+                 cancel=None, angles=None) -> DriverCheck:
     """What :func:`check` computes while driver ``k`` moves (the others held at the
     reference): its motion, limits, branch points, dead centres, angle extremes and
     velocity ratio, with ``output`` and ``positions`` (that driver's values) as there.
     A check's drivers are independent of one another, so they may be computed apart
     (in other processes, on other cores) and given to :func:`check`
-    (``driver_checks=``): the report is the same, bit for bit.
+    (``driver_checks=``): the report is the same, bit for bit.  ``angles()``, when
+    given, is called once the rest is done and gives the angles' extremes
+    (``driver_angles(mechanism, k).angles``, e.g. from another process that computed
+    them meanwhile), or None to have them computed here.
 
     Raises
     ------
@@ -325,7 +330,8 @@ def driver_check(mechanism: Mechanism, k: int, *, output: str | None = None, pos
     m = mechanism
     _driver_index(m, k)
     plan = check_plan(m)
-    return _driver_check(m, plan.assur, plan, k, angle_specs(plan.assur), watched(m), output, positions, cancel)
+    return _driver_check(m, plan.assur, plan, k, angle_specs(plan.assur), watched(m), output, positions, cancel,
+                         angles)
 
 
 def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str | None = None,

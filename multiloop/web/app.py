@@ -93,31 +93,36 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 def _drivers(job, m, key):
     """Set ``job.sweeps``, the sweeps of every driver of ``m`` (shown at once:
     ``job.notify``), and return, when the second core (:mod:`.second_core`) takes a share
-    of the drivers, the check of every driver (``check``'s ``driver_checks``); else None,
-    and the check moves the drivers itself after the sweeps."""
+    of the work (every other driver; the angles' extremes of a design with one driver),
+    the check of every driver (``check``'s ``driver_checks``); else None, and the check
+    moves the drivers itself after the sweeps."""
     from multiloop.kin.check import driver_check
 
+    from .jobs import LOG
     from .scene import sweep_driver
     from .second_core import SECOND_CORE
     ks, wait = ((), None) if key is not None and key in _SWEEPS else SECOND_CORE.drivers(m, job)
-    dcs = None
     if wait is None:
+        angles = SECOND_CORE.angles(m, job)
         job.sweeps = _sweeps(m, key, job.poll)
-    else:
-        from .jobs import LOG
-        LOG.info("job %s: drivers %s moved on the second core", job.name, ", ".join(m.drivers[k].joint for k in ks))
+        job.report(1 / 2)
+        job.notify()
+        if angles is None:
+            return None
+        LOG.info("job %s: the angles of %s on the second core", job.name, m.drivers[0].joint)
+        return (driver_check(m, 0, cancel=job.poll, angles=angles),)
+    LOG.info("job %s: drivers %s moved on the second core", job.name, ", ".join(m.drivers[k].joint for k in ks))
 
-        def both(k):
-            return sweep_driver(m, k, cancel=job.poll), driver_check(m, k, cancel=job.poll)
-        done = {k: both(k) for k in range(len(m.drivers)) if k not in ks}
-        done.update(zip(ks, wait() or [both(k) for k in ks]))    # (the child failed: moved here)
-        job.sweeps = tuple(done[k][0] for k in range(len(m.drivers)))
-        dcs = tuple(done[k][1] for k in range(len(m.drivers)))
-        if key is not None:
-            _SWEEPS[key] = job.sweeps
+    def both(k):
+        return sweep_driver(m, k, cancel=job.poll), driver_check(m, k, cancel=job.poll)
+    done = {k: both(k) for k in range(len(m.drivers)) if k not in ks}
+    done.update(zip(ks, wait() or [both(k) for k in ks]))    # (the child failed: moved here)
+    job.sweeps = tuple(done[k][0] for k in range(len(m.drivers)))
+    if key is not None:
+        _SWEEPS[key] = job.sweeps
     job.report(1 / 2)
     job.notify()
-    return dcs
+    return tuple(done[k][1] for k in range(len(m.drivers)))
 
 
 def _motion_and_check(job, m, threshold, key=None):

@@ -8,9 +8,17 @@ driver of a design with several: their motion frames (:func:`~.scene.sweep_drive
 their checks, the same functions on the same design, so the report the page shows is
 the one ``multiloop check --json`` prints, bit for bit.
 
-Tasks and results are pickled over the child's stdin and stdout, one task at a time:
-``(serial, mechanism, drivers)`` in, ``(serial, ok, value)`` out (``value``: the
-``(Sweep, DriverCheck)`` of each driver, or the error's text).  A task whose job was
+A design with one driver gives the child the extremes of its angles
+(:func:`~multiloop.kin.check.driver_angles`), which the job's check takes once its
+branch points, dead centres and velocity ratio are done
+(:func:`~multiloop.kin.check.driver_check`'s ``angles``).
+
+Tasks and results are pickled over the child's stdin and stdout, one task at a time,
+once the child has said it is ready (its signal handler set, its warm-up done; until
+then every job does all of its work itself):
+``(serial, mechanism, what, drivers)`` in, ``(serial, ok, value)`` out (``value``: the
+``(Sweep, DriverCheck)`` of each driver, or the angles' extremes, or the error's
+text).  A task whose job was
 cancelled (a newer edit) is stopped at its next solve by ``SIGUSR1`` where the system
 has it; a job never waits for a busy or failed child: it moves those drivers itself.
 The child stops at its next solve once the server is gone.
@@ -55,6 +63,7 @@ class SecondCore:
     def __init__(self):
         self.proc, self.task, self.serial = None, None, 0
         self.lock = threading.Lock()
+        self.ready = threading.Event()          # the child has started and warmed up
 
     def start(self) -> None:
         """Start the child (once; not on a machine with one core, or with
@@ -73,15 +82,16 @@ class SecondCore:
         self.proc = proc
         threading.Thread(target=self._read, args=(proc,), name="multiloop-web-second-core", daemon=True).start()
 
-    def submit(self, m, drivers: tuple[int, ...]) -> _Task | None:
-        """Give the child ``drivers`` of ``m``; None when it is not running or busy."""
+    def submit(self, m, drivers: tuple[int, ...], what: str = "drivers") -> _Task | None:
+        """Give the child ``drivers`` of ``m`` (``what``: "drivers", their sweeps and
+        checks; "angles", their angles' extremes); None when it is not running or busy."""
         with self.lock:
-            if self.proc is None or self.proc.poll() is not None or self.task is not None:
+            if not self.ready.is_set() or self.proc.poll() is not None or self.task is not None:
                 return None
             self.serial += 1
             task = _Task(self.serial)
             try:
-                pickle.dump((task.serial, m, tuple(drivers)), self.proc.stdin)
+                pickle.dump((task.serial, m, what, tuple(drivers)), self.proc.stdin)
                 self.proc.stdin.flush()
             except (OSError, pickle.PicklingError):
                 return None
@@ -95,6 +105,8 @@ class SecondCore:
         ks = theirs(len(m.drivers))
         if ks:
             self.submit(m, ks)
+        elif len(m.drivers) == 1:
+            self.submit(m, (0,), "angles")
 
     def stop(self, task: _Task) -> None:
         """Stop ``task`` at the child's next solve (its job was cancelled)."""
@@ -106,7 +118,13 @@ class SecondCore:
                     pass
 
     def _read(self, proc) -> None:
-        """The child's results, each to its task (the reader thread)."""
+        """The child's results, each to its task (the reader thread), after its word
+        that it is ready (its signal handler set, its warm-up done)."""
+        try:
+            pickle.load(proc.stdout)
+        except Exception:  # noqa: BLE001 - the child is gone before its start: never used
+            return
+        self.ready.set()
         while True:
             try:
                 serial, ok, value = pickle.load(proc.stdout)
@@ -127,9 +145,17 @@ class SecondCore:
         then moves them itself); ``((), None)`` when the child is not used.  A cancelled
         job stops the child's task too."""
         ks = theirs(len(m.drivers))
-        task = self.submit(m, ks) if ks else None
+        return ks, self._waiter(self.submit(m, ks) if ks else None, job)
+
+    def angles(self, m, job):
+        """Start the child on the angles' extremes of ``m``'s only driver: ``wait()``
+        giving them (``driver_angles(m, 0).angles``) or None (the job then computes them
+        itself); None when the child is not used."""
+        return self._waiter(self.submit(m, (0,), "angles") if len(m.drivers) == 1 else None, job)
+
+    def _waiter(self, task, job):
         if task is None:
-            return (), None
+            return None
 
         def wait():
             try:
@@ -137,7 +163,7 @@ class SecondCore:
             except BaseException:
                 self.stop(task)
                 raise
-        return ks, wait
+        return wait
 
 
 #: the server's child (started by :func:`multiloop.web.app.warm_up` after the first page)
@@ -173,19 +199,23 @@ def main(argv: list[str]) -> int:
         if stop.is_set():
             raise _Stop
 
-    from multiloop.kin.check import driver_check
+    from multiloop.kin.check import driver_angles, driver_check
 
     from .scene import sweep_driver
     _warm_up(sweep_driver, driver_check, cancel)
     inp, out = sys.stdin.buffer, sys.stdout.buffer
-    stop.clear()
+    pickle.dump("ready", out)
+    out.flush()
     while True:
         try:
-            serial, m, ks = pickle.load(inp)
+            serial, m, what, ks = pickle.load(inp)
         except EOFError:
             return 0
         try:
-            value = [(sweep_driver(m, k, cancel=cancel), driver_check(m, k, cancel=cancel)) for k in ks]
+            if what == "angles":
+                value = driver_angles(m, ks[0], cancel=cancel).angles
+            else:
+                value = [(sweep_driver(m, k, cancel=cancel), driver_check(m, k, cancel=cancel)) for k in ks]
             reply = (serial, True, value)
         except Exception as exc:  # noqa: BLE001 - the job moves these drivers itself (its error is shown)
             reply = (serial, False, str(exc))
