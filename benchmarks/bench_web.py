@@ -28,7 +28,8 @@ apart), and the drop to the frame in which the re-solved drawing is in
 the readout (*drawing*) and to the frame in which the new check's report is in the page
 (*check*, goal 300 ms).  It prints the median and the maximum per mechanism.
 
-``--server`` measures the server's share of the same re-check without a browser: per
+``--server`` measures the server's share of the same re-check without a browser (with the
+second core of ``multiloop serve`` unless ``--one-core``): per
 mechanism, ``--edits`` edits in a session (the handle the browser's drag takes, moved as
 far as the drag moves it),
 the edit's handler, the job (every driver's sweep, then the check) and the showing of
@@ -296,8 +297,15 @@ def server_latency_of(name: str, edits: int) -> dict:
         wb.close()
 
 
-def server_latency(names, edits: int) -> None:
-    """Print the server's share of a re-check per mechanism (:func:`server_latency_of`)."""
+def server_latency(names, edits: int, one_core: bool = False) -> None:
+    """Print the server's share of a re-check per mechanism (:func:`server_latency_of`),
+    with the second core of ``multiloop serve`` (:mod:`multiloop.web.second_core`) unless
+    ``one_core``."""
+    from multiloop.web.second_core import SECOND_CORE
+    if not one_core:
+        SECOND_CORE.start()
+        SECOND_CORE.ready.wait(120)
+    print(f"second core: {'on' if SECOND_CORE.ready.is_set() else 'off'}")
     print(f"{'mechanism':24s} handler (ms) median max | job: sweeps + check (ms) median max | "
           "show (ms) median max | total median")
     for name in names:
@@ -318,6 +326,7 @@ def main(argv=None) -> int:
     ap.add_argument("--edit-latency", action="store_true",
                     help="time drags and the re-check after each drop, per catalogue mechanism")
     ap.add_argument("--edits", type=int, default=3, help="drags per mechanism (--edit-latency; default 3)")
+    ap.add_argument("--one-core", action="store_true", help="--server without the second core")
     ap.add_argument("--names", nargs="*", help="the catalogue mechanisms of --edit-latency (default: all)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one re-check")
     ap.add_argument("--server", action="store_true",
@@ -329,7 +338,7 @@ def main(argv=None) -> int:
         from multiloop.web.app import catalogue_names
         warnings.simplefilter("ignore")
         print(f"python {sys.version.split()[0]}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
-        server_latency(args.names or catalogue_names(), args.edits)
+        server_latency(args.names or catalogue_names(), args.edits, args.one_core)
         print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
         return 0
     runs = 2 if args.quick else args.runs

@@ -523,7 +523,7 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
 def test_drag_is_checked_on_two_cores_as_check_json(page, server, name, joint, share):
     """Drag a joint of a design: the page's check of the edited design is ``check``'s
     document of ``moved(design, joint, new)``, bit for bit, with a share of its work
-    done by the server's second process (multiloop.web.second_core: every other
+    done by the server's second process (multiloop.web.second_core: the second
     cylinder of excavator_bucket, the triad six-bar's angles; the server's log names it)."""
     from multiloop.kin.check import check
     from multiloop.web.editing import moved

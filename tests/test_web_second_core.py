@@ -1,5 +1,5 @@
 """The second core of the web workbench (multiloop.web.second_core): a child process moves
-every other driver of a design while the page's job moves the others, and the report is
+half the drivers of a design while the page's job moves the others, and the report is
 ``check``'s, bit for bit; a cancelled job stops the child's task; the child ends with
 the server."""
 from __future__ import annotations
@@ -57,14 +57,14 @@ def monkeypatch_module():
     mp.undo()
 
 
-def test_every_other_driver_goes_to_the_child():
-    assert theirs(1) == () and theirs(2) == (1,) and theirs(3) == (1,) and theirs(4) == (1, 3)
+def test_the_second_half_of_the_drivers_goes_to_the_child():
+    assert theirs(1) == () and theirs(2) == (1,) and theirs(3) == (1, 2) and theirs(4) == (2, 3)
 
 
 @pytest.mark.parametrize("name", ["excavator", "excavator_bucket", "knuckle_boom_crane", "stephenson_3_triad",
                                   "four_bar"])
 def test_a_job_on_two_cores_gives_check_s_report_and_the_sweeps_bit_for_bit(core, name):
-    """An edited design's job with the child doing its share (every other driver; the
+    """An edited design's job with the child doing its share (half the drivers; the
     angles' extremes of a design with one driver): the document is
     ``check(...).as_dict()`` and every sweep equals the one moved in this process."""
     from multiloop.web import app

@@ -93,7 +93,7 @@ def _sweeps(m, key: str | None, cancel=None) -> tuple:
 def _drivers(job, m, key):
     """Set ``job.sweeps``, the sweeps of every driver of ``m`` (shown at once:
     ``job.notify``), and return, when the second core (:mod:`.second_core`) takes a share
-    of the work (every other driver; the angles' extremes of a design with one driver),
+    of the work (half the drivers; the angles' extremes of a design with one driver),
     the check of every driver (``check``'s ``driver_checks``); else None, and the check
     moves the drivers itself after the sweeps."""
     from multiloop.kin.check import driver_check

@@ -3,8 +3,8 @@
 A design check moves each driver in turn, the others held: the drivers are
 independent (:func:`multiloop.kin.check.driver_check`), and Python runs one of them at a
 time.  On a machine with a second core, a child process (``python -m
-multiloop.web.second_core PARENT_PID``, started once per server) takes every other
-driver of a design with several: their motion frames (:func:`~.scene.sweep_driver`) and
+multiloop.web.second_core PARENT_PID``, started once per server) takes half the
+drivers of a design with several: their motion frames (:func:`~.scene.sweep_driver`) and
 their checks, the same functions on the same design, so the report the page shows is
 the one ``multiloop check --json`` prints, bit for bit.
 
@@ -39,8 +39,9 @@ POLL_S = 0.005
 
 
 def theirs(n_drivers: int) -> tuple[int, ...]:
-    """The drivers the child moves: every other one, from the second."""
-    return tuple(range(1, n_drivers, 2))
+    """The drivers the child moves: the second half (the larger, of an odd number: the
+    job also assembles the report)."""
+    return tuple(range(n_drivers // 2, n_drivers)) if n_drivers > 1 else ()
 
 
 class _Task:
