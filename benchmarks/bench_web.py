@@ -218,8 +218,9 @@ def _stats(values) -> str:
     return f"{statistics.median(v):7.1f} {max(v):7.1f}" if v else "      -       -"
 
 
-def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None:
-    """Print the edit latency table of every mechanism of ``names`` (module docstring)."""
+def edit_latency(browser, exe: str, names, edits: int, timeout_s: float, each: bool = False) -> None:
+    """Print the edit latency table of every mechanism of ``names`` (module docstring);
+    with ``each``, every drop's check latency in order too."""
     srv, url = _serve(exe)
     page = browser.new_page(viewport={"width": 1400, "height": 1000})
     try:
@@ -231,10 +232,11 @@ def edit_latency(browser, exe: str, names, edits: int, timeout_s: float) -> None
             r = edit_latency_of(page, name, edits, int(1000 * timeout_s))
             drops = r["drop"]
             pre = r["follow_pre"]
+            checks = [d.get("check") for d in drops]
+            every = " | each: " + ", ".join("-" if c is None else f"{c:.0f}" for c in checks) if each else ""
             print(f"{name:24s} {r['joint'][:8]:8s} {_stats(r['follow'])} {len(r['follow']):3d} | "
                   f"{max(pre) if pre else float('nan'):12.1f} {len(pre):3d} | "
-                  f"{_stats([d.get('draw') for d in drops])} | {_stats([d.get('check') for d in drops])}",
-                  flush=True)
+                  f"{_stats([d.get('draw') for d in drops])} | {_stats(checks)}{every}", flush=True)
     finally:
         page.close()
         srv.terminate()
@@ -327,6 +329,7 @@ def main(argv=None) -> int:
                     help="time drags and the re-check after each drop, per catalogue mechanism")
     ap.add_argument("--edits", type=int, default=3, help="drags per mechanism (--edit-latency; default 3)")
     ap.add_argument("--one-core", action="store_true", help="--server without the second core")
+    ap.add_argument("--each", action="store_true", help="--edit-latency: every drop's check latency too")
     ap.add_argument("--names", nargs="*", help="the catalogue mechanisms of --edit-latency (default: all)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one re-check")
     ap.add_argument("--server", action="store_true",
@@ -361,7 +364,7 @@ def main(argv=None) -> int:
             browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox", "--disable-gpu"])
             for label, exe in exes:
                 print(f"{label}: {exe}")
-                edit_latency(browser, exe, args.names or catalogue_names(), args.edits, args.timeout)
+                edit_latency(browser, exe, args.names or catalogue_names(), args.edits, args.timeout, args.each)
             browser.close()
         print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
         return 0
