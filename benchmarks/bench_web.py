@@ -33,7 +33,9 @@ second core of ``multiloop serve`` unless ``--one-core``): per
 mechanism, ``--edits`` edits in a session (the handle the browser's drag takes, moved as
 far as the drag moves it),
 the edit's handler, the job (every driver's sweep, then the check) and the showing of
-its results, in ms (median and maximum).
+its results, in ms (median and maximum); ``--calls`` adds the Python calls of one more
+edit's job (a count that the machine's speed does not change; with ``--one-core`` it is
+the whole job's).
 """
 from __future__ import annotations
 
@@ -261,7 +263,25 @@ def _far_handle(view) -> tuple[str, float]:
     return d["name"][int(np.argmax(np.where(inside, gap.min(axis=1), -1.0)))], px
 
 
-def server_latency_of(name: str, edits: int) -> dict:
+def _job_calls(wb, joint, to) -> int:
+    """Python calls (functions and builtins) of the job of one edit of ``wb``: a count
+    that does not depend on the machine's speed (the child's share is not counted)."""
+    import threading
+    n = [0]
+
+    def count(frame, event, arg):
+        if event in ("call", "c_call"):
+            n[0] += 1
+    threading.setprofile(count)            # the job's thread starts inside the edit
+    try:
+        wb.editor.drag(joint, to)
+    finally:
+        threading.setprofile(None)
+    wb.job.thread.join()
+    return n[0]
+
+
+def server_latency_of(name: str, edits: int, calls: bool = False) -> dict:
     """``edits`` edits of catalogue mechanism ``name`` in a session without a browser (a
     :class:`~multiloop.web.app.Workbench` in a Bokeh document, as a page's): the handle
     the browser's drag takes moved as the drag moves it (16 px right and 8 px down, then
@@ -294,27 +314,33 @@ def server_latency_of(name: str, edits: int) -> dict:
             t3 = time.perf_counter()
             for key, v in zip(out, (t1 - t0, t2 - t1, t3 - t2)):
                 out[key].append(1000 * v)
+        if calls:
+            d = wb.view.handles.data
+            i = d["name"].index(joint)
+            out["calls"] = _job_calls(wb, joint, (d["x"][i] + 16 * px, d["y"][i] - 8 * px))
+            settle()
         return out
     finally:
         wb.close()
 
 
-def server_latency(names, edits: int, one_core: bool = False) -> None:
+def server_latency(names, edits: int, one_core: bool = False, calls: bool = False) -> None:
     """Print the server's share of a re-check per mechanism (:func:`server_latency_of`),
     with the second core of ``multiloop serve`` (:mod:`multiloop.web.second_core`) unless
-    ``one_core``."""
-    from multiloop.web.second_core import SECOND_CORE
+    ``one_core``; with ``calls``, the Python calls of one more edit's job too."""
+    ready = False
     if not one_core:
+        from multiloop.web.second_core import SECOND_CORE
         SECOND_CORE.start()
-        SECOND_CORE.ready.wait(120)
-    print(f"second core: {'on' if SECOND_CORE.ready.is_set() else 'off'}")
+        ready = SECOND_CORE.ready.wait(120)
+    print(f"second core: {'on' if ready else 'off'}")
     print(f"{'mechanism':24s} handler (ms) median max | job: sweeps + check (ms) median max | "
           "show (ms) median max | total median")
     for name in names:
-        r = server_latency_of(name, edits)
+        r = server_latency_of(name, edits, calls)
         total = [a + b + c for a, b, c in zip(r["handler"], r["job"], r["show"])]
         print(f"{name:24s} {_stats(r['handler'])} | {_stats(r['job'])} | {_stats(r['show'])} | "
-              f"{sorted(total)[len(total) // 2]:7.1f}", flush=True)
+              f"{sorted(total)[len(total) // 2]:7.1f}" + (f" | calls {r['calls']}" if calls else ""), flush=True)
 
 
 def main(argv=None) -> int:
@@ -330,6 +356,8 @@ def main(argv=None) -> int:
     ap.add_argument("--edits", type=int, default=3, help="drags per mechanism (--edit-latency; default 3)")
     ap.add_argument("--one-core", action="store_true", help="--server without the second core")
     ap.add_argument("--each", action="store_true", help="--edit-latency: every drop's check latency too")
+    ap.add_argument("--calls", action="store_true",
+                    help="--server: the Python calls of one more edit's job (a count, not a time)")
     ap.add_argument("--names", nargs="*", help="the catalogue mechanisms of --edit-latency (default: all)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds to wait for one re-check")
     ap.add_argument("--server", action="store_true",
@@ -341,7 +369,7 @@ def main(argv=None) -> int:
         from multiloop.web.app import catalogue_names
         warnings.simplefilter("ignore")
         print(f"python {sys.version.split()[0]}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
-        server_latency(args.names or catalogue_names(), args.edits, args.one_core)
+        server_latency(args.names or catalogue_names(), args.edits, args.one_core, args.calls)
         print(f"load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
         return 0
     runs = 2 if args.quick else args.runs
