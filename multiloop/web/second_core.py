@@ -15,13 +15,14 @@ branch points, dead centres and velocity ratio are done
 
 Tasks and results are pickled over the child's stdin and stdout, one task at a time,
 once the child has said it is ready (its signal handler set, its warm-up done; until
-then every job does all of its work itself):
-``(serial, mechanism, what, drivers)`` in, ``(serial, ok, value)`` out (``value``: the
-``(Sweep, DriverCheck)`` of each driver, or the angles' extremes, or the error's
-text).  A task whose job was
-cancelled (a newer edit) is stopped at its next solve by ``SIGUSR1`` where the system
-has it; a job never waits for a busy or failed child: it moves those drivers itself.
-The child stops at its next solve once the server is gone.
+then every job does all of its work itself): ``(serial, mechanism, what, drivers)``
+in, ``(serial, ok, value)`` out (``value``: the ``(Sweep, DriverCheck)`` of each
+driver, or the angles' extremes, or the error's text).  The server writes and reads
+them itself: nothing a page sends is unpickled.  A task whose job was cancelled (a
+newer edit) is stopped at its next solve by ``SIGUSR1`` where the system has it; a job
+never waits for a busy or failed child: it does that work itself.  The child stops at
+its next solve once the server is gone, and at the end of its input when the server
+exits.
 """
 from __future__ import annotations
 
