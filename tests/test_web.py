@@ -498,6 +498,12 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
           && ({DEEP_JS})('#ml-check-status[data-ok]').length > 0; }}"""
     page.wait_for_function(edited, timeout=60000)
     print(f"\ndrop to the re-solved drawing: {1000 * (time.perf_counter() - t0):.0f} ms")
+    # no tooltip while the dragged design is re-solved; the tooltips are back at the next move
+    hovers = """() => Bokeh.documents[0].get_model_by_name('ml-mechanism').toolbar.tools
+        .filter(t => t.type == 'HoverTool').map(t => t.active)"""
+    assert page.evaluate(hovers) == [False, False]
+    page.mouse.move(sx + 30, sy + 10)
+    page.wait_for_function(f"() => ({hovers})().every(a => a)", timeout=60000)
     # the new drawing and its check changed several texts, laid out once per message (layout_batch)
     after = page.evaluate(layouts)
     laid, deferred = after["laid"] - before["laid"], after["deferred"] - before["deferred"]

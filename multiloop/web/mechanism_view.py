@@ -50,7 +50,14 @@ if (!drag.active || handles.data.name.length == 0) { return; }
 if (cb_obj.event_name == 'panstart') {
   const ref = handles.tags[0];
   if (ref != null && slider.value != ref) { slider.value = ref; }
+  // no tooltip while a joint is dragged and its design re-solved: one kept over the
+  // dragged joint was inspected and laid out again at every change of the drawing
+  for (const h of hovers) { h.active = false; }
   return;
+}
+if (cb_obj.event_name == 'panend') {       // the tooltips are back at the pointer's next move
+  document.addEventListener('pointermove', () => { for (const h of hovers) { h.active = true; } },
+                            {once: true, capture: true});
 }
 const names = joints.data.name, jx = Array.from(joints.data.x), jy = Array.from(joints.data.y);
 handles.data.name.forEach((n, k) => {
@@ -189,10 +196,11 @@ class MechanismView:
         f.multi_line("xs", "ys", source=self.paths, line_color="#bbbbbb", line_width=1)
         r = f.patches("xs", "ys", source=self.links, fill_color="colour", fill_alpha=0.25,
                       line_color="colour", line_width=3)
-        f.add_tools(HoverTool(renderers=[r], tooltips=[("link", "@name"), ("group", "@group")]))
         j = f.scatter("x", "y", source=self.joints, marker="marker", size="size", fill_color="fill",
                       line_color="black", line_width=1.5)
-        f.add_tools(HoverTool(renderers=[j], tooltips=[("joint", "@name"), ("links", "@links")]))
+        hovers = [HoverTool(renderers=[r], tooltips=[("link", "@name"), ("group", "@group")]),
+                  HoverTool(renderers=[j], tooltips=[("joint", "@name"), ("links", "@links")])]
+        f.add_tools(*hovers)
         f.scatter("x", "y", source=self.marks, marker="diamond", size=11, color="#d62728", alpha=0.8)
         f.text("x", "y", text="label", source=self.marks, text_font_size="9px", text_color="#d62728",
                x_offset=6, y_offset="dy")
@@ -206,7 +214,7 @@ class MechanismView:
         f.xaxis.formatter = f.yaxis.formatter = self.ticks
         f.xaxis.axis_label, f.yaxis.axis_label = "x (m)", "y (m)"
         follow = CustomJS(args=dict(drag=drag, handles=self.handles, joints=self.joints, links=self.links,
-                                    slider=self.player.slider), code=FOLLOW_JS)
+                                    slider=self.player.slider, hovers=hovers), code=FOLLOW_JS)
         for event in ("panstart", "pan", "panend"):
             f.js_on_event(event, follow)
         return f
