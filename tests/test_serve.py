@@ -304,6 +304,8 @@ def test_the_warm_up_fills_the_shared_cache(with_child):
     shown.set()
     app.warm_up(name, m, 40.0, start(m, 40.0) if with_child else None, ready, shown)
     assert ready.is_set() and name not in app._WARMING
+    import gc
+    assert gc.get_freeze_count() > 10_000        # the imports frozen: no full collection scans them
     assert app._SCENES[name][0].node_names == tuple(m.joint_names) + tuple(p.name for p in m.points)
     assert len(app._SWEEPS[name]) == len(m.drivers)
     assert ((name, 40.0) in app._CHECKS) == with_child          # in-process the session's job checks

@@ -8,6 +8,7 @@ blocks the page.
 """
 from __future__ import annotations
 
+import gc
 import os
 import sys
 from importlib import resources
@@ -155,8 +156,8 @@ def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
     from the child process ``child`` (:mod:`.prepare`) when there is one, else here;
     ``ready`` is set once its drawing and motion are there (or failed) and
     ``_WARMING[name]`` once the warm-up ends.  Then, after the first page was shown
-    (``shown``), start the second core (:mod:`.second_core`) and import what the other
-    mechanisms and the synthesis use."""
+    (``shown``), start the second core (:mod:`.second_core`), import what the other
+    mechanisms and the synthesis use and freeze what is there for the garbage collector."""
     try:
         if child is not None:
             from .prepare import results
@@ -182,6 +183,10 @@ def warm_up(name: str, m, threshold: float, child, ready, shown) -> None:
     from multiloop.topo.assur import decompose  # noqa: F401
 
     from . import synthesis_view  # noqa: F401
+    # the imports' 130 000 objects out of the cyclic collector's sight: a full collection
+    # scanned them all (80 ms, inside whichever job it fell in: the re-check's random
+    # slow drops); with them frozen it takes 3-8 ms (Python's gc.freeze, made for this)
+    gc.freeze()
 
 
 def _first_choice(files: dict) -> str:

@@ -26,6 +26,7 @@ exits.
 """
 from __future__ import annotations
 
+import gc
 import os
 import pickle
 import signal
@@ -205,6 +206,7 @@ def main(argv: list[str]) -> int:
 
     from .scene import sweep_driver
     _warm_up(sweep_driver, driver_check, cancel)
+    gc.freeze()                             # (as the server's: no full collection scans the imports)
     inp, out = sys.stdin.buffer, sys.stdout.buffer
     pickle.dump("ready", out)
     out.flush()
