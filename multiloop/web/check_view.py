@@ -91,12 +91,29 @@ class CheckView:
 
     def busy(self, text: str, running: bool = False) -> None:
         """A status line instead of a report; ``running``: a job computes it (Cancel enabled)."""
-        self.shown = None
+        self.shown = self.doc = None
         self.stop.disabled = not running
         self.verdict.text = html('<p id="ml-check-status">{text}</p>', text=text)
         self.json.text = self.table.text = html("")
         self.events.data = dict(x=[], label=[])
         self.curves.data = dict(xs=[], ys=[], name=[], colour=[])
+
+    def _json(self, doc: dict) -> None:
+        """The JSON document, folded, of the report still shown (``doc``)."""
+        if self.doc is doc:
+            self.json.text = html('<details><summary>check --json</summary><pre id="ml-check-json" '
+                                  'data-mechanism="{name}">{text}</pre></details>', name=doc["mechanism"],
+                                  text=json.dumps(doc, indent=1, allow_nan=False))
+
+    def _later(self, fn) -> None:
+        """``fn()`` in the session's next tick, its changes in a message of their own: the
+        report's verdict, events and angles reach the page first, and the folded JSON (some
+        50 KB to write, send and lay out) after them, not on their way."""
+        document = self.json.document
+        if document is None:
+            fn()
+        else:
+            document.add_next_tick_callback(fn)
 
     def use_units(self, units: Units) -> None:
         """Show the report shown (if any) again in ``units``."""
@@ -120,9 +137,7 @@ class CheckView:
         items = join(html("<li>{v}</li>", v=v) for v in lines) or html("<li>no fault found</li>")
         self.verdict.text = html('<h3 id="ml-check-status" data-ok="{flag}">Verdict: {ok}</h3><ul>{items}</ul>',
                                  flag=str(doc["ok"]).lower(), ok=ok, items=items)
-        self.json.text = html('<details><summary>check --json</summary><pre id="ml-check-json" '
-                              'data-mechanism="{name}">{text}</pre></details>', name=doc["mechanism"],
-                              text=json.dumps(doc, indent=1, allow_nan=False))
+        self._later(lambda: self._json(doc))
         if sw is None:
             return []
         u = self.units
