@@ -145,8 +145,8 @@ class SecondCore:
     def drivers(self, m, job):
         """Start the child on its share of ``m``'s drivers (:func:`theirs`): ``(drivers,
         wait)``, ``wait()`` giving their ``(Sweep, DriverCheck)`` pairs or None (the job
-        then moves them itself); ``((), None)`` when the child is not used.  A cancelled
-        job stops the child's task too."""
+        then moves them itself); ``wait`` is None when the child is not used (one driver,
+        or the child busy, not ready or gone).  A cancelled job stops the child's task too."""
         ks = theirs(len(m.drivers))
         return ks, self._waiter(self.submit(m, ks) if ks else None, job)
 
