@@ -127,3 +127,14 @@ def test_the_child_ends_with_the_server():
             break
         time.sleep(0.1)
     assert not alive()
+
+
+def test_a_design_shown_from_the_cache_has_the_child_decompose_it_alone(core):
+    """``prepare``: the child compiles the design's plan and computes nothing else (its
+    answer holds no result); the next task is taken."""
+    task = core.prepare(load_named("excavator"))
+    assert task is not None
+    assert task.result(lambda: None) is None and task.ok
+    nxt = core.submit(load_named("excavator"), (2,))
+    sweep, dc = nxt.result(lambda: None)[0]
+    assert dc.joint == sweep.joint == "bucket_cyl_slide"

@@ -380,14 +380,13 @@ def check(mechanism: Mechanism, *, min_transmission: float = 40.0, output: str |
                                      got=repr(min_transmission)), "min_transmission")
     plan = check_plan(m)
     ap = plan.assur
-    specs = angle_specs(ap)
-    w = watched(m)
     positions = positions or {}
     unknown = set(positions) - {d.joint for d in m.drivers}
     if unknown:
         raise ParameterError(explain("positions", expected="driver joint names", got=", ".join(sorted(unknown))),
                              "positions")
     if driver_checks is None:
+        specs, w = angle_specs(ap), watched(m)
         dcs = tuple(_driver_check(m, ap, plan, k, specs, w, output, positions.get(d.joint), cancel)
                     for k, d in enumerate(m.drivers))
     else:

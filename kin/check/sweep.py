@@ -345,7 +345,6 @@ class Side:
         return out
 
 
-
 def _fits(p, q) -> np.ndarray:
     """Whether the samples' differences ``p`` agree with the model's ``q`` (:data:`MODEL_FIT`)."""
     return np.abs(p - q) <= MODEL_FIT * np.abs(q)

@@ -454,8 +454,8 @@ def _start_warm_up(files: dict, threshold: float):
     from .prepare import start
     name = _first_choice(files)
     m = load_choice(files, name)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    child = start(m, threshold) if cores > 1 else None       # on one core it would only take turns
+    from .second_core import cores
+    child = start(m, threshold) if cores() > 1 else None     # on one core it would only take turns
     _WARMING[name] = threading.Event()
 
     def then():

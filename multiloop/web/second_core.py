@@ -34,10 +34,15 @@ import subprocess
 import sys
 import threading
 
-__all__ = ["SecondCore", "SECOND_CORE", "theirs", "main"]
+__all__ = ["SecondCore", "SECOND_CORE", "theirs", "cores", "main"]
 
 #: the wait for the child's result between two polls of the job (s)
 POLL_S = 0.005
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def theirs(n_drivers: int) -> tuple[int, ...]:
@@ -71,8 +76,7 @@ class SecondCore:
     def start(self) -> None:
         """Start the child (once; not on a machine with one core, or with
         ``MULTILOOP_SECOND_CORE=0``)."""
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-        if self.proc is not None or cores < 2 or os.environ.get("MULTILOOP_SECOND_CORE") == "0":
+        if self.proc is not None or cores() < 2 or os.environ.get("MULTILOOP_SECOND_CORE") == "0":
             return
         # one BLAS thread: the problems are small, and spinning BLAS threads take cores
         env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
@@ -87,7 +91,8 @@ class SecondCore:
 
     def submit(self, m, drivers: tuple[int, ...], what: str = "drivers") -> _Task | None:
         """Give the child ``drivers`` of ``m`` (``what``: "drivers", their sweeps and
-        checks; "angles", their angles' extremes); None when it is not running or busy."""
+        checks; "angles", their angles' extremes; "plan", the check's plan of ``m``
+        alone); None when it is not running or busy."""
         with self.lock:
             if not self.ready.is_set() or self.proc.poll() is not None or self.task is not None:
                 return None
@@ -101,15 +106,12 @@ class SecondCore:
             self.task = task
             return task
 
-    def prepare(self, m) -> None:
-        """Give the child its share of ``m``'s drivers, the result unused: a design the
-        page shows from its cache (a catalogue machine) then finds its topology's plans
-        compiled in the child when its first edit is checked."""
-        ks = theirs(len(m.drivers))
-        if ks:
-            self.submit(m, ks)
-        elif len(m.drivers) == 1:
-            self.submit(m, (0,), "angles")
+    def prepare(self, m) -> _Task | None:
+        """Have the child decompose ``m`` (and compile its check's plan), nothing more: a
+        design the page shows from its cache (a catalogue machine) then finds its
+        structure's plan kept in the child (``decompose`` keeps plans by structure) when
+        its first edit is checked.  The task, or None (the child busy or not ready)."""
+        return self.submit(m, (), "plan")
 
     def stop(self, task: _Task) -> None:
         """Stop ``task`` at the child's next solve (its job was cancelled)."""
@@ -128,6 +130,8 @@ class SecondCore:
         except Exception:  # noqa: BLE001 - the child is gone before its start: never used
             return
         self.ready.set()
+        from .jobs import LOG
+        LOG.info("second core: ready (pid %d)", proc.pid)
         while True:
             try:
                 serial, ok, value = pickle.load(proc.stdout)
@@ -203,6 +207,7 @@ def main(argv: list[str]) -> int:
             raise _Stop
 
     from multiloop.kin.check import driver_angles, driver_check
+    from multiloop.kin.check.core import check_plan
 
     from .scene import sweep_driver
     _warm_up(sweep_driver, driver_check, cancel)
@@ -216,7 +221,10 @@ def main(argv: list[str]) -> int:
         except EOFError:
             return 0
         try:
-            if what == "angles":
+            if what == "plan":
+                check_plan(m)
+                value = None
+            elif what == "angles":
                 value = driver_angles(m, ks[0], cancel=cancel).angles
             else:
                 value = [(sweep_driver(m, k, cancel=cancel), driver_check(m, k, cancel=cancel)) for k in ks]
