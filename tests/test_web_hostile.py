@@ -156,19 +156,29 @@ def test_hostile_names_of_a_served_file_stay_text(browser, served):
 
 
 def test_hostile_names_of_an_uploaded_file_stay_text(browser, served, files, tmp_path):
-    """The same file uploaded under a hostile name, after a bad file of that name."""
+    """The same file uploaded under a hostile name, after a bad file of that name; its
+    check's angles computed by the server's second process (multiloop.web.second_core:
+    the hostile design pickled to it by the server, its names text there too)."""
     page = _open(browser, served[0])
     try:
+        for _ in range(1200):               # (a hang guard: the child's start and warm-up)
+            if "second core: ready" in stderr_of(served[1]):
+                break
+            time.sleep(0.1)
         _pick(page, "four_bar")
+        # its check done (the second core free again before the upload's)
+        page.wait_for_selector("#ml-check-json[data-mechanism=four_bar]", state="attached", timeout=120000)
         bad = tmp_path / f"{HOSTILE['img']}.toml"
         bad.write_text("x = [")
         upload(page, "ml-open", bad)
         sync_api.expect(page.locator("#ml-message")).to_contain_text(f"{bad.name}: TOML syntax error", timeout=120000)
         mine = tmp_path / f"{HOSTILE['svg']}.json"
         mine.write_bytes(files[0].read_bytes())
+        before = len(stderr_of(served[1]))
         upload(page, "ml-open", mine)
         sync_api.expect(page.locator(".ml-pick select")).to_have_value(f"upload: {mine.name}", timeout=120000)
         _names_are_text(page)
+        assert f"job check: the angles of {HOSTILE['img']} on the second core" in stderr_of(served[1])[before:]
         _hover_every_joint(page)
         _assert_clean(page)
     finally:
