@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import re
 import sys
 
-from multiloop.topo.errors import (AssemblyError, DecompositionError, LinkageError, MobilityError, ParameterError,
-                                   SingularityError, TopologyError, cap_message)
+from multiloop.commands.messages import flagged, message_of  # noqa: F401 - flagged: the commands' helper
+from multiloop.topo.errors import LinkageError, cap_message
 
 COMMANDS = {
     "analyse": "structural report of a chain or mechanism (Pozhbelko & Kuts 2020 numbers)",
@@ -74,42 +73,6 @@ def _flags(p: argparse.ArgumentParser) -> dict[str, str]:
             for a in p._actions if a.option_strings}
 
 
-#: errors about the mechanism a command read: their message names the file
-_OF_THE_MECHANISM = (TopologyError, MobilityError, DecompositionError, AssemblyError, SingularityError)
-
-
-def flagged(text: str, parameters, flags: dict[str, str]) -> str:
-    """A :class:`~topo.errors.ParameterError`'s ``text`` in the command's terms: each of
-    its ``parameters`` that is an option of the command becomes the option's flag
-    (``flags``, from :func:`_flags`), where the library names it: in the subject (the
-    text before the first ``": "``) by its name, elsewhere quoted (``'start'``).
-
-    >>> flagged("start/stop: expected both or neither, got only one", ("start", "stop"),
-    ...         {"start": "--from", "stop": "--to"})
-    '--from/--to: expected both or neither, got only one'
-    >>> flagged("drivers: expected 'at' when the first driver is a P joint", ("drivers", "at"), {"at": "--at"})
-    'drivers: expected --at when the first driver is a P joint'
-    """
-    head, sep, rest = text.partition(": ")
-    for p in parameters:
-        if p in flags:
-            head = re.sub(rf"(?<![\w'-]){re.escape(p)}(?![\w'-])", lambda _, f=flags[p]: f, head)
-            rest = rest.replace(f"'{p}'", flags[p])
-    return head + sep + rest
-
-
-def _message(exc: LinkageError, args) -> str:
-    """The error's message; the library parameters it names become the options' flags
-    (:func:`flagged`), and a fault of the mechanism names the file it came from."""
-    text = str(exc)
-    if isinstance(exc, ParameterError):
-        text = flagged(text, exc.parameters, args._flags)
-    source = getattr(args, "file", None) or getattr(args, "input", None) or getattr(args, "start", None)
-    if isinstance(exc, _OF_THE_MECHANISM) and isinstance(source, str) and source not in text:
-        text = f"{source}: {text}"
-    return cap_message(text)
-
-
 def _tolerant_streams() -> None:
     """Print what the terminal cannot encode as escapes (a Latin-1 or ASCII terminal, a
     lone surrogate in a name) instead of failing with UnicodeEncodeError."""
@@ -135,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
         with quiet_warnings(f"multiloop {args.command}"):   # one line per warning, no source path
             return int(args._run(args) or 0)
     except LinkageError as exc:
-        print(f"multiloop {args.command}: error: {_message(exc, args)}", file=sys.stderr)
+        print(f"multiloop {args.command}: error: {message_of(exc, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
