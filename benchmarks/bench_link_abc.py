@@ -406,7 +406,8 @@ def run_letter(ch: str, target: np.ndarray, db: str | None, evaluations: int, li
         curve = _curve(d)
         row["designs"].append({"links": d.links, "structure": d.structure, "error_rms": d.error_rms,
                                "deviation_max": d.deviation_max, "input_range": d.input_range,
-                               "cd": link_cd(target, curve, closed, stroke), "chamfer_ours": d.chamfer})
+                               "cd": link_cd(target, curve, closed, stroke), "chamfer_ours": d.chamfer,
+                               "fit": d.fit})
     if row["designs"]:
         best = min(row["designs"], key=lambda r: (r["cd"], r["links"]))
         row.update(cd=best["cd"], links=best["links"], structure=best["structure"])

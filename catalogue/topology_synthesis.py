@@ -46,6 +46,7 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.budget import LIMITS, Budget, Meter
+from .dimensional.curve_distance import SAMPLES, CurveProblem, fit_curve
 from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
@@ -68,8 +69,12 @@ DEFAULT_EVALUATIONS = 100_000
 MIN_POLISH = Budget(100, 0.05)
 #: share of the budget for the screen (every retrieved start polished briefly) ...
 SCREEN_SHARE = 0.5
-#: ... and kept for the final checks (the finalists' second polish has the rest)
+#: ... and kept for the final checks (the finalists' second polish has the rest; the
+#: returned designs' refinement by the distance between the curves has half of it)
 ASSESS_SHARE = 0.15
+#: evaluations kept for the returned designs' refinement by the distance between the
+#: curves (:func:`_curve_stage`)
+CURVE_SHARE = 0.15
 #: the nearest start's least share of the budget, however long the retrieval took
 MIN_SHARE = 0.1
 #: the most evaluations of one start's screening polish, and of one finalist's second
@@ -96,7 +101,11 @@ class Design:
     point to the traced curve (the polyline of 2000 driver steps,
     :func:`.curves.polyline_distance`), over the target's size.  ``interval``: an open
     target's input interval as written in the design's driver ``range`` (rad or m from
-    its reference; :attr:`input_range` in deg or m), None for a closed target."""
+    its reference; :attr:`input_range` in deg or m), None for a closed target.
+    ``fit``: ``"points"`` when the design is the point-matching polish's (the errors are
+    at its matched points), ``"curve"`` when it was refined further by the distance
+    between the curves (:mod:`.dimensional.curve_distance`; the errors are then the
+    target points' distances to the traced curve, as ``deviation_max``)."""
 
     mechanism: Mechanism
     error_max: float
@@ -109,6 +118,7 @@ class Design:
     deviation_max: float = float("nan")
     evaluations: int = 0
     interval: tuple[float, float] | None = None
+    fit: str = "points"
 
     @property
     def input_range(self) -> list[float] | None:
@@ -123,7 +133,8 @@ class Design:
         return {"error_max": self.error_max, "error_rms": self.error_rms, "links": self.links,
                 "structure": self.structure, "file": file, "chamfer": self.chamfer,
                 "deviation_max": self.deviation_max, "retrieval_distance": self.retrieved,
-                "evaluations": self.evaluations, "seconds": round(self.seconds, 3), "input_range": self.input_range}
+                "evaluations": self.evaluations, "seconds": round(self.seconds, 3), "input_range": self.input_range,
+                "fit": self.fit}
 
 
 @dataclass(frozen=True)
@@ -152,7 +163,7 @@ class TopologySynthesis:
         for d in self.as_list(files):
             rng = "" if d["input_range"] is None else "  input range [{:.6g}, {:.6g}]".format(*d["input_range"])
             lines.append(f"  {d['links']} links  rms {d['error_rms']:.3g}  max {d['error_max']:.3g}  "
-                         f"chamfer {d['chamfer']:.3g}  {d['structure']}{rng}"
+                         f"chamfer {d['chamfer']:.3g}  fit {d['fit']}  {d['structure']}{rng}"
                          + (f"  -> {d['file']}" if d["file"] else ""))
         return "\n".join(lines)
 
@@ -333,9 +344,20 @@ def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, se
     target input on one branch (an open target: within the certified range of motion,
     and the design is written over that interval, :func:`.open_targets.on_interval`);
     with LInK's chamfer score and the dense deviation."""
-    m, inputs, interval = res.mechanism, np.asarray(res.inputs, float), None
+    m, inputs = res.mechanism, np.asarray(res.inputs, float)
     if not _reaches_targets(m, inputs, closed) or not _error_is_the_motions(res, point):
         return None
+    return _made(m, inputs, closed, point, target, retrieved, seconds, evaluations,
+                 (float(res.error_max), float(res.error_rms)))
+
+
+def _made(m: Mechanism, inputs: np.ndarray, closed: bool, point: str, target: np.ndarray, retrieved: float,
+          seconds: float, evaluations: int, errors=None, fit: str = "points") -> Design | None:
+    """The :class:`Design` of a checked mechanism ``m`` met at driver ``inputs`` (an open
+    target's design written over their span): its traced curve, chamfer score and
+    deviation; ``errors`` ``(max, rms)``, default the target points' distances to the
+    traced curve (over the target's size)."""
+    interval = None
     if not closed:
         try:
             m, interval = on_interval(m, inputs)
@@ -346,9 +368,54 @@ def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, se
         return None
     size = float(np.max(np.ptp(target, axis=0)))
     gaps = polyline_distance(target, curve)
-    return Design(m, float(res.error_max), float(res.error_rms), m.n_links, decompose(m).formula,
+    if errors is None:
+        errors = (float(gaps.max() / size), float(np.sqrt(np.mean(np.square(gaps))) / size))
+    return Design(m, errors[0], errors[1], m.n_links, decompose(m).formula,
                   chamfer_score(target, curve, closed=closed), float(retrieved), seconds, float(gaps.max() / size),
-                  int(evaluations), interval)
+                  int(evaluations), interval, fit)
+
+
+def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter: Meter) -> Design:
+    """Design ``d`` refined by the distance between the curves
+    (:func:`.dimensional.curve_distance.fit_curve`, within ``meter``), each step of the
+    fit taken only when its design passes the checks of a returned design
+    (:func:`_holds_curve`: a curve traced at :data:`SAMPLES` inputs can step over a
+    narrow window where the design does not assemble); the refined design when it
+    scores a lower chamfer distance than ``d``, else ``d`` itself."""
+    t0 = time.perf_counter()
+    span = None if d.interval is None else (d.interval[1] if d.interval[0] == 0.0 else d.interval[0])
+    inputs = lambda sp: (2 * np.pi if closed else sp) * np.linspace(0.0, 1.0, SAMPLES)  # noqa: E731
+    fit = fit_curve(d.mechanism, target, closed, point, meter, span=span,
+                    accept=lambda m, sp: _holds_curve(m, inputs(sp), closed, point, target))
+    if fit is None or not fit.after < fit.before:
+        return d
+    m, sp = fit.at(1.0)
+    new = _made(m, inputs(sp), closed, point, target, d.retrieved, d.seconds + time.perf_counter() - t0,
+                d.evaluations + fit.evaluations, fit="curve")
+    return new if new is not None and new.chamfer < d.chamfer else d
+
+
+def _holds_curve(m: Mechanism, inputs: np.ndarray, closed: bool, point: str, target: np.ndarray) -> bool:
+    """Whether design ``m`` passes the checks of a returned design along ``inputs``: its
+    certified motion holds them on one branch (turning fully for a closed target), and
+    the certified ``solve`` of its tracer there agrees with the batch's
+    (:meth:`.dimensional.curve_distance.CurveProblem.curves`) to 1e-6 of the target's size."""
+    if not _reaches_targets(m, inputs, closed) or (closed and not _turns_fully(m)):
+        return False
+    own = CurveProblem(m, target, closed, point)
+    batch = own.curves(own.x0[None], inputs[None])[0]
+    st = solve(m, inputs)
+    P = st.point_positions[:, st.point_index(point)]
+    return bool(np.all(np.abs(P - batch) <= 1e-6 * own.size))
+
+
+def _turns_fully(m: Mechanism) -> bool:
+    """Whether ``m``'s driver turns fully (:func:`kin.solve.motion_events`)."""
+    try:
+        ev = motion_events(m)
+    except (LinkageError, ValueError, FloatingPointError):
+        return False
+    return ev is not None and ev.turns_fully
 
 
 def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,
@@ -471,9 +538,10 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
         with Atlas(atlas, readonly=True) as a:
             ranked = _ranked(a, target, closed, tuple(links), candidates)
         rounds = _Rounds(ranked, per_topology, topologies, point)
-        polished, stopped = _screen_and_refine(rounds, target, closed, point, seed, run, tol, max(top, finalists),
-                                               tick)
+        polished, stopped = _screen_and_refine(rounds, target, closed, point, seed, run.until(1.0 - CURVE_SHARE, 1.0),
+                                               tol, max(top, finalists), tick)
         designs = _checked_designs(polished, target, closed, point, top, tick)
+        designs = _curve_stage(designs, target, closed, point, run.until(1.0, 1.0 - ASSESS_SHARE / 2), tol, tick)
     return TopologySynthesis(tuple(designs), closed, rounds.taken, time.perf_counter() - t0, run.used, limits, stopped)
 
 
@@ -490,6 +558,21 @@ def _checked_designs(polished: list, target: np.ndarray, closed: bool, point: st
             if len(designs) == top:
                 break
     return designs
+
+
+def _curve_stage(designs: list, target: np.ndarray, closed: bool, point: str, meter: Meter, tol: float,
+                 tick=None) -> list:
+    """Each design whose RMS error is above ``tol`` refined by the distance between the
+    curves (:func:`_curve_fitted`), the designs sharing ``meter`` equally (what one
+    leaves, the next may use); the order is kept."""
+    out = []
+    for k, d in enumerate(designs):
+        if tick is not None:
+            tick()
+        if d.error_rms > tol and meter.portion(len(designs) - k, smallest=MIN_POLISH) is not None:
+            d = _curve_fitted(d, target, closed, point, meter.share(1.0 / (len(designs) - k)))
+        out.append(d)
+    return out
 
 
 def _atlas_file(atlas, progress: bool = False, say=None) -> Path:
