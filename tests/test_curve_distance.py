@@ -70,6 +70,26 @@ def test_residuals_vanish_on_the_design_s_own_curve_and_grow_off_it():
     assert 0.003 < halves[0] < 0.011 and 0.003 < halves[1] < 0.011
 
 
+def test_a_span_that_nears_the_driver_s_limit_is_penalised():
+    """A four-bar whose crank does not turn fully: traced over half its range the hinge
+    residual is 0; traced to within 1e-5 of its limit (the dyad nearly stretched, its
+    folded transmission angle below MIN_MARGIN) it is positive, and it is the last
+    residual."""
+    from multiloop.catalogue.dimensional.curve_distance import MIN_MARGIN
+    m = load_named("four_bar")
+    shift = np.zeros((len(m.joints) + len(m.points), 2))
+    shift[1] = [0.04, 0.03]                       # (A further out: the crank longer)
+    m = _moved(m, shift)
+    motion = motion_events(m)
+    assert not motion.turns_fully and motion.hi > 0.5
+    target = np.c_[np.linspace(0.0, 0.1, 50), np.zeros(50)]
+    hinge = []
+    for f in (0.5, 1.0 - 1e-5):
+        prob = CurveProblem(m, target, False, "P", span=f * motion.hi)
+        hinge.append(prob.residuals_batch(prob.x0[None], prob.timing_for(prob.x0))[0][-1])
+    assert hinge[0] == 0.0 and 0.0 < hinge[1] <= 1.0 and MIN_MARGIN > 0
+
+
 def _apart(a, b, size, closed):
     """The largest distance either way between polylines ``a`` and ``b`` (closed: the
     last point joined to the first), over ``size``."""

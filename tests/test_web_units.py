@@ -153,5 +153,8 @@ def test_units_reach_an_atlas_designs_deviation_and_an_uploaded_target_table():
         assert "<td>deviation 0.0042 m</td>" in sv.table.text
         wb.units.lengths.select.value = "mm"
         assert "<td>deviation 4.2 mm</td>" in sv.table.text
+        sv.results = [AtlasDesign(m, 0.00123, 0.000456, "RRR", np.zeros((2, 2)), deviation=0.0042, fit="curve")]
+        sv._list()                                    # (a design refined by the curve distance says so)
+        assert "<td>deviation 4.2 mm, curve fit</td>" in sv.table.text
     finally:
         wb.close()

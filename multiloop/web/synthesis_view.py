@@ -41,7 +41,9 @@ class AtlasDesign:
     """A design of the synthesis without a start, as a candidate of the list: the
     mechanism, its errors, its structure formula and ``achieved``, its tracer's path over
     the driver's motion (drawn over the target); ``deviation``: the retrieved curve's
-    largest deviation from the target (m), shown in the list's ``stopped`` column."""
+    largest deviation from the target (m), shown in the list's ``stopped`` column, with
+    ``fit`` (``"curve"`` when the design was refined by the distance between the curves,
+    :class:`multiloop.catalogue.topology_synthesis.Design`)."""
 
     mechanism: object
     error_max: float
@@ -51,6 +53,7 @@ class AtlasDesign:
     seed: str = "atlas"
     stopped: str = ""
     deviation: float | None = None
+    fit: str = "points"
 
 
 def traced(m) -> np.ndarray:
@@ -92,7 +95,7 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
         P = traced(d.mechanism)
         i = [p.name for p in d.mechanism.points].index(options["point"])
         out.append(AtlasDesign(d.mechanism, d.error_max, d.error_rms, d.structure, P[i],
-                               deviation=float(d.deviation_max)))
+                               deviation=float(d.deviation_max), fit=d.fit))
     if not out:
         raise InputError(explain("target path", expected="a design that passes check",
                                  got=f"none of {res.polished} polished candidates",
@@ -104,9 +107,12 @@ def run_atlas(job: Job, target: np.ndarray, options: dict) -> list:
 
 def stopped_text(r, units: Units) -> str:
     """The ``stopped`` column of candidate ``r``: why its run stopped, or an atlas
-    design's deviation in the page's length unit."""
+    design's deviation in the page's length unit (and "curve fit" for a design refined by
+    the distance between the curves)."""
     dev = getattr(r, "deviation", None)
-    return r.stopped if dev is None else f"deviation {units.shown(dev, 'm'):.3g} {units.length}"
+    if dev is None:
+        return r.stopped
+    return f"deviation {units.shown(dev, 'm'):.3g} {units.length}" + (", curve fit" if r.fit == "curve" else "")
 
 
 def csv_label(units: Units) -> str:
