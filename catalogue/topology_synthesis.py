@@ -377,11 +377,11 @@ def _made(m: Mechanism, inputs: np.ndarray, closed: bool, point: str, target: np
 
 def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter: Meter) -> Design:
     """Design ``d`` refined by the distance between the curves
-    (:func:`.dimensional.curve_distance.fit_curve`, within ``meter``), each step of the
-    fit taken only when its design passes the checks of a returned design
-    (:func:`_holds_curve`: a curve traced at :data:`SAMPLES` inputs can step over a
-    narrow window where the design does not assemble); the refined design when it
-    scores a lower chamfer distance than ``d``, else ``d`` itself."""
+    (:func:`.dimensional.curve_distance.fit_curve`, within ``meter``): the fit's last
+    round whose design passes the checks of a returned design (:func:`_holds_curve`: a
+    curve traced at :data:`SAMPLES` inputs could step over a narrow window where the
+    design does not assemble), when it scores a lower chamfer distance than ``d``, else
+    ``d`` itself."""
     t0 = time.perf_counter()
     span = None if d.interval is None else (d.interval[1] if d.interval[0] == 0.0 else d.interval[0])
     inputs = lambda sp: (2 * np.pi if closed else sp) * np.linspace(0.0, 1.0, SAMPLES)  # noqa: E731

@@ -140,13 +140,22 @@ def test_an_open_fit_finds_a_span_that_traces_the_stroke():
     assert solve(got, np.linspace(0.0, span, 50)).ok.all()        # (its range is the new span)
 
 
-def test_a_refused_step_ends_the_fit_at_the_last_design_taken():
-    """``accept`` refusing every polished design (and the ones walked back) leaves the
-    start: the fit reports the start's residual and design."""
+def test_the_fit_ends_at_the_last_round_the_checks_take():
+    """``accept`` is asked from the last round back: refusing every round leaves the
+    start (its residual and design); refusing only the last round's design gives an
+    earlier round's, whose residual lies between the start's and the last's."""
     m = load_named("four_bar")
     target = _traced(m, 0.0, 2 * np.pi, 300)[:-1] * 1.05
-    fit = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: False)
-    assert fit.after == fit.before and np.array_equal(fit.end, fit.start)
+    none = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: False, chunk=10)
+    assert none.after == none.before and np.array_equal(none.end, none.start)
+    asked = []
+    every = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: asked.append(d) or True, chunk=10)
+    assert len(asked) == 1                       # (the last round passes: one check)
+    refused = []
+    last = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: refused.append(d) or len(refused) > 1,
+                     chunk=10)
+    assert len(refused) == 2 and every.after < last.after < last.before
+    assert not np.array_equal(last.end, every.end)
 
 
 @pytest.fixture(scope="module")

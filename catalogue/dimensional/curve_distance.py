@@ -51,35 +51,43 @@ MIN_MARGIN = 2.0
 
 def nearest_on_polyline(points: np.ndarray, curve: np.ndarray, closed: bool = False,
                         tree: cKDTree | None = None) -> np.ndarray:
-    """The nearest point ``(n, 2)`` of polyline ``curve`` (m, 2; with ``closed``, its last
-    point joined to its first) to each of ``points`` (n, 2): on one of the two segments
-    at the curve's nearest vertex (``tree``: a :class:`scipy.spatial.cKDTree` of
-    ``curve``, if built already).  Exact for a curve sampled densely against its
-    curvature, and continuous where the nearest vertex changes (both vertices share
-    the segment between them).
+    """The nearest point ``(..., n, 2)`` of polyline ``curve`` (m, 2; with ``closed``, its
+    last point joined to its first) to each of ``points`` (..., n, 2), or of each of the
+    curves ``(D, m, 2)`` to its own points ``(D, n, 2)``: on one of the two segments at
+    the curve's nearest vertex (found by a :class:`scipy.spatial.cKDTree` of each curve;
+    ``tree``: a single ``curve``'s, if built already).  Exact for a
+    curve sampled densely against its curvature, and continuous where the nearest
+    vertex changes (both vertices share the segment between them).
 
     Examples
     --------
     >>> nearest_on_polyline(np.array([[0.5, 1.0], [3.0, 0.5]]), np.array([[0., 0.], [1., 0.], [2., 0.]])).tolist()
     [[0.5, 0.0], [2.0, 0.0]]
     """
+    P = np.asarray(points, float)
     C = np.asarray(curve, float)
-    m = len(C)
-    _, k = (tree or cKDTree(C)).query(points)
-    ends = np.vstack([C, C[:1]]) if closed else C
-    before = (k - 1) % m if closed else np.maximum(k - 1, 0)
-    after = k if closed else np.minimum(k, m - 2)
-    best = None
-    for a in (before, after):
-        v = ends[a + 1] - ends[a]
-        t = np.clip(np.sum((points - ends[a]) * v, axis=1) / np.maximum(np.sum(v * v, axis=1), 1e-300), 0.0, 1.0)
-        q = ends[a] + t[:, None] * v
+    m = C.shape[-2]
+    if C.ndim == 2:
+        _, k = (tree or cKDTree(C)).query(P.reshape(-1, 2))
+        k, C = k.reshape(1, -1), C[None]
+        P2 = P.reshape(1, -1, 2)
+    else:
+        P2 = P
+        k = np.stack([cKDTree(c).query(p)[1] for c, p in zip(C, P2)])
+    ends = np.concatenate([C, C[:, :1]], axis=1) if closed else C
+    rows = np.arange(len(ends))[:, None]
+    best = best_d2 = None
+    for a in ((k - 1) % m if closed else np.maximum(k - 1, 0), k if closed else np.minimum(k, m - 2)):
+        A = ends[rows, a]
+        v = ends[rows, a + 1] - A
+        t = np.clip(np.sum((P2 - A) * v, axis=-1) / np.maximum(np.sum(v * v, axis=-1), 1e-300), 0.0, 1.0)
+        q = A + t[..., None] * v
+        d2 = np.sum(np.square(P2 - q), axis=-1)
         if best is None:
-            best = q
+            best, best_d2 = q, d2
         else:
-            nearer = np.sum((points - q) ** 2, axis=1) < np.sum((points - best) ** 2, axis=1)
-            best = np.where(nearer[:, None], q, best)
-    return best
+            best = np.where((d2 < best_d2)[..., None], q, best)
+    return best.reshape(P.shape)
 
 
 class CurveProblem:
@@ -150,18 +158,21 @@ class CurveProblem:
         keeps the refinement from a limit between two samples; a design that does not
         assemble along its whole curve gets NaN."""
         C, mu = self._traced(np.atleast_2d(Z), PHI)
-        n = len(self.target)
-        out = np.full((len(C), 2 * n + 2 * C.shape[1] + 1), np.nan)
-        for d, c in enumerate(C):
-            if not np.all(np.isfinite(c)):
-                continue
-            to_curve = (self.target - nearest_on_polyline(self.target, c, self.closed)) / np.sqrt(n)
-            seg = np.linalg.norm(np.diff(np.vstack([c, c[:1]]) if self.closed else c, axis=0), axis=1)
-            w = seg + np.roll(seg, 1) if self.closed else np.r_[seg, 0.0] + np.r_[0.0, seg]
-            w = w / max(float(np.sum(w)), 1e-300)           # (half of each side's arc length)
-            to_target = (c - nearest_on_polyline(c, self.target, self.closed, self.tree)) * np.sqrt(w)[:, None]
-            out[d, :-1] = np.concatenate([to_curve.ravel(), to_target.ravel()]) / self.size
-            out[d, -1] = max(0.0, 1.0 - mu[d] / MIN_MARGIN)
+        n, N = len(self.target), C.shape[1]
+        out = np.full((len(C), 2 * n + 2 * N + 1), np.nan)
+        whole = np.all(np.isfinite(C), axis=(1, 2))
+        if not whole.any():
+            return out
+        c = C[whole]
+        T = np.broadcast_to(self.target, (len(c), n, 2))
+        to_curve = (T - nearest_on_polyline(T, c, self.closed)) / np.sqrt(n)
+        seg = np.linalg.norm(np.diff(np.concatenate([c, c[:, :1]], axis=1) if self.closed else c, axis=1), axis=2)
+        pad = np.zeros((len(c), 1))
+        w = seg + np.roll(seg, 1, axis=1) if self.closed else np.hstack([seg, pad]) + np.hstack([pad, seg])
+        w = w / np.maximum(np.sum(w, axis=1, keepdims=True), 1e-300)     # (half of each side's arc length)
+        to_target = (c - nearest_on_polyline(c, self.target, self.closed, self.tree)) * np.sqrt(w)[..., None]
+        out[whole, :-1] = np.concatenate([to_curve.reshape(len(c), -1), to_target.reshape(len(c), -1)], axis=1) / self.size
+        out[whole, -1] = np.maximum(0.0, 1.0 - mu[whole] / MIN_MARGIN)
         return out
 
     def mechanism(self, z: np.ndarray) -> Mechanism:
@@ -198,12 +209,11 @@ def fit_curve(mechanism: Mechanism, target, closed: bool, point: str, meter: Met
     """Refine ``mechanism`` so that its tracer ``point`` traces ``target``
     (:class:`CurveProblem`) within ``meter``: at most ``rounds`` polishes
     (:func:`.optimise.polish`) of ``chunk`` residual evaluations each, each from the
-    last design ``accept(mechanism, span) -> bool`` took (when given; else every
-    polished design is taken).  A polished design that ``accept`` refuses is walked back
-    towards the last one taken (the first of 1/2 and 1/4 of the way that it takes, if
-    its residual is lower) and the fit ends there; it also ends when a polish no longer
-    lowers the residual or the meter is spent.  None when the start's own curve does not assemble or the meter
-    cannot afford one Jacobian."""
+    last, while they lower the residual and the meter lasts.  The result is the last
+    round's design that ``accept(mechanism, span) -> bool`` takes (when given; asked from
+    the last round back, so that a fit whose end passes costs one call), else the start.
+    None when the start's own curve does not assemble or the meter cannot afford one
+    Jacobian."""
     prob = CurveProblem(mechanism, target, closed, point, span)
     rms = lambda z: _rms(prob.residuals_batch(z[None], prob.timing_for(z))[0])  # noqa: E731
     if meter.affordable(len(prob.x0) + 3) < len(prob.x0) + 3:
@@ -212,7 +222,7 @@ def fit_curve(mechanism: Mechanism, target, closed: bool, point: str, meter: Met
     meter.spend(1)
     if not np.isfinite(f):
         return None
-    used, before = 1, f
+    used, rounds_done = 1, [(z, f)]
     for _ in range(rounds):
         if meter.stop() is not None:
             break
@@ -224,19 +234,12 @@ def fit_curve(mechanism: Mechanism, target, closed: bool, point: str, meter: Met
         f1 = rms(z1)
         if not f1 < f * (1.0 - 1e-9):
             break
-        if accept is None or accept(*_design_of(prob, z1)):
-            z, f = z1, f1
-            continue
-        for t in (0.5, 0.25):               # (the fit has met what the checks allow: it ends)
-            zt = z + t * (z1 - z)
-            if accept(*_design_of(prob, zt)) and meter.take(1, whole=True) == 1:
-                used += 1
-                ft = rms(zt)
-                if ft < f:
-                    z, f = zt, ft
-                break
-        break
-    return CurveFit(prob, prob.x0.copy(), z, before, f, used)
+        z, f = z1, f1
+        rounds_done.append((z, f))
+    for z, f in reversed(rounds_done[1:]):
+        if accept is None or accept(*_design_of(prob, z)):
+            return CurveFit(prob, prob.x0.copy(), z, rounds_done[0][1], f, used)
+    return CurveFit(prob, prob.x0.copy(), prob.x0.copy(), rounds_done[0][1], rounds_done[0][1], used)
 
 
 def _rms(r: np.ndarray) -> float:
