@@ -8,8 +8,10 @@ retrieved realisations with their best tracer points (:mod:`.tracers`), carries 
 best few mechanisms of each topology onto the target by the similarity that aligns
 their curves, screens each by the dimensional synthesiser's local polish
 (:func:`.dimensional.synthesise` with ``method="local"``, which frees every joint and
-the tracer point) and polishes the best few again on more target points.
-A design is returned only when its driver's certified motion
+the tracer point) and polishes the best few again on more target points; a target
+given as a curve (more points than that polish takes) has its returned designs refined
+by the distance between the curves (:mod:`.dimensional.curve_distance`, after LInK's
+chamfer), each checked as below.  A design is returned only when its driver's certified motion
 (:func:`kin.solve.motion_events`) reaches every target input on one continuous branch;
 an open target's design is written over its
 input interval (the driver's ``range``).  Designs are ordered by RMS error, fewer
@@ -73,7 +75,10 @@ SCREEN_SHARE = 0.5
 #: returned designs' refinement by the distance between the curves has half of it)
 ASSESS_SHARE = 0.15
 #: evaluations kept for the returned designs' refinement by the distance between the
-#: curves (:func:`_curve_stage`)
+#: curves (:func:`_curve_stage`), for a target that is a curve: one of more points than
+#: the finalists' polish takes (:data:`REFINE_POINTS`: the polish sees a sample of it).
+#: Fewer points are precision points, met as given: the polyline through sparse points
+#: is not the curve they lie on (its chords cut its bulges), so no distance to it is asked.
 CURVE_SHARE = 0.15
 #: the nearest start's least share of the budget, however long the retrieval took
 MIN_SHARE = 0.1
@@ -380,8 +385,10 @@ def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter
     (:func:`.dimensional.curve_distance.fit_curve`, within ``meter``): the fit's last
     round whose design passes the checks of a returned design (:func:`_holds_curve`: a
     curve traced at :data:`SAMPLES` inputs could step over a narrow window where the
-    design does not assemble), when it scores a lower chamfer distance than ``d``, else
-    ``d`` itself."""
+    design does not assemble), when its distance to the target is lower than ``d``'s,
+    else ``d`` itself.  Lower: in the target's own frame (the fit's residual, both halves), not
+    by :func:`.curves.chamfer_score`, which compares shapes after a similarity and can
+    prefer a design whose curve is farther from the target."""
     t0 = time.perf_counter()
     span = None if d.interval is None else (d.interval[1] if d.interval[0] == 0.0 else d.interval[0])
     inputs = lambda sp: (2 * np.pi if closed else sp) * np.linspace(0.0, 1.0, SAMPLES)  # noqa: E731
@@ -392,7 +399,7 @@ def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter
     m, sp = fit.at(1.0)
     new = _made(m, inputs(sp), closed, point, target, d.retrieved, d.seconds + time.perf_counter() - t0,
                 d.evaluations + fit.evaluations, fit="curve")
-    return new if new is not None and new.chamfer < d.chamfer else d
+    return d if new is None else new
 
 
 def _holds_curve(m: Mechanism, inputs: np.ndarray, closed: bool, point: str, target: np.ndarray) -> bool:
@@ -538,10 +545,13 @@ def synthesise(path=None, start=None, links=(4, 6, 8), *, atlas: str | Path | No
         with Atlas(atlas, readonly=True) as a:
             ranked = _ranked(a, target, closed, tuple(links), candidates)
         rounds = _Rounds(ranked, per_topology, topologies, point)
-        polished, stopped = _screen_and_refine(rounds, target, closed, point, seed, run.until(1.0 - CURVE_SHARE, 1.0),
+        curve = len(target) > REFINE_POINTS
+        polished, stopped = _screen_and_refine(rounds, target, closed, point, seed,
+                                               run.until(1.0 - CURVE_SHARE, 1.0) if curve else run,
                                                tol, max(top, finalists), tick)
         designs = _checked_designs(polished, target, closed, point, top, tick)
-        designs = _curve_stage(designs, target, closed, point, run.until(1.0, 1.0 - ASSESS_SHARE / 2), tol, tick)
+        if curve:
+            designs = _curve_stage(designs, target, closed, point, run.until(1.0, 1.0 - ASSESS_SHARE / 2), tol, tick)
     return TopologySynthesis(tuple(designs), closed, rounds.taken, time.perf_counter() - t0, run.used, limits, stopped)
 
 

@@ -899,6 +899,9 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         page.locator(".ml-timing select").select_option("prescribed")
         sync_api.expect(page.get_by_text("last input (rad)")).to_be_attached(timeout=120000)
         page.locator(".ml-timing select").select_option("free")
+        # (the page's layout settles first: the prescribed timing's fields leave, so the
+        # target's box is measured where the stroke will be drawn, whatever the load)
+        sync_api.expect(page.get_by_text("last input (rad)")).to_be_hidden(timeout=120000)
         page.locator(".ml-budget input").fill("2")
         page.locator(".ml-budget input").press("Enter")
         page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")

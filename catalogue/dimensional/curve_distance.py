@@ -22,6 +22,15 @@ reference, whose joints are variables too).  Every design is solved by
 its reference branches) at :data:`SAMPLES` inputs from its reference, dense enough for a
 triad's mode to be followed.  The refinement itself is :func:`.optimise.polish`: the
 same trust region, forward differences in one batched call and meter.
+
+References
+----------
+.. [1] Barrow H.G., Tenenbaum J.M., Bolles R.C., Wolf H.C. Parametric correspondence
+   and chamfer matching: two new techniques for image matching. Proc. 5th IJCAI (1977)
+   659-663.
+.. [2] Nobari A.H., Srivastava A., Gutfreund D., Xu K., Ahmed F. LInK: learning joint
+   representations of design and performance spaces through contrastive learning for
+   mechanism synthesis. arXiv:2405.20592 (2024).
 """
 from __future__ import annotations
 
