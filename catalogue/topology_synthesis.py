@@ -389,6 +389,8 @@ def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter
     else ``d`` itself.  Lower: in the target's own frame (the fit's residual, both halves), not
     by :func:`.curves.chamfer_score`, which compares shapes after a similarity and can
     prefer a design whose curve is farther from the target."""
+    if d.interval is not None and 0.0 not in d.interval:
+        return d                # (a stroke that does not start at the reference: a P joint's design)
     t0 = time.perf_counter()
     span = None if d.interval is None else (d.interval[1] if d.interval[0] == 0.0 else d.interval[0])
     inputs = lambda sp: (2 * np.pi if closed else sp) * np.linspace(0.0, 1.0, SAMPLES)  # noqa: E731
