@@ -4,7 +4,9 @@ Run:  python benchmarks/bench_synthesis.py [--quick] [--no-charts] [--pyslvs-pyt
 
 ``--pyslvs-python`` (or ``$MULTILOOP_PYSLVS_PYTHON``) names an interpreter that has
 Pyslvs 22.7.0 (it builds from its sdist only with Cython 3.0: ``pip install 'cython<3.1'
-wheel`` then ``pip wheel --no-build-isolation --no-deps pyslvs==22.7.0``); the default
+wheel`` then ``pip wheel --no-build-isolation --no-deps pyslvs==22.7.0``, and at run time
+its parser needs ``lark-parser`` 0.12, not ``lark`` 1.x: with ``lark`` 1.3 it fails with
+``VisitError ... invalid options``); the default
 is this interpreter when it imports ``pyslvs``, else the Pyslvs rows are skipped with a
 message.
 
