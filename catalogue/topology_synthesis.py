@@ -48,7 +48,7 @@ from .curves import (CURVE_POINTS, aligned_distances, chamfer_score, descriptor,
 from .curve_atlas import CurveIndex, stored_curve
 from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.budget import LIMITS, Budget, Meter
-from .dimensional.curve_distance import SAMPLES, CurveProblem, fit_curve
+from .dimensional.curve_distance import SAMPLES, fit_curve
 from .dimensional.synthesise import check_tol, one_blas_thread
 from .dimensional.report import limits_text
 from .dimensional.targets import check_rows, read_table
@@ -283,18 +283,25 @@ def _subset(target: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
     return target[np.minimum(idx, len(target) - 1)]
 
 
-def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True) -> bool:
+def _motion(m: Mechanism, inputs: np.ndarray):
     """The design's certified motion (:func:`kin.solve.motion_events`: its driver's
-    limits and crossings by continuation) reaches every target input on the design's
-    branch (no circuit defect); for an open target, the inputs' span lies in it too
+    limits and crossings by continuation) over ``inputs``, or None when it has none."""
+    x = np.asarray(inputs, float)
+    try:
+        return motion_events(m, extent=max(float(np.max(np.abs(x), initial=0.0)), 1e-12) * 1.01
+                             if not m.is_rotary(0) else None)
+    except (LinkageError, ValueError, FloatingPointError):
+        return None
+
+
+def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True, motion=None) -> bool:
+    """The design's certified motion (:func:`_motion`, or ``motion`` if computed)
+    reaches every target input on the design's branch (no circuit defect); for an open
+    target, the inputs' span lies in it too
     (:meth:`~kin.motion.DriverMotion.holds_span`).  Only the motion is asked, not the
     whole design check."""
     x = np.asarray(inputs, float)
-    try:
-        motion = motion_events(m, extent=max(float(np.max(np.abs(x), initial=0.0)), 1e-12) * 1.01
-                               if not m.is_rotary(0) else None)
-    except (LinkageError, ValueError, FloatingPointError):
-        return False
+    motion = _motion(m, x) if motion is None else motion
     if motion is None or not motion.reaches(x).all():
         return False
     return closed or motion.holds_span(x)
@@ -393,38 +400,28 @@ def _curve_fitted(d: Design, target: np.ndarray, closed: bool, point: str, meter
         return d                # (a stroke that does not start at the reference: a P joint's design)
     t0 = time.perf_counter()
     span = None if d.interval is None else (d.interval[1] if d.interval[0] == 0.0 else d.interval[0])
-    inputs = lambda sp: (2 * np.pi if closed else sp) * np.linspace(0.0, 1.0, SAMPLES)  # noqa: E731
     fit = fit_curve(d.mechanism, target, closed, point, meter, span=span,
-                    accept=lambda m, sp: _holds_curve(m, inputs(sp), closed, point, target))
+                    accept=lambda m, sp, x, curve: _holds_curve(m, x, curve, closed, point, target))
     if fit is None or not fit.after < fit.before:
         return d
-    m, sp = fit.at(1.0)
-    new = _made(m, inputs(sp), closed, point, target, d.retrieved, d.seconds + time.perf_counter() - t0,
-                d.evaluations + fit.evaluations, fit="curve")
+    m, _ = fit.at(1.0)
+    new = _made(m, fit.problem.timing_for(fit.end)[0], closed, point, target, d.retrieved,
+                d.seconds + time.perf_counter() - t0, d.evaluations + fit.evaluations, fit="curve")
     return d if new is None else new
 
 
-def _holds_curve(m: Mechanism, inputs: np.ndarray, closed: bool, point: str, target: np.ndarray) -> bool:
+def _holds_curve(m: Mechanism, inputs: np.ndarray, curve: np.ndarray, closed: bool, point: str,
+                 target: np.ndarray) -> bool:
     """Whether design ``m`` passes the checks of a returned design along ``inputs``: its
-    certified motion holds them on one branch (turning fully for a closed target), and
-    the certified ``solve`` of its tracer there agrees with the batch's
+    certified motion holds them on one branch (turns fully, for a closed target), and
+    the certified ``solve`` of its tracer there agrees with the batch's ``curve``
     (:meth:`.dimensional.curve_distance.CurveProblem.curves`) to 1e-6 of the target's size."""
-    if not _reaches_targets(m, inputs, closed) or (closed and not _turns_fully(m)):
+    motion = _motion(m, inputs)
+    if motion is None or not (motion.turns_fully if closed else _reaches_targets(m, inputs, False, motion)):
         return False
-    own = CurveProblem(m, target, closed, point)
-    batch = own.curves(own.x0[None], inputs[None])[0]
     st = solve(m, inputs)
     P = st.point_positions[:, st.point_index(point)]
-    return bool(np.all(np.abs(P - batch) <= 1e-6 * own.size))
-
-
-def _turns_fully(m: Mechanism) -> bool:
-    """Whether ``m``'s driver turns fully (:func:`kin.solve.motion_events`)."""
-    try:
-        ev = motion_events(m)
-    except (LinkageError, ValueError, FloatingPointError):
-        return False
-    return ev is not None and ev.turns_fully
+    return bool(np.all(np.abs(P - curve) <= 1e-6 * float(np.max(np.ptp(target, axis=0)))))
 
 
 def _polish(start: Mechanism, target: np.ndarray, closed: bool, point: str, limits: Budget, seed: int,

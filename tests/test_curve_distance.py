@@ -110,7 +110,7 @@ def test_a_closed_fit_traces_the_target_curve_from_a_perturbed_start():
     start = _moved(m, 0.02 * m.size * rng.uniform(-1, 1, (len(m.joints) + len(m.points), 2)))
     seen = []
     meter = Meter(3000)
-    fit = fit_curve(start, target, True, "P", meter, accept=lambda d, span: seen.append(d) or True)
+    fit = fit_curve(start, target, True, "P", meter, accept=lambda d, span, *_: seen.append(d) or True)
     got, span = fit.at(1.0)
     assert span is None and fit.after < 0.01 * fit.before
     assert _apart(_traced(start, 0.0, 2 * np.pi)[:-1], target, size, True) > 1e-2
@@ -146,13 +146,13 @@ def test_the_fit_ends_at_the_last_round_the_checks_take():
     earlier round's, whose residual lies between the start's and the last's."""
     m = load_named("four_bar")
     target = _traced(m, 0.0, 2 * np.pi, 300)[:-1] * 1.05
-    none = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: False, chunk=10)
+    none = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span, *_: False, chunk=10)
     assert none.after == none.before and np.array_equal(none.end, none.start)
     asked = []
-    every = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: asked.append(d) or True, chunk=10)
+    every = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span, *_: asked.append(d) or True, chunk=10)
     assert len(asked) == 1                       # (the last round passes: one check)
     refused = []
-    last = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span: refused.append(d) or len(refused) > 1,
+    last = fit_curve(m, target, True, "P", Meter(2000), accept=lambda d, span, *_: refused.append(d) or len(refused) > 1,
                      chunk=10)
     assert len(refused) == 2 and every.after < last.after < last.before
     assert not np.array_equal(last.end, every.end)

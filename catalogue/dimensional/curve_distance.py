@@ -196,16 +196,20 @@ class CurveProblem:
 
 @dataclass(frozen=True)
 class CurveFit:
-    """A design refined by the curve distance: the problem, the start's and the refined
-    variables (design, then an open target's span), the root of the mean squared residual
+    """A design refined by the curve distance: the problem, the refined variables
+    (design, then an open target's span; :attr:`start`: the start's), the root of the mean squared residual
     (:class:`CurveProblem`) at both, and the designs evaluated."""
 
     problem: CurveProblem
-    start: np.ndarray
     end: np.ndarray
     before: float
     after: float
     evaluations: int
+
+    @property
+    def start(self) -> np.ndarray:
+        """The start's variables (the problem's own)."""
+        return self.problem.x0
 
     def at(self, t: float = 1.0) -> tuple[Mechanism, float | None]:
         """The design a fraction ``t`` of the way from the start to the refined one, and
@@ -219,8 +223,9 @@ def fit_curve(mechanism: Mechanism, target, closed: bool, point: str, meter: Met
     (:class:`CurveProblem`) within ``meter``: at most ``rounds`` polishes
     (:func:`.optimise.polish`) of ``chunk`` residual evaluations each, each from the
     last, while they lower the residual and the meter lasts.  The result is the last
-    round's design that ``accept(mechanism, span) -> bool`` takes (when given; asked from
-    the last round back, so that a fit whose end passes costs one call), else the start.
+    round's design that ``accept(mechanism, span, inputs, curve) -> bool`` takes (given
+    its traced ``inputs`` and the batch's ``curve`` there; asked from the last round
+    back, so that a fit whose end passes costs one call), else the start.
     None when the start's own curve does not assemble or the meter cannot afford one
     Jacobian."""
     prob = CurveProblem(mechanism, target, closed, point, span)
@@ -246,9 +251,9 @@ def fit_curve(mechanism: Mechanism, target, closed: bool, point: str, meter: Met
         z, f = z1, f1
         rounds_done.append((z, f))
     for z, f in reversed(rounds_done[1:]):
-        if accept is None or accept(*_design_of(prob, z)):
-            return CurveFit(prob, prob.x0.copy(), z, rounds_done[0][1], f, used)
-    return CurveFit(prob, prob.x0.copy(), prob.x0.copy(), rounds_done[0][1], rounds_done[0][1], used)
+        if accept is None or accept(*_design_of(prob, z), prob.timing_for(z)[0], prob.curves(z[None])[0]):
+            return CurveFit(prob, z, rounds_done[0][1], f, used)
+    return CurveFit(prob, prob.x0.copy(), rounds_done[0][1], rounds_done[0][1], used)
 
 
 def _rms(r: np.ndarray) -> float:
