@@ -6,7 +6,9 @@ named by :func:`~kin.geometry.design_names`) and runs each step once for every d
 input: the dyads' closed forms (Vasechkin et al. 2017, eqs. 1-18) broadcast the designs'
 numbers ``(D, 1)`` over the inputs, and the triad and class IV steps compute every
 assembly mode of every design at every input with one polynomial kernel and follow the
-reference's mode along the inputs (:func:`kin.groups.triad.follow_modes_batch`).  A step
+reference's mode along the inputs (:func:`kin.groups.triad.follow_modes_batch`); designs
+within a hair of the first (a finite-difference Jacobian's rows) are Newton-polished from
+the first one's poses instead, where that stays well inside its mode.  A step
 with no batched form (Newton's) makes the plan fall back to :func:`kin.solve.solve` per
 design.
 

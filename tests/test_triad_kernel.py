@@ -143,3 +143,50 @@ def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
     with kernel.using("on"):
         solve_designs(m, cols, X, x)
     assert seen
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.0, 0.3), st.integers(3, 140), st.booleans())
+def test_designs_near_the_first_are_polished_from_it(seed, move, N, jit):
+    """Designs within 1e-9 of the first (a finite-difference Jacobian's rows) are
+    Newton-polished from the first design's poses, input by input, and kept only well
+    inside its mode: the same statuses as each design tracked alone, poses within 1e-10
+    (turning points, lost modes and a far design among them)."""
+    A, b, L, start = _random_triads(1, N, seed, move)
+    rng = np.random.default_rng(seed)
+    k = 6
+    A = np.repeat(A, k, axis=0) + 1e-9 * rng.standard_normal((k, 1, 3, 2))
+    b = np.repeat(b, k, axis=0) + 1e-9 * rng.standard_normal((k, 3, 2))
+    L = np.repeat(L, k, axis=0)
+    start = np.repeat(start, k, axis=0)
+    A[0] -= 1e-9 * rng.standard_normal((3, 2))   # (the first one is tracked as it is)
+    A[-1] += 0.01                               # one far design: tracked
+    P, th, s = track_designs(A, b, L, start, jit=jit)
+    for d in range(k):
+        Pd, thd, sd = track_designs(A[d:d + 1], b[d:d + 1], L[d:d + 1], start[d:d + 1], jit=jit)
+        np.testing.assert_array_equal(s[d], sd[0])
+        assert np.nanmax(np.abs(P[d] - Pd[0]), initial=0.0) <= 1e-10
+        assert np.nanmax(np.abs(th[d] - thd[0]), initial=0.0) <= 1e-10
+
+
+def test_near_designs_skip_the_tracker(monkeypatch):
+    """The rows of a Jacobian of the Stephenson III triad over a whole turn's grid: only
+    the first and a far row go through the tracker, the near rows agree with it."""
+    import multiloop.kin.groups.triad as triad
+    m = load_named("stephenson_3_triad")
+    cols, X = design_population(m, 1, 0.0, 1)
+    h = 1e-7 * m.size * np.eye(len(cols))
+    far = X[0] + 0.01 * m.size * np.random.default_rng(0).standard_normal(len(cols))
+    X = np.vstack([X, X[0] + h, far])
+    tracked = []
+    real = triad._track_all
+    monkeypatch.setattr(triad, "_track_all", lambda A, *a: tracked.append(A.shape[0]) or real(A, *a))
+    x = np.linspace(0.0, 1.0, 96)
+    r = solve_designs(m, cols, X, x)
+    assert tracked == [2]
+    monkeypatch.setattr(triad, "_track_all", real)
+    for d in range(X.shape[0]):
+        alone = solve_designs(m, cols, X[d:d + 1], x)
+        np.testing.assert_array_equal(alone.ok[0], r.ok[d])
+        assert np.nanmax(np.abs(alone.point("P")[0] - r.point("P")[d]), initial=0.0) <= 1e-10 * m.size
+    assert r.ok.all()

@@ -791,11 +791,82 @@ def track_designs(A, b, l, start, *, stride=32, jit=False):
     -------
     P : ndarray (D, N, 3, 2), theta : ndarray (D, N), status : ndarray (D, N) int
         As :class:`~kin.groups.triad.TriadTrack` (0 ok, 1 no assembly, 2 lost, 3 after).
+
+    Notes
+    -----
+    Designs within :data:`NEAR` of the first one (the rows of a finite-difference
+    Jacobian, which perturb one design) are not tracked on their own: each is
+    Newton-polished at every input from the first design's pose there, and kept when
+    every input converges well inside the first design's mode (within a quarter of the
+    distance to its nearest other mode, from all its modes at every input), which is
+    the mode the tracker would follow (:func:`_near_first`); any other is tracked.
     """
     Dn, N = A.shape[:2]
     L = np.broadcast_to(l[:, None] if l.ndim == 2 else l, (Dn, N, 3))
-    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     nb = _kernel() if jit else None
+    near = _near_rows(A, b, L, start)
+    if near.size == 0:
+        return _track_all(A, b, L, start, stride, nb)
+    rest = np.setdiff1d(np.arange(Dn), near)
+    P = np.full((Dn, N, 3, 2), np.nan)
+    th = np.full((Dn, N), np.nan)
+    status = np.full((Dn, N), 3)
+    P[rest], th[rest], status[rest] = _track_all(A[rest], b[rest], L[rest], start[rest], stride, nb)
+    kept, Pn, thn = _near_first(A[near], b[near], L[near], P[0], th[0], status[0], nb)
+    P[near[kept]], th[near[kept]], status[near[kept]] = Pn, thn, 0
+    left = near[~kept]
+    if left.size:
+        P[left], th[left], status[left] = _track_all(A[left], b[left], L[left], start[left], stride, nb)
+    return P, th, status
+
+
+#: how near another design's pins, pivots, lengths and start must be to the first one's
+#: (the largest coordinate difference, relative to the first design's longest leg) for it
+#: to be solved from the first one's poses (:func:`track_designs`)
+NEAR = 1e-5
+
+
+def _near_rows(A, b, L, start) -> np.ndarray:
+    """The rows after the first whose inputs are within :data:`NEAR` of the first's."""
+    Dn = A.shape[0]
+    if Dn < 3:
+        return np.zeros(0, int)
+    dev = np.max(np.abs(A - A[:1]).reshape(Dn, -1), axis=1)
+    for a in (b, L, start):
+        dev = np.maximum(dev, np.max(np.abs(a - a[:1]).reshape(Dn, -1), axis=1))
+    ok = dev <= NEAR * float(np.max(L[0]))        # (NaN: not near)
+    ok[0] = False
+    return np.flatnonzero(ok)
+
+
+def _near_first(A, b, L, P0, th0, s0, nb):
+    """Designs near a first one whose every input tracked (``P0``, ``th0``, status
+    ``s0``), each Newton-polished at every input from the first one's pose: the rows
+    kept (every input converged, within a quarter of the first one's separation from its
+    nearest other mode there), their ``P`` and ``theta``."""
+    K, N = A.shape[:2]
+    none = np.zeros(K, bool), np.zeros((0, N, 3, 2)), np.zeros((0, N))
+    if (s0 != 0).any():
+        return none
+    bb = b - b[:, :1]
+    if nb is None:
+        m = triad_modes(A[0], np.broadcast_to(b[0], (N, 3, 2)), L[0])
+        Pm, thm = m.P, m.theta
+    else:
+        Pm, thm = _modes_nb(nb, A[0], np.broadcast_to(bb[0], (N, 3, 2)), L[0])
+    d = np.where(np.isfinite(thm), np.nan_to_num(_dist(Pm, P0[:, None]), nan=np.inf), np.inf)   # (N, modes)
+    own = np.argmin(d, axis=1)
+    d[np.arange(N), own] = np.inf
+    sep = np.min(d, axis=1)                                                          # (N,)
+    Pf, thf, res = _polish(A, bb[:, None], L, np.broadcast_to(P0[:, 0], (K, N, 2)), np.broadcast_to(th0, (K, N)))
+    kept = np.all((res <= _ACCEPT) & (_dist(Pf, P0) <= 0.25 * sep), axis=1)
+    return kept, Pf[kept], _wrap(thf[kept])
+
+
+def _track_all(A, b, L, start, stride, nb):
+    """:func:`track_designs` of every design by the tracker (batched where it can be)."""
+    Dn, N = A.shape[:2]
+    finite = np.all(np.isfinite(A.reshape(Dn, -1)), axis=1)
     step = stride if N > 2 * stride else 1        # a short path: all modes at every input
     if finite.all():                              # (no copies of the designs' arrays)
         k, Pd, thd = _fill(A, b, L, start, step, nb)
