@@ -25,13 +25,13 @@ STORED_UP_TO = 12
 #: ints stop at 2**63 and 2**31)
 INT_RANGES = {"dof": (1, 2 ** 31 - 1), "max_multiplicity": (1, 2 ** 31 - 1), "max_link_degree": (2, 2 ** 31 - 1),
               "workers": (1, 1024), "limit": (0, 2 ** 63 - 1), "curves": (1, 10 ** 6),
-              "html_limit": (1, 2 ** 63 - 1)}
+              "points_per_link": (1, 256), "html_limit": (1, 2 ** 63 - 1)}
 
 
 def _check_options(req: Mapping) -> None:
     """Every integer option within its range, the query well formed."""
     for key, (lo, hi) in INT_RANGES.items():
-        value = req[key]
+        value = req.get(key)
         if value is not None and not lo <= value <= hi:
             got = str(value) if abs(value) < 10 ** 30 else f"a {len(str(abs(value)))}-digit number"
             raise ParameterError(explain(key, expected=f"an integer from {lo} to {hi}", got=got), key)
@@ -44,6 +44,10 @@ def _check_options(req: Mapping) -> None:
         raise ParameterError(explain("curves", expected="'links' N, 'dof' 1 and 'mechanisms'",
                                      got="'curves' without them", hint="the curves belong to the stored mechanisms"),
                              "curves", "links", "dof", "mechanisms")
+    if req.get("points_per_link") is not None and req["curves"] is None:
+        raise ParameterError(explain("points_per_link", expected="'curves' K too", got="'points_per_link' alone",
+                                     hint="it is the number of traced points per moving link of each realisation"),
+                             "points_per_link", "curves")
 
 
 def parse_assortment(text: str | None, name: str) -> tuple[int, ...] | None:
@@ -104,11 +108,14 @@ def atlas_request(req: Mapping) -> SynthesisOptions | None:
 
 def build_atlas(atlas: Atlas, opts: SynthesisOptions | None, *, loops: bool | None = None,
                 workers: int | None = None, scheduler=None, progress: bool = True,
-                mechanisms: bool = False, curves: int | None = None, table: bool = False):
+                mechanisms: bool = False, curves: int | None = None, table: bool = False,
+                points_per_link: int | None = None):
     """Build the chains of ``opts`` (``loops``: None for [La] up to 10 links; with
     ``table`` beyond :data:`STORED_UP_TO` links count them by row instead), with
     ``mechanisms`` the inversions of a 1-DOF atlas and with ``curves`` that many
-    realisations of each closed-form mechanism; returns ``(built, inversions, curves)``,
+    realisations of each closed-form mechanism, each traced at ``points_per_link`` points
+    of every moving link other than the driven one (default
+    :data:`~.curve_atlas.POINTS_PER_LINK`); returns ``(built, inversions, curves)``,
     None for each build not asked for (:class:`BuildResult`,
     :class:`~.inversions.MechanismCounts`, :class:`~.curve_atlas.CurveBuild`)."""
     built: BuildResult | None = None
@@ -122,8 +129,8 @@ def build_atlas(atlas: Atlas, opts: SynthesisOptions | None, *, loops: bool | No
         from .inversions import build_mechanisms
         inv = build_mechanisms(atlas, opts, progress=progress)
         if curves is not None:
-            from .curve_atlas import build_curves
+            from .curve_atlas import POINTS_PER_LINK, build_curves
             from .distributed import default_workers
-            made = build_curves(atlas, opts, curves, progress=progress,
+            made = build_curves(atlas, opts, curves, points_per_link or POINTS_PER_LINK, progress=progress,
                                 workers=workers or default_workers(), scheduler=scheduler)
     return built, inv, made

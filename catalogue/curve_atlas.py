@@ -35,13 +35,13 @@ import numpy as np
 
 from . import stored_rows as sr
 from .atlas import Atlas, each_with_progress
-from .curves import CURVE_POINTS, DESCRIPTOR_HARMONICS, descriptor, normalise, reversed_descriptor
+from .curves import CURVE_POINTS, DESCRIPTOR_HARMONICS, descriptors_closed, normalise_closed, reversed_descriptor
 from .distributed import map_calls
 from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
 from .synthesis import SynthesisOptions
 
-__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_record", "stored_curve",
+__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_records", "stored_curve", "POINTS_PER_LINK",
            "save_index"]
 
 _SCHEMA = """
@@ -114,16 +114,21 @@ def _mechanism_ids(atlas: Atlas, opts: SynthesisOptions) -> list[tuple[int, Inve
     return [(ids[(r.chain, r.frame, r.joint, r.driven)], r) for r in iter_mechanisms(atlas, opts)]
 
 
-def curve_record(points: np.ndarray) -> tuple[bytes, bytes, complex, float]:
-    """Descriptor and normalised shape (as stored BLOBs), centre and radius of a closed curve."""
-    z, c, r = normalise(points, CURVE_POINTS, True)
-    d = descriptor(points, closed=True)
-    return d.tobytes(), z.astype(np.complex64).tobytes(), c, r
+def curve_records(curves: np.ndarray) -> list[tuple[bytes, bytes, complex, float]]:
+    """Descriptor and normalised shape (as stored BLOBs), centre and radius of each closed
+    curve of a batch ``(K, n, 2)`` (the curves of one realisation, traced at the same inputs)."""
+    if not len(curves):
+        return []
+    z, c, r = normalise_closed(curves, CURVE_POINTS)
+    d = descriptors_closed(curves)
+    return [(d[i].tobytes(), z[i].astype(np.complex64).tobytes(), complex(c[i]), float(r[i]))
+            for i in range(len(curves))]
 
 
 def realise_mechanism(mid: int, inv: InversionRecord, k: int, per_link: int) -> list[tuple]:
-    """The ``k`` realisations of one mechanism with their curves, ready to store
-    (seeds from the mechanism's row id, so any process gives the same rows)."""
+    """The ``k`` realisations of one mechanism with their curves (``per_link`` tracer
+    points on each moving link other than the driven one), ready to store (seeds from the
+    mechanism's row id, so any process gives the same rows)."""
     rows = []
     for s in range(k):
         seed = 1_000_003 * mid + 7919 * s
@@ -133,8 +138,9 @@ def realise_mechanism(mid: int, inv: InversionRecord, k: int, per_link: int) -> 
         m = r.mechanism
         curves = coupler_curves(m, (m.frame, m.drivers[0].links[1]), per_link, np.random.default_rng(seed))
         joints = {j.name: list(j.at) for j in m.joints}
+        records = curve_records(np.array([cv.points for cv in curves]))
         rows.append((r.seed, r.tries, r.min_angle, joints,
-                     [(cv.link, cv.at, *curve_record(cv.points)) for cv in curves]))
+                     [(cv.link, cv.at, *rec) for cv, rec in zip(curves, records)]))
     return rows
 
 
@@ -158,11 +164,18 @@ def _timed(mid: int, inv: InversionRecord, k: int, per_link: int) -> tuple[int, 
     return mid, rows, time.perf_counter() - t
 
 
-def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = 2, progress: bool = False,
+#: tracer points per moving link of a realisation (``multiloop atlas --points-per-link``)
+POINTS_PER_LINK = 2
+
+
+def build_curves(atlas: Atlas, opts: SynthesisOptions, k: int, per_link: int = POINTS_PER_LINK, progress: bool = False,
                  max_mechanisms: int | None = None, workers: int = 1, scheduler=None) -> CurveBuild:
     """Draw ``k`` certified realisations of every closed-form mechanism of ``opts``
     (mechanisms already built with :func:`.inversions.build_mechanisms`) and store
-    ``per_link`` coupler curves per moving link other than the driven one; resumes.
+    ``per_link`` coupler curves per moving link other than the driven one (the motion is
+    solved once per realisation, so more points per link cost little: Hrones & Nelson
+    1951 drew their four-bar atlas the same way, many coupler points per linkage); resumes
+    (a mechanism already done keeps the points it was built with).
     ``workers`` local processes, or one Dask task per mechanism on ``scheduler`` (an
     address or a ``distributed.Client``), draw them (:func:`.distributed.map_calls`);
     this process writes each mechanism in one transaction, so the rows are the same for

@@ -210,6 +210,14 @@ def descriptor(path, closed: bool | None = None, harmonics: int = DESCRIPTOR_HAR
     return np.concatenate([np.abs(Z[k]), np.abs(Z[-k])]).astype(np.float32)
 
 
+def descriptors_closed(curves, harmonics: int = DESCRIPTOR_HARMONICS, m: int = 2 * CURVE_POINTS) -> np.ndarray:
+    """:func:`descriptor` of a batch of closed curves ``(K, n, 2)`` at once, ``(K, 2H)``."""
+    z = normalise_closed(curves, m)[0]
+    Z = np.fft.fft(z, axis=1) / m
+    k = np.arange(1, harmonics + 1)
+    return np.concatenate([np.abs(Z[:, k]), np.abs(Z[:, -k])], axis=1).astype(np.float32)
+
+
 def reversed_descriptor(d: np.ndarray) -> np.ndarray:
     """The descriptor of the same curve traversed backwards (``Z_k ↔ Z_−k``)."""
     d = np.asarray(d)

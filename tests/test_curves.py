@@ -10,12 +10,12 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from multiloop.catalogue.atlas import Atlas
-from multiloop.catalogue.curve_atlas import CurveIndex, build_curves, stored_curve
+from multiloop.catalogue.curve_atlas import CurveIndex, _mechanism_ids, build_curves, realise_mechanism, stored_curve
 from multiloop.catalogue.curves import (
-    aligned_distance, chamfer_score, descriptor, is_closed, normalise, reversed_descriptor,
+    CURVE_POINTS, aligned_distance, chamfer_score, descriptor, is_closed, normalise, reversed_descriptor,
 )
 from multiloop.catalogue.inversions import build_mechanisms, iter_mechanisms
-from multiloop.catalogue.realisations import TURN_SAMPLES, realise
+from multiloop.catalogue.realisations import TURN_SAMPLES, coupler_curves, realise
 from multiloop.catalogue.synthesis import SynthesisOptions, nauty_available
 from multiloop.cli import main
 
@@ -171,6 +171,34 @@ def test_curves_same_in_two_processes(tmp_path):
             got.append(atlas.con.execute("SELECT r.mechanism, c.link, c.x, c.y, c.descriptor FROM curves c JOIN "
                                          "realisations r ON r.id = c.realisation ORDER BY 1, 2, 3").fetchall())
     assert got[0] == got[1] and len(got[0]) > 0
+
+
+@needs_nauty
+def test_points_per_link_traces_more_points_of_the_same_realisations(tmp_path, capsys):
+    """--points-per-link P: P curves on each moving link other than the driven one, from
+    the same realisations (the motion solved once), every stored record equal to the
+    one-curve route (normalise and descriptor of each curve alone, to the bit); without
+    --curves it is refused with exit 2."""
+    db = tmp_path / "p.sqlite"
+    args = ["atlas", "--links", "4", "--dof", "1", "--db", str(db), "--no-loops", "--no-progress", "--mechanisms",
+            "--curves", "2"]
+    assert main(args + ["--points-per-link", "3"]) == 0
+    with Atlas(db) as atlas:
+        per = atlas.con.execute("SELECT c.realisation, c.link, count(*) FROM curves c GROUP BY 1, 2").fetchall()
+        counts = [n for _, _, n in per]
+        assert len(per) == 4 and max(counts) == 3 and sum(counts) >= 10   # (a point whose path has no length is left out)
+        stored = [r[0] for r in atlas.con.execute("SELECT c.descriptor FROM curves c ORDER BY c.id")]
+        mid, inv = _mechanism_ids(atlas, SynthesisOptions(4, 1))[0]
+    rows = realise_mechanism(mid, inv, 2, 3)
+    m = realise(inv, rows[0][0]).mechanism
+    curves = coupler_curves(m, (m.frame, m.drivers[0].links[1]), 3, np.random.default_rng(rows[0][0]))
+    for cv, (link, at, d, z, c, r) in zip(curves, rows[0][4]):
+        assert d == descriptor(cv.points, closed=True).tobytes() and d in stored
+        z0, c0, r0 = normalise(cv.points, CURVE_POINTS, True)
+        assert z == z0.astype(np.complex64).tobytes() and c == c0 and r == r0
+    assert main(["atlas", "--links", "4", "--dof", "1", "--db", str(tmp_path / "q.sqlite"), "--mechanisms",
+                 "--no-progress", "--points-per-link", "3"]) == 2
+    assert "points-per-link" in capsys.readouterr().err.replace("_", "-")
 
 
 def _curve_rows(db):

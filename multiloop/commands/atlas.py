@@ -48,6 +48,9 @@ def add_arguments(p) -> None:
     p.add_argument("--curves", type=int, metavar="K",
                    help="with --mechanisms: K certified realisations of every closed-form mechanism and their "
                         "coupler curves with descriptors (resumable)")
+    p.add_argument("--points-per-link", type=int, metavar="P",
+                   help="with --curves: P traced points on every moving link other than the driven one "
+                        "(default 2; the motion is solved once per realisation)")
     p.add_argument("--limit", type=int, help="list at most this many chains")
     p.add_argument("--html", metavar="DIR", help="write the HTML gallery to DIR")
     p.add_argument("--html-limit", type=int, default=2000, help="chains per gallery page (default 2000)")
@@ -69,7 +72,7 @@ def run(args) -> int:
         built, inv, curves = build_atlas(atlas, opts, loops=args.loops, workers=args.workers,
                                          scheduler=args.scheduler, progress=not args.no_progress,
                                          mechanisms=args.mechanisms and args.query is None, curves=args.curves,
-                                         table=args.table)
+                                         table=args.table, points_per_link=args.points_per_link)
         if curves is not None:
             print(curves.to_text(), file=sys.stderr)
         doc = atlas_listing(atlas, opts, args.query, args.limit, args.table, args.mechanisms, built, inv,
