@@ -812,7 +812,7 @@ def track_designs(A, b, l, start, *, stride=32, jit=False):
     th = np.full((Dn, N), np.nan)
     status = np.full((Dn, N), 3)
     P[rest], th[rest], status[rest] = _track_all(A[rest], b[rest], L[rest], start[rest], stride, nb)
-    kept, Pn, thn = _near_first(A[near], b[near], L[near], P[0], th[0], status[0], nb)
+    kept, Pn, thn = _near_first(A[near], b[near], L[near], (A[0], b[0], L[0]), (P[0], th[0], status[0]), nb)
     P[near[kept]], th[near[kept]], status[near[kept]] = Pn, thn, 0
     left = near[~kept]
     if left.size:
@@ -839,25 +839,29 @@ def _near_rows(A, b, L, start) -> np.ndarray:
     return np.flatnonzero(ok)
 
 
-def _near_first(A, b, L, P0, th0, s0, nb):
-    """Designs near a first one whose every input tracked (``P0``, ``th0``, status
-    ``s0``), each Newton-polished at every input from the first one's pose: the rows
-    kept (every input converged, within a quarter of the first one's separation from its
-    nearest other mode there), their ``P`` and ``theta``."""
+def _near_first(A, b, L, first, tracked, nb):
+    """Designs near a ``first`` one (its ``A``, ``b``, ``L``) whose every input tracked
+    (``tracked``: its ``P``, ``theta`` and status), each Newton-polished at every input
+    from the first one's pose: the rows kept (every input converged, within a quarter of
+    the first one's separation from its nearest other mode there), their ``P`` and
+    ``theta``."""
     K, N = A.shape[:2]
+    (A0, b0, L0), (P0, th0, s0) = first, tracked
     none = np.zeros(K, bool), np.zeros((0, N, 3, 2)), np.zeros((0, N))
     if (s0 != 0).any():
         return none
-    bb = b - b[:, :1]
     if nb is None:
-        m = triad_modes(A[0], np.broadcast_to(b[0], (N, 3, 2)), L[0])
+        m = triad_modes(A0, np.broadcast_to(b0, (N, 3, 2)), L0)
         Pm, thm = m.P, m.theta
     else:
-        Pm, thm = _modes_nb(nb, A[0], np.broadcast_to(bb[0], (N, 3, 2)), L[0])
+        Pm, thm = _modes_nb(nb, A0, np.broadcast_to(b0 - b0[:1], (N, 3, 2)), L0)
     d = np.where(np.isfinite(thm), np.nan_to_num(_dist(Pm, P0[:, None]), nan=np.inf), np.inf)   # (N, modes)
     own = np.argmin(d, axis=1)
+    if not np.all(d[np.arange(N), own] <= 1e-6 * np.max(L0)):    # its pose is not among the modes found
+        return none
     d[np.arange(N), own] = np.inf
     sep = np.min(d, axis=1)                                                          # (N,)
+    bb = b - b[:, :1]
     Pf, thf, res = _polish(A, bb[:, None], L, np.broadcast_to(P0[:, 0], (K, N, 2)), np.broadcast_to(th0, (K, N)))
     kept = np.all((res <= _ACCEPT) & (_dist(Pf, P0) <= 0.25 * sep), axis=1)
     return kept, Pf[kept], _wrap(thf[kept])
