@@ -437,6 +437,45 @@ def chart(rows: list[dict], path: str) -> None:
     fig.savefig(path, dpi=90)
 
 
+def chart_links_time(rows: list[dict], path: str, budget_s: float = 60.0) -> None:
+    """Error against links and against time: every returned design's chamfer distance by
+    its number of links (the letter's best filled), and each letter's best by its wall
+    seconds, with LInK's mean and the 60-s goal."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
+    link_mean = float(np.mean([r["link_cd"] for r in rows]))
+    for i, r in enumerate(rows):
+        jitter = (i / max(len(rows) - 1, 1) - 0.5) * 0.6
+        for d in r["designs"]:
+            best = d["cd"] == r["cd"]
+            ax1.plot(d["links"] + jitter, d["cd"], "o", ms=4, color="tab:blue", mfc="tab:blue" if best else "none")
+    ax1.axhline(link_mean, color="tab:red", ls="--", lw=1, label=f"LInK's mean ({link_mean:.4f}, 15-20 joints)")
+    ax1.set_xticks(sorted({d["links"] for r in rows for d in r["designs"]}))
+    ax1.set_xlabel("links of the design (filled: the letter's best)")
+    ax1.set_ylabel("chamfer distance (LInK's metric)")
+    ax1.set_yscale("log")
+    ax1.legend(fontsize=7)
+    ax2.plot([r["seconds"] for r in rows], [r["cd"] for r in rows], "o", color="tab:blue")
+    for r in rows:
+        ax2.annotate(r["letter"], (r["seconds"], r["cd"]), fontsize=6, xytext=(2, 2), textcoords="offset points")
+    ax2.axhline(link_mean, color="tab:red", ls="--", lw=1)
+    ax2.axvline(budget_s, color="gray", ls=":", lw=1, label=f"{budget_s:.0f} s a letter")
+    ax2.set_xlabel("wall seconds of the letter")
+    ax2.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+
+
+def _charts(rows: list[dict], path: str) -> None:
+    """:func:`chart` at ``path`` and :func:`chart_links_time` beside it (``*_links_time.png``)."""
+    chart(rows, path)
+    stem, dot, ext = path.rpartition(".")
+    chart_links_time(rows, f"{stem}_links_time.{ext}" if dot else f"{path}_links_time")
+
+
 def table(rows: list[dict]) -> str:
     lines = ["| letter | mode | ours: CD | links | wall s | CPU s | LInK: CD | LInK: joints |",
              "|---|---|---|---|---|---|---|---|"]
@@ -463,7 +502,8 @@ def main(argv=None) -> int:
                    help="only score LInK's own designs (its alpha_res.npy) by this port, beside its stored CD")
     p.add_argument("--report", nargs="+", default=None, metavar="JSON",
                    help="no run: merge the rows of these --json files (e.g. letters run in two processes), "
-                        "print the table, write --json and --chart")
+                        "print the table, write --json and --chart (and the chart of error against links "
+                        "and time beside it, *_links_time.png)")
     a = p.parse_args(argv)
     if a.report:
         docs = [json.load(open(f)) for f in a.report]
@@ -474,7 +514,7 @@ def main(argv=None) -> int:
             with open(a.json, "w") as f:
                 json.dump(doc, f, indent=1)
         if a.chart:
-            chart(rows, a.chart)
+            _charts(rows, a.chart)
         return 0
     if a.targets is None:
         p.error("--targets is required (LInKGenerator's alphabet.npy)")
@@ -498,7 +538,7 @@ def main(argv=None) -> int:
                            "rows": rows}, f, indent=1)
     print(table(rows))
     if a.chart:
-        chart(rows, a.chart)
+        _charts(rows, a.chart)
     return 0
 
 

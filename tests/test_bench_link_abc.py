@@ -86,3 +86,22 @@ def test_metric_of_a_curve_against_itself(B):
     assert B.link_cd(stroke, stroke, False) < 0.01
     # a stroke half the length scores far worse
     assert B.link_cd(stroke, stroke[:60], False) > 0.1
+
+
+def test_report_writes_both_charts_and_the_merged_rows(B, tmp_path):
+    """--report merges the rows of two runs (letters sorted), writes --json, the per-letter
+    chart and the chart of error against links and time beside it (both PNG)."""
+    import json
+
+    def row(ch, cd, s):
+        return {"letter": ch, "mode": "closed", "seconds": s, "cpu_seconds": s, "link_cd": 0.02, "link_joints": 19,
+                "cd": cd, "links": 8, "structure": "x",
+                "designs": [{"links": 8, "cd": cd}, {"links": 6, "cd": 2 * cd}]}
+    for name, rows in (("a", [row("B", 0.03, 40.0)]), ("b", [row("A", 0.01, 20.0)])):
+        (tmp_path / f"{name}.json").write_text(json.dumps({"evaluations": 1, "seed": 0, "rows": rows}))
+    out = tmp_path / "m.json"
+    assert B.main(["--report", str(tmp_path / "b.json"), str(tmp_path / "a.json"), "--json", str(out),
+                   "--chart", str(tmp_path / "c.png")]) == 0
+    assert [r["letter"] for r in json.loads(out.read_text())["rows"]] == ["A", "B"]
+    for f in ("c.png", "c_links_time.png"):
+        assert (tmp_path / f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
