@@ -41,8 +41,8 @@ from .inversions import InversionRecord, iter_mechanisms
 from .realisations import coupler_curves, realise
 from .synthesis import SynthesisOptions
 
-__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_records", "stored_curve", "POINTS_PER_LINK",
-           "save_index"]
+__all__ = ["build_curves", "realise_mechanism", "CurveBuild", "CurveIndex", "CurveHit", "curve_records", "stored_curve",
+           "POINTS_PER_LINK", "save_index"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS realisations (

@@ -204,18 +204,20 @@ def descriptor(path, closed: bool | None = None, harmonics: int = DESCRIPTOR_HAR
     to translation, scale, rotation and start point (module docstring)."""
     if closed is None:
         closed = is_closed(path)
-    z, _, _ = normalise(path, m, closed)
-    Z = np.fft.fft(z) / len(z)
-    k = np.arange(1, harmonics + 1)
-    return np.concatenate([np.abs(Z[k]), np.abs(Z[-k])]).astype(np.float32)
+    return _magnitudes(normalise(path, m, closed)[0], harmonics)
 
 
 def descriptors_closed(curves, harmonics: int = DESCRIPTOR_HARMONICS, m: int = 2 * CURVE_POINTS) -> np.ndarray:
     """:func:`descriptor` of a batch of closed curves ``(K, n, 2)`` at once, ``(K, 2H)``."""
-    z = normalise_closed(curves, m)[0]
-    Z = np.fft.fft(z, axis=1) / m
+    return _magnitudes(normalise_closed(curves, m)[0], harmonics)
+
+
+def _magnitudes(z: np.ndarray, harmonics: int) -> np.ndarray:
+    """``|Z_k|``, k = 1…H then −1…−H, of the discrete Fourier coefficients of the rows of
+    ``z`` (complex samples, last axis), float32."""
+    Z = np.fft.fft(z, axis=-1) / z.shape[-1]
     k = np.arange(1, harmonics + 1)
-    return np.concatenate([np.abs(Z[:, k]), np.abs(Z[:, -k])], axis=1).astype(np.float32)
+    return np.concatenate([np.abs(Z[..., k]), np.abs(Z[..., -k])], axis=-1).astype(np.float32)
 
 
 def reversed_descriptor(d: np.ndarray) -> np.ndarray:
