@@ -337,7 +337,7 @@ def test_open_retrieval_scans_a_larger_index_at_a_stride(curve_atlas, monkeypatc
     """Beyond :data:`.open_targets.OPEN_SCAN` stored curves the coarse windows of an open
     target look at an even stride of them: only curves on the stride are ranked, and a
     window of a curve on it is still met within the fine windows' resolution (0.02 of its
-    size); with the limit at the index's size the ranking is the whole scan's."""
+    size), and at every rank no nearer than the whole scan's."""
     from multiloop.catalogue import open_targets
     with Atlas(curve_atlas) as atlas:
         index = CurveIndex(atlas, exact=True)
@@ -346,14 +346,15 @@ def test_open_retrieval_scans_a_larger_index_at_a_stride(curve_atlas, monkeypatc
         row = stride                                                       # on the stride
         z = _traced(atlas, int(index.ids[row]))[200:900]
         target = np.stack([z.real, z.imag], 1)
-        whole = open_targets.ranked_windows(atlas, index, target, 8)
-        monkeypatch.setattr(open_targets, "OPEN_SCAN", K)
-        assert [(d, c["shape"].tobytes()) for d, c, _ in open_targets.ranked_windows(atlas, index, target, 8)] == \
-            [(d, c["shape"].tobytes()) for d, c, _ in whole]
+        whole = open_targets.ranked_windows(atlas, index, target, 4)      # (K below the limit: every curve)
         monkeypatch.setattr(open_targets, "OPEN_SCAN", K // 5)
         on = [index.ids[i] for i in range(0, K, stride)]
         got = open_targets.ranked_windows(atlas, index, target, 4)
         assert got[0][0] <= 0.02                      # its own curve is on the stride (the fine windows' bound)
+        # a subset ranks no better than the whole at any rank (both pools hold every candidate)
+        assert len(got) == len(whole) and all(g[0] >= w[0] for g, w in zip(got, whole))
+        # (and the stride did leave out curves that the whole scan ranks among these four)
+        assert [g[1]["shape"].tobytes() for g in got] != [w[1]["shape"].tobytes() for w in whole]
         assert all(any(c["shape"].tobytes() == stored_curve(atlas, int(i))["shape"].tobytes() for i in on)
                    for _, c, _ in got)
 
