@@ -49,8 +49,7 @@ def add_arguments(p) -> None:
                    help="with --mechanisms: K certified realisations of every closed-form mechanism and their "
                         "coupler curves with descriptors (resumable)")
     p.add_argument("--points-per-link", type=int, metavar="P",
-                   help="with --curves: P traced points on every moving link other than the driven one "
-                        "(default 2; the motion is solved once per realisation)")
+                   help="with --curves: P traced points on each moving link but the driven one (default 2)")
     p.add_argument("--limit", type=int, help="list at most this many chains")
     p.add_argument("--html", metavar="DIR", help="write the HTML gallery to DIR")
     p.add_argument("--html-limit", type=int, default=2000, help="chains per gallery page (default 2000)")
