@@ -1,0 +1,333 @@
+"""Design sensitivities: the derivatives of a batch's poses with respect to its design
+variables and its inputs, exactly, by the velocity analogue of each step.
+
+Every step of a plan (a driver, a dyad, a triad, a class IV group, any Assur group)
+places its unknown links ``u`` so that its pair constraints ``Φ(Z_u, Z_k, x) = 0`` hold
+(:mod:`multiloop.topo.constraints`: pins, sliders, drivers; ``Z_k`` the poses of the
+links it attaches to, ``x`` the design variables and the inputs).  Differentiating the
+constraints (the implicit function theorem) gives, step by step in the plan's order,
+
+    J_u ∂Z_u/∂x = −∂Φ/∂x − J_k ∂Z_k/∂x,
+
+the same linear system as the step's velocities ``J_u u̇ = −J_k k̇ − Φ_φ φ̇`` (Nikravesh
+1988, §3.6 and §4.2; Haug 1989, §6.2 on design sensitivity) with one right-hand side per
+variable instead of one per driver: no design is solved again, and no step is
+differenced.  The explicit term ``∂Φ/∂x`` is that of the design's reference geometry:
+a pin's reference position ``r_j`` and the links' reference points ``c`` (their first
+joints', :func:`multiloop.topo.constraints.link_origins`) enter through the offsets
+``ρ = r_j − c``, a guide through its angle, an input through its driving constraint.
+A material point's derivative follows from its link's:
+``W = X + R(θ)(r − c)`` gives ``∂W = ∂X + perp(W − X) ∂θ + R(θ)(∂r − ∂c)``.
+
+The derivative with respect to an input is the velocity analogue itself (the pose's
+rate per unit driver rate), so the same call gives both.  Positions where a design did
+not assemble are NaN; at a singular position the system is singular and the
+derivatives are unbounded, as the velocities are.
+
+References
+----------
+.. [1] Nikravesh P.E. Computer-Aided Analysis of Mechanical Systems. Prentice Hall
+   (1988), ch. 3-4.
+.. [2] Haug E.J. Computer Aided Kinematics and Dynamics of Mechanical Systems, vol. 1.
+   Allyn and Bacon (1989), ch. 6.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from multiloop.topo.model import JointKind
+
+from .design import DesignPoses
+from .memo import cached
+
+__all__ = ["PoseSensitivity", "pose_sensitivity"]
+
+
+@dataclass(frozen=True, eq=False)
+class _Block:
+    """One constraint of a step, compiled: its kind, links, rows and constant selections
+    of the design columns (``Ea``, ``Eb``: ``∂ρ/∂x`` on links a and b, (2, q); ``alpha``:
+    the guide angle's column; ``drive``: the input's column; -1 for none)."""
+
+    kind: str
+    joint: str
+    a: int
+    b: int
+    row: int
+    Ea: np.ndarray
+    Eb: np.ndarray
+    alpha: int
+    drive: int
+
+
+@dataclass(frozen=True, eq=False)
+class _StepBlocks:
+    unknown: tuple[int, ...]
+    blocks: tuple[_Block, ...]
+    n_eq: int
+
+
+@dataclass(frozen=True, eq=False)
+class _Compiled:
+    names: tuple[str, ...]
+    steps: tuple[_StepBlocks, ...]
+
+
+def _selection(cols: dict, name: str, q: int) -> np.ndarray:
+    """``∂(reference position of name)/∂x`` (2, q): ones at its ``.x``/``.y`` columns."""
+    E = np.zeros((2, q))
+    for i, axis in enumerate(("x", "y")):
+        c = cols.get(f"{name}.{axis}")
+        if c is not None:
+            E[i, c] = 1.0
+    return E
+
+
+def _origin_joint(m, link: str) -> str | None:
+    """The joint whose reference position is link ``link``'s reference point (None: the origin)."""
+    lk = next(x for x in m.links if x.name == link)
+    js = m.joints_of(link)
+    return None if lk.is_frame or not js else js[0].name
+
+
+def _compile(sp, names: tuple[str, ...]) -> _Compiled:
+    m = sp.mechanism
+    p = len(names)
+    q = p + len(m.drivers)
+    cols = {n: i for i, n in enumerate(names)}
+    idx = {x: i for i, x in enumerate(m.link_names)}
+    origin = {x: _origin_joint(m, x) for x in m.link_names}
+    zero = np.zeros((2, q))
+
+    def rho(joint: str, link: str) -> np.ndarray:
+        o = origin[link]
+        E = _selection(cols, joint, q) if m.joint(joint).kind is JointKind.R else zero.copy()
+        return E - (_selection(cols, o, q) if o is not None else zero)
+
+    steps = []
+    for st in sp.steps:
+        blocks, row = [], 0
+        for c in st.step.constraints:
+            alpha = cols.get(f"{c.joint}.angle", -1) if c.kind in ("P", "drive_P") else -1
+            drive = p + c.driver if c.kind.startswith("drive") else -1
+            blocks.append(_Block(c.kind, c.joint, idx[c.a], idx[c.b], row, rho(c.joint, c.a), rho(c.joint, c.b),
+                                 alpha, drive))
+            row += c.n_equations
+        steps.append(_StepBlocks(tuple(st.unknown), tuple(blocks), row))
+    return _Compiled(tuple(names), tuple(steps))
+
+
+def _rotate(c, s, v):
+    """``R(θ) v`` for rotations (B,) and vectors (B, 2) or (2,) → (B, 2)."""
+    out = np.empty(c.shape + (2,))
+    out[..., 0] = c * v[..., 0] - s * v[..., 1]
+    out[..., 1] = s * v[..., 0] + c * v[..., 1]
+    return out
+
+
+def _rotate_cols(c, s, E):
+    """``R(θ) E`` for rotations (B,) and a constant (2, q) → (B, 2, q)."""
+    return np.stack([c[:, None] * E[0] - s[:, None] * E[1], s[:, None] * E[0] + c[:, None] * E[1]], axis=1)
+
+
+def _perp(v):
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class PoseSensitivity:
+    """The derivatives of D designs' poses at N inputs.
+
+    ``dZ`` ``(n_links, D·N, 3, q)``: ``∂(X, Y, θ)/∂(x, inputs)`` of every link, the
+    columns ``names`` (the design variables, then ``"input:<joint>"`` per driver).
+    """
+
+    poses: DesignPoses
+    names: tuple[str, ...]
+    dZ: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.poses.store.shape
+
+    def point(self, name: str) -> np.ndarray:
+        """``∂W/∂(x, inputs)`` of joint or tracer point ``name``: ``(D, N, 2, q)``."""
+        st = self.poses
+        sp, geo = st.plan, st.geometry
+        m = sp.mechanism
+        pts = [p.name for p in m.points]
+        k = sp.point_host[pts.index(name)] if name in pts else sp.joint_host[m.joint_names.index(name)]
+        return self.world(k, name)
+
+    def world(self, k: int, name: str) -> np.ndarray:
+        """``∂W/∂(x, inputs)`` of the material point of link ``k`` at the reference
+        position of joint or tracer point ``name``: ``(D, N, 2, q)``."""
+        st = self.poses
+        G, geo = st.store, st.geometry
+        D, N = self.shape
+        q = len(self.names)
+        cols = {n: i for i, n in enumerate(self.names)}
+        link = st.plan.mechanism.link_names[k]
+        o = _origin_joint(st.plan.mechanism, link)
+        E = _selection(cols, name, q) - (_selection(cols, o, q) if o is not None else 0.0)
+        c, s = (np.broadcast_to(v, (D, N)).reshape(-1) for v in (G.c[k], G.s[k]))
+        r = geo.at(name)[:, 0] - (geo.at(o)[:, 0] if o is not None else 0.0)         # (D, 2)
+        arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
+        dZ = self.dZ[k]
+        out = dZ[:, :2, :] + _perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)
+        return out.reshape(D, N, 2, q)
+
+
+def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
+    """The exact derivatives of poses ``st`` (from :func:`kin.design.solve_designs`)
+    with respect to their design variables and inputs (module docstring).
+
+    Examples
+    --------
+    A crank of length 1 turned by φ = 90° from its reference: its tip is at
+    ``O + R(φ)(T − O)``, so the columns (O.x, O.y, T.x, T.y, the input) are
+    ``I − R(φ)``, ``R(φ)`` and the tip's velocity ``(−sin φ, cos φ)``.
+
+    >>> from multiloop.topo.model import MechanismBuilder
+    >>> from multiloop.kin.design import solve_designs
+    >>> b = MechanismBuilder()
+    >>> b.add_link("g", frame=True)
+    >>> b.add_joint("O", "R", ("g", "crank"), at=(0, 0))
+    >>> b.add_point("T", "crank", at=(1, 0))
+    >>> b.add_driver("O", ("g", "crank"))
+    >>> m = b.build()
+    >>> names = ("O.x", "O.y", "T.x", "T.y")
+    >>> st = solve_designs(m, names, [[0.0, 0.0, 1.0, 0.0]], [np.pi / 2])
+    >>> np.round(pose_sensitivity(st).point("T")[0, 0], 12).tolist()
+    [[1.0, 1.0, 0.0, -1.0, -1.0], [-1.0, 1.0, 1.0, 0.0, 0.0]]
+    """
+    sp, geo = st.plan, st.geometry
+    m = sp.mechanism
+    names = tuple(geo.cols) if geo.batch else ()
+    comp = cached(sp, ("sensitivity", names), _compile, names)
+    D, N = st.store.shape
+    B = D * N
+    q = len(names) + len(m.drivers)
+    dZ = np.full((m.n_links, B, 3, q), np.nan)
+    dZ[sp.mechanism.link_names.index(m.frame)] = 0.0
+    view = _Flat(st, geo, D, N)
+    for step in comp.steps:
+        _step_sensitivity(step, view, dZ, q)
+    bad = ~st.ok.reshape(-1)
+    dZ[:, bad] = np.nan
+    return PoseSensitivity(st, names + tuple(f"input:{d.joint}" for d in m.drivers), dZ)
+
+
+class _Flat:
+    """The poses of a batch flattened to B = D·N rows, with the per-design offsets ρ."""
+
+    def __init__(self, st: DesignPoses, geo, D: int, N: int):
+        G = st.store
+        st.th                                   # (the angle rows of pending links)
+        self.st, self.geo, self.D, self.N = st, geo, D, N
+        self.m = st.plan.mechanism
+        self.X = G.T[:, 0].reshape(G.T.shape[0], -1)
+        self.Y = G.T[:, 1].reshape(G.T.shape[0], -1)
+        self.c = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.c]
+        self.s = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.s]
+        self._rho: dict = {}
+
+    def arm(self, joint: str, k: int) -> np.ndarray:
+        """``R(θ_k)(r_joint − c_k)`` over the batch (B, 2)."""
+        key = (joint, k)
+        hit = self._rho.get(key)
+        if hit is None:
+            o = _origin_joint(self.m, self.m.link_names[k])
+            r = self.geo.at(joint)
+            r = (r if r.ndim == 3 else np.broadcast_to(r, (self.D, 1, 2)))[:, 0]
+            if o is not None:
+                c0 = self.geo.at(o)
+                r = r - (c0 if c0.ndim == 3 else np.broadcast_to(c0, (self.D, 1, 2)))[:, 0]
+            hit = self._rho[key] = _rotate(self.c[k], self.s[k], np.repeat(np.broadcast_to(r, (self.D, 2)), self.N, axis=0))
+        return hit
+
+    def axis(self, joint: str) -> np.ndarray:
+        u = self.geo.axis(joint)
+        u = u[:, 0] if u.ndim == 3 else np.broadcast_to(u, (self.D, 2))
+        return np.repeat(u, self.N, axis=0)
+
+    def position(self, k: int) -> np.ndarray:
+        return np.stack([self.X[k], self.Y[k]], axis=-1)
+
+
+def _partials(b: _Block, v: _Flat, q: int):
+    """The block's ``∂Φ/∂Z_a``, ``∂Φ/∂Z_b`` (B, rows, 3) and ``∂Φ/∂x`` (B, rows, q) (module docstring)."""
+    Bn = v.D * v.N
+    if b.kind == "R":
+        ra, rb = v.arm(b.joint, b.a), v.arm(b.joint, b.b)
+        da = np.zeros((Bn, 2, 3))
+        da[:, 0, 0] = da[:, 1, 1] = 1.0
+        da[:, :, 2] = _perp(ra)
+        db = np.zeros((Bn, 2, 3))
+        db[:, 0, 0] = db[:, 1, 1] = -1.0
+        db[:, :, 2] = -_perp(rb)
+        dx = _rotate_cols(v.c[b.a], v.s[b.a], b.Ea) - _rotate_cols(v.c[b.b], v.s[b.b], b.Eb)
+        return da, db, dx
+    if b.kind == "drive_R":
+        da = np.zeros((Bn, 1, 3))
+        da[:, 0, 2] = -1.0
+        db = -da
+        dx = np.zeros((Bn, 1, q))
+        dx[:, 0, b.drive] = -1.0
+        return da, db, dx
+    # a guide's line (P) or slide (drive_P): w · d with w = R(θ_a) n₀ (the line) or R(θ_a) u
+    ra, rb = v.arm(b.joint, b.a), v.arm(b.joint, b.b)
+    u0 = v.axis(b.joint)
+    u = _rotate(v.c[b.a], v.s[b.a], u0)
+    n = _perp(u)
+    w, dw = (n, -u) if b.kind == "P" else (u, n)          # ∂w/∂α
+    d = v.position(b.b) + rb - v.position(b.a) - ra
+    line_a = np.concatenate([-w, (np.sum(_perp(w) * d, -1) - np.sum(w * _perp(ra), -1))[:, None]], axis=1)
+    line_b = np.concatenate([w, np.sum(w * _perp(rb), -1)[:, None]], axis=1)
+    line_x = (np.einsum("bi,bij->bj", w, _rotate_cols(v.c[b.b], v.s[b.b], b.Eb))
+              - np.einsum("bi,bij->bj", w, _rotate_cols(v.c[b.a], v.s[b.a], b.Ea)))
+    if b.alpha >= 0:
+        line_x[:, b.alpha] += np.sum(dw * d, -1)
+    if b.kind == "drive_P":
+        line_x[:, b.drive] -= 1.0
+        return line_a[:, None], line_b[:, None], line_x[:, None]
+    da = np.zeros((Bn, 2, 3))
+    db = np.zeros((Bn, 2, 3))
+    da[:, 0, 2], db[:, 0, 2] = -1.0, 1.0                 # θ_b − θ_a = 0
+    da[:, 1], db[:, 1] = line_a, line_b
+    dx = np.zeros((Bn, 2, q))
+    dx[:, 1] = line_x
+    return da, db, dx
+
+
+def _step_sensitivity(step: _StepBlocks, v: _Flat, dZ: np.ndarray, q: int) -> None:
+    """Solve one step's velocity analogue for ``∂Z_u/∂x`` (module docstring), in place."""
+    Bn = v.D * v.N
+    col = {k: 3 * i for i, k in enumerate(step.unknown)}
+    J = np.zeros((Bn, step.n_eq, step.n_eq))
+    rhs = np.zeros((Bn, step.n_eq, q))
+    for b in step.blocks:
+        da, db, dx = _partials(b, v, q)
+        r = slice(b.row, b.row + dx.shape[1])
+        rhs[:, r] -= dx
+        for k, part in ((b.a, da), (b.b, db)):
+            if k in col:
+                J[:, r, col[k]:col[k] + 3] += part
+            else:
+                rhs[:, r] -= part @ dZ[k]
+    good = np.all(np.isfinite(J), axis=(1, 2)) & np.all(np.isfinite(rhs), axis=(1, 2))
+    J[~good] = np.eye(step.n_eq)
+    rhs[~good] = 0.0
+    with np.errstate(all="ignore"):
+        try:
+            sol = np.linalg.solve(J, rhs)
+        except np.linalg.LinAlgError:          # an exactly singular position: left out
+            good &= np.linalg.det(J) != 0.0
+            J[~good] = np.eye(step.n_eq)
+            sol = np.linalg.solve(J, rhs)
+    sol[~good] = np.nan
+    for k, c0 in col.items():
+        dZ[k] = sol[:, c0:c0 + 3]
+
