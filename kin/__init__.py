@@ -11,6 +11,8 @@ names); the value types are re-exported.
   systems, the all-modes class III triad and its tracker, the class IV group, and the
   generic Newton group solver (``kin.groups.newton``).
 * ``kin.solve`` — :func:`solve` (whole mechanism along an Assur plan), ``compile_plan``.
+* ``kin.sensitivity`` — exact derivatives of a design batch's poses by its design
+  variables and inputs (``pose_sensitivity``: each step's velocity analogue).
 * ``kin.kernel`` — compiled plans: ``kernel_plan`` (a plan as flat arrays),
   ``run_positions`` (one numba kernel over a batch), ``load``, ``using`` and the modes
   (``MULTILOOP_KERNEL``: ``auto``, ``on``, ``off``).

@@ -42,7 +42,7 @@ from multiloop.topo.model import JointKind
 from .design import DesignPoses
 from .memo import cached
 
-__all__ = ["PoseSensitivity", "pose_sensitivity"]
+__all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,8 +71,31 @@ class _StepBlocks:
 
 @dataclass(frozen=True, eq=False)
 class _Compiled:
+    """The steps' blocks, and the same as flat arrays for the compiled route
+    (:func:`kin._sensitivity_nb.sensitivities`)."""
+
     names: tuple[str, ...]
     steps: tuple[_StepBlocks, ...]
+    flat: dict
+
+
+_KINDS = {"R": 0, "P": 1, "drive_R": 2, "drive_P": 3}
+
+
+def _flatten(steps: tuple[_StepBlocks, ...], n_links: int) -> dict:
+    blocks = [b for st in steps for b in st.blocks]
+    bounds = np.cumsum([0] + [len(st.blocks) for st in steps])
+    col_of = np.full((len(steps), n_links), -1, np.int64)
+    unknown = np.full((len(steps), max(len(st.unknown) for st in steps)), -1, np.int64)
+    for s, st in enumerate(steps):
+        for i, k in enumerate(st.unknown):
+            col_of[s, k], unknown[s, i] = 3 * i, k
+    ints = lambda f: np.array([f(b) for b in blocks], np.int64)      # noqa: E731
+    return dict(kind=ints(lambda b: _KINDS[b.kind]), la=ints(lambda b: b.a), lb=ints(lambda b: b.b),
+                row=ints(lambda b: b.row), alpha=ints(lambda b: b.alpha), drive=ints(lambda b: b.drive),
+                Ea=np.stack([b.Ea for b in blocks]), Eb=np.stack([b.Eb for b in blocks]),
+                step_lo=bounds[:-1].astype(np.int64), step_hi=bounds[1:].astype(np.int64),
+                neq=np.array([st.n_eq for st in steps], np.int64), col_of=col_of, unknown=unknown)
 
 
 def _selection(cols: dict, name: str, q: int) -> np.ndarray:
@@ -116,7 +139,7 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
                                  alpha, drive))
             row += c.n_equations
         steps.append(_StepBlocks(tuple(st.unknown), tuple(blocks), row))
-    return _Compiled(tuple(names), tuple(steps))
+    return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m.n_links))
 
 
 def _rotate(c, s, v):
@@ -161,6 +184,27 @@ class PoseSensitivity:
         k = sp.point_host[pts.index(name)] if name in pts else sp.joint_host[m.joint_names.index(name)]
         return self.world(k, name)
 
+    def angle(self, link: str) -> np.ndarray:
+        """``∂θ/∂(x, inputs)`` of link ``link``: ``(D, N, q)``."""
+        D, N = self.shape
+        k = self.poses.plan.mechanism.link_names.index(link)
+        return self.dZ[k][:, 2, :].reshape(D, N, -1)
+
+    def axis(self, joint: str) -> np.ndarray:
+        """``∂u/∂(x, inputs)`` of P joint ``joint``'s reference guide ``u``: ``(D, 2, q)``
+        (nonzero in its angle's column only)."""
+        D = self.shape[0]
+        out = np.zeros((D, 2, len(self.names)))
+        if f"{joint}.angle" in self.names:
+            u = np.broadcast_to(self.poses.geometry.axis(joint), (D, 1, 2))[:, 0]
+            out[:, :, self.names.index(f"{joint}.angle")] = _perp(u)
+        return out
+
+    def tangent(self, eps) -> "TangentView":
+        """The poses moved to first order by ``±eps`` (a number, or one per column) along
+        each column (:class:`TangentView`)."""
+        return TangentView(self, eps)
+
     def world(self, k: int, name: str) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of the material point of link ``k`` at the reference
         position of joint or tracer point ``name``: ``(D, N, 2, q)``."""
@@ -178,6 +222,49 @@ class PoseSensitivity:
         dZ = self.dZ[k]
         out = dZ[:, :2, :] + _perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)
         return out.reshape(D, N, 2, q)
+
+
+class TangentView:
+    """The poses of a :class:`PoseSensitivity` moved to first order along each of its q
+    columns by ``+eps`` and by ``−eps`` (a number or one per column; ``2q`` copies on a new axis after the inputs'),
+    in the interface of a check's view (``point(joint)`` ``(D, N, 2q, 2)``,
+    ``angle(link)`` ``(D, N, 2q)``, ``axis(joint)`` ``(D, 1, 2q, 2)``): an explicit
+    function ``f`` of the poses (a monitored angle's formula) evaluated on it gives its
+    derivative along the exact tangents by :meth:`derivative`, ``(f₊ − f₋)/(2 eps)``,
+    with no design solved again (the error is that of the formula's own second
+    derivative, ``O(eps²)``)."""
+
+    def __init__(self, sens: PoseSensitivity, eps):
+        self.sens = sens
+        self.eps = np.broadcast_to(np.asarray(eps, float), (len(sens.names),))
+        self.signs = np.concatenate([self.eps, -self.eps])
+
+    def _moved(self, value, d):
+        """``value`` (…, c) moved by ``±eps d`` (…, c, q) → (…, 2q, c)."""
+        step = np.concatenate([d, d], axis=-1) * self.signs
+        return value[..., None, :] + np.swapaxes(step, -1, -2)
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Where the poses assembled ``(D, N, 2q)``."""
+        return np.repeat(self.sens.poses.ok[..., None], len(self.signs), axis=-1)
+
+    def point(self, name: str) -> np.ndarray:
+        return self._moved(self.sens.poses.point(name), self.sens.point(name))
+
+    def angle(self, link: str) -> np.ndarray:
+        th = self.sens.poses.angle(link)
+        return th[..., None] + np.concatenate([self.sens.angle(link)] * 2, axis=-1) * self.signs
+
+    def axis(self, joint: str) -> np.ndarray:
+        D = self.sens.shape[0]
+        u = np.broadcast_to(self.sens.poses.geometry.axis(joint), (D, 1, 2))[:, 0]
+        return self._moved(u, self.sens.axis(joint))[:, None]
+
+    def derivative(self, values: np.ndarray) -> np.ndarray:
+        """``(…, 2q)`` values of a function over this view → its derivatives ``(…, q)``."""
+        q = values.shape[-1] // 2
+        return (values[..., :q] - values[..., q:]) / (2.0 * self.eps)
 
 
 def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
@@ -213,11 +300,41 @@ def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
     dZ = np.full((m.n_links, B, 3, q), np.nan)
     dZ[sp.mechanism.link_names.index(m.frame)] = 0.0
     view = _Flat(st, geo, D, N)
-    for step in comp.steps:
-        _step_sensitivity(step, view, dZ, q)
+    nb = _compiled_route(B)
+    if nb is not None:
+        _run_compiled(nb, comp, view, st.ok.reshape(-1), dZ)
+    else:
+        for step in comp.steps:
+            _step_sensitivity(step, view, dZ, q)
     bad = ~st.ok.reshape(-1)
     dZ[:, bad] = np.nan
     return PoseSensitivity(st, names + tuple(f"input:{d.joint}" for d in m.drivers), dZ)
+
+
+def _compiled_route(n_positions: int):
+    """The compiled route (:mod:`kin._sensitivity_nb`) when the kernel's mode asks for it
+    and numba loads, else None (the NumPy route)."""
+    from . import kernel
+    if not kernel.wanted(n_positions):
+        return None
+    try:
+        from . import _sensitivity_nb
+    except (ImportError, RuntimeError):        # no numba, or no writable cache directory
+        return None
+    return _sensitivity_nb
+
+
+def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarray) -> None:
+    f = comp.flat
+    blocks = [b for st in comp.steps for b in st.blocks]
+    per = lambda g: np.ascontiguousarray(np.stack([g(b) for b in blocks]))      # noqa: E731
+    rho_a = per(lambda b: v.offset(b.joint, b.a))
+    rho_b = per(lambda b: v.offset(b.joint, b.b))
+    u0 = per(lambda b: v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else np.zeros((v.D, 2)))
+    C, S = (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
+    nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
+                     f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], rho_a, rho_b, u0, f["step_lo"],
+                     f["step_hi"], f["neq"], f["col_of"], f["unknown"], np.ascontiguousarray(ok), dZ)
 
 
 class _Flat:
@@ -234,24 +351,31 @@ class _Flat:
         self.s = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.s]
         self._rho: dict = {}
 
+    def _per_design(self, a: np.ndarray) -> np.ndarray:
+        """A geometry value ``(2,)`` or ``(D, 1, 2)`` as ``(D, 2)``."""
+        return a[:, 0] if a.ndim == 3 else np.broadcast_to(a, (self.D, 2))
+
+    def offset(self, joint: str, k: int) -> np.ndarray:
+        """``ρ = r_joint − c_k`` per design (D, 2)."""
+        o = _origin_joint(self.m, self.m.link_names[k])
+        r = self._per_design(self.geo.at(joint))
+        return r - self._per_design(self.geo.at(o)) if o is not None else np.array(r)
+
+    def reference_axis(self, joint: str) -> np.ndarray:
+        """A P joint's reference guide per design (D, 2)."""
+        return self._per_design(self.geo.axis(joint))
+
     def arm(self, joint: str, k: int) -> np.ndarray:
-        """``R(θ_k)(r_joint − c_k)`` over the batch (B, 2)."""
+        """``R(θ_k) ρ`` over the batch (B, 2)."""
         key = (joint, k)
         hit = self._rho.get(key)
         if hit is None:
-            o = _origin_joint(self.m, self.m.link_names[k])
-            r = self.geo.at(joint)
-            r = (r if r.ndim == 3 else np.broadcast_to(r, (self.D, 1, 2)))[:, 0]
-            if o is not None:
-                c0 = self.geo.at(o)
-                r = r - (c0 if c0.ndim == 3 else np.broadcast_to(c0, (self.D, 1, 2)))[:, 0]
-            hit = self._rho[key] = _rotate(self.c[k], self.s[k], np.repeat(np.broadcast_to(r, (self.D, 2)), self.N, axis=0))
+            r = np.repeat(self.offset(joint, k), self.N, axis=0)
+            hit = self._rho[key] = _rotate(self.c[k], self.s[k], r)
         return hit
 
     def axis(self, joint: str) -> np.ndarray:
-        u = self.geo.axis(joint)
-        u = u[:, 0] if u.ndim == 3 else np.broadcast_to(u, (self.D, 2))
-        return np.repeat(u, self.N, axis=0)
+        return np.repeat(self.reference_axis(joint), self.N, axis=0)
 
     def position(self, k: int) -> np.ndarray:
         return np.stack([self.X[k], self.Y[k]], axis=-1)

@@ -90,6 +90,67 @@ def test_a_span_that_nears_the_driver_s_limit_is_penalised():
     assert hinge[0] == 0.0 and 0.0 < hinge[1] <= 1.0 and MIN_MARGIN > 0
 
 
+def _jacobian_problem(name, closed, shift=0.03):
+    """A curve problem of catalogue mechanism ``name`` against its own curve moved by a
+    wave of ``shift`` of its size (closed: a whole turn; open: 1.5 rad, span 1.2)."""
+    m = load_named(name)
+    st = solve(m, np.linspace(0.0, 2 * np.pi if closed else 1.5, 200, endpoint=not closed))
+    T = st.point_positions[:, 0][np.asarray(st.status == "ok")]
+    k = np.arange(len(T))
+    T = T + shift * m.size * np.c_[np.sin(k / 9), np.cos(k / 13)]
+    return CurveProblem(m, T, closed, m.points[0].name, None if closed else 1.2)
+
+
+def _central_jacobian(prob, z):
+    span = prob.upper - prob.lower
+    out = []
+    for i in range(len(z)):
+        h = 1e-7 * span[i]
+        zp, zm = z.copy(), z.copy()
+        zp[i] += h
+        zm[i] -= h
+        out.append((prob.residuals_batch(zp[None], prob.timing_for(zp))[0]
+                    - prob.residuals_batch(zm[None], prob.timing_for(zm))[0]) / (2 * h))
+    return np.stack(out, axis=1)
+
+
+@pytest.mark.parametrize("name, closed, margin", [("four_bar", True, None), ("stephenson_3_triad", True, None),
+                                                  ("watt_1", False, None), ("stephenson_3", False, None),
+                                                  ("four_bar", True, 60.0), ("watt_1", False, 60.0)])
+@pytest.mark.parametrize("mode", ["off", "on"])
+def test_the_exact_jacobian_equals_central_differences(name, closed, margin, mode, monkeypatch):
+    """Every residual's exact derivative (the poses' sensitivities through the chamfer
+    halves, an open target's span, and, with the margin raised so that the hinge is
+    active, the hinge's) equals central differences of the residuals, with the NumPy and
+    with the compiled sensitivities; the residuals are :meth:`residuals_batch`'s."""
+    from multiloop.catalogue.dimensional import curve_distance
+    from multiloop.kin import kernel
+    if margin is not None:
+        monkeypatch.setattr(curve_distance, "MIN_MARGIN", margin)
+    prob = _jacobian_problem(name, closed)
+    z = prob.x0
+    with kernel.using(mode):
+        R, J = prob.jacobian_batch(z[None])
+        np.testing.assert_array_equal(R[0], prob.residuals_batch(z[None], prob.timing_for(z))[0])
+    assert (R[0, -1] > 0) == (margin is not None)
+    fd = _central_jacobian(prob, z)
+    np.testing.assert_allclose(J[0], fd, rtol=0, atol=2e-6 * np.abs(fd).max())
+
+
+def test_the_polish_takes_the_exact_jacobian(monkeypatch):
+    """:func:`~.optimise.polish` asks a problem that has one for its exact Jacobian (and
+    not for the forward differences' designs), and the fit still reaches its target."""
+    from multiloop.catalogue.dimensional import optimise
+    prob = _jacobian_problem("four_bar", True, shift=0.01)
+    calls = []
+    exact = prob.jacobian_batch
+    monkeypatch.setattr(prob, "jacobian_batch", lambda *a: calls.append(1) or exact(*a))
+    monkeypatch.setattr(optimise, "_jacobian", lambda *a, **k: pytest.fail("differenced"))
+    z, _, n = optimise.polish(prob, prob.x0, np.empty(0), max_nfev=30)
+    rms = lambda v: np.sqrt(np.sum(prob.residuals_batch(v[None], prob.timing_for(v))[0] ** 2))   # noqa: E731
+    assert calls and rms(z) < 0.5 * rms(prob.x0)
+
+
 def _apart(a, b, size, closed):
     """The largest distance either way between polylines ``a`` and ``b`` (closed: the
     last point joined to the first), over ``size``."""

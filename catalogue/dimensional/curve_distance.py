@@ -74,6 +74,15 @@ def nearest_on_polyline(points: np.ndarray, curve: np.ndarray, closed: bool = Fa
     [[0.5, 0.0], [2.0, 0.0]]
     """
     P = np.asarray(points, float)
+    return _nearest_segments(P, curve, closed, tree)[0].reshape(P.shape)
+
+
+def _nearest_segments(points, curve, closed: bool, tree=None):
+    """:func:`nearest_on_polyline`'s nearest points ``q`` (D, n, 2), and which segment and
+    where: its first vertex's index ``a`` (D, n) into the curve, its direction ``v``
+    (D, n, 2), the parameter ``t`` (D, n) clipped to [0, 1] and whether the unclipped one
+    was inside (``inner``), for the derivatives of :meth:`CurveProblem.jacobian_batch`."""
+    P = np.asarray(points, float)
     C = np.asarray(curve, float)
     m = C.shape[-2]
     if C.ndim == 2:
@@ -85,18 +94,22 @@ def nearest_on_polyline(points: np.ndarray, curve: np.ndarray, closed: bool = Fa
         k = np.stack([cKDTree(c).query(p)[1] for c, p in zip(C, P2)])
     ends = np.concatenate([C, C[:, :1]], axis=1) if closed else C
     rows = np.arange(len(ends))[:, None]
-    best = best_d2 = None
+    best = None
     for a in ((k - 1) % m if closed else np.maximum(k - 1, 0), k if closed else np.minimum(k, m - 2)):
         A = ends[rows, a]
         v = ends[rows, a + 1] - A
-        t = np.clip(np.sum((P2 - A) * v, axis=-1) / np.maximum(np.sum(v * v, axis=-1), 1e-300), 0.0, 1.0)
+        raw = np.sum((P2 - A) * v, axis=-1) / np.maximum(np.sum(v * v, axis=-1), 1e-300)
+        t = np.clip(raw, 0.0, 1.0)
         q = A + t[..., None] * v
         d2 = np.sum(np.square(P2 - q), axis=-1)
         if best is None:
-            best, best_d2 = q, d2
+            best = [q, a, v, t, (raw > 0.0) & (raw < 1.0), d2]
         else:
-            best = np.where((d2 < best_d2)[..., None], q, best)
-    return best.reshape(P.shape)
+            nearer = d2 < best[5]
+            best = [np.where(nearer[..., None] if x.ndim == 3 else nearer, y, x)
+                    for x, y in zip(best, (q, a, v, t, (raw > 0.0) & (raw < 1.0), d2))]
+    lead = P.shape[:-1]
+    return tuple(x.reshape(lead + x.shape[2:]) for x in best[:5])
 
 
 class CurveProblem:
@@ -121,6 +134,7 @@ class CurveProblem:
 
     free_timing = False
     constrained = False
+    exact_jacobian = True
 
     def __init__(self, mechanism: Mechanism, target: np.ndarray, closed: bool, point: str, span: float | None = None):
         from ..curves import resample
@@ -167,22 +181,129 @@ class CurveProblem:
         keeps the refinement from a limit between two samples; a design that does not
         assemble along its whole curve gets NaN."""
         C, mu = self._traced(np.atleast_2d(Z), PHI)
+        return self._chamfer(C, mu)[0]
+
+    def jacobian_batch(self, Z: np.ndarray, PHI=None) -> tuple[np.ndarray, np.ndarray]:
+        """The residuals ``(D, R)`` of designs ``Z`` (:meth:`residuals_batch`, traced at
+        :meth:`timing_for`; ``PHI``, the polish's, is that) and their exact Jacobian
+        ``(D, R, n)`` with respect to the variables.
+
+        The traced samples' derivatives are the poses' design sensitivities
+        (:func:`multiloop.kin.sensitivity.pose_sensitivity`: every step's velocity
+        analogue; an open target's span moves the samples by their velocity times their
+        fraction of the span).  The chamfer halves are differentiated on their nearest
+        segments (a point's nearest point on a moving segment; a sample's offset from a
+        fixed one and its arc-length weight), where they are smooth (a nearest segment
+        that changes is a kink of the distance itself).  The hinge's margin is a check's
+        angle formula, an explicit function of the poses, differenced along their exact
+        tangents (:class:`multiloop.kin.sensitivity.TangentView`, a millionth of each
+        variable's range)."""
+        from multiloop.kin import kernel
+        from multiloop.kin.sensitivity import pose_sensitivity
+        Z = np.atleast_2d(Z)
+        X, nx = Z[:, :self.nx], self.nx
+        st = self.ev.poses(X, self.timing_for(Z))
+        with kernel.for_batches():
+            sens = pose_sensitivity(st)
+        C = np.where(st.ok[..., None], st.point(self.point), np.nan)
+        mu = transmission_angles(self.ev, X, st)
+        dC = self._by_variables(sens.point(self.point), nx)
+        worst = np.argmin(np.where(np.isnan(mu), np.inf, mu), axis=1)
+        rows = np.arange(len(Z))
+        dmu = np.zeros((len(Z), len(self.x0)))
+        if np.any(mu[rows, worst] < MIN_MARGIN):
+            span = self.upper - self.lower
+            eps = 1e-6 * np.r_[span[:nx], span[nx] if not self.closed else 1.0]
+            tv = sens.tangent(eps)
+            d = tv.derivative(transmission_angles(self.ev, X, tv))            # (D, N, q)
+            dmu = self._by_variables(d[:, :, None, :], nx)[rows, worst, 0]
+        return self._chamfer(C, mu[rows, worst], dC, dmu)
+
+    def _by_variables(self, d: np.ndarray, nx: int) -> np.ndarray:
+        """Derivatives ``(D, N, c, q)`` by design variables and input → by the problem's
+        variables ``(D, N, c, n)`` (the input's column, times each sample's fraction of the
+        span, is an open target's span's)."""
+        if self.closed:
+            return d[..., :nx]
+        return np.concatenate([d[..., :nx], d[..., nx:nx + 1] * self.s[None, :, None, None]], axis=-1)
+
+    def _chamfer(self, C: np.ndarray, mu: np.ndarray, dC: np.ndarray | None = None,
+                 dmu: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """The residuals ``(D, R)`` of traced curves ``C`` (D, N, 2) whose smallest margins
+        are ``mu`` (D,), and with the derivatives ``dC`` (D, N, 2, n) and ``dmu`` (D, n)
+        their Jacobian ``(D, R, n)`` (else None)."""
         n, N = len(self.target), C.shape[1]
         out = np.full((len(C), 2 * n + 2 * N + 1), np.nan)
+        jac = None if dC is None else np.full(out.shape + (dC.shape[-1],), np.nan)
         whole = np.all(np.isfinite(C), axis=(1, 2))
         if not whole.any():
-            return out
+            return out, jac
         c = C[whole]
+        dc = None if dC is None else dC[whole]
+        r1, j1 = self._to_curve(c, dc)
+        r2, j2 = self._to_target(c, dc)
+        out[whole, :-1] = np.concatenate([r1.reshape(len(c), -1), r2.reshape(len(c), -1)], axis=1) / self.size
+        hinge = 1.0 - mu[whole] / MIN_MARGIN
+        out[whole, -1] = np.maximum(0.0, hinge)
+        if jac is not None:
+            last = np.where((hinge > 0.0)[:, None], -dmu[whole] / MIN_MARGIN, 0.0)
+            jac[whole] = np.concatenate([j1.reshape(len(c), 2 * n, -1) / self.size,
+                                         j2.reshape(len(c), 2 * N, -1) / self.size, last[:, None, :]], axis=1)
+        return out, jac
+
+    def _to_curve(self, c: np.ndarray, dc: np.ndarray | None):
+        """Target → curve offsets ``(D, n, 2)`` over √n, and their derivatives (D, n, 2, k):
+        the nearest point ``q = A + t v`` of segment AB of the curve, with
+        ``t = (T − A)·v / v·v`` inside the segment (else an end), moves by
+        ``dq = (1 − t) dA + t dB + v dt``."""
+        n = len(self.target)
         T = np.broadcast_to(self.target, (len(c), n, 2))
-        to_curve = (T - nearest_on_polyline(T, c, self.closed)) / np.sqrt(n)
-        seg = np.linalg.norm(np.diff(np.concatenate([c, c[:, :1]], axis=1) if self.closed else c, axis=1), axis=2)
-        pad = np.zeros((len(c), 1))
-        w = seg + np.roll(seg, 1, axis=1) if self.closed else np.hstack([seg, pad]) + np.hstack([pad, seg])
-        w = w / np.maximum(np.sum(w, axis=1, keepdims=True), 1e-300)     # (half of each side's arc length)
-        to_target = (c - nearest_on_polyline(c, self.target, self.closed, self.tree)) * np.sqrt(w)[..., None]
-        out[whole, :-1] = np.concatenate([to_curve.reshape(len(c), -1), to_target.reshape(len(c), -1)], axis=1) / self.size
-        out[whole, -1] = np.maximum(0.0, 1.0 - mu[whole] / MIN_MARGIN)
-        return out
+        q, a, v, t, inner = _nearest_segments(T, c, self.closed)
+        r = (T - q) / np.sqrt(n)
+        if dc is None:
+            return r, None
+        rows = np.arange(len(c))[:, None]
+        dA, dB = dc[rows, a], dc[rows, (a + 1) % c.shape[1]]
+        kB = (T - c[rows, a]) - 2.0 * t[..., None] * v          # dt = (kA·dA + kB·dB) / v·v
+        kA = -(kB + v)
+        vv = np.maximum(np.sum(v * v, axis=-1), 1e-300)
+        dt = np.where(inner, 1.0, 0.0)[..., None] * (np.einsum("dni,dnij->dnj", kA, dA)
+                                                    + np.einsum("dni,dnij->dnj", kB, dB)) / vv[..., None]
+        dq = (1.0 - t)[..., None, None] * dA + t[..., None, None] * dB + v[..., :, None] * dt[:, :, None, :]
+        return r, -dq / np.sqrt(n)
+
+    def _to_target(self, c: np.ndarray, dc: np.ndarray | None):
+        """Curve → target offsets ``(D, N, 2)``, each times the root of its sample's share
+        ``w`` of the curve's arc length, and their derivatives (D, N, 2, k): the offset
+        from a fixed segment moves by its normal part, ``w = s_j / S`` by the lengths
+        of the samples' segments."""
+        q, a, v, t, inner = _nearest_segments(c, self.target, self.closed, self.tree)
+        vec = np.diff(np.concatenate([c, c[:, :1]], axis=1) if self.closed else c, axis=1)
+        seg = np.linalg.norm(vec, axis=2)
+        s = self._shares(seg)
+        S = np.maximum(np.sum(s, axis=1, keepdims=True), 1e-300)     # (half of each side's arc length)
+        sw = np.sqrt(s / S)
+        off = c - q
+        r = off * sw[..., None]
+        if dc is None:
+            return r, None
+        vv = np.maximum(np.sum(v * v, axis=-1), 1e-300)
+        along = np.where(inner, 1.0, 0.0)[..., None] * np.einsum("dni,dnij->dnj", v, dc) / vv[..., None]
+        doff = dc - v[..., :, None] * along[:, :, None, :]
+        e = vec / np.maximum(seg, 1e-300)[..., None]
+        ahead = np.roll(dc, -1, axis=1) if self.closed else dc[:, 1:]
+        ds = self._shares(np.einsum("dki,dkij->dkj", e, ahead - dc[:, :ahead.shape[1]]))
+        dw = ds / S[..., None] - s[..., None] * np.sum(ds, axis=1, keepdims=True) / S[..., None] ** 2
+        dsw = np.where(sw[..., None] > 0.0, dw / (2.0 * np.maximum(sw, 1e-300)[..., None]), 0.0)
+        return r, doff * sw[..., None, None] + off[..., :, None] * dsw[:, :, None, :]
+
+    def _shares(self, seg: np.ndarray) -> np.ndarray:
+        """Each sample's two half segments ``(D, N, ...)`` from segment lengths (or their
+        derivatives) ``(D, N or N − 1, ...)``."""
+        if self.closed:
+            return seg + np.roll(seg, 1, axis=1)
+        pad = np.zeros_like(seg[:, :1])
+        return np.concatenate([seg, pad], axis=1) + np.concatenate([pad, seg], axis=1)
 
     def mechanism(self, z: np.ndarray) -> Mechanism:
         """Design ``z`` as a mechanism (the start's names, topology and drivers; the

@@ -581,6 +581,41 @@ class Problem:
         st = self.ev.poses(Z[:, :self.nx], W)
         return self.diff(self.features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
 
+    @property
+    def exact_jacobian(self) -> bool:
+        """Whether :meth:`jacobian_batch` has the polish's Jacobian: a path target (not
+        shape-only) with free timing or timing from the reference, on the design's
+        variables alone, without constraints."""
+        t = self.target
+        return (isinstance(t, PathTarget) and not t.shape_only and len(self.names) == self.nx
+                and not self.constrained and (self.free_timing or self.timing_mode == "reference"))
+
+    def jacobian_batch(self, Z: np.ndarray, PHI: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The residuals ``(P, N·2)`` of :meth:`residuals_batch` and their exact Jacobian
+        ``(P, N·2, n)`` with respect to the design and, with free timing, each target's
+        driver value (``n = nx + N``); only where :attr:`exact_jacobian`.
+
+        The tracer's derivatives are the poses' design sensitivities
+        (:func:`multiloop.kin.sensitivity.pose_sensitivity`: every step's velocity
+        analogue), its derivative by its own driver value the velocity analogue itself;
+        a path-dependent plan is solved along its :meth:`walk` and differentiated at the
+        targets' inputs."""
+        from multiloop.kin.sensitivity import pose_sensitivity
+        P, N = PHI.shape
+        X = Z[:, :self.nx]
+        W, at = (PHI, np.arange(N)) if not self.ev.path_dependent else self.walk(PHI)
+        st = self.ev.poses(X, W)
+        with kernel.for_batches():
+            dF = pose_sensitivity(st).point(self.target.point)[:, at] / self._size       # (P, N, 2, nx + 1)
+        T, size = self.targets_for(Z)
+        R = self.diff(self.features(Z, st)[:, at], T, size).reshape(P, -1)
+        J = dF[..., :self.nx].reshape(P, 2 * N, self.nx)
+        if self.free_timing:
+            timing = np.zeros((P, N, 2, N))
+            timing[:, np.arange(N), :, np.arange(N)] = np.swapaxes(dF[..., self.nx], 0, 1)   # (target i: its own)
+            J = np.concatenate([J, timing.reshape(P, 2 * N, N)], axis=2)
+        return R, J
+
     def walk(self, PHI: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Driver values ``W`` (P, L) that walk from the reference (0) through each design's
         ``PHI`` (P, N) in order by steps of at most the grid's spacing, and the columns

@@ -39,6 +39,15 @@ METHODS = ("de", "cmaes", "local")
 
 #: how many distinct good designs the probe polishes during the search
 ELITE = 3
+#: whether the polish takes a problem's exact Jacobian (``jacobian_batch``) where it has one
+EXACT = True
+#: the smallest singular value of an exact Jacobian the polish passes on, relative to the
+#: largest (:func:`_floored`)
+SINGULAR_FLOOR = 1e-8
+#: the polish stops at a point inside the box whose residuals' RMS is at most this: a
+#: relative error at rounding, which no step improves (an exact Jacobian keeps stepping
+#: there until ``max_nfev``)
+ROUNDING_RMS = 1e-14
 
 
 @dataclass(frozen=True)
@@ -180,7 +189,8 @@ def _cmaes(c: _Counter, u0: np.ndarray, seed: int, popsize: int) -> None:
 
 
 class _Deadline(Exception):
-    pass
+    """The polish stops with the best point seen: the meter is spent or past its deadline,
+    or the residuals are at rounding (:data:`ROUNDING_RMS`)."""
 
 
 def _residuals(problem: Problem, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
@@ -208,6 +218,22 @@ def _jacobian(problem: Problem, split, u: np.ndarray, hi: np.ndarray, nz: int, f
         i = np.arange(c * n_phi)
         J[i, nz + i // c] = (R[-1, i] - R[0, i]) / 1e-7
     return J, U.shape[0]
+
+
+def _floored(J: np.ndarray) -> np.ndarray:
+    """``J`` with its singular values raised to at least :data:`SINGULAR_FLOOR` of the
+    largest.  An exact Jacobian is singular where the problem has a symmetry (free
+    timing: the reference pose slid along the motion with every driver value moved
+    back), and SciPy's trust region takes no Gauss-Newton step from a rank-deficient
+    one (it regularises every step, which converged linearly); a forward difference's
+    rounding had kept those singular values near 1e-8."""
+    if J.size == 0 or not np.all(np.isfinite(J)):
+        return J
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    low = SINGULAR_FLOOR * s[0]
+    if s[-1] >= low:
+        return J
+    return (U * np.maximum(s, low)) @ Vt
 
 
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
@@ -262,10 +288,17 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         inside = bool(np.all((u >= lo) & (u <= hi)))
         if inside and n < best[0] and (meter is None or not meter.late()):
             best[0], best[1] = n, u.copy()      # (past the deadline a slow path leaves NaN)
+            if n <= r.size * ROUNDING_RMS ** 2:
+                raise _Deadline
         return r
 
+    exact = EXACT and getattr(problem, "exact_jacobian", False)
+
     def jac(u):
-        charge(1 + nz + int(free))                  # the rows of _jacobian
+        charge(1 + nz + int(free))                  # the rows of _jacobian (what the exact one replaces)
+        if exact:
+            J = problem.jacobian_batch(*split(u))[1][0] * scale
+            return _floored(np.where(np.isfinite(J), J, 0.0))
         return _jacobian(problem, split, u, hi, nz, free)[0]
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
