@@ -41,6 +41,7 @@ from multiloop.topo.model import JointKind
 
 from .design import DesignPoses
 from .memo import cached
+from .rigid import perp
 
 __all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity"]
 
@@ -60,6 +61,8 @@ class _Block:
     Eb: np.ndarray
     alpha: int
     drive: int
+    origin_a: str | None = None             # the joints at links a's and b's reference points
+    origin_b: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,14 +139,15 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
             alpha = cols.get(f"{c.joint}.angle", -1) if c.kind in ("P", "drive_P") else -1
             drive = p + c.driver if c.kind.startswith("drive") else -1
             blocks.append(_Block(c.kind, c.joint, idx[c.a], idx[c.b], row, rho(c.joint, c.a), rho(c.joint, c.b),
-                                 alpha, drive))
+                                 alpha, drive, origin[c.a], origin[c.b]))
             row += c.n_equations
         steps.append(_StepBlocks(tuple(st.unknown), tuple(blocks), row))
     return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m.n_links))
 
 
 def _rotate(c, s, v):
-    """``R(θ) v`` for rotations (B,) and vectors (B, 2) or (2,) → (B, 2)."""
+    """``R(θ) v`` for rotations given by their cos and sin (B,) (kept by the pose store,
+    :func:`kin.rigid.rotate` takes θ) and vectors (B, 2) or (2,) → (B, 2)."""
     out = np.empty(c.shape + (2,))
     out[..., 0] = c * v[..., 0] - s * v[..., 1]
     out[..., 1] = s * v[..., 0] + c * v[..., 1]
@@ -153,10 +157,6 @@ def _rotate(c, s, v):
 def _rotate_cols(c, s, E):
     """``R(θ) E`` for rotations (B,) and a constant (2, q) → (B, 2, q)."""
     return np.stack([c[:, None] * E[0] - s[:, None] * E[1], s[:, None] * E[0] + c[:, None] * E[1]], axis=1)
-
-
-def _perp(v):
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,7 +197,7 @@ class PoseSensitivity:
         out = np.zeros((D, 2, len(self.names)))
         if f"{joint}.angle" in self.names:
             u = np.broadcast_to(self.poses.geometry.axis(joint), (D, 1, 2))[:, 0]
-            out[:, :, self.names.index(f"{joint}.angle")] = _perp(u)
+            out[:, :, self.names.index(f"{joint}.angle")] = perp(u)
         return out
 
     def tangent(self, eps) -> "TangentView":
@@ -220,7 +220,7 @@ class PoseSensitivity:
         r = geo.at(name)[:, 0] - (geo.at(o)[:, 0] if o is not None else 0.0)         # (D, 2)
         arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
         dZ = self.dZ[k]
-        out = dZ[:, :2, :] + _perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)
+        out = dZ[:, :2, :] + perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)
         return out.reshape(D, N, 2, q)
 
 
@@ -328,8 +328,8 @@ def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarra
     f = comp.flat
     blocks = [b for st in comp.steps for b in st.blocks]
     per = lambda g: np.ascontiguousarray(np.stack([g(b) for b in blocks]))      # noqa: E731
-    rho_a = per(lambda b: v.offset(b.joint, b.a))
-    rho_b = per(lambda b: v.offset(b.joint, b.b))
+    rho_a = per(lambda b: v.offset(b.joint, b.origin_a))
+    rho_b = per(lambda b: v.offset(b.joint, b.origin_b))
     u0 = per(lambda b: v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else np.zeros((v.D, 2)))
     C, S = (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
     nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
@@ -350,27 +350,32 @@ class _Flat:
         self.c = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.c]
         self.s = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.s]
         self._rho: dict = {}
+        self._offsets: dict = {}
 
     def _per_design(self, a: np.ndarray) -> np.ndarray:
         """A geometry value ``(2,)`` or ``(D, 1, 2)`` as ``(D, 2)``."""
         return a[:, 0] if a.ndim == 3 else np.broadcast_to(a, (self.D, 2))
 
-    def offset(self, joint: str, k: int) -> np.ndarray:
-        """``ρ = r_joint − c_k`` per design (D, 2)."""
-        o = _origin_joint(self.m, self.m.link_names[k])
-        r = self._per_design(self.geo.at(joint))
-        return r - self._per_design(self.geo.at(o)) if o is not None else np.array(r)
+    def offset(self, joint: str, origin: str | None) -> np.ndarray:
+        """``ρ = r_joint − c`` per design (D, 2), ``c`` the reference position of joint
+        ``origin`` (a link's reference point; None: the origin)."""
+        key = (joint, origin)
+        hit = self._offsets.get(key)
+        if hit is None:
+            r = self._per_design(self.geo.at(joint))
+            hit = self._offsets[key] = r - self._per_design(self.geo.at(origin)) if origin is not None else np.array(r)
+        return hit
 
     def reference_axis(self, joint: str) -> np.ndarray:
         """A P joint's reference guide per design (D, 2)."""
         return self._per_design(self.geo.axis(joint))
 
-    def arm(self, joint: str, k: int) -> np.ndarray:
-        """``R(θ_k) ρ`` over the batch (B, 2)."""
+    def arm(self, joint: str, k: int, origin: str | None) -> np.ndarray:
+        """``R(θ_k) ρ`` over the batch (B, 2), ``origin`` link k's reference joint."""
         key = (joint, k)
         hit = self._rho.get(key)
         if hit is None:
-            r = np.repeat(self.offset(joint, k), self.N, axis=0)
+            r = np.repeat(self.offset(joint, origin), self.N, axis=0)
             hit = self._rho[key] = _rotate(self.c[k], self.s[k], r)
         return hit
 
@@ -385,13 +390,13 @@ def _partials(b: _Block, v: _Flat, q: int):
     """The block's ``∂Φ/∂Z_a``, ``∂Φ/∂Z_b`` (B, rows, 3) and ``∂Φ/∂x`` (B, rows, q) (module docstring)."""
     Bn = v.D * v.N
     if b.kind == "R":
-        ra, rb = v.arm(b.joint, b.a), v.arm(b.joint, b.b)
+        ra, rb = v.arm(b.joint, b.a, b.origin_a), v.arm(b.joint, b.b, b.origin_b)
         da = np.zeros((Bn, 2, 3))
         da[:, 0, 0] = da[:, 1, 1] = 1.0
-        da[:, :, 2] = _perp(ra)
+        da[:, :, 2] = perp(ra)
         db = np.zeros((Bn, 2, 3))
         db[:, 0, 0] = db[:, 1, 1] = -1.0
-        db[:, :, 2] = -_perp(rb)
+        db[:, :, 2] = -perp(rb)
         dx = _rotate_cols(v.c[b.a], v.s[b.a], b.Ea) - _rotate_cols(v.c[b.b], v.s[b.b], b.Eb)
         return da, db, dx
     if b.kind == "drive_R":
@@ -402,14 +407,14 @@ def _partials(b: _Block, v: _Flat, q: int):
         dx[:, 0, b.drive] = -1.0
         return da, db, dx
     # a guide's line (P) or slide (drive_P): w · d with w = R(θ_a) n₀ (the line) or R(θ_a) u
-    ra, rb = v.arm(b.joint, b.a), v.arm(b.joint, b.b)
+    ra, rb = v.arm(b.joint, b.a, b.origin_a), v.arm(b.joint, b.b, b.origin_b)
     u0 = v.axis(b.joint)
     u = _rotate(v.c[b.a], v.s[b.a], u0)
-    n = _perp(u)
+    n = perp(u)
     w, dw = (n, -u) if b.kind == "P" else (u, n)          # ∂w/∂α
     d = v.position(b.b) + rb - v.position(b.a) - ra
-    line_a = np.concatenate([-w, (np.sum(_perp(w) * d, -1) - np.sum(w * _perp(ra), -1))[:, None]], axis=1)
-    line_b = np.concatenate([w, np.sum(w * _perp(rb), -1)[:, None]], axis=1)
+    line_a = np.concatenate([-w, (np.sum(perp(w) * d, -1) - np.sum(w * perp(ra), -1))[:, None]], axis=1)
+    line_b = np.concatenate([w, np.sum(w * perp(rb), -1)[:, None]], axis=1)
     line_x = (np.einsum("bi,bij->bj", w, _rotate_cols(v.c[b.b], v.s[b.b], b.Eb))
               - np.einsum("bi,bij->bj", w, _rotate_cols(v.c[b.a], v.s[b.a], b.Ea)))
     if b.alpha >= 0:

@@ -287,6 +287,41 @@ def test_the_exact_polish_converges_fast_despite_the_timing_symmetry():
     assert np.sqrt(np.mean(pr.residuals(z2, p2) ** 2)) < 1e-13 and n <= 250
 
 
+def test_a_full_rotation_penalty_has_its_gradient():
+    """With ``full_rotation`` (topology synthesis's closed targets) the Jacobian stays
+    exact and carries the penalty row: zero where the penalty is flat, and the
+    reference-margin hinge's gradient where the reference is within 1e-3 of singular
+    (the rocker nearly in line with the coupler), both equal to central differences."""
+    from multiloop.catalogue.dimensional.objective import Constraints
+    m = load_named("four_bar")
+    P = solve(m, np.radians(np.arange(7.0, 360.0, 33.0))).point_positions[:, 0]
+    A, B = (np.array(m.joint(n).at) for n in ("A", "B"))
+    d = (B - A) / np.linalg.norm(B - A)
+    for off in (None, 3e-5):                     # O4 on line AB beyond B, 3e-5 off it: margin 3.75e-4
+        start = m if off is None else _moved_joint(m, "O4", tuple(B + 0.08 * d + off * np.array([-d[1], d[0]])))
+        pr = Problem(Evaluator(start, design_space(start, ["P"], region=P)), path_target(start, P, "P"),
+                     Constraints(full_rotation=True))
+        assert pr.exact_jacobian and pr.constrained
+        z = pr.x0
+        phi = pr.match(z)
+        R, J = pr.jacobian_batch(z[None], phi[None])
+        active = pr.reference_margin(z[None, :pr.nx])[0] < 1e-3
+        assert active == (off is not None) and R.shape[1] == 2 * len(P) + 1 and R[0, -1] == pr.penalty_batch(z[None])[0]
+        fd = []
+        for i in range(pr.nx):
+            h = 1e-8 * m.size
+            up, down = z.copy(), z.copy()
+            up[i] += h
+            down[i] -= h
+            fd.append((pr.penalty_batch(up[None])[0] - pr.penalty_batch(down[None])[0]) / (2 * h))
+        np.testing.assert_allclose(J[0, -1, :pr.nx], fd, rtol=1e-4, atol=1e-6 * max(1.0, np.abs(fd).max()))
+        assert np.any(J[0, -1] != 0) == active
+
+
+def _moved_joint(m, name, at):
+    return replace(m, joints=tuple(replace(j, at=at) if j.name == name else j for j in m.joints))
+
+
 def test_the_jacobian_is_differenced_where_it_is_not_exact():
     """Shape-only targets, motion and function targets and constraints keep the forward
     differences (no exact Jacobian is claimed)."""

@@ -21,7 +21,7 @@ reference, whose joints are variables too).  Every design is solved by
 :meth:`.evaluator.Evaluator.poses` (the designs batched over the compiled plan, each on
 its reference branches) at :data:`SAMPLES` inputs from its reference, dense enough for a
 triad's mode to be followed.  The refinement itself is :func:`.optimise.polish`: the
-same trust region, forward differences in one batched call and meter.
+same trust region and meter, with the exact Jacobian of :meth:`CurveProblem.jacobian_batch`.
 
 References
 ----------

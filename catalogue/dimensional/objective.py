@@ -585,10 +585,12 @@ class Problem:
     def exact_jacobian(self) -> bool:
         """Whether :meth:`jacobian_batch` has the polish's Jacobian: a path target (not
         shape-only) with free timing or timing from the reference, on the design's
-        variables alone, without constraints."""
-        t = self.target
+        variables alone, with no constraint but ``full_rotation``."""
+        t, c = self.target, self.cons
+        only_rotation = not (c.min_transmission or c.length_bounds or c.max_ratio or c.grashof != "any"
+                             or c.mode != "any")
         return (isinstance(t, PathTarget) and not t.shape_only and len(self.names) == self.nx
-                and not self.constrained and (self.free_timing or self.timing_mode == "reference"))
+                and only_rotation and (self.free_timing or self.timing_mode == "reference"))
 
     def jacobian_batch(self, Z: np.ndarray, PHI: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The residuals ``(P, N·2)`` of :meth:`residuals_batch` and their exact Jacobian
@@ -614,7 +616,25 @@ class Problem:
             timing = np.zeros((P, N, 2, N))
             timing[:, np.arange(N), :, np.arange(N)] = np.swapaxes(dF[..., self.nx], 0, 1)   # (target i: its own)
             J = np.concatenate([J, timing.reshape(P, 2 * N, N)], axis=2)
+        if self.constrained:
+            R = np.concatenate([R, self.penalty_batch(Z)[:, None]], axis=1)
+            J = np.concatenate([J, self._penalty_gradient(X, J.shape[2])[:, None, :]], axis=1)
         return R, J
+
+    def _penalty_gradient(self, X: np.ndarray, n: int, h: float = 1e-7) -> np.ndarray:
+        """The gradient ``(P, n)`` of :meth:`penalty_batch` where only ``full_rotation`` is
+        set: its full-rotation term, the fraction of the grid that fails, is piecewise
+        constant (its derivative zero wherever it has one), and the reference-margin
+        hinge ``max(0, 1e-3 − m(X))/1e-3``, explicit in the design (no motion solved), is
+        differenced forward by ``h`` of the mechanism's size where it is active."""
+        out = np.zeros((X.shape[0], n))
+        m0 = self.reference_margin(X)
+        for p in np.flatnonzero(m0 < 1e-3):
+            step = h * self.mech_size
+            moved = X[p] + step * np.eye(self.nx)
+            hinge = np.maximum(0.0, 1e-3 - self.reference_margin(moved)) / 1e-3
+            out[p, :self.nx] = self.cons.weight * (hinge - max(0.0, 1e-3 - m0[p]) / 1e-3) / step
+        return out
 
     def walk(self, PHI: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Driver values ``W`` (P, L) that walk from the reference (0) through each design's

@@ -16,8 +16,10 @@ seconds are spent) or when the best objective reaches the tolerance.  Under an
 evaluation budget every decision (the probes' schedule, the stop) reads the count of
 evaluations, not the clock, so a seed gives the same search on any machine.
 The polish is :func:`scipy.optimize.least_squares` (trust-region reflective) on
-the design plus one driver value per target, with the forward-difference
-Jacobian computed as one batched call (all perturbed designs together).  When the
+the design plus one driver value per target, with the problem's exact Jacobian where
+it has one (``exact_jacobian``: the poses' design sensitivities,
+:mod:`multiloop.kin.sensitivity`), else the forward-difference Jacobian computed as
+one batched call (all perturbed designs together).  When the
 problem has constraints, the polish's residual vector carries the same weighted
 violation as the global objective (:meth:`~.objective.Problem.penalty_batch`) as one
 more residual, so the polish trades the targets against the constraints as the
@@ -243,7 +245,8 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
 
     The variables are normalised: the design to its unit box, the driver values to
     radians (or to the mechanism's size for a slider input), and the trust region
-    works with unit variable scales (``x_scale=1``); the Jacobian is forward
+    works with unit variable scales (``x_scale=1``); the Jacobian is the problem's
+    exact one where it has one (``exact_jacobian``; :func:`_floored`), else forward
     differences of step 1e-7 in these units, all perturbed designs in one batched
     call (Moré 1978 on the scaling of Levenberg–Marquardt steps); target i depends on
     its own driver value only, so one row with every driver value perturbed gives all
@@ -253,7 +256,8 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     the best point inside it; only points inside the box are kept.  Stops at
     ``max_nfev`` residual evaluations, or when ``meter`` (a :class:`~.budget.Meter`,
     charged with every design evaluated) cannot afford the next residual or Jacobian
-    or is past its deadline (checked before each), with the best point seen.  Returns
+    or is past its deadline (checked before each), or once the residuals' RMS is at
+    rounding (:data:`ROUNDING_RMS`), with the best point seen.  Returns
     the refined ``(z, phi)`` and the number of designs evaluated.
     """
     from scipy.optimize import least_squares
@@ -297,8 +301,8 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     def jac(u):
         charge(1 + nz + int(free))                  # the rows of _jacobian (what the exact one replaces)
         if exact:
-            J = problem.jacobian_batch(*split(u))[1][0] * scale
-            return _floored(np.where(np.isfinite(J), J, 0.0))
+            J = np.nan_to_num(problem.jacobian_batch(*split(u))[1][0] * scale, nan=0.0, posinf=0.0, neginf=0.0)
+            return _floored(J) if len(u0) <= 120 else J       # (LSMR's steps are minimum-norm)
         return _jacobian(problem, split, u, hi, nz, free)[0]
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
