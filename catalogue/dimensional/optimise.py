@@ -238,6 +238,14 @@ def _floored(J: np.ndarray) -> np.ndarray:
     return (U * np.maximum(s, low)) @ Vt
 
 
+def _exact_jacobian(problem, split: tuple, scale: np.ndarray) -> np.ndarray:
+    """The problem's exact Jacobian at the polish's point ``split`` = (Z, PHI), in its
+    unit variables, floored (:func:`_floored`) up to 120 variables (beyond, LSMR's steps
+    are minimum-norm)."""
+    J = np.nan_to_num(problem.jacobian_batch(*split)[1][0] * scale, nan=0.0, posinf=0.0, neginf=0.0)
+    return _floored(J) if J.shape[1] <= 120 else J
+
+
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
            meter: Meter | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and, with free timing, the driver
@@ -301,8 +309,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     def jac(u):
         charge(1 + nz + int(free))                  # the rows of _jacobian (what the exact one replaces)
         if exact:
-            J = np.nan_to_num(problem.jacobian_batch(*split(u))[1][0] * scale, nan=0.0, posinf=0.0, neginf=0.0)
-            return _floored(J) if len(u0) <= 120 else J       # (LSMR's steps are minimum-norm)
+            return _exact_jacobian(problem, split(u), scale)
         return _jacobian(problem, split, u, hi, nz, free)[0]
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
