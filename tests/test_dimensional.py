@@ -239,33 +239,55 @@ def test_every_design_variable_changes_the_objective(name, link):
 
 @pytest.mark.parametrize("name,link", [("four_bar", "coupler"), ("watt_1", "link_5"), ("crank_slider", "rod"),
                                        ("stephenson_3_triad", "T2"), ("stephenson_3", "T2")])
-@pytest.mark.parametrize("timed", [False, True])
-def test_the_exact_jacobian_equals_central_differences(name, link, timed):
-    """Point matching's exact Jacobian (the poses' design sensitivities; with free timing
-    each target's driver value by the velocity analogue; a triad's and a class IV
+@pytest.mark.parametrize("timing", ["free", "reference", "absolute", "step", "shape", "shape-step"])
+def test_the_exact_jacobian_equals_central_differences(name, link, timing):
+    """Point matching's exact Jacobian (the poses' design sensitivities; each target's
+    driver value by the velocity analogue, free or moved by the timing's offset or the
+    design's own zero; a shape-only target's similarity; a triad's and a class IV
     group's along the walk) equals central differences of its residuals."""
     m, pt = _with_point(load_named(name), link)
     x = np.radians(np.arange(5.0, 60.0, 6.0))
     st = solve(m, x)
     ok = np.asarray(st.status == "ok")
     target = st.point_positions[ok, st.point_index(pt)] + 1e-3
-    t = path_target(m, np.c_[target, np.degrees(x[ok])] if timed else target, pt)
+    shape = timing.startswith("shape")
+    mode = {"free": None, "shape": None}.get(timing, timing.replace("shape-", ""))
+    path = target if mode is None else np.c_[target, np.degrees(x[ok]) + (30.0 if mode == "absolute" else 0.0)]
+    t = path_target(m, path, pt, shape_only=shape, **({} if mode is None else {"timing": mode}))
     pr = Problem(Evaluator(m, design_space(m, [pt], region=target)), t)
-    assert pr.exact_jacobian and pr.free_timing != timed
+    pr.init_offset()
+    pr.init_shape()
+    assert pr.exact_jacobian and pr.free_timing == (mode is None)
     z = pr.x0
-    phi = pr.timing_for(z[None])[0] if timed else pr.match(z)
+    free = pr.free_timing
+    phi = pr.match(z) if free else pr.timing_for(z[None])[0]
     R, J = pr.jacobian_batch(z[None], phi[None])
     np.testing.assert_array_equal(R[0], pr.residuals(z, phi))
-    w = np.concatenate([z, phi]) if not timed else z
+    w = np.concatenate([z, phi]) if free else z
+    n = len(pr.names)
     fd = []
     for i in range(len(w)):
         h = 1e-6 * (m.size if i < pr.nx else 1.0)
         up, down = w.copy(), w.copy()
         up[i] += h
         down[i] -= h
-        res = [pr.residuals(v[:pr.nx], v[pr.nx:] if not timed else phi) for v in (up, down)]
+        res = [pr.residuals(v[:n], v[n:] if free else pr.timing_for(v[None])[0]) for v in (up, down)]
         fd.append((res[0] - res[1]) / (2 * h))
     np.testing.assert_allclose(J[0], np.stack(fd, axis=1), rtol=0, atol=1e-6 * np.abs(J).max())
+
+
+def test_the_jacobian_is_differenced_where_it_is_not_exact():
+    """Motion and function targets and the constraints other than full rotation keep the
+    forward differences (no exact Jacobian is claimed)."""
+    m, pt = _with_point(load_named("four_bar"), "coupler")
+    st = solve(m, np.radians(np.arange(5.0, 60.0, 6.0)))
+    target = st.point_positions[:, st.point_index(pt)]
+    ev = Evaluator(m, design_space(m, [pt], region=target))
+    from multiloop.catalogue.dimensional.objective import Constraints
+    assert Problem(ev, path_target(m, target, pt, shape_only=True)).exact_jacobian
+    assert not Problem(ev, path_target(m, target, pt), Constraints(max_ratio=3.0)).exact_jacobian
+    table = np.c_[np.arange(0.0, 60.0, 10.0), np.arange(0.0, 30.0, 5.0)]
+    assert not Problem(ev, function_target(m, table, "O4")).exact_jacobian
 
 
 def test_the_exact_polish_converges_fast_despite_the_timing_symmetry():
@@ -320,18 +342,6 @@ def test_a_full_rotation_penalty_has_its_gradient():
 
 def _moved_joint(m, name, at):
     return replace(m, joints=tuple(replace(j, at=at) if j.name == name else j for j in m.joints))
-
-
-def test_the_jacobian_is_differenced_where_it_is_not_exact():
-    """Shape-only targets, motion and function targets and constraints keep the forward
-    differences (no exact Jacobian is claimed)."""
-    m, pt = _with_point(load_named("four_bar"), "coupler")
-    st = solve(m, np.radians(np.arange(5.0, 60.0, 6.0)))
-    target = st.point_positions[:, st.point_index(pt)]
-    ev = Evaluator(m, design_space(m, [pt], region=target))
-    assert not Problem(ev, path_target(m, target, pt, shape_only=True)).exact_jacobian
-    from multiloop.catalogue.dimensional.objective import Constraints
-    assert not Problem(ev, path_target(m, target, pt), Constraints(max_ratio=3.0)).exact_jacobian
 
 
 def test_function_generation_freudenstein_start_is_exact():

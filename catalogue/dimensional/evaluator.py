@@ -158,6 +158,35 @@ class Evaluator:
         position along the guide from the guide's point (the joint's reference point)
         to the slider's first R joint."""
         X = np.atleast_2d(np.asarray(X, float))
+        j, q = self._driver_arm()
+        d = self.at(X, q) - self.at(X, j.name)
+        if j.kind is JointKind.R:
+            return np.arctan2(d[:, 1], d[:, 0])
+        return np.sum(d * self.axis(X, j.name), axis=-1)
+
+    def driver_zero_gradient(self, X) -> np.ndarray:
+        """The gradient ``(P, n_var)`` of :meth:`driver_zero` by the design variables: of
+        the arm's angle ``atan2(d)``, ``perp(d)/|d|²`` on its two joints' columns; of a
+        slide ``d·u``, ``u`` on them and ``d·perp(u)`` on the guide's angle."""
+        X = np.atleast_2d(np.asarray(X, float))
+        j, q = self._driver_arm()
+        d = self.at(X, q) - self.at(X, j.name)
+        out = np.zeros(X.shape)
+        if j.kind is JointKind.R:
+            w = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.sum(d * d, axis=1, keepdims=True)
+        else:
+            w = self.axis(X, j.name)
+            if f"{j.name}.angle" in self._cols:
+                out[:, self._cols[f"{j.name}.angle"]] = d[:, 1] * w[:, 0] - d[:, 0] * w[:, 1]
+        for sign, name in ((1.0, q), (-1.0, j.name)):
+            for i, axis in enumerate("xy"):
+                c = self._cols.get(f"{name}.{axis}")
+                if c is not None:
+                    out[:, c] += sign * w[:, i]
+        return out
+
+    def _driver_arm(self):
+        """The driver's joint and the driven link's next R joint (the arm :meth:`driver_zero` measures)."""
         m = self.mechanism
         j = m.joint(m.drivers[0].joint)
         _, link, _ = self.driver_sense()
@@ -165,10 +194,7 @@ class Evaluator:
         if q is None:
             raise InputError(explain(f"driven link {link!r}", expected="a second R joint to measure its position by",
                                      got="none"))
-        d = self.at(X, q) - self.at(X, j.name)
-        if j.kind is JointKind.R:
-            return np.arctan2(d[:, 1], d[:, 0])
-        return np.sum(d * self.axis(X, j.name), axis=-1)
+        return j, q
 
     # -- outputs ---------------------------------------------------------------
     def point(self, X, phi, name: str) -> tuple[np.ndarray, np.ndarray]:

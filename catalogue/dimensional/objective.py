@@ -583,43 +583,67 @@ class Problem:
 
     @property
     def exact_jacobian(self) -> bool:
-        """Whether :meth:`jacobian_batch` has the polish's Jacobian: a path target (not
-        shape-only) with free timing or timing from the reference, on the design's
-        variables alone, with no constraint but ``full_rotation``."""
-        t, c = self.target, self.cons
+        """Whether :meth:`jacobian_batch` has the polish's Jacobian: a path target (any
+        timing, shape-only too) with no constraint but ``full_rotation``."""
+        c = self.cons
         only_rotation = not (c.min_transmission or c.length_bounds or c.max_ratio or c.grashof != "any"
                              or c.mode != "any")
-        return (isinstance(t, PathTarget) and not t.shape_only and len(self.names) == self.nx
-                and only_rotation and (self.free_timing or self.timing_mode == "reference"))
+        return isinstance(self.target, PathTarget) and only_rotation
 
     def jacobian_batch(self, Z: np.ndarray, PHI: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The residuals ``(P, N·2)`` of :meth:`residuals_batch` and their exact Jacobian
-        ``(P, N·2, n)`` with respect to the design and, with free timing, each target's
-        driver value (``n = nx + N``); only where :attr:`exact_jacobian`.
+        """The residuals ``(P, N·2)`` of :meth:`residuals_batch` (and the penalty, when
+        constrained) and their exact Jacobian ``(P, N·2, n)`` by the problem's variables
+        and, with free timing, each target's driver value (``n = len(names) + N``); only
+        where :attr:`exact_jacobian`.
 
         The tracer's derivatives are the poses' design sensitivities
         (:func:`multiloop.kin.sensitivity.pose_sensitivity`: every step's velocity
-        analogue), its derivative by its own driver value the velocity analogue itself;
-        a path-dependent plan is solved along its :meth:`walk` and differentiated at the
-        targets' inputs."""
+        analogue), by a driver value the velocity analogue itself; a path-dependent plan
+        is solved along its :meth:`walk` and differentiated at the targets' inputs.  The
+        timing's variables move every target's driver value (``timing.offset`` by 1, an
+        absolute timing by minus the design's own zero,
+        :meth:`~.evaluator.Evaluator.driver_zero_gradient`); a shape-only target's
+        similarity moves the target and its size."""
         from multiloop.kin.sensitivity import pose_sensitivity
         P, N = PHI.shape
         X = Z[:, :self.nx]
         W, at = (PHI, np.arange(N)) if not self.ev.path_dependent else self.walk(PHI)
         st = self.ev.poses(X, W)
         with kernel.for_batches():
-            dF = pose_sensitivity(st).point(self.target.point)[:, at] / self._size       # (P, N, 2, nx + 1)
+            dF = pose_sensitivity(st).point(self.target.point)[:, at]        # (P, N, 2, nx + 1)
         T, size = self.targets_for(Z)
-        R = self.diff(self.features(Z, st)[:, at], T, size).reshape(P, -1)
-        J = dF[..., :self.nx].reshape(P, 2 * N, self.nx)
+        R = self.diff(self.features(Z, st)[:, at], T, size)
+        inv = (1.0 / size)[:, None, None, None]
+        J = np.zeros((P, N, 2, len(self.names) + (N if self.free_timing else 0)))
+        J[..., :self.nx] = dF[..., :self.nx] * inv
+        rate = dF[..., self.nx] * inv[..., 0]                                  # (P, N, 2) by each target's driver value
         if self.free_timing:
-            timing = np.zeros((P, N, 2, N))
-            timing[:, np.arange(N), :, np.arange(N)] = np.swapaxes(dF[..., self.nx], 0, 1)   # (target i: its own)
-            J = np.concatenate([J, timing.reshape(P, 2 * N, N)], axis=2)
+            J[:, np.arange(N), :, len(self.names) + np.arange(N)] = np.swapaxes(rate, 0, 1)   # (target i: its own)
+        elif self.timing_mode == "absolute":
+            J[..., :self.nx] -= self.sense * rate[..., None] * self.ev.driver_zero_gradient(X)[:, None, None, :]
+        elif self.timing_mode == "step":
+            J[..., self.names.index("timing.offset")] = rate
+        if isinstance(self.target, PathTarget) and self.target.shape_only:
+            self._shape_columns(J, Z, T, R)
+        R, J = R.reshape(P, -1), J.reshape(P, 2 * N, -1)
         if self.constrained:
             R = np.concatenate([R, self.penalty_batch(Z)[:, None]], axis=1)
             J = np.concatenate([J, self._penalty_gradient(X, J.shape[2])[:, None, :]], axis=1)
         return R, J
+
+    def _shape_columns(self, J: np.ndarray, Z: np.ndarray, T: np.ndarray, R: np.ndarray) -> None:
+        """A shape-only target's similarity columns of ``J`` (P, N, 2, n), in place: the
+        target ``T = s Rot(a) (t − c₀) + c₀ + (dx, dy)`` and the size ``s L`` move the
+        residuals ``(F − T)/(s L)`` by ``−(T − c₀ − d) /(s L) − R`` (log s),
+        ``−perp(T − c₀ − d)/(s L)`` (a) and ``−e_x/(s L)``, ``−e_y/(s L)``."""
+        e = Z[:, self.nx:self.nx + 4]
+        inv = 1.0 / (np.exp(e[:, 0]) * self.target.size)[:, None, None]
+        arm = T - self.target.points.mean(axis=0) - e[:, None, 2:4]
+        k = self.nx
+        J[..., k] = -arm * inv - R
+        J[..., k + 1] = np.stack([arm[..., 1], -arm[..., 0]], axis=-1) * inv
+        J[..., 0, k + 2] = -inv[..., 0]
+        J[..., 1, k + 3] = -inv[..., 0]
 
     def _penalty_gradient(self, X: np.ndarray, n: int, h: float = 1e-7) -> np.ndarray:
         """The gradient ``(P, n)`` of :meth:`penalty_batch` where only ``full_rotation`` is
