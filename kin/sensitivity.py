@@ -208,16 +208,24 @@ class PoseSensitivity:
     def world(self, k: int, name: str) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of the material point of link ``k`` at the reference
         position of joint or tracer point ``name``: ``(D, N, 2, q)``."""
+        geo = self.poses.geometry
+        cols = {n: i for i, n in enumerate(self.names)}
+        return self.material(k, np.broadcast_to(geo.at(name), (self.shape[0], 1, 2))[:, 0],
+                             _selection(cols, name, len(self.names)))
+
+    def material(self, k: int, r: np.ndarray, E: np.ndarray | None = None) -> np.ndarray:
+        """``∂W/∂(x, inputs)`` of the material point of link ``k`` at reference position
+        ``r`` (D, 2), which moves with the design by ``E`` (2, q) (None: it does not):
+        ``(D, N, 2, q)``."""
         st = self.poses
         G, geo = st.store, st.geometry
         D, N = self.shape
         q = len(self.names)
         cols = {n: i for i, n in enumerate(self.names)}
-        link = st.plan.mechanism.link_names[k]
-        o = _origin_joint(st.plan.mechanism, link)
-        E = _selection(cols, name, q) - (_selection(cols, o, q) if o is not None else 0.0)
+        o = _origin_joint(st.plan.mechanism, st.plan.mechanism.link_names[k])
+        E = (np.zeros((2, q)) if E is None else E) - (_selection(cols, o, q) if o is not None else 0.0)
         c, s = (np.broadcast_to(v, (D, N)).reshape(-1) for v in (G.c[k], G.s[k]))
-        r = geo.at(name)[:, 0] - (geo.at(o)[:, 0] if o is not None else 0.0)         # (D, 2)
+        r = np.asarray(r, float) - (np.broadcast_to(geo.at(o), (D, 1, 2))[:, 0] if o is not None else 0.0)
         arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
         dZ = self.dZ[k]
         out = dZ[:, :2, :] + perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)

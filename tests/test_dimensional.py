@@ -30,7 +30,7 @@ def test_batched_evaluator_equals_solve(name):
 from dataclasses import replace  # noqa: E402
 
 from multiloop.catalogue.dimensional import Problem, path_target, synthesise  # noqa: E402
-from multiloop.topo.model import TracerPoint  # noqa: E402
+from multiloop.topo.model import JointKind, TracerPoint  # noqa: E402
 
 
 def _with_point(m, link, name="T"):
@@ -276,9 +276,59 @@ def test_the_exact_jacobian_equals_central_differences(name, link, timing):
     np.testing.assert_allclose(J[0], np.stack(fd, axis=1), rtol=0, atol=1e-6 * np.abs(J).max())
 
 
+def _central_residuals(pr, z, phi, free, h_design):
+    """Central differences of ``pr``'s residuals by its variables (and free driver values)."""
+    w = np.concatenate([z, phi]) if free else z
+    n = len(pr.names)
+    out = []
+    for i in range(len(w)):
+        h = h_design if i < pr.nx else 1e-6
+        up, down = w.copy(), w.copy()
+        up[i] += h
+        down[i] -= h
+        res = [pr.residuals(v[:n], v[n:] if free else pr.timing_for(v[None])[0]) for v in (up, down)]
+        out.append((res[0] - res[1]) / (2 * h))
+    return np.stack(out, axis=1)
+
+
+@pytest.mark.parametrize("task,name,what", [("motion", "four_bar", "coupler"), ("motion", "watt_1", "link_5"),
+                                            ("motion", "stephenson_3_triad", "T2"),
+                                            ("function", "four_bar", "O4"), ("function", "crank_slider", "S"),
+                                            ("function", "watt_2", "O6")])
+def test_the_exact_jacobian_of_motion_and_function_targets(task, name, what):
+    """Motion generation (a frame on the link: its point and angle, the frame's offset as
+    variables, free timing) and function generation (a relative angle, or a P joint's
+    slide, at prescribed inputs): the exact Jacobian equals central differences."""
+    m = load_named(name)
+    x = np.radians(np.arange(5.0, 60.0, 6.0))
+    st = solve(m, x)
+    ok = np.asarray(st.status == "ok")
+    if task == "motion":
+        xy, th = st.point_on_link(what, np.mean([j.at for j in m.joints if what in j.links], axis=0))[0], \
+            st.angles[:, st.link_index(what)]
+        t = motion_target(m, np.c_[xy[ok] + 1e-3, np.degrees(th[ok]) + 0.5], what)
+    else:
+        j = m.joint(what)
+        out = (st.angles[:, st.link_index(j.links[1])] - st.angles[:, st.link_index(j.links[0])]) \
+            if j.kind is JointKind.R else st.positions[:, st.joint_index("B"), 0]
+        out = np.degrees(out) if j.kind is JointKind.R else out - out[0]
+        t = function_target(m, np.c_[np.degrees(x[ok]) - np.degrees(x[ok][0]), out[ok] * 1.01], what)
+    ev = Evaluator(m, design_space(m, []))
+    pr = Problem(ev, t)
+    pr.init_motion_frame()
+    assert pr.exact_jacobian
+    z = pr.x0
+    free = pr.free_timing
+    phi = pr.match(z) if free else pr.timing_for(z[None])[0]
+    R, J = pr.jacobian_batch(z[None], phi[None])
+    np.testing.assert_array_equal(R[0], pr.residuals(z, phi))
+    fd = _central_residuals(pr, z, phi, free, 1e-6 * m.size)
+    np.testing.assert_allclose(J[0], fd, rtol=0, atol=1e-6 * np.abs(J).max())
+
+
 def test_the_jacobian_is_differenced_where_it_is_not_exact():
-    """Motion and function targets and the constraints other than full rotation keep the
-    forward differences (no exact Jacobian is claimed)."""
+    """The constraints other than full rotation keep the forward differences (no exact
+    Jacobian is claimed); a shape-only target has one."""
     m, pt = _with_point(load_named("four_bar"), "coupler")
     st = solve(m, np.radians(np.arange(5.0, 60.0, 6.0)))
     target = st.point_positions[:, st.point_index(pt)]
@@ -286,8 +336,6 @@ def test_the_jacobian_is_differenced_where_it_is_not_exact():
     from multiloop.catalogue.dimensional.objective import Constraints
     assert Problem(ev, path_target(m, target, pt, shape_only=True)).exact_jacobian
     assert not Problem(ev, path_target(m, target, pt), Constraints(max_ratio=3.0)).exact_jacobian
-    table = np.c_[np.arange(0.0, 60.0, 10.0), np.arange(0.0, 30.0, 5.0)]
-    assert not Problem(ev, function_target(m, table, "O4")).exact_jacobian
 
 
 def test_the_exact_polish_converges_fast_despite_the_timing_symmetry():

@@ -583,25 +583,24 @@ class Problem:
 
     @property
     def exact_jacobian(self) -> bool:
-        """Whether :meth:`jacobian_batch` has the polish's Jacobian: a path target (any
-        timing, shape-only too) with no constraint but ``full_rotation``."""
+        """Whether :meth:`jacobian_batch` has the polish's Jacobian: every task (path,
+        with any timing and shape-only too; motion; function) with no constraint but
+        ``full_rotation``."""
         c = self.cons
-        only_rotation = not (c.min_transmission or c.length_bounds or c.max_ratio or c.grashof != "any"
-                             or c.mode != "any")
-        return isinstance(self.target, PathTarget) and only_rotation
+        return not (c.min_transmission or c.length_bounds or c.max_ratio or c.grashof != "any" or c.mode != "any")
 
     def jacobian_batch(self, Z: np.ndarray, PHI: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The residuals ``(P, N·2)`` of :meth:`residuals_batch` (and the penalty, when
-        constrained) and their exact Jacobian ``(P, N·2, n)`` by the problem's variables
+        """The residuals ``(P, N·c)`` of :meth:`residuals_batch` (and the penalty, when
+        constrained) and their exact Jacobian ``(P, N·c, n)`` by the problem's variables
         and, with free timing, each target's driver value (``n = len(names) + N``); only
         where :attr:`exact_jacobian`.
 
-        The tracer's derivatives are the poses' design sensitivities
+        The features' derivatives come from the poses' design sensitivities
         (:func:`multiloop.kin.sensitivity.pose_sensitivity`: every step's velocity
-        analogue), by a driver value the velocity analogue itself; a path-dependent plan
-        is solved along its :meth:`walk` and differentiated at the targets' inputs.  The
-        timing's variables move every target's driver value (``timing.offset`` by 1, an
-        absolute timing by minus the design's own zero,
+        analogue; :meth:`_feature_jacobian`), by a driver value the velocity analogue
+        itself; a path-dependent plan is solved along its :meth:`walk` and differentiated
+        at the targets' inputs.  The timing's variables move every target's driver value
+        (``timing.offset`` by 1, an absolute timing by minus the design's own zero,
         :meth:`~.evaluator.Evaluator.driver_zero_gradient`); a shape-only target's
         similarity moves the target and its size."""
         from multiloop.kin.sensitivity import pose_sensitivity
@@ -610,26 +609,72 @@ class Problem:
         W, at = (PHI, np.arange(N)) if not self.ev.path_dependent else self.walk(PHI)
         st = self.ev.poses(X, W)
         with kernel.for_batches():
-            dF = pose_sensitivity(st).point(self.target.point)[:, at]        # (P, N, 2, nx + 1)
+            sens = pose_sensitivity(st)
         T, size = self.targets_for(Z)
-        R = self.diff(self.features(Z, st)[:, at], T, size)
-        inv = (1.0 / size)[:, None, None, None]
-        J = np.zeros((P, N, 2, len(self.names) + (N if self.free_timing else 0)))
-        J[..., :self.nx] = dF[..., :self.nx] * inv
-        rate = dF[..., self.nx] * inv[..., 0]                                  # (P, N, 2) by each target's driver value
+        F = self.features(Z, st)
+        R = self.diff(F[:, at], T, size)
+        dF, frame = self._feature_jacobian(Z, st, sens, F)
+        c = R.shape[2]
+        scale = np.broadcast_to((1.0 / size)[:, None, None, None], (P, 1, c, 1)).copy()
+        if isinstance(self.target, MotionTarget):
+            scale[:, :, 2] = 1.0                                              # (the angle: not over the size)
+        dF, frame = dF[:, at] * scale, None if frame is None else frame[:, at] * scale
+        J = np.zeros((P, N, c, len(self.names) + (N if self.free_timing else 0)))
+        J[..., :self.nx] = dF[..., :self.nx]
+        rate = dF[..., self.nx]                                               # (P, N, c) by each target's driver value
         if self.free_timing:
             J[:, np.arange(N), :, len(self.names) + np.arange(N)] = np.swapaxes(rate, 0, 1)   # (target i: its own)
         elif self.timing_mode == "absolute":
             J[..., :self.nx] -= self.sense * rate[..., None] * self.ev.driver_zero_gradient(X)[:, None, None, :]
         elif self.timing_mode == "step":
             J[..., self.names.index("timing.offset")] = rate
+        if frame is not None:
+            J[..., self.nx:self.nx + 3] = frame
         if isinstance(self.target, PathTarget) and self.target.shape_only:
             self._shape_columns(J, Z, T, R)
-        R, J = R.reshape(P, -1), J.reshape(P, 2 * N, -1)
+        R, J = R.reshape(P, -1), J.reshape(P, N * c, -1)
         if self.constrained:
             R = np.concatenate([R, self.penalty_batch(Z)[:, None]], axis=1)
             J = np.concatenate([J, self._penalty_gradient(X, J.shape[2])[:, None, :]], axis=1)
         return R, J
+
+    def _feature_jacobian(self, Z: np.ndarray, st: DesignPoses, sens, F: np.ndarray):
+        """The derivatives ``(P, L, c, nx + 1)`` of :meth:`features` by the design and
+        the driver value, and for a motion target by its frame ``(P, L, 3, 3)`` (else
+        None): a path's tracer point; a motion's frame point ``R(θ) e + t`` on its link
+        (moving with the link, and by ``R(θ)`` with the frame's offset) and the link's
+        angle plus the frame's; a function's relative angle ``θ_b − θ_a`` (R output) or
+        slide ``(p_b − p_a)·R(θ_a) u`` (P output)."""
+        ev, t = self.ev, self.target
+        X = Z[:, :self.nx]
+        if isinstance(t, PathTarget):
+            return sens.point(t.point), None
+        if isinstance(t, MotionTarget):
+            k = ev.links[t.link]
+            xy = sens.material(k, Z[:, self.nx:self.nx + 2])
+            th = sens.angle(t.link)[:, :, None, :]
+            frame = np.zeros(F.shape[:2] + (3, 3))
+            c, s = np.cos(st.th[k]), np.sin(st.th[k])
+            frame[..., 0, 0], frame[..., 0, 1], frame[..., 1, 0], frame[..., 1, 1] = c, -s, s, c
+            frame[..., 2, 2] = 1.0
+            return np.concatenate([xy, th], axis=2), frame
+        j = ev.mechanism.joint(t.joint)
+        a, b = j.links[0], j.links[1]
+        if j.kind is JointKind.R:
+            return (sens.angle(b) - sens.angle(a))[:, :, None, :], None
+        ka, kb = ev.links[a], ev.links[b]
+        r = ev.at(X, j.name)
+        u = ev.axis(X, j.name)
+        tha = st.th[ka]
+        ua = np.stack([np.cos(tha) * u[:, 0:1] - np.sin(tha) * u[:, 1:2],
+                       np.sin(tha) * u[:, 0:1] + np.cos(tha) * u[:, 1:2]], axis=-1)       # (P, L, 2)
+        gap = st.world(kb, r) - st.world(ka, r)
+        dgap = sens.material(kb, r) - sens.material(ka, r)
+        dua = np.stack([-ua[..., 1], ua[..., 0]], axis=-1)[..., None] * sens.angle(a)[:, :, None, :]
+        if f"{j.name}.angle" in ev.space.names:
+            col = ev.space.names.index(f"{j.name}.angle")
+            dua[..., col] += np.stack([-ua[..., 1], ua[..., 0]], axis=-1)        # (R(θ) perp(u) = perp(R(θ) u))
+        return (np.einsum("plc,plcq->plq", ua, dgap) + np.einsum("plc,plcq->plq", gap, dua))[:, :, None, :], None
 
     def _shape_columns(self, J: np.ndarray, Z: np.ndarray, T: np.ndarray, R: np.ndarray) -> None:
         """A shape-only target's similarity columns of ``J`` (P, N, 2, n), in place: the
