@@ -684,3 +684,25 @@ def test_local_method_polishes_a_near_start_without_global_search(name, link):
     assert res.history == () or len(res.history) <= 1
     assert res.stopped == "tolerance"
     assert res.error_max < 1e-6, res.error_max
+
+
+def test_the_evaluator_keeps_its_last_solve_only_for_the_same_call():
+    """``Evaluator.poses`` returns its last poses for the same designs, inputs, outputs and
+    kernel mode (the polish's Jacobian at the point of its last residual), and solves
+    anew when any of them differs."""
+    from multiloop.kin import kernel
+    m = load_named("four_bar")
+    ev = Evaluator(m, design_space(m, ["P"]))
+    X = ev.space.x0[None, :]
+    phi = np.linspace(0.0, 1.0, 5)
+    a = ev.poses(X, phi)
+    assert ev.poses(X.copy(), phi.copy()) is a
+    moved = X.copy()
+    moved[0, 2] += 1e-9
+    for other in (ev.poses(moved, phi), ev.poses(X, phi + 1e-9), ev.poses(X, phi, outputs=["P"])):
+        assert other is not a
+    with kernel.using("off"):
+        assert ev.poses(X, phi) is not ev.poses(moved, phi)
+        b = ev.poses(X, phi)
+    assert ev.poses(X, phi) is not b
+    np.testing.assert_allclose(ev.poses(X, phi).point("P"), a.point("P"), atol=1e-15)
