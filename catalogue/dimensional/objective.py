@@ -615,10 +615,10 @@ class Problem:
         R = self.diff(F[:, at], T, size)
         dF, frame = self._feature_jacobian(Z, st, sens, F)
         c = R.shape[2]
-        scale = np.broadcast_to((1.0 / size)[:, None, None, None], (P, 1, c, 1)).copy()
+        over = np.broadcast_to(size[:, None, None, None], (P, 1, c, 1)).copy()
         if isinstance(self.target, MotionTarget):
-            scale[:, :, 2] = 1.0                                              # (the angle: not over the size)
-        dF, frame = dF[:, at] * scale, None if frame is None else frame[:, at] * scale
+            over[:, :, 2] = 1.0                                               # (the angle: not over the size)
+        dF, frame = dF[:, at] / over, None if frame is None else frame[:, at] / over
         J = np.zeros((P, N, c, len(self.names) + (N if self.free_timing else 0)))
         J[..., :self.nx] = dF[..., :self.nx]
         rate = dF[..., self.nx]                                               # (P, N, c) by each target's driver value
