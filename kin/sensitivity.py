@@ -333,6 +333,8 @@ def _compiled_route(n_positions: int):
 
 
 def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarray) -> None:
+    """Every step's velocity analogue by the compiled kernel, into ``dZ`` in place (the
+    blocks' per-design offsets and guides gathered here, the rest compiled once)."""
     f = comp.flat
     blocks = [b for st in comp.steps for b in st.blocks]
     per = lambda g: np.ascontiguousarray(np.stack([g(b) for b in blocks]))      # noqa: E731
