@@ -110,13 +110,17 @@ class DesignPoses:
         """P joint ``joint``'s guide in each design's reference ``(D, 1, 2)``."""
         return self.geometry.axis(joint)
 
-    def point(self, name: str) -> np.ndarray:
-        """Joint or tracer point ``name`` ``(D, N, 2)``, on the link that carries it in
+    def host(self, name: str) -> int:
+        """The index of the link that carries joint or tracer point ``name`` in
         :func:`kin.solve.solve`."""
         m, sp = self.plan.mechanism, self.plan
         names = [p.name for p in m.points]
-        k = sp.point_host[names.index(name)] if name in names else sp.joint_host[m.joint_names.index(name)]
-        return self.world(k, self.geometry.at(name)[:, 0])
+        return sp.point_host[names.index(name)] if name in names else sp.joint_host[m.joint_names.index(name)]
+
+    def point(self, name: str) -> np.ndarray:
+        """Joint or tracer point ``name`` ``(D, N, 2)``, on the link that carries it in
+        :func:`kin.solve.solve`."""
+        return self.world(self.host(name), self.geometry.at(name)[:, 0])
 
 
 def design_mechanism(geometry: Geometry, d: int) -> Mechanism:

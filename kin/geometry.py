@@ -19,7 +19,7 @@ from multiloop.topo.model import JointKind, Mechanism
 
 from .poses import unit
 
-__all__ = ["Geometry", "design_names", "design_matrix"]
+__all__ = ["Geometry", "design_names", "design_matrix", "origin_joint"]
 
 
 def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
@@ -43,6 +43,14 @@ def design_matrix(names, positions) -> np.ndarray:
     (``{"J1": (x, y), ...}``, one dict per design), for names ``"J.x"`` / ``"J.y"`` only
     (pin-jointed designs; a guide angle has no position)."""
     return np.array([[at[n[:-2]][0 if n.endswith(".x") else 1] for n in names] for at in positions], float)
+
+
+def origin_joint(m: Mechanism, link: str) -> str | None:
+    """The joint whose reference position is link ``link``'s reference point (its first
+    joint), or None where that point is the origin (the frame, a link without joints)."""
+    lk = next(x for x in m.links if x.name == link)
+    js = m.joints_of(link)
+    return None if lk.is_frame or not js or js[0].at is None else js[0].name
 
 
 class Geometry:
@@ -106,12 +114,10 @@ class Geometry:
     def origin(self, link: str) -> np.ndarray:
         """A link's reference point: its first joint's position (the origin for the frame
         or a link without joints), as :func:`topo.constraints.link_origins`."""
-        m = self.mechanism
-        lk = next(x for x in m.links if x.name == link)
-        js = m.joints_of(link)
-        if lk.is_frame or not js or js[0].at is None:
+        j = origin_joint(self.mechanism, link)
+        if j is None:
             return np.zeros((self.D, 1, 2)) if self.batch else np.zeros(2)
-        return self.at(js[0].name)
+        return self.at(j)
 
     def origins_xy(self) -> tuple:
         """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only)."""

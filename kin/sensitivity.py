@@ -40,6 +40,7 @@ import numpy as np
 from multiloop.topo.model import JointKind
 
 from .design import DesignPoses
+from .geometry import origin_joint
 from .memo import cached
 from .rigid import perp
 
@@ -80,6 +81,7 @@ class _Compiled:
     names: tuple[str, ...]
     steps: tuple[_StepBlocks, ...]
     flat: dict
+    origins: tuple                          # each link's reference joint (None: the origin)
 
 
 _KINDS = {"R": 0, "P": 1, "drive_R": 2, "drive_P": 3}
@@ -111,20 +113,13 @@ def _selection(cols: dict, name: str, q: int) -> np.ndarray:
     return E
 
 
-def _origin_joint(m, link: str) -> str | None:
-    """The joint whose reference position is link ``link``'s reference point (None: the origin)."""
-    lk = next(x for x in m.links if x.name == link)
-    js = m.joints_of(link)
-    return None if lk.is_frame or not js else js[0].name
-
-
 def _compile(sp, names: tuple[str, ...]) -> _Compiled:
     m = sp.mechanism
     p = len(names)
     q = p + len(m.drivers)
     cols = {n: i for i, n in enumerate(names)}
     idx = {x: i for i, x in enumerate(m.link_names)}
-    origin = {x: _origin_joint(m, x) for x in m.link_names}
+    origin = {x: origin_joint(m, x) for x in m.link_names}
     zero = np.zeros((2, q))
 
     def rho(joint: str, link: str) -> np.ndarray:
@@ -142,7 +137,13 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
                                  alpha, drive, origin[c.a], origin[c.b]))
             row += c.n_equations
         steps.append(_StepBlocks(tuple(st.unknown), tuple(blocks), row))
-    return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m.n_links))
+    return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m.n_links),
+                     tuple(origin[x] for x in m.link_names))
+
+
+def _per_design(a: np.ndarray, D: int) -> np.ndarray:
+    """A geometry value ``(2,)`` (one design's, shared) or ``(D, 1, 2)`` as ``(D, 2)``."""
+    return a[:, 0] if a.ndim == 3 else np.broadcast_to(a, (D, 2))
 
 
 def _rotate(c, s, v):
@@ -170,6 +171,7 @@ class PoseSensitivity:
     poses: DesignPoses
     names: tuple[str, ...]
     dZ: np.ndarray
+    origins: tuple                          # each link's reference joint (None: the origin)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -177,12 +179,7 @@ class PoseSensitivity:
 
     def point(self, name: str) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of joint or tracer point ``name``: ``(D, N, 2, q)``."""
-        st = self.poses
-        sp, geo = st.plan, st.geometry
-        m = sp.mechanism
-        pts = [p.name for p in m.points]
-        k = sp.point_host[pts.index(name)] if name in pts else sp.joint_host[m.joint_names.index(name)]
-        return self.world(k, name)
+        return self.world(self.poses.host(name), name)
 
     def angle(self, link: str) -> np.ndarray:
         """``∂θ/∂(x, inputs)`` of link ``link``: ``(D, N, q)``."""
@@ -196,8 +193,7 @@ class PoseSensitivity:
         D = self.shape[0]
         out = np.zeros((D, 2, len(self.names)))
         if f"{joint}.angle" in self.names:
-            u = np.broadcast_to(self.poses.geometry.axis(joint), (D, 1, 2))[:, 0]
-            out[:, :, self.names.index(f"{joint}.angle")] = perp(u)
+            out[:, :, self.names.index(f"{joint}.angle")] = perp(_per_design(self.poses.geometry.axis(joint), D))
         return out
 
     def tangent(self, eps) -> "TangentView":
@@ -210,8 +206,7 @@ class PoseSensitivity:
         position of joint or tracer point ``name``: ``(D, N, 2, q)``."""
         geo = self.poses.geometry
         cols = {n: i for i, n in enumerate(self.names)}
-        return self.material(k, np.broadcast_to(geo.at(name), (self.shape[0], 1, 2))[:, 0],
-                             _selection(cols, name, len(self.names)))
+        return self.material(k, _per_design(geo.at(name), self.shape[0]), _selection(cols, name, len(self.names)))
 
     def material(self, k: int, r: np.ndarray, E: np.ndarray | None = None) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of the material point of link ``k`` at reference position
@@ -222,10 +217,10 @@ class PoseSensitivity:
         D, N = self.shape
         q = len(self.names)
         cols = {n: i for i, n in enumerate(self.names)}
-        o = _origin_joint(st.plan.mechanism, st.plan.mechanism.link_names[k])
+        o = self.origins[k]
         E = (np.zeros((2, q)) if E is None else E) - (_selection(cols, o, q) if o is not None else 0.0)
         c, s = (np.broadcast_to(v, (D, N)).reshape(-1) for v in (G.c[k], G.s[k]))
-        r = np.asarray(r, float) - (np.broadcast_to(geo.at(o), (D, 1, 2))[:, 0] if o is not None else 0.0)
+        r = np.asarray(r, float) - (_per_design(geo.at(o), D) if o is not None else 0.0)
         arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
         dZ = self.dZ[k]
         out = dZ[:, :2, :] + perp(arm)[:, :, None] * dZ[:, 2:3, :] + _rotate_cols(c, s, E)
@@ -265,8 +260,7 @@ class TangentView:
         return th[..., None] + np.concatenate([self.sens.angle(link)] * 2, axis=-1) * self.signs
 
     def axis(self, joint: str) -> np.ndarray:
-        D = self.sens.shape[0]
-        u = np.broadcast_to(self.sens.poses.geometry.axis(joint), (D, 1, 2))[:, 0]
+        u = _per_design(self.sens.poses.geometry.axis(joint), self.sens.shape[0])
         return self._moved(u, self.sens.axis(joint))[:, None]
 
     def derivative(self, values: np.ndarray) -> np.ndarray:
@@ -316,7 +310,7 @@ def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
             _step_sensitivity(step, view, dZ, q)
     bad = ~st.ok.reshape(-1)
     dZ[:, bad] = np.nan
-    return PoseSensitivity(st, names + tuple(f"input:{d.joint}" for d in m.drivers), dZ)
+    return PoseSensitivity(st, names + tuple(f"input:{d.joint}" for d in m.drivers), dZ, comp.origins)
 
 
 def _compiled_route(n_positions: int):
@@ -354,7 +348,6 @@ class _Flat:
         G = st.store
         st.th                                   # (the angle rows of pending links)
         self.st, self.geo, self.D, self.N = st, geo, D, N
-        self.m = st.plan.mechanism
         self.X = G.T[:, 0].reshape(G.T.shape[0], -1)
         self.Y = G.T[:, 1].reshape(G.T.shape[0], -1)
         self.c = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.c]
@@ -362,23 +355,19 @@ class _Flat:
         self._rho: dict = {}
         self._offsets: dict = {}
 
-    def _per_design(self, a: np.ndarray) -> np.ndarray:
-        """A geometry value ``(2,)`` or ``(D, 1, 2)`` as ``(D, 2)``."""
-        return a[:, 0] if a.ndim == 3 else np.broadcast_to(a, (self.D, 2))
-
     def offset(self, joint: str, origin: str | None) -> np.ndarray:
         """``ρ = r_joint − c`` per design (D, 2), ``c`` the reference position of joint
         ``origin`` (a link's reference point; None: the origin)."""
         key = (joint, origin)
         hit = self._offsets.get(key)
         if hit is None:
-            r = self._per_design(self.geo.at(joint))
-            hit = self._offsets[key] = r - self._per_design(self.geo.at(origin)) if origin is not None else np.array(r)
+            r = _per_design(self.geo.at(joint), self.D)
+            hit = self._offsets[key] = r - _per_design(self.geo.at(origin), self.D) if origin is not None else np.array(r)
         return hit
 
     def reference_axis(self, joint: str) -> np.ndarray:
         """A P joint's reference guide per design (D, 2)."""
-        return self._per_design(self.geo.axis(joint))
+        return _per_design(self.geo.axis(joint), self.D)
 
     def arm(self, joint: str, k: int, origin: str | None) -> np.ndarray:
         """``R(θ_k) ρ`` over the batch (B, 2), ``origin`` link k's reference joint."""
