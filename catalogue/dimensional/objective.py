@@ -26,6 +26,7 @@ from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.kin.groups.registry import reference_margin
+from multiloop.kin.rigid import perp
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind
 
@@ -93,6 +94,13 @@ def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.nda
         a = spec_value(st, sp)
         out = np.fmin(out, t.margin(a, a))
     return out
+
+
+def _guide_in_world(th: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """A guide's reference direction ``u`` (P, 2) carried by its link's rotations ``th``
+    (P, N): ``R(θ) u`` (P, N, 2)."""
+    c, s = np.cos(th), np.sin(th)
+    return np.stack([c * u[:, 0:1] - s * u[:, 1:2], s * u[:, 0:1] + c * u[:, 1:2]], axis=-1)
 
 
 def _wrap(a):
@@ -321,9 +329,7 @@ class Problem:
         if j.kind is JointKind.R:
             return (st.th[kb] - st.th[ka])[..., None]
         r = ev.at(X, j.name)
-        u = ev.axis(X, j.name)
-        ua = np.stack([np.cos(st.th[ka]) * u[:, 0:1] - np.sin(st.th[ka]) * u[:, 1:2],
-                       np.sin(st.th[ka]) * u[:, 0:1] + np.cos(st.th[ka]) * u[:, 1:2]], axis=-1)
+        ua = _guide_in_world(st.th[ka], ev.axis(X, j.name))
         return np.sum((st.world(kb, r) - st.world(ka, r)) * ua, axis=-1)[..., None]
 
     def diff(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -664,16 +670,12 @@ class Problem:
             return (sens.angle(b) - sens.angle(a))[:, :, None, :], None
         ka, kb = ev.links[a], ev.links[b]
         r = ev.at(X, j.name)
-        u = ev.axis(X, j.name)
-        tha = st.th[ka]
-        ua = np.stack([np.cos(tha) * u[:, 0:1] - np.sin(tha) * u[:, 1:2],
-                       np.sin(tha) * u[:, 0:1] + np.cos(tha) * u[:, 1:2]], axis=-1)       # (P, L, 2)
+        ua = _guide_in_world(st.th[ka], ev.axis(X, j.name))                         # (P, L, 2)
         gap = st.world(kb, r) - st.world(ka, r)
         dgap = sens.material(kb, r) - sens.material(ka, r)
-        dua = np.stack([-ua[..., 1], ua[..., 0]], axis=-1)[..., None] * sens.angle(a)[:, :, None, :]
+        dua = perp(ua)[..., None] * sens.angle(a)[:, :, None, :]
         if f"{j.name}.angle" in ev.space.names:
-            col = ev.space.names.index(f"{j.name}.angle")
-            dua[..., col] += np.stack([-ua[..., 1], ua[..., 0]], axis=-1)        # (R(θ) perp(u) = perp(R(θ) u))
+            dua[..., ev.space.names.index(f"{j.name}.angle")] += perp(ua)       # (R(θ) perp(u) = perp(R(θ) u))
         return (np.einsum("plc,plcq->plq", ua, dgap) + np.einsum("plc,plcq->plq", gap, dua))[:, :, None, :], None
 
     def _shape_columns(self, J: np.ndarray, Z: np.ndarray, T: np.ndarray, R: np.ndarray) -> None:
