@@ -77,20 +77,9 @@ def _point_problem(m):
 
 def _jacobians(prob, z, phi):
     """The exact Jacobian and the differenced one at ``(z, phi)``, both in the polish's
-    unit-box variables, as callables."""
+    unit-box variables (``optimise.unit_variables``), as callables."""
     from multiloop.catalogue.dimensional import optimise
-    free = prob.free_timing
-    nz = len(z)
-    span = np.where(prob.upper > prob.lower, prob.upper - prob.lower, 1.0)
-    scale = np.concatenate([span, np.ones(len(phi))]) if free else span
-    origin = np.concatenate([prob.lower, np.zeros(len(phi))]) if free else prob.lower
-    u = (np.concatenate([z, phi]) if free else z) - origin
-    u = u / scale
-    hi = np.concatenate([np.ones(nz), np.full(len(phi), np.inf)]) if free else np.ones(nz)
-
-    def split(U):
-        W = origin + np.atleast_2d(U) * scale
-        return W[:, :nz], (W[:, nz:] if free else prob.timing_for(W[:, :nz]))
+    u, _, hi, scale, split = optimise.unit_variables(prob, z, phi)
 
     def exact():
         prob.ev._last = None            # (a cold Jacobian: the polish's follows a residual at its point)
@@ -98,7 +87,7 @@ def _jacobians(prob, z, phi):
 
     def differenced():
         prob.ev._last = None
-        return optimise._jacobian(prob, split, u, hi, nz, free)[0]
+        return optimise._jacobian(prob, split, u, hi, len(z), prob.free_timing)[0]
     return exact, differenced
 
 

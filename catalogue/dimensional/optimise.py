@@ -246,6 +246,28 @@ def _exact_jacobian(problem, split: tuple, scale: np.ndarray) -> np.ndarray:
     return _floored(J) if J.shape[1] <= 120 else J
 
 
+def unit_variables(problem, z: np.ndarray, phi: np.ndarray):
+    """The polish's variables (:func:`polish`): the start ``u0`` (the design in its unit
+    box, with free timing the driver values in radians or mechanism sizes after it), its
+    bounds ``lo``, ``hi``, the ``scale`` of each variable, and ``split(U) -> (Z, PHI)``,
+    the designs and driver values of unit variables ``U``."""
+    nz = len(z)
+    free = problem.free_timing
+    span = np.where(problem.upper > problem.lower, problem.upper - problem.lower, 1.0)
+    pscale = 1.0 if problem.rotary else problem.mech_size
+    scale = np.concatenate([span, np.full(len(phi), pscale)]) if free else span
+    origin = np.concatenate([problem.lower, np.zeros(len(phi))]) if free else problem.lower
+    lo = np.concatenate([np.zeros(nz), np.full(len(phi), -np.inf)]) if free else np.zeros(nz)
+    hi = np.concatenate([np.ones(nz), np.full(len(phi), np.inf)]) if free else np.ones(nz)
+    w0 = np.concatenate([z, phi]) if free else np.asarray(z, float)
+
+    def split(U):
+        W = origin + np.atleast_2d(U) * scale
+        Z = W[:, :nz]
+        return Z, (W[:, nz:] if free else problem.timing_for(Z))
+    return np.clip((w0 - origin) / scale, lo, hi), lo, hi, scale, split
+
+
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
            meter: Meter | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and, with free timing, the driver
@@ -271,21 +293,9 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     from scipy.optimize import least_squares
     nz = len(z)
     free = problem.free_timing
-    span = np.where(problem.upper > problem.lower, problem.upper - problem.lower, 1.0)
-    pscale = 1.0 if problem.rotary else problem.mech_size
-    scale = np.concatenate([span, np.full(len(phi), pscale)]) if free else span
-    origin = np.concatenate([problem.lower, np.zeros(len(phi))]) if free else problem.lower
-    lo = np.concatenate([np.zeros(nz), np.full(len(phi), -np.inf)]) if free else np.zeros(nz)
-    hi = np.concatenate([np.ones(nz), np.full(len(phi), np.inf)]) if free else np.ones(nz)
-    w0 = np.concatenate([z, phi]) if free else np.asarray(z, float)
-    u0 = np.clip((w0 - origin) / scale, lo, hi)
+    u0, lo, hi, scale, split = unit_variables(problem, z, phi)
     count = [0]
     best = [np.inf, u0]
-
-    def split(U):
-        W = origin + np.atleast_2d(U) * scale
-        Z = W[:, :nz]
-        return Z, (W[:, nz:] if free else problem.timing_for(Z))
 
     def charge(rows):
         if meter is not None and (meter.late() or meter.take(rows, whole=True) < rows):
