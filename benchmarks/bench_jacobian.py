@@ -82,11 +82,11 @@ def _jacobians(prob, z, phi):
     u, _, hi, scale, split = optimise.unit_variables(prob, z, phi)
 
     def exact():
-        prob.ev._last = None            # (a cold Jacobian: the polish's follows a residual at its point)
+        prob.ev._last = []              # (a cold Jacobian: the polish's follows a residual at its point)
         return prob.jacobian_batch(*split(u))[1][0] * scale
 
     def differenced():
-        prob.ev._last = None
+        prob.ev._last = []
         return optimise._jacobian(prob, split, u, hi, len(z), prob.free_timing)[0]
     return exact, differenced
 
@@ -99,7 +99,7 @@ def _polish_times(prob, z, phi, rounds: int = 4) -> tuple[float, float]:
     kept = Evaluator.poses
 
     def dropped(self, X, phi, outputs=None):
-        self._last = None
+        self._last = []
         return kept(self, X, phi, outputs)
     out = {True: [], False: []}
     try:

@@ -93,6 +93,11 @@ def design_space(m: Mechanism, points=(), *, margin: float = 1.0, region=None,
     return DesignSpace(tuple(names), x0, lo, hi)
 
 
+#: how many of its last solves an :class:`Evaluator` keeps (a polish step's residuals at
+#: the targets' inputs and its constraint penalty over the grid)
+KEPT_SOLVES = 2
+
+
 class Evaluator:
     """The parameterised solver of one mechanism (compile once, call many times): the
     design decoding of synthesis over :func:`kin.design.solve_designs`.
@@ -113,7 +118,7 @@ class Evaluator:
         self.frame = self.links[m.frame]
         self._cols = {n: i for i, n in enumerate(space.names)}
         self.deadline: float | None = None      # time.perf_counter() value, for per-design fallbacks
-        self._last: tuple | None = None          # (key, DesignPoses) of the last poses() call
+        self._last: list = []                    # [(key, DesignPoses)] of the last KEPT_SOLVES poses() calls
         self.slow = unbatched_steps(m)          # steps solved design by design
         self.path_dependent = bool(path_dependent_steps(m))     # (inputs must be walked to from the reference)
 
@@ -132,19 +137,20 @@ class Evaluator:
 
         One driver only (the synthesis problems are single-input); ``phi`` is the
         driver value from the reference configuration (rad, or m for a P driver).
-        The last call's poses are kept: the same designs at the same inputs (the polish
-        asks for its Jacobian at the point whose residuals it has just had) are not
-        solved again.
+        The last :data:`KEPT_SOLVES` calls' poses are kept: the same designs at the same
+        inputs (the polish asks for its Jacobian at the point whose residuals, and
+        constraint penalty over the driver grid, it has just had) are not solved again.
         """
         X = np.atleast_2d(np.asarray(X, float))
         phi = np.asarray(phi, float)
         key = (X.shape, X.tobytes(), phi.shape, phi.tobytes(), None if outputs is None else tuple(outputs),
                self.deadline, kernel.mode(), kernel.is_default())
-        if self._last is not None and self._last[0] == key:
-            return self._last[1]
+        for k, st in self._last:
+            if k == key:
+                return st
         with kernel.for_batches():
             st = solve_designs(self.mechanism, self.space.names, X, phi, outputs=outputs, deadline=self.deadline)
-        self._last = (key, st)
+        self._last = [(key, st)] + self._last[:KEPT_SOLVES - 1]
         return st
 
     def branches(self, X) -> np.ndarray:
