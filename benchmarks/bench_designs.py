@@ -147,6 +147,23 @@ def synthesis_goal(py: str | None, budget: int = 2) -> None:
           f"(population objective {de / theirs:.2f}) -> {'MET' if ours >= 2 * theirs else 'NOT MET'}")
 
 
+def synthesis_rate(evaluations: int = 30_000, seeds=(0, 1, 2)) -> list[float]:
+    """Evaluations per CPU second of whole synthesis runs under an evaluation budget
+    (the four-bar's ten points, free timing; the same work on any machine, so two
+    versions of the code compare by this rate whatever the load): one line per seed."""
+    import bench_synthesis as bs
+    T = bs.targets()["four-bar 10 points"]
+    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=3000, seed=0)   # (warm)
+    rates = []
+    for seed in seeds:
+        t = time.process_time()
+        r = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=seed)
+        rates.append(r.evaluations / (time.process_time() - t))
+        print(f"synthesis, four-bar 10 points, {evaluations} evaluations, seed {seed}: "
+              f"{rates[-1]:,.0f} evaluations a CPU second, error {r.error_max:.2e}")
+    return rates
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer designs")

@@ -87,7 +87,7 @@ def _jacobians(prob, z, phi):
 
     def differenced():
         prob.ev._last = []
-        return optimise._jacobian(prob, split, u, hi, len(z), prob.free_timing)[0]
+        return optimise._jacobian(prob, split, u, hi, len(z), prob.free_timing)[1][0]
     return exact, differenced
 
 

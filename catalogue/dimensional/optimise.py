@@ -19,7 +19,10 @@ The polish is :func:`scipy.optimize.least_squares` (trust-region reflective) on
 the design plus one driver value per target, with the problem's exact Jacobian where
 it has one (``exact_jacobian``: the poses' design sensitivities,
 :mod:`multiloop.kin.sensitivity`), else the forward-difference Jacobian computed as
-one batched call (all perturbed designs together).  When the
+one batched call (all perturbed designs together).  :func:`polish_batch` runs the
+same trust region (SciPy's ``trf`` iteration, ported to act on K designs at once) for
+several designs together, each residual and Jacobian call one batch over the compiled
+plan: synthesis polishes its probes' designs and its final candidates so.  When the
 problem has constraints, the polish's residual vector carries the same weighted
 violation as the global objective (:meth:`~.objective.Problem.penalty_batch`) as one
 more residual, so the polish trades the targets against the constraints as the
@@ -34,7 +37,7 @@ import numpy as np
 from .budget import Budget, Meter
 from .objective import Problem
 
-__all__ = ["SearchResult", "global_search", "polish", "METHODS"]
+__all__ = ["SearchResult", "global_search", "polish", "polish_batch", "METHODS"]
 
 #: the search methods (the first is the default): differential evolution, CMA-ES, local polish only
 METHODS = ("de", "cmaes", "local")
@@ -98,14 +101,12 @@ class _Counter:
         unit-box coordinate (the designs the probe polishes)."""
         F = np.concatenate([self.elite_f, f])
         A = np.vstack([self.elite_u, U])
+        order = np.argsort(F, kind="stable")
+        order = order[np.isfinite(F[order])]
         keep: list[int] = []
-        for i in np.argsort(F, kind="stable"):
-            if not np.isfinite(F[i]):
-                break
-            if all(np.max(np.abs(A[i] - A[j])) > gap for j in keep):
-                keep.append(int(i))
-                if len(keep) == k:
-                    break
+        while len(order) and len(keep) < k:      # (the best left; drop the designs within the gap of it)
+            keep.append(int(order[0]))
+            order = order[np.max(np.abs(A[order] - A[order[0]]), axis=1) > gap]
         self.elite_f, self.elite_u = F[keep], A[keep]
 
     def elapsed(self) -> float:
@@ -122,13 +123,11 @@ class _Counter:
             # the grid objective cannot reach the tolerance (sampling); ask the polish about
             # the best few distinct designs not yet polished, spending at most 40 % of the search
             self.probed_t = t
-            for u in self.elite_u:
-                key = u.round(6).tobytes()
-                if key in self.probed or self.done or self.probe_time > 0.4 * self.meter.clock():
-                    continue
-                self.probed.add(key)
+            fresh = [u for u in self.elite_u if u.round(6).tobytes() not in self.probed]
+            if fresh and not self.done:
+                self.probed.update(u.round(6).tobytes() for u in fresh)
                 t1 = self.meter.clock()
-                self.done = bool(self.probe(self.lo + u * self.span))
+                self.done = bool(self.probe(self.lo + np.array(fresh) * self.span))
                 self.probe_time += self.meter.clock() - t1
         return self.done or self.best_f <= self.tol or self.meter.stop() is not None
 
@@ -140,12 +139,12 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, meter:
     ``meter`` is the search's :class:`~.budget.Meter` (default: a run of
     :data:`~.budget.DEFAULT_EVALUATIONS` evaluations).  ``popsize`` multiplies the number
     of variables (as in SciPy's DE); CMA-ES uses the same population.  The start design is
-    always in the first population.  ``probe(z) -> bool`` is called (at most every 5 % of
+    always in the first population.  ``probe(Z) -> bool`` is called (at most every 5 % of
     the meter's span, spending at most 40 % of what the search has spent, both in the
-    meter's unit) on each of the :data:`ELITE` best designs seen so far that differ
-    pairwise by more than 0.05 in some unit-box coordinate and were not probed before
-    (an early polish of the best few); it stops the search when it returns True
-    (e.g. the polished design meets the tolerance).  The probe charges its evaluations
+    meter's unit) with the :data:`ELITE` best designs seen so far that differ
+    pairwise by more than 0.05 in some unit-box coordinate and were not probed before,
+    ``(k, n)`` (an early polish of the best few, together); it stops the search when it
+    returns True (e.g. a polished design meets the tolerance).  The probe charges its evaluations
     to the same meter.  ``stopped`` is one of :data:`~.budget.STOPS`.
     """
     c = _Counter(problem, meter if meter is not None else Meter.start(Budget.of()), tol, progress, probe)
@@ -153,7 +152,7 @@ def global_search(problem: Problem, *, method: str = "de", seed: int = 0, meter:
     c(u0[None, :])
     if probe is not None:                   # the start itself may be one polish away
         c.probed.add(u0.round(6).tobytes())
-        c.done = bool(probe(problem.x0.copy()))
+        c.done = bool(probe(problem.x0[None, :].copy()))
         c.probe_time = c.meter.clock()
     if method != "local" and c.best_f > tol and not c.done:
         if method == "de":
@@ -203,23 +202,31 @@ def _residuals(problem: Problem, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
     return R
 
 
-def _jacobian(problem: Problem, split, u: np.ndarray, hi: np.ndarray, nz: int, free: bool) -> tuple[np.ndarray, int]:
+def _jacobian(problem: Problem, split, U: np.ndarray, hi: np.ndarray, nz: int, free: bool) -> tuple[np.ndarray, np.ndarray, int]:
     """Forward differences (step 1e-7, backwards at the upper bound) of the polish's
-    residuals at ``u``, and the number of designs evaluated.  Target i's residuals
-    depend on the design and on its own driver value only: all driver values are
-    perturbed in one row, which gives the driver columns' diagonal blocks."""
-    h = np.where(u + 1e-7 > hi, -1e-7, 1e-7)
-    U = np.vstack([u, u[None, :] + np.diag(h)[:nz]] + ([np.r_[u[:nz], u[nz:] + 1e-7]] if free else []))
-    R = _residuals(problem, *split(U))
-    R = np.where(np.isfinite(R), R, 1.0)
-    J = np.zeros((R.shape[1], len(u)))
-    J[:, :nz] = ((R[1:nz + 1] - R[0]) / h[:nz, None]).T
+    residuals at the rows of ``U`` ``(K, n)`` (or one point ``(n,)``): the residuals
+    ``(K, m)``, the Jacobians ``(K, m, n)`` and the number of designs evaluated, all in
+    one batched call.  Target i's residuals depend on the design and on its own driver
+    value only: all driver values are perturbed in one row, which gives the driver
+    columns' diagonal blocks."""
+    U = np.atleast_2d(U)
+    K, n = U.shape
+    h = np.where(U[:, :nz] + 1e-7 > hi[:nz], -1e-7, 1e-7)                     # (K, nz)
+    rows = [U[:, None, :], np.repeat(U[:, None, :], nz, axis=1)]
+    rows[1][:, np.arange(nz), np.arange(nz)] += h
     if free:
-        n_phi = len(u) - nz
-        c = (R.shape[1] - int(problem.constrained)) // n_phi
+        rows.append(np.concatenate([U[:, None, :nz], U[:, None, nz:] + 1e-7], axis=2))
+    W = np.concatenate(rows, axis=1)                                            # (K, 1 + nz + free, n)
+    R = _residuals(problem, *split(W.reshape(-1, n)))
+    R = np.where(np.isfinite(R), R, 1.0).reshape(K, W.shape[1], -1)
+    J = np.zeros((K, R.shape[2], n))
+    J[:, :, :nz] = np.swapaxes((R[:, 1:nz + 1] - R[:, :1]) / h[:, :, None], 1, 2)
+    if free:
+        n_phi = n - nz
+        c = (R.shape[2] - int(problem.constrained)) // n_phi
         i = np.arange(c * n_phi)
-        J[i, nz + i // c] = (R[-1, i] - R[0, i]) / 1e-7
-    return J, U.shape[0]
+        J[:, i, nz + i // c] = (R[:, -1, i] - R[:, 0, i]) / 1e-7
+    return R[:, 0], J, W.shape[0] * W.shape[1]
 
 
 def _floored(J: np.ndarray) -> np.ndarray:
@@ -273,7 +280,7 @@ def unit_variables(problem, z: np.ndarray, phi: np.ndarray):
 
 
 def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 100,
-           meter: Meter | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+           meter: Meter | None = None, unbounded: bool = True) -> tuple[np.ndarray, np.ndarray, int]:
     """Least-squares refinement of design ``z`` and, with free timing, the driver
     values ``phi`` (one per target).
 
@@ -287,7 +294,8 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     of their columns (Curtis, Powell & Reid 1974: columns that share no row are
     differenced together).  The trust region
     runs unbounded first and, only when it leaves the box, again within the box from
-    the best point inside it; only points inside the box are kept.  Stops at
+    the best point inside it (``unbounded=False``: within the box from the start);
+    only points inside the box are kept.  Stops at
     ``max_nfev`` residual evaluations, or when ``meter`` (a :class:`~.budget.Meter`,
     charged with every design evaluated) cannot afford the next residual or Jacobian
     or is past its deadline (checked before each), or once the residuals' RMS is at
@@ -324,7 +332,7 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
         charge(1 + nz + int(free))                  # the rows of _jacobian (what the exact one replaces)
         if exact:
             return _exact_jacobian(problem, split(u), scale)
-        return _jacobian(problem, split, u, hi, nz, free)[0]
+        return _jacobian(problem, split, u, hi, nz, free)[1][0]
 
     # (an SVD of a few hundred columns takes seconds: beyond 120 variables the
     # trust-region subproblem is solved iteratively)
@@ -333,10 +341,190 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     try:
         # the box's reflective scaling (Coleman & Li 1996) slows convergence from the
         # interior by orders of magnitude: unbounded first, bounded only when it leaves the box
-        sol = least_squares(fun, u0, max_nfev=max_nfev, **opts)
-        if not np.all((sol.x >= lo) & (sol.x <= hi)):
-            least_squares(fun, best[1], bounds=(lo, hi), max_nfev=max(max_nfev - sol.nfev, 10), **opts)
+        sol = least_squares(fun, u0, max_nfev=max_nfev, **opts) if unbounded else None
+        if sol is None or not np.all((sol.x >= lo) & (sol.x <= hi)):
+            used = 0 if sol is None else sol.nfev
+            least_squares(fun, best[1], bounds=(lo, hi), max_nfev=max(max_nfev - used, 10), **opts)
     except _Deadline:
         pass
     Z, PHI = split(best[1])
     return Z[0].copy(), np.array(PHI[0], float), count[0]
+
+
+
+def _tr_steps(J: np.ndarray, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray,
+              floor: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
+    within ``|h| <= radius``, and their Levenberg–Marquardt parameters ``alpha`` (the
+    last ones, ``alpha``, start the search): SciPy's ``solve_lsq_trust_region``
+    (Moré 1977, on one SVD of ``J``) for all K at once, step for step — the Gauss–Newton
+    step of a full-rank ``J`` where it fits, else ``alpha`` by at most ten safeguarded
+    Newton steps to 1 % of the radius and the step scaled onto it.  With ``floor`` the
+    singular values are raised to :data:`SINGULAR_FLOOR` of the largest (as
+    :func:`_floored` raises an exact Jacobian's)."""
+    K, m, n = J.shape
+    W, s, Vt = np.linalg.svd(J, full_matrices=False)
+    if floor:
+        s = np.maximum(s, SINGULAR_FLOOR * s[:, :1])
+    uf = np.einsum("kmi,km->ki", W, R)
+    suf = s * uf
+    full = (m >= n) & (s[:, -1] > np.finfo(float).eps * m * s[:, 0])
+    gn = -np.einsum("kij,ki->kj", Vt, np.divide(uf, s, out=np.zeros_like(uf), where=full[:, None]))
+    fits = full & (np.linalg.norm(gn, axis=1) <= radius)
+
+    def phi(al):
+        den = s * s + al[:, None]
+        norm = np.linalg.norm(suf / den, axis=1)
+        return norm - radius, -np.sum(suf ** 2 / den ** 3, axis=1) / norm
+
+    upper = np.linalg.norm(suf, axis=1) / radius
+    f0, d0 = phi(np.zeros(K))
+    lower = np.where(full, -f0 / d0, 0.0)
+    reset = np.maximum(1e-3 * upper, np.sqrt(np.maximum(lower * upper, 0.0)))     # (rows that fit: unused)
+    alpha = np.where(~full & (alpha == 0), reset, alpha)
+    live = ~fits
+    for _ in range(10):
+        if not live.any():
+            break
+        reset = np.maximum(1e-3 * upper, np.sqrt(np.maximum(lower * upper, 0.0)))
+        alpha = np.where(live & ((alpha < lower) | (alpha > upper)), reset, alpha)
+        f, d = phi(alpha)
+        upper = np.where(live & (f < 0), alpha, upper)
+        ratio = f / d
+        lower = np.where(live, np.maximum(lower, alpha - ratio), lower)
+        alpha = np.where(live, alpha - (f + radius) * ratio / radius, alpha)
+        live &= ~(np.abs(f) < 0.01 * radius)
+    h = -np.einsum("kij,ki->kj", Vt, suf / (s * s + alpha[:, None]))
+    h *= (radius / np.linalg.norm(h, axis=1))[:, None]
+    return np.where(fits[:, None], gn, h), np.where(fits, 0.0, alpha)
+
+
+def polish_batch(problem: Problem, Z: np.ndarray, PHI: np.ndarray, *, max_nfev: int = 100,
+                 meter: Meter | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`polish` of K designs ``Z`` ``(K, n)`` and, with free timing, their driver
+    values ``PHI`` ``(K, N)``, all at once: every residual and Jacobian call scores the
+    designs still moving in one batch (one pass over the compiled plan), so a polish of
+    several starts costs about what one costs.
+
+    The same variables, Jacobian, stops and charges as :func:`polish`, and its
+    trust region's iteration (SciPy's ``trf`` without bounds: Branch, Coleman & Li
+    1999; the radius a quarter of the step below a ratio of 0.25, doubled above 0.75 on
+    the boundary; the step the exact solution of the subproblem, :func:`_tr_steps`),
+    run for every design together.  A design stops after ``max_nfev`` residual
+    evaluations, at a residual RMS of :data:`ROUNDING_RMS`, or when its step is below
+    rounding; all stop when ``meter`` cannot afford the next call or is past its
+    deadline.  The best point inside the box is kept; a design whose iteration ended
+    outside the box is polished again within it from there (:func:`polish`,
+    ``unbounded=False``).  Beyond 120 variables (where :func:`polish` solves the
+    subproblem iteratively) the designs are polished one by one.  Returns the refined
+    ``Z``, ``PHI`` and the number of designs evaluated.
+    """
+    Z = np.atleast_2d(np.asarray(Z, float))
+    PHI = np.atleast_2d(np.asarray(PHI, float))
+    nz = Z.shape[1]
+    free = problem.free_timing
+    if nz + (PHI.shape[1] if free else 0) > 120:           # (polish's iterative subproblem: one at a time)
+        out = [polish(problem, z, phi, max_nfev=max_nfev, meter=meter) for z, phi in zip(Z, PHI)]
+        return np.array([o[0] for o in out]), np.array([o[1] for o in out]), sum(o[2] for o in out)
+    starts = [unit_variables(problem, z, phi) for z, phi in zip(Z, PHI)]
+    _, lo, hi, scale, split = starts[0]
+    U = np.stack([s[0] for s in starts])
+    exact = EXACT and getattr(problem, "exact_jacobian", False)
+    count = [0]
+
+    def afford(rows: int) -> bool:
+        if meter is not None and (meter.late() or meter.take(rows, whole=True) < rows):
+            return False
+        count[0] += rows
+        return True
+
+    def with_jacobian(Ua):
+        if not afford(Ua.shape[0] * (1 + nz + int(free))):
+            return None
+        if exact:
+            R, J = problem.jacobian_batch(*split(Ua))
+            J = np.nan_to_num(J * scale, nan=0.0, posinf=0.0, neginf=0.0)
+        else:
+            R, J, _ = _jacobian(problem, split, Ua, hi, nz, free)
+        return np.where(np.isfinite(R), R, 1.0), J
+
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        run = _TrustRegions(problem, U, lo, hi, split, afford, meter, floor=exact)
+        run.iterate(with_jacobian, max_nfev)
+    Zs, PHIs = split(run.best_u)
+    Zs, PHIs = Zs.copy(), np.array(PHIs, float)
+    for k in np.flatnonzero(run.left_box & (meter is None or meter.stop() is None)):
+        Zs[k], PHIs[k], n = polish(problem, Zs[k], PHIs[k], max_nfev=max(max_nfev - int(run.nfev[k]), 10),
+                                   meter=meter, unbounded=False)
+        count[0] += n
+    return Zs, PHIs, count[0]
+
+
+class _TrustRegions:
+    """:func:`polish_batch`'s iteration: K trust regions over the unit variables ``U``
+    ``(K, n)``, the best point inside the box ``best_u`` of each, its residual
+    evaluations ``nfev`` and whether its iteration ended outside the box ``left_box``."""
+
+    def __init__(self, problem: Problem, U: np.ndarray, lo, hi, split, afford, meter, floor: bool):
+        self.problem, self.U, self.lo, self.hi, self.split, self.afford = problem, U, lo, hi, split, afford
+        self.meter, self.floor = meter, floor
+        self.best_u, self.best_f = U.copy(), np.full(len(U), np.inf)
+        self.nfev = np.ones(len(U), int)
+        self.left_box = np.zeros(len(U), bool)
+
+    def _keep(self, k: np.ndarray, Un: np.ndarray, Fn: np.ndarray) -> None:
+        """Keep the points ``Un`` of designs ``k`` that are inside the box and better."""
+        if self.meter is not None and self.meter.late():
+            return                              # (past the deadline a slow path leaves NaN)
+        better = np.all((Un >= self.lo) & (Un <= self.hi), axis=1) & (Fn < self.best_f[k])
+        self.best_u[k[better]], self.best_f[k[better]] = Un[better], Fn[better]
+
+    def iterate(self, with_jacobian, max_nfev: int) -> None:
+        """SciPy's ``trf_no_bounds`` loop for every design at once (the same radius
+        updates, Levenberg–Marquardt warm starts and tests: ``gtol``, ``ftol``, ``xtol``
+        at 1e-15), until each has stopped."""
+        U = self.U
+        first = with_jacobian(U)
+        if first is None:
+            return
+        R, J = first
+        F = np.einsum("km,km->k", R, R)
+        self._keep(np.arange(len(U)), U, F)
+        norm = np.linalg.norm(U, axis=1)
+        radius, alpha = np.where(norm > 0, norm, 1.0), np.zeros(len(U))
+        rounding = R.shape[1] * ROUNDING_RMS ** 2
+        active = (F > rounding) & (np.max(np.abs(np.einsum("kmi,km->ki", J, R)), axis=1) >= 1e-15)
+        while active.any():
+            a = np.flatnonzero(active)
+            h, alpha[a] = _tr_steps(J[a], R[a], radius[a], alpha[a], self.floor)
+            Jh = np.einsum("kmi,ki->km", J[a], h)
+            pred = -(2.0 * np.einsum("km,km->k", R[a], Jh) + np.einsum("km,km->k", Jh, Jh))   # |r|² − |r + Jh|²
+            if not self.afford(len(a)):
+                break
+            Un = U[a] + h
+            Rn = _residuals(self.problem, *self.split(Un))
+            Rn = np.where(np.isfinite(Rn), Rn, 1.0)
+            self.nfev[a] += 1
+            Fn = np.einsum("km,km->k", Rn, Rn)
+            self._keep(a, Un, Fn)
+            gain = F[a] - Fn
+            rho = np.where(pred > 0, gain / np.where(pred > 0, pred, 1.0), np.where((pred == 0) & (gain == 0), 1.0, 0.0))
+            step = np.linalg.norm(h, axis=1)
+            new_radius = np.where(rho < 0.25, 0.25 * step,
+                                  np.where((rho > 0.75) & (step > 0.95 * radius[a]), 2.0 * radius[a], radius[a]))
+            done = ((gain < 1e-15 * F[a]) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + np.linalg.norm(U[a], axis=1)))
+            alpha[a] = np.where(done, alpha[a], alpha[a] * radius[a] / np.where(new_radius > 0, new_radius, 1.0))
+            radius[a] = np.where(done, radius[a], new_radius)
+            ok = gain > 0
+            acc = a[ok]
+            if len(acc):
+                new = with_jacobian(Un[ok])
+                if new is None:
+                    U[acc] = Un[ok]
+                    break
+                U[acc], (R[acc], J[acc]), F[acc] = Un[ok], new, Fn[ok]
+                flat = np.max(np.abs(np.einsum("kmi,km->ki", J[acc], R[acc])), axis=1) < 1e-15
+                active[acc[flat]] = False
+            active[a[done]] = False
+            active &= (self.nfev < max_nfev) & (F > rounding)
+        self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)

@@ -14,7 +14,7 @@ from multiloop.topo.model import Mechanism
 from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
-from .optimise import METHODS, global_search, polish
+from .optimise import METHODS, global_search, polish_batch
 from .report import constraint_report, turns_fully
 from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
@@ -403,18 +403,21 @@ def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: i
 
 
 def _prober(problem: Problem, polished: list, meter: Meter, tol: float):
-    """The global search's probe: polish design ``z`` (charged to the search's
-    ``meter``), keep the result in ``polished``, and say whether it meets the tolerance
-    and every constraint."""
-    def probe(z):
+    """The global search's probe: polish designs ``Z`` ``(k, n)`` together
+    (:func:`~.optimise.polish_batch`, charged to the search's ``meter``), keep each
+    result in ``polished``, and say whether one meets the tolerance and every constraint."""
+    def probe(Z):
         if meter.stop() is not None:
             return False
         with _unbounded(problem.ev):
-            phi = problem.match(z)
-        z2, phi2, n = polish(problem, z, phi, max_nfev=100, meter=meter)
-        a = _assess(problem, z2, phi2)
-        polished.append((a, z2, phi2, n))
-        return a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0
+            PHI = np.array([problem.match(z) for z in Z])
+        Z2, PHI2, n = polish_batch(problem, Z, PHI, max_nfev=100, meter=meter)
+        met = False
+        for i, (z2, phi2) in enumerate(zip(Z2, PHI2)):
+            a = _assess(problem, z2, phi2)
+            polished.append((a, z2, phi2, n if i == 0 else 0))
+            met = met or (a[2] and np.sqrt(np.mean(a[0] ** 2)) <= tol and _violation(problem, z2) == 0.0)
+        return met
     return probe
 
 
@@ -477,14 +480,20 @@ def _closed_form(problem: Problem) -> str | None:
     return None
 
 
+#: how many designs the final polish refines together: the global search's design and the
+#: best of the candidates polished before it
+FINAL_STARTS = 2
+
+
 def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, meter: Meter | None = None):
     """The best of the global design, its polish and the probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not.
 
-    What ``meter`` has left is split: the global design is polished with half of it,
-    then the best candidate so far (often a probe's polished design) with the rest.  When the
-    search stopped at the tolerance (``skip``), only the best candidate is polished, a
-    little (100 evaluations: near a solution the steps converge quickly)."""
+    The global design and the best :data:`FINAL_STARTS` − 1 candidates so far (often the
+    probes' polished designs) are polished together with what ``meter`` has left
+    (:func:`~.optimise.polish_batch`).  When the search stopped at the tolerance
+    (``skip``), only the best candidate is polished, a little (100 residual evaluations:
+    near a solution the steps converge quickly)."""
     with _unbounded(problem.ev):
         phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
@@ -497,15 +506,14 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
             keys[id(c[1])] = (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
                               float(np.sqrt(np.mean(c[0][0] ** 2))))
         return keys[id(c[1])]
-    for half in ((False,) if skip else (True, False)):
-        if meter is not None and meter.stop() is not None:
-            break
-        part = None if meter is None else meter.share(0.5) if half else meter
-        _, zs, phis, _ = cands[0] if half else min(cands, key=key)
-        z2, phi2, n = polish(problem, zs, phis, max_nfev=100 if skip else 1500, meter=part)
-        cands.append((_assess(problem, z2, phi2), z2, phi2, n))
-        if half and not cands[-1][0][2]:
-            notes.append("the local polish left the continuous branch")
+    if meter is None or meter.stop() is None:
+        picks = [min(cands, key=key)] if skip else [cands[0]] + sorted(cands[1:], key=key)[:FINAL_STARTS - 1]
+        Z2, PHI2, n = polish_batch(problem, np.array([c[1] for c in picks]), np.array([c[2] for c in picks]),
+                                   max_nfev=100 if skip else 1500, meter=meter)
+        for i, (z2, phi2) in enumerate(zip(Z2, PHI2)):
+            cands.append((_assess(problem, z2, phi2), z2, phi2, n if i == 0 else 0))
+            if i == 0 and not skip and not cands[-1][0][2]:
+                notes.append("the local polish left the continuous branch")
     a, zb, phib, _ = _certified(problem, sorted(cands, key=key))
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
