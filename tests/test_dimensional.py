@@ -571,11 +571,12 @@ def test_full_rotation_result_turns_fully():
     m = load_named("four_bar")
     st = solve(m, np.radians(np.arange(10.0, 130.0, 20.0)))
     target = st.point_positions[:, st.point_index("P")]
-    res = synthesise(_non_grashof_four_bar(), path=target, point="P", full_rotation=True, evaluations=6000, seed=0)
+    # (a search outcome: with 6000 evaluations 7 of 8 seeds met it, with either DE)
+    res = synthesise(_non_grashof_four_bar(), path=target, point="P", full_rotation=True, evaluations=12000, seed=0)
     assert check(res.mechanism).drivers[0].full_rotation      # the output's driver turns fully
     row = next(c for c in res.constraints if c["name"] == "full_rotation")
     assert row["met"] and row["value"]["certified"] and row["violation"] == 0.0     # and the report says so
-    assert np.isfinite(res.error_max)          # (6000 evaluations may not reach the true four-bar from this start)
+    assert np.isfinite(res.error_max)          # (the budget may not reach the true four-bar from this start)
 
 
 def test_length_bounds_and_max_ratio_are_met():

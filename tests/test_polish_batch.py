@@ -117,8 +117,17 @@ def test_a_design_polishes_alike_alone_or_in_a_batch():
     pr = _four_bar_problem()
     Z, PHI = _starts(pr, 3, 0.02, seed=2)
     Zb, Pb, _ = optimise.polish_batch(pr, Z, PHI, max_nfev=40)
-    Z1, P1, _ = optimise.polish_batch(pr, Z[1:2], PHI[1:2], max_nfev=40)
+    Z1, P1, _ = optimise.polish_batch(pr, Z[1:], PHI[1:], max_nfev=40)          # (other company)
     assert np.allclose(Zb[1], Z1[0], rtol=0, atol=1e-12) and np.allclose(Pb[1], P1[0], rtol=0, atol=1e-12)
+
+
+def test_one_design_is_scipys_own_polish():
+    """A batch of one is :func:`optimise.polish` (SciPy's ``least_squares``) itself."""
+    pr = _four_bar_problem()
+    Z, PHI = _starts(pr, 1, 0.02, seed=6)
+    Zb, Pb, n = optimise.polish_batch(pr, Z, PHI, max_nfev=40)
+    z1, p1, n1 = optimise.polish(pr, Z[0], PHI[0], max_nfev=40)
+    assert np.array_equal(Zb[0], z1) and np.array_equal(Pb[0], p1) and n == n1
 
 
 def test_an_evaluation_budget_bounds_the_batch_and_repeats_exactly():

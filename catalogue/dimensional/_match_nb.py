@@ -70,22 +70,28 @@ def _leading(ok, p, start, stop, step):
 
 
 @numba.njit(**_JIT)
-def _assign(d2, order, acc, run):
-    """Cheapest monotone assignment of the targets (rows of ``d2``) to the samples in
-    the column order ``order`` (``_dp``: acc = d2[0]; acc = d2[i] + running min)."""
-    N, K = d2.shape[0], order.size
-    for k in range(K):
-        acc[k] = d2[0, order[k]]
+def _assign(d2, c0, step, acc):
+    """Cheapest monotone assignment of the targets (rows of ``d2``) to the samples taken
+    in the column order ``c0, c0 + step, …`` (mod M; ``step`` ±1) (``_dp``: acc = d2[0];
+    acc = d2[i] + running min, the running minimum taken in the same pass)."""
+    N, M = d2.shape
+    c = c0
+    for k in range(M):
+        acc[k] = d2[0, c]
+        c += step
+        c = c + M if c < 0 else c - M if c >= M else c
     for i in range(1, N):
         m = acc[0]
-        for k in range(K):
-            if acc[k] < m:
-                m = acc[k]
-            run[k] = m
-        for k in range(K):
-            acc[k] = d2[i, order[k]] + run[k]
+        c = c0
+        for k in range(M):
+            a = acc[k]
+            if a < m:
+                m = a
+            acc[k] = d2[i, c] + m
+            c += step
+            c = c + M if c < 0 else c - M if c >= M else c
     best = acc[0]
-    for k in range(1, K):
+    for k in range(1, M):
         if acc[k] < best:
             best = acc[k]
     return best
@@ -104,8 +110,7 @@ def free_timing_costs(F, T, inv, ok, rotary, ang, forward, backward, out):
     idx = np.empty(M, np.int64)
     valid = np.empty(M, np.bool_)
     d2 = np.empty((N, M))
-    acc, run = np.empty(M), np.empty(M)
-    order = np.empty(M, np.int64)
+    acc = np.empty(M)
     for p in range(P):
         full = False
         if rotary:
@@ -136,11 +141,7 @@ def free_timing_costs(F, T, inv, ok, rotary, ang, forward, backward, out):
         _distances(F[p], T[p], idx, valid, inv[p], ang, d2)
         cost = np.inf
         if forward:
-            for k in range(M):
-                order[k] = k
-            cost = _assign(d2, order, acc, run)
+            cost = _assign(d2, 0, 1, acc)
         if backward:                 # the forward walk reversed (a closed curve's shifted by 5)
-            for k in range(M):
-                order[k] = M - 1 - ((k - 5) % M) if full else M - 1 - k
-            cost = min(cost, _assign(d2, order, acc, run))
+            cost = min(cost, _assign(d2, 4 if full else M - 1, -1, acc))
         out[p] = cost

@@ -489,9 +489,10 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
     """The best of the global design, its polish and the probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not.
 
-    The global design and the best :data:`FINAL_STARTS` − 1 candidates so far (often the
-    probes' polished designs) are polished together with what ``meter`` has left
-    (:func:`~.optimise.polish_batch`).  When the search stopped at the tolerance
+    What ``meter`` has left is split: the global design and the best
+    :data:`FINAL_STARTS` − 1 other candidates (often the probes' polished designs) are
+    polished together with half of it (:func:`~.optimise.polish_batch`), then the best
+    candidate so far with the rest.  When the search stopped at the tolerance
     (``skip``), only the best candidate is polished, a little (100 residual evaluations:
     near a solution the steps converge quickly)."""
     with _unbounded(problem.ev):
@@ -506,13 +507,16 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
             keys[id(c[1])] = (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
                               float(np.sqrt(np.mean(c[0][0] ** 2))))
         return keys[id(c[1])]
-    if meter is None or meter.stop() is None:
-        picks = [min(cands, key=key)] if skip else [cands[0]] + sorted(cands[1:], key=key)[:FINAL_STARTS - 1]
+    for first in ((False,) if skip else (True, False)):
+        if meter is not None and meter.stop() is not None:
+            break
+        part = None if meter is None else meter.share(0.5) if first else meter
+        picks = [cands[0]] + sorted(cands[1:], key=key)[:FINAL_STARTS - 1] if first else [min(cands, key=key)]
         Z2, PHI2, n = polish_batch(problem, np.array([c[1] for c in picks]), np.array([c[2] for c in picks]),
-                                   max_nfev=100 if skip else 1500, meter=meter)
+                                   max_nfev=100 if skip else 1500, meter=part)
         for i, (z2, phi2) in enumerate(zip(Z2, PHI2)):
             cands.append((_assess(problem, z2, phi2), z2, phi2, n if i == 0 else 0))
-            if i == 0 and not skip and not cands[-1][0][2]:
+            if first and i == 0 and not cands[-1][0][2]:
                 notes.append("the local polish left the continuous branch")
     a, zb, phib, _ = _certified(problem, sorted(cands, key=key))
     if not a[2]:
