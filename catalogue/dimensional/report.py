@@ -17,7 +17,7 @@ from multiloop.topo.errors import ParameterError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
+__all__ = ["constraint_report", "turns_fully", "certified_transmission", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -41,13 +41,40 @@ def turns_fully(problem: Problem, z: np.ndarray) -> bool:
     return bool(motion is not None and motion.rotary and motion.turns_fully and m.drivers[0].range is None)
 
 
+def certified_transmission(problem: Problem, z: np.ndarray) -> float:
+    """The smallest folded transmission angle (deg, 90 ideal) of design ``z`` over its
+    certified motion: the exact extremes ``multiloop check`` finds
+    (:func:`multiloop.kin.check.driver_angles`: the walk's limits by continuation, each
+    extreme zoomed to 1e-10 rad from its bracket), of the same angles as the search's
+    :func:`~.objective.transmission_angles` (the types whose degenerate value is a reach
+    limit), each folded to its distance from that value; ``inf`` when there is none,
+    NaN when the design cannot be checked."""
+    from multiloop.kin.check import driver_angles
+    from multiloop.kin.check.angle_types import angle_type
+    from multiloop.topo.errors import LinkageError
+    m = problem.ev.with_design(np.asarray(z, float)[:problem.nx])
+    try:
+        found = driver_angles(m, 0)
+    except LinkageError:
+        return float("nan")
+    out = float("inf")
+    for a in found.angles:
+        t = angle_type(a.quantity)
+        if t.reach_limit and a.extreme is not None:
+            out = min(out, float(t.margin(a.extreme.min, a.extreme.max)))
+    return out
+
+
 def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuous: bool) -> list[dict]:
     """One row per constraint of ``problem`` at design ``z`` (driver values ``phi``):
     ``{"name", "required", "value", "met", "violation"}``; ``violation`` is 0 when met,
     else how far the value is from the requirement in its own units (deg, m, a ratio,
     a fraction of a turn, a count of dyads).  Full rotation is the certified one of
     ``multiloop check``; its violation is the fraction of the driver grid not reached
-    (at least one sample when the grid is all reached but ``check`` finds a lock).
+    (at least one sample when the grid is all reached but ``check`` finds a lock).  The
+    minimum transmission angle is ``check``'s exact one too
+    (:func:`certified_transmission`; the driver grid's samples only for a design
+    ``check`` refuses), never read off the grid.
 
     Always reported: the targets reached by continuous motion from the reference in
     order (``continuous``, from the caller's assessment) and a non-singular reference
@@ -67,8 +94,10 @@ def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuo
         rows.append(_row("full_rotation", "the driver turns fully (multiloop check)",
                          {"certified": sure, "grid_fraction": frac}, 0.0 if sure else max(1.0 - frac, 1.0 / problem.M)))
     if c.min_transmission:
-        mu = np.where(ok, transmission_angles(ev, X, st)[:, :problem.M], np.inf).min()
-        rows.append(_row("min_transmission", float(c.min_transmission), float(mu), c.min_transmission - mu))
+        mu = certified_transmission(problem, z)
+        if mu != mu:                                # (no certified motion: the grid's samples)
+            mu = float(np.where(ok, transmission_angles(ev, X, st)[:, :problem.M], np.inf).min())
+        rows.append(_row("min_transmission", float(c.min_transmission), mu, c.min_transmission - mu))
     if c.length_bounds or c.max_ratio:
         L = problem.lengths(X)[0]
         if c.length_bounds:

@@ -15,7 +15,7 @@ from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish_batch
-from .report import constraint_report, turns_fully
+from .report import certified_transmission, constraint_report, turns_fully
 from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
 __all__ = ["SynthesisResult", "synthesise", "path_target", "function_target", "motion_target"]
@@ -525,13 +525,23 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
 
 
 def _certified(problem: Problem, ranked: list):
-    """The first of the best five ``ranked`` candidates whose full rotation ``multiloop
-    check`` certifies (when full rotation is asked; a design on the edge of it may pass
-    every grid sample and lock between two), else the first."""
-    if problem.cons.full_rotation:
-        for c in ranked[:5]:
-            if c[0][2] and turns_fully(problem, c[1]):
-                return c
+    """The first of the best five ``ranked`` candidates that reaches its targets
+    continuously and meets the certified constraints, else the first: a full rotation
+    that ``multiloop check`` certifies (a design on the edge of it may pass every grid
+    sample and lock between two) and a minimum transmission angle that holds by
+    ``check``'s exact extremes (one sitting on the threshold at the grid's samples may
+    dip below it between two)."""
+    c = problem.cons
+    if not (c.full_rotation or c.min_transmission):
+        return ranked[0]
+    for cand in ranked[:5]:
+        if not cand[0][2]:
+            continue
+        if c.full_rotation and not turns_fully(problem, cand[1]):
+            continue
+        if c.min_transmission and not certified_transmission(problem, cand[1]) >= c.min_transmission:
+            continue
+        return cand
     return ranked[0]
 
 
