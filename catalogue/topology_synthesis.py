@@ -50,7 +50,7 @@ from .dimensional import SynthesisResult, synthesise as dimensional_synthesise
 from .dimensional.budget import LIMITS, Budget, Meter
 from .dimensional.curve_distance import SAMPLES, fit_curve
 from .dimensional.synthesise import check_tol, one_blas_thread
-from .dimensional.report import limits_text
+from .dimensional.report import certified_motion, limits_text, reaches_targets
 from .dimensional.targets import check_rows, read_table
 from .inversions import inversion
 from .open_targets import on_interval, ranked_windows
@@ -283,30 +283,6 @@ def _subset(target: np.ndarray, n: int, closed: bool = True) -> np.ndarray:
     return target[np.minimum(idx, len(target) - 1)]
 
 
-def _motion(m: Mechanism, inputs: np.ndarray):
-    """The design's certified motion (:func:`kin.solve.motion_events`: its driver's
-    limits and crossings by continuation) over ``inputs``, or None when it has none."""
-    x = np.asarray(inputs, float)
-    try:
-        return motion_events(m, extent=max(float(np.max(np.abs(x), initial=0.0)), 1e-12) * 1.01
-                             if not m.is_rotary(0) else None)
-    except (LinkageError, ValueError, FloatingPointError):
-        return None
-
-
-def _reaches_targets(m: Mechanism, inputs: np.ndarray, closed: bool = True, motion=None) -> bool:
-    """The design's certified motion (:func:`_motion`, or ``motion`` if computed)
-    reaches every target input on the design's branch (no circuit defect); for an open
-    target, the inputs' span lies in it too
-    (:meth:`~kin.motion.DriverMotion.holds_span`).  Only the motion is asked, not the
-    whole design check."""
-    x = np.asarray(inputs, float)
-    motion = _motion(m, x) if motion is None else motion
-    if motion is None or not motion.reaches(x).all():
-        return False
-    return closed or motion.holds_span(x)
-
-
 def _error_is_the_motions(res: SynthesisResult, point: str) -> bool:
     """Whether the polished error is the design's own: the tracer solved by the
     certified motion (:func:`kin.solve.solve`) at the polished inputs meets the
@@ -357,7 +333,7 @@ def _design(res: SynthesisResult, closed: bool, point: str, retrieved: float, se
     and the design is written over that interval, :func:`.open_targets.on_interval`);
     with LInK's chamfer score and the dense deviation."""
     m, inputs = res.mechanism, np.asarray(res.inputs, float)
-    if not _reaches_targets(m, inputs, closed) or not _error_is_the_motions(res, point):
+    if not reaches_targets(m, inputs, closed) or not _error_is_the_motions(res, point):
         return None
     return _made(m, inputs, closed, point, target, retrieved, seconds, evaluations,
                  (float(res.error_max), float(res.error_rms)))
@@ -416,8 +392,8 @@ def _holds_curve(m: Mechanism, inputs: np.ndarray, curve: np.ndarray, closed: bo
     certified motion holds them on one branch (turns fully, for a closed target), and
     the certified ``solve`` of its tracer there agrees with the batch's ``curve``
     (:meth:`.dimensional.curve_distance.CurveProblem.curves`) to 1e-6 of the target's size."""
-    motion = _motion(m, inputs)
-    if motion is None or not (motion.turns_fully if closed else _reaches_targets(m, inputs, False, motion)):
+    motion = certified_motion(m, inputs)
+    if motion is None or not (motion.turns_fully if closed else reaches_targets(m, inputs, False, motion)):
         return False
     st = solve(m, inputs)
     P = st.point_positions[:, st.point_index(point)]

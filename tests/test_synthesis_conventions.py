@@ -355,3 +355,31 @@ def test_assess_a_design_that_does_not_assemble_at_its_reference():
     assert not pr.ev.poses(far[None, :pr.nx], [0.0]).ok.any()
     rel, ang, ok = _assess(pr, far, np.zeros(len(st.point_positions)))
     assert not ok and ang is None
+
+
+def test_continuity_is_the_certified_motions_not_the_grids():
+    """A four-bar that fails Grashof by 1e-4 locks over 3.3° around 180°, between two
+    samples of the 96-sample grid: every sample assembles, so the grid alone calls the
+    crank fully turning and targets across the gap reached.  The returned assessment and
+    the report's ``continuous`` row take the certified motion's answer (``check``'s walk):
+    not reached; targets short of the gap are."""
+    import math
+
+    from multiloop.catalogue.dimensional.report import constraint_report
+    from multiloop.catalogue.dimensional.synthesise import _assess, _certified
+    from multiloop.kin.check import check
+    from tests.test_check import four_bar
+    a, b, c = 0.3, 1.0, 0.6
+    m, pt = _with_point(four_bar(a, b, c, b + c - a + 1e-4, math.radians(1.875)), "coupler")
+    assert not check(m).drivers[0].full_rotation
+    for deg, reached in ((np.array([100.0, 150.0, 200.0, 250.0]), False), (np.array([20.0, 60.0, 120.0]), True)):
+        st = solve(m, np.radians(deg[deg < 170.0]))                      # (any points: continuity is the question)
+        T = np.resize(st.point_positions[:, st.point_index(pt)], (len(deg), 2))
+        pr = _problem(m, pt, np.column_stack([T, deg]))
+        z, phi = pr.x0, pr.timing_for(pr.x0[None, :])[0]
+        grid = _assess(pr, z, phi)
+        assert grid[2]                                                   # the grid: all samples assemble
+        chosen = _certified(pr, [(grid, z, phi, 0)])
+        assert chosen[0][2] is reached
+        row = next(r for r in constraint_report(pr, z, phi, chosen[0][2]) if r["name"] == "continuous")
+        assert row["met"] is reached

@@ -17,7 +17,7 @@ from multiloop.topo.errors import ParameterError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully", "certified_transmission", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
+__all__ = ["constraint_report", "turns_fully", "certified_transmission", "certified_motion", "reaches_targets", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -39,6 +39,34 @@ def turns_fully(problem: Problem, z: np.ndarray) -> bool:
     except LinkageError:
         return False
     return bool(motion is not None and motion.rotary and motion.turns_fully and m.drivers[0].range is None)
+
+
+def certified_motion(m, inputs):
+    """Design ``m``'s certified motion (:func:`multiloop.kin.solve.motion_events`: its
+    driver's limits and crossings by continuation; a slider's searched over the inputs'
+    extent) over driver values ``inputs``, or None when it has none."""
+    from multiloop.kin.solve import motion_events
+    from multiloop.topo.errors import LinkageError
+    x = np.asarray(inputs, float)
+    try:
+        return motion_events(m, extent=max(float(np.max(np.abs(x), initial=0.0)), 1e-12) * 1.01
+                             if not m.is_rotary(0) else None)
+    except (LinkageError, ValueError, FloatingPointError):
+        return None
+
+
+def reaches_targets(m, inputs, closed: bool = True, motion=None) -> bool:
+    """Whether design ``m``'s certified motion (:func:`certified_motion`, or ``motion``
+    if computed) reaches every target input ``inputs`` (rad or m from the reference) on
+    the design's branch (no circuit defect); for an open target (``closed`` False) the
+    inputs' span lies in it too (:meth:`~multiloop.kin.motion.DriverMotion.holds_span`:
+    the targets met in order without passing a limit).  Only the motion is asked, not
+    the whole design check."""
+    x = np.asarray(inputs, float)
+    motion = certified_motion(m, x) if motion is None else motion
+    if motion is None or not motion.reaches(x).all():
+        return False
+    return closed or motion.holds_span(x)
 
 
 def certified_transmission(problem: Problem, z: np.ndarray) -> float:

@@ -15,7 +15,7 @@ from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish_batch
-from .report import certified_transmission, constraint_report, turns_fully
+from .report import certified_transmission, constraint_report, reaches_targets, turns_fully
 from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
 __all__ = ["SynthesisResult", "synthesise", "path_target", "function_target", "motion_target"]
@@ -525,24 +525,33 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
 
 
 def _certified(problem: Problem, ranked: list):
-    """The first of the best five ``ranked`` candidates that reaches its targets
-    continuously and meets the certified constraints, else the first: a full rotation
-    that ``multiloop check`` certifies (a design on the edge of it may pass every grid
-    sample and lock between two) and a minimum transmission angle that holds by
-    ``check``'s exact extremes (one sitting on the threshold at the grid's samples may
-    dip below it between two)."""
+    """The first of the best five ``ranked`` candidates whose certified motion
+    (``multiloop check``'s walk, :func:`~.report.reaches_targets`) reaches its targets in
+    order without passing a limit and that meets the certified constraints, else the
+    first, with its assessment's ``ok`` replaced by the certified answer: the targets'
+    continuity (the driver grid's samples may all assemble with a limit between two), a
+    full rotation that ``check`` certifies, and a minimum transmission angle that holds
+    by ``check``'s exact extremes (one on the threshold at the grid's samples may dip
+    below it between two)."""
     c = problem.cons
-    if not (c.full_rotation or c.min_transmission):
-        return ranked[0]
     for cand in ranked[:5]:
-        if not cand[0][2]:
+        if not (cand[0][2] and _reached(problem, cand)):
             continue
         if c.full_rotation and not turns_fully(problem, cand[1]):
             continue
         if c.min_transmission and not certified_transmission(problem, cand[1]) >= c.min_transmission:
             continue
         return cand
-    return ranked[0]
+    first = ranked[0]
+    (rel, ang, ok), rest = first[0], first[1:]
+    return ((rel, ang, bool(ok and _reached(problem, first))),) + tuple(rest)
+
+
+def _reached(problem: Problem, cand) -> bool:
+    """Whether candidate ``cand``'s certified motion reaches its targets' driver values in
+    order from the reference (:func:`~.report.reaches_targets`, the span held)."""
+    m = problem.ev.with_design(np.asarray(cand[1], float)[:problem.nx])
+    return reaches_targets(m, cand[2], closed=False)
 
 
 def _violation(problem: Problem, z: np.ndarray) -> float:
