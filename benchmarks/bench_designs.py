@@ -164,6 +164,30 @@ def synthesis_rate(evaluations: int = 30_000, seeds=(0, 1, 2)) -> list[float]:
     return rates
 
 
+def search_rate(evaluations: int = 20_000, rounds: int = 5) -> float:
+    """Evaluations per second of the global search alone (differential evolution, no
+    probes, no polish) on the four-bar's ten points: the population objective inside
+    the search's own loop, the fastest of ``rounds`` runs."""
+    import bench_synthesis as bs
+    from multiloop.catalogue.dimensional import optimise
+    from multiloop.catalogue.dimensional.budget import Budget, Meter
+    from multiloop.catalogue.dimensional.synthesise import _checked, _problem, _target, one_blas_thread
+    from multiloop.catalogue.dimensional.objective import Constraints
+    m = bs.start_mechanism()
+    task, target = _target(m, bs.targets()["four-bar 10 points"], "P", False, None, None, None, None, "reference")
+    problem = _problem(m, task, _checked(task, target, "any")[0], None, Constraints(), 96, None)
+    with one_blas_thread():
+        optimise.global_search(problem, meter=Meter.start(Budget.of(2000)), tol=0.0)          # (warm)
+        best = np.inf
+        for _ in range(rounds):
+            t = time.perf_counter()
+            r = optimise.global_search(problem, meter=Meter.start(Budget.of(evaluations)), tol=0.0)
+            best = min(best, (time.perf_counter() - t) / r.evaluations)
+    print(f"global search (DE, no probes), four-bar 10 points: {1 / best:,.0f} evaluations/s "
+          f"(fastest of {rounds} runs of {evaluations})")
+    return 1 / best
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer designs")
