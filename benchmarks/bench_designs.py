@@ -164,28 +164,89 @@ def synthesis_rate(evaluations: int = 30_000, seeds=(0, 1, 2)) -> list[float]:
     return rates
 
 
-def search_rate(evaluations: int = 20_000, rounds: int = 5) -> float:
-    """Evaluations per second of the global search alone (differential evolution, no
-    probes, no polish) on the four-bar's ten points: the population objective inside
-    the search's own loop, the fastest of ``rounds`` runs."""
+def synthesis_floor_goal(budget: float = 2.0, D: int = 10_000, N: int = 96) -> None:
+    """The issue's row "synthesis evaluations/s against a bare NumPy four-bar pass" (goal
+    at least 0.2 of it): the whole run's rate (four-bar, 10 points, free timing, ``budget``
+    seconds) and the search's alone, over the designs a second of the floor
+    (:func:`bare_curves`, D designs × N inputs in one NumPy pass, the grid's N)."""
     import bench_synthesis as bs
+    m = load_named("four_bar")
+    names, X = _population(m, D, 0.02)
+    phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)
+    floor, _ = _best(lambda: bare_curves(m, names, X, phi))
+    floor_rate = D / floor
+    T = bs.targets()["four-bar 10 points"]
+    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=500, seed=0)
+    res = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=budget, seed=0)
+    whole = res.evaluations / res.seconds
+    search = search_rate(rounds=3)
+    print(f"synthesis against a bare NumPy four-bar pass ({floor_rate:,.0f} designs/s of {N} positions): whole run "
+          f"{whole:,.0f}/s = {whole / floor_rate:.3f} of it, the search alone {search:,.0f}/s = "
+          f"{search / floor_rate:.3f}; goal >= 0.2 -> {'MET' if whole >= 0.2 * floor_rate else 'NOT MET'} "
+          f"(whole run), {'MET' if search >= 0.2 * floor_rate else 'NOT MET'} (search)")
+
+
+def triad_synthesis_goal(budget: float = 2.0) -> None:
+    """The issue's row "synthesis evaluations/s, Stephenson III triad" (goal 6 500/s): ten
+    points of the catalogue triad six-bar's tracer curve over 60° of its driver (free
+    timing, an exact target), from the mechanism with its joints moved by 0.3 % of its
+    size, ``budget`` seconds; the whole run's rate (it may stop early at the tolerance:
+    the polish's share then weighs more) and the search's alone."""
+    from dataclasses import replace
+    from multiloop.catalogue.dimensional import synthesise
+    from multiloop.kin.solve import solve
+    m = load_named("stephenson_3_triad")
+    pt = m.points[0].name
+    st = solve(m, np.radians(np.linspace(0.0, 60.0, 10)))
+    T = st.point_positions[:, st.point_index(pt)]
+    rng = np.random.default_rng(1)
+    size = float(np.ptp(np.array([j.at for j in m.joints]), axis=0).max())
+    start = replace(m, joints=tuple(replace(j, at=tuple(np.asarray(j.at) + rng.normal(0.0, 0.003 * size, 2)))
+                                    for j in m.joints))
+    synthesise(start, path=T, point=pt, evaluations=500, seed=0)                  # (warm: numba's cache)
+    res = synthesise(start, path=T, point=pt, budget=budget, seed=0)
+    rate = res.evaluations / res.seconds
+    search = _search_alone(_path_problem(start, T, pt), 5000, 3)
+    print(f"synthesis evaluations per second, Stephenson III triad, 10 points, free timing, {budget:g} s: "
+          f"whole run {rate:,.0f}/s ({res.evaluations:,} in {res.seconds:.2f} s, error {res.error_max:.1e}, "
+          f"stopped {res.stopped}), the search alone {search:,.0f}/s; goal >= 6500 -> "
+          f"{'MET' if rate >= 6500 else 'NOT MET'} (whole run), {'MET' if search >= 6500 else 'NOT MET'} (search)")
+
+
+def _search_alone(problem, evaluations: int, rounds: int) -> float:
+    """Evaluations per second of the global search alone on ``problem`` (DE, no probes,
+    no polish), the fastest of ``rounds`` runs."""
     from multiloop.catalogue.dimensional import optimise
     from multiloop.catalogue.dimensional.budget import Budget, Meter
-    from multiloop.catalogue.dimensional.synthesise import _checked, _problem, _target, one_blas_thread
-    from multiloop.catalogue.dimensional.objective import Constraints
-    m = bs.start_mechanism()
-    task, target = _target(m, bs.targets()["four-bar 10 points"], "P", False, None, None, None, None, "reference")
-    problem = _problem(m, task, _checked(task, target, "any")[0], None, Constraints(), 96, None)
+    from multiloop.catalogue.dimensional.synthesise import one_blas_thread
     with one_blas_thread():
-        optimise.global_search(problem, meter=Meter.start(Budget.of(2000)), tol=0.0)          # (warm)
+        optimise.global_search(problem, meter=Meter.start(Budget.of(min(2000, evaluations))), tol=0.0)   # (warm)
         best = np.inf
         for _ in range(rounds):
             t = time.perf_counter()
             r = optimise.global_search(problem, meter=Meter.start(Budget.of(evaluations)), tol=0.0)
             best = min(best, (time.perf_counter() - t) / r.evaluations)
-    print(f"global search (DE, no probes), four-bar 10 points: {1 / best:,.0f} evaluations/s "
-          f"(fastest of {rounds} runs of {evaluations})")
     return 1 / best
+
+
+def _path_problem(m, T, point):
+    """The synthesiser's problem for path ``T`` of ``point`` (free timing, no constraint)."""
+    from multiloop.catalogue.dimensional.objective import Constraints
+    from multiloop.catalogue.dimensional.synthesise import _checked, _problem, _target
+    task, target = _target(m, T, point, False, None, None, None, None, "reference")
+    return _problem(m, task, _checked(task, target, "any")[0], None, Constraints(), 96, None)
+
+
+def search_rate(evaluations: int = 20_000, rounds: int = 5) -> float:
+    """Evaluations per second of the global search alone (differential evolution, no
+    probes, no polish) on the four-bar's ten points: the population objective inside
+    the search's own loop, the fastest of ``rounds`` runs."""
+    import bench_synthesis as bs
+    rate = _search_alone(_path_problem(bs.start_mechanism(), bs.targets()["four-bar 10 points"], "P"),
+                         evaluations, rounds)
+    print(f"global search (DE, no probes), four-bar 10 points: {rate:,.0f} evaluations/s "
+          f"(fastest of {rounds} runs of {evaluations})")
+    return rate
 
 
 def main(argv=None):
