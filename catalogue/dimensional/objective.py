@@ -108,8 +108,9 @@ def _lowest(f: np.ndarray, rotary: bool) -> np.ndarray:
     two neighbours (cyclic when the whole turn is reached): the vertex, below the
     sample by ``(f₊ − f₋)² / 8(f₋ − 2f₀ + f₊)`` when the three are convex.  A sampled
     minimum misses the true one by O(h²); the parabola's by O(h³) where the angle is
-    smooth (at a kink, where two groups' angles cross, it reads lower: on the safe
-    side)."""
+    smooth, which it is near its minimum: the lowest of several groups' angles, and an
+    angle folded at 90°, have corners only at peaks.  (At a V-shaped dip the vertex
+    would lie between the true minimum and the lowest sample.)"""
     P, M = f.shape
     k = np.argmin(f, axis=1)
     rows = np.arange(P)

@@ -379,7 +379,6 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     return Z[0].copy(), np.array(PHI[0], float), count[0]
 
 
-
 def _tr_steps(J: np.ndarray, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray,
               floor: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
