@@ -887,10 +887,123 @@ def _track_all(A, b, L, start, stride, nb):
         P[rows[k]], th[rows[k]], status[rows[k]] = Pd, thd, 0
         alone[rows] = True
         alone[rows[k]] = False
+    rest = np.flatnonzero(alone & finite)
+    if rest.size and step > 1:                    # (designs lost on the way: their prefix, batched)
+        done, Pd, thd, sd = _track_partial(A[rest], b[rest], L[rest], start[rest], step, nb)
+        P[rest[done]], th[rest[done]], status[rest[done]] = Pd, thd, sd
+        alone[rest[done]] = False
     for d in np.flatnonzero(alone):               # the single-design tracker, as alone
         if finite[d]:
             P[d], th[d], status[d] = _track(A[d], b[d], L[d], start[d], stride, nb)
     return P, th, status
+
+
+def _track_partial(A, b, L, start, stride, nb):
+    """:func:`_track` for many designs at once where it does the same steps for each: a
+    design whose mode is lost at a coarse input (or that does not assemble at the
+    reference), every other input before it accepted from its Taylor prediction; the
+    rest of its inputs followed at full resolution from its last good coarse input, as
+    :func:`_refine` follows that tail (:func:`_partial_tail`).  Returns the designs
+    done, and their ``P``,
+    ``theta`` and statuses; any other design (an input refused before the loss, or no
+    loss at all) is left to :func:`_track`."""
+    Dn, N = A.shape[:2]
+    c = _coarse(N, stride)
+    nc = len(c)
+    Pm, thm, ic, _ = _coarse_follow(A[:, c], b, L[:, c], start, nb)
+    good = ic >= 0
+    kmax = good.sum(axis=1) - 1                   # (the last good coarse input, when they lead)
+    done = (kmax < nc - 1) & np.all(good == (np.arange(nc) <= kmax[:, None]), axis=1)
+    P = np.full((Dn, N, 3, 2), np.nan)
+    th = np.full((Dn, N), np.nan)
+    status = np.full((Dn, N), 3)
+    status[done & (kmax < 0)] = 1                 # (no assembly at the reference)
+    live = np.flatnonzero(done & (kmax >= 0))
+    if live.size:
+        ok = _partial_prefix(A[live], b[live], L[live], c, kmax[live], Pm[live], thm[live], ic[live],
+                             P[live], th[live], status[live])
+        done[live[~ok[0]]] = False
+        P[live], th[live], status[live] = ok[1:]
+        _partial_tail(A, b, L, c, kmax, live[ok[0]], P, th, status, nb)
+        _first_failures(P, th, status, live[ok[0]])
+    return done, P[done], th[done], status[done]
+
+
+def _partial_prefix(A, b, L, c, kmax, Pm, thm, ic, P, th, status):
+    """Phases 1 and 2 of :func:`_track` for designs lost after their coarse input
+    ``c[kmax]``: the coarse points and every input before ``c[kmax]`` from its nearest
+    coarse point (Taylor, Newton, the acceptance tests), in :func:`_track`'s NumPy route.
+    Returns whether each design had every such input accepted, and ``P``, ``theta`` and
+    the statuses so far."""
+    G, nc = ic.shape
+    ar = np.arange(nc)
+    kk = ar[None, :] <= kmax[:, None]                                       # (G, nc) good coarse points
+    icc = np.where(kk, ic, 0)
+    Pc = Pm[np.arange(G)[:, None], ar, icc]                                # (G, nc, 3, 2)
+    thc = thm[np.arange(G)[:, None], ar, icc]
+    other = np.isfinite(thm) & (np.arange(MAX_MODES) != icc[..., None])
+    sep = np.min(np.where(other, np.nan_to_num(_dist(Pm, Pc[:, :, None]), nan=np.inf), np.inf), axis=-1)
+    g, k = np.nonzero(kk)
+    P[g, c[k]], th[g, c[k]], status[g, c[k]] = Pc[g, k], thc[g, k], 0
+    end = c[kmax]                                                           # (G,)
+    fine = np.setdiff1d(np.arange(int(end.max()) + 1), c, assume_unique=True)
+    dd, ff = np.nonzero(fine[None, :] <= end[:, None])
+    ff = fine[ff]
+    accepted = np.ones(G, bool)
+    if ff.size:
+        left = np.searchsorted(c, ff, side="right") - 1
+        right = np.minimum(left + 1, kmax[dd])
+        kn = np.where(ff - c[left] <= c[right] - ff, left, right)
+        Pp, dth, sing = _predict(A[dd, c[kn]], Pc[dd, kn], A[dd, ff], L[dd, c[kn]], L[dd, ff])
+        bb = (b - b[:, :1])[dd]
+        Pf, thf, res = _polish(A[dd, ff], bb, L[dd, ff], Pp[:, 0], thc[dd, kn] + dth)
+        acc = ((res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep[dd, kn])
+               & (_dist(Pf, Pc[dd, kn]) <= 0.5 * sep[dd, kn]))
+        accepted = ~np.isin(np.arange(G), dd[~acc])
+        P[dd[acc], ff[acc]] = Pf[acc]
+        th[dd[acc], ff[acc]] = _wrap(thf[acc])
+        status[dd[acc], ff[acc]] = 0
+    return accepted, P, th, status
+
+
+def _partial_tail(A, b, L, c, kmax, rows, P, th, status, nb, chunk: int = 16):
+    """:func:`_refine`'s tail for designs ``rows`` at once, in place: every input from
+    ``c[kmax]`` to the last followed at full resolution from the pose there, ``chunk``
+    inputs at a time for the designs still followed (a design's mode is almost always
+    lost within the first chunk: all modes at every later input would be spent on
+    nothing).  Following is causal, and a chunk starts from the pose its predecessor
+    ended on, the mode itself, so the chunks give the single pass's modes and
+    statuses; the designs' chunks are padded with their last input to one length."""
+    N = A.shape[1]
+    cur = c[kmax[rows]].copy()
+    first = np.ones(len(rows), bool)
+    live = np.arange(len(rows))
+    while live.size:
+        d = rows[live]
+        lo = cur[live]
+        n = np.minimum(lo + chunk, N - 1) - lo + 1
+        j = np.minimum(lo[:, None] + np.arange(int(n.max()))[None, :], N - 1)
+        Pt, tht, idx, st = _coarse_follow(A[d[:, None], j], b[d], L[d[:, None], j], P[d, lo], nb)
+        on = np.zeros(len(live), bool)
+        for i, (dd, l0, m) in enumerate(zip(d, lo, n)):
+            if idx[i, 0] < 0:                      # (the start has no mode: nothing reached)
+                if first[live[i]]:
+                    status[dd, l0:] = 1
+                continue
+            ok = np.flatnonzero(idx[i, :m] >= 0)
+            P[dd, l0 + ok] = Pt[i, ok, idx[i, ok]]
+            th[dd, l0 + ok] = tht[i, ok, idx[i, ok]]
+            status[dd, l0:l0 + m] = st[i, :m]
+            on[i] = idx[i, m - 1] >= 0 and l0 + m < N
+        first[live] = False
+        cur[live] = lo + n - 1
+        live = live[on]
+
+
+def _first_failures(P, th, status, rows) -> None:
+    """:func:`_first_failure_final` of designs ``rows``, in place."""
+    for d in rows:
+        _first_failure_final(P[d], th[d], status[d])
 
 
 def _kernel():
