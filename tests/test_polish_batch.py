@@ -55,7 +55,7 @@ def test_the_steps_are_scipys(m, n, rank, seed, radius, alpha0):
     K = 3
     J = rng.normal(size=(K, m, min(rank, m, n))) @ rng.normal(size=(K, min(rank, m, n), n))
     R = rng.normal(size=(K, m))
-    h, alpha = optimise._tr_steps(J, R, np.full(K, radius), np.full(K, alpha0), floor=False)
+    h, alpha = optimise._tr_steps(optimise._svd(J, False), R, np.full(K, radius), np.full(K, alpha0))
     for k in range(K):
         W, s, Vt = np.linalg.svd(J[k], full_matrices=False)
         ref, ref_alpha, _ = solve_lsq_trust_region(n, m, W.T @ R[k], s, Vt.T, radius, initial_alpha=alpha0)
@@ -69,7 +69,7 @@ def test_a_floored_step_is_the_step_of_the_floored_jacobian():
     rng = np.random.default_rng(7)
     J = rng.normal(size=(1, 8, 3)) @ rng.normal(size=(1, 3, 12))       # rank 3 of 8 × 12
     R = rng.normal(size=(1, 8))
-    h, _ = optimise._tr_steps(J, R, np.array([0.5]), np.zeros(1), floor=True)
+    h, _ = optimise._tr_steps(optimise._svd(J, True), R, np.array([0.5]), np.zeros(1))
     W, s, Vt = np.linalg.svd(optimise._floored(J[0]), full_matrices=False)
     ref, _, _ = solve_lsq_trust_region(12, 8, W.T @ R[0], s, Vt.T, 0.5, initial_alpha=0.0)
     assert np.allclose(h[0], ref, rtol=1e-6, atol=1e-10)      # (the floored J rebuilt: rounding)

@@ -19,6 +19,8 @@ import numpy as np
 from multiloop.kin.design import (DesignPoses, branch_signs, design_mechanism, design_names, path_dependent_steps,
                                   solve_designs, unbatched_steps)
 from multiloop.kin import kernel
+from multiloop.kin.memo import cached
+from multiloop.kin.rigid import perp
 from multiloop.kin.geometry import Geometry
 from multiloop.topo.assur import DriverStep, decompose
 from multiloop.topo.errors import InputError, explain
@@ -189,7 +191,7 @@ class Evaluator:
         d = self.at(X, q) - self.at(X, j.name)
         out = np.zeros(X.shape)
         if j.kind is JointKind.R:
-            w = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.sum(d * d, axis=1, keepdims=True)
+            w = perp(d) / np.sum(d * d, axis=1, keepdims=True)
         else:
             w = self.axis(X, j.name)
             if f"{j.name}.angle" in self._cols:
@@ -219,9 +221,13 @@ class Evaluator:
         return st.point(name), st.ok
 
     def with_design(self, x) -> Mechanism:
-        """The start mechanism with the dimensions of design ``x`` (names kept)."""
-        geo = Geometry(self.mechanism, self.space.names, np.asarray(x, float)[None, :])
-        return design_mechanism(geo, 0)
+        """The start mechanism with the dimensions of design ``x`` (names kept); the same
+        object for the same numbers (kept in the evaluator's memo), so the certified
+        walks of one design (its continuity, full rotation and transmission extremes,
+        each asked by the selection and again by the report) share its plan's memo."""
+        x = np.asarray(x, float)
+        return cached(self, ("design", x.tobytes()), lambda ev, v: design_mechanism(
+            Geometry(ev.mechanism, ev.space.names, np.frombuffer(v, float)[None, :]), 0), x.tobytes())
 
 
 def four_bar_roles(m) -> dict | None:

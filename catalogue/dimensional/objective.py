@@ -26,7 +26,7 @@ from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.kin.groups.registry import reference_margin
-from multiloop.kin.rigid import perp
+from multiloop.kin.rigid import perp, rotate
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind
 
@@ -126,13 +126,6 @@ def _lowest(f: np.ndarray, rotary: bool) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         vertex = f0 - (fr - fl) ** 2 / (8.0 * den)
     return np.where(good, vertex, f0)
-
-
-def _guide_in_world(th: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """A guide's reference direction ``u`` (P, 2) carried by its link's rotations ``th``
-    (P, N): ``R(θ) u`` (P, N, 2)."""
-    c, s = np.cos(th), np.sin(th)
-    return np.stack([c * u[:, 0:1] - s * u[:, 1:2], s * u[:, 0:1] + c * u[:, 1:2]], axis=-1)
 
 
 def _wrap(a):
@@ -361,7 +354,7 @@ class Problem:
         if j.kind is JointKind.R:
             return (st.th[kb] - st.th[ka])[..., None]
         r = ev.at(X, j.name)
-        ua = _guide_in_world(st.th[ka], ev.axis(X, j.name))
+        ua = rotate(ev.axis(X, j.name)[:, None, :], st.th[ka])     # (the guide carried by its link)
         return np.sum((st.world(kb, r) - st.world(ka, r)) * ua, axis=-1)[..., None]
 
     def diff(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -702,7 +695,7 @@ class Problem:
             return (sens.angle(b) - sens.angle(a))[:, :, None, :], None
         ka, kb = ev.links[a], ev.links[b]
         r = ev.at(X, j.name)
-        ua = _guide_in_world(st.th[ka], ev.axis(X, j.name))                         # (P, L, 2)
+        ua = rotate(ev.axis(X, j.name)[:, None, :], st.th[ka])                  # (P, L, 2): the guide on its link
         gap = st.world(kb, r) - st.world(ka, r)
         dgap = sens.material(kb, r) - sens.material(ka, r)
         dua = perp(ua)[..., None] * sens.angle(a)[:, :, None, :]

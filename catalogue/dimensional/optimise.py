@@ -277,11 +277,19 @@ def _floored(J: np.ndarray) -> np.ndarray:
     return (U * np.maximum(s, low)) @ Vt
 
 
+def _unit_jacobians(problem, split: tuple, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The problem's residuals ``(K, m)`` and exact Jacobians ``(K, m, n)`` at the
+    polish's points ``split`` = (Z, PHI), in its unit variables (``scale``), a
+    non-finite entry zero."""
+    R, J = problem.jacobian_batch(*split)
+    return R, np.nan_to_num(J * scale, nan=0.0, posinf=0.0, neginf=0.0)
+
+
 def _exact_jacobian(problem, split: tuple, scale: np.ndarray) -> np.ndarray:
     """The problem's exact Jacobian at the polish's point ``split`` = (Z, PHI), in its
     unit variables, floored (:func:`_floored`) up to 120 variables (beyond, LSMR's steps
     are minimum-norm)."""
-    J = np.nan_to_num(problem.jacobian_batch(*split)[1][0] * scale, nan=0.0, posinf=0.0, neginf=0.0)
+    J = _unit_jacobians(problem, split, scale)[1][0]
     return _floored(J) if J.shape[1] <= 120 else J
 
 
@@ -379,20 +387,26 @@ def polish(problem: Problem, z: np.ndarray, phi: np.ndarray, *, max_nfev: int = 
     return Z[0].copy(), np.array(PHI[0], float), count[0]
 
 
-def _tr_steps(J: np.ndarray, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray,
-              floor: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
-    within ``|h| <= radius``, and their Levenberg–Marquardt parameters ``alpha`` (the
-    last ones, ``alpha``, start the search): SciPy's ``solve_lsq_trust_region``
-    (Moré 1977, on one SVD of ``J``) for all K at once, step for step — the Gauss–Newton
-    step of a full-rank ``J`` where it fits, else ``alpha`` by at most ten safeguarded
-    Newton steps to 1 % of the radius and the step scaled onto it.  With ``floor`` the
-    singular values are raised to :data:`SINGULAR_FLOOR` of the largest (as
-    :func:`_floored` raises an exact Jacobian's)."""
-    K, m, n = J.shape
+def _svd(J: np.ndarray, floor: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The SVDs ``W, s, Vt`` of K Jacobians ``J`` ``(K, m, n)`` that :func:`_tr_steps`
+    takes, with ``floor`` the singular values raised to :data:`SINGULAR_FLOOR` of the
+    largest (as :func:`_floored` raises an exact Jacobian's)."""
     W, s, Vt = np.linalg.svd(J, full_matrices=False)
     if floor:
         s = np.maximum(s, SINGULAR_FLOOR * s[:, :1])
+    return W, s, Vt
+
+
+def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
+    (``J`` ``(m, n)`` given by its :func:`_svd`) within ``|h| <= radius``, and their
+    Levenberg–Marquardt parameters ``alpha`` (the last ones, ``alpha``, start the
+    search): SciPy's ``solve_lsq_trust_region`` (Moré 1977, on one SVD of ``J``) for all
+    K at once, step for step — the Gauss–Newton step of a full-rank ``J`` where it fits,
+    else ``alpha`` by at most ten safeguarded Newton steps to 1 % of the radius and the
+    step scaled onto it."""
+    W, s, Vt = svd
+    K, m, n = len(R), W.shape[1], Vt.shape[2]
     uf = np.einsum("kmi,km->ki", W, R)
     suf = s * uf
     full = (m >= n) & (s[:, -1] > np.finfo(float).eps * m * s[:, 0])
@@ -470,8 +484,7 @@ def polish_batch(problem: Problem, Z: np.ndarray, PHI: np.ndarray, *, max_nfev: 
         if not afford(Ua.shape[0] * (1 + nz + int(free))):
             return None
         if exact:
-            R, J = problem.jacobian_batch(*split(Ua))
-            J = np.nan_to_num(J * scale, nan=0.0, posinf=0.0, neginf=0.0)
+            R, J = _unit_jacobians(problem, split(Ua), scale)
         else:
             R, J, _ = _jacobian(problem, split, Ua, hi, nz, free)
         return np.where(np.isfinite(R), R, 1.0), J
@@ -522,9 +535,10 @@ class _TrustRegions:
         radius, alpha = np.where(norm > 0, norm, 1.0), np.zeros(len(U))
         rounding = R.shape[1] * ROUNDING_RMS ** 2
         active = (F > rounding) & (np.max(np.abs(np.einsum("kmi,km->ki", J, R)), axis=1) >= 1e-15)
+        W, s, Vt = _svd(J, self.floor)           # (a rejected step's design keeps its Jacobian's)
         while active.any():
             a = np.flatnonzero(active)
-            h, alpha[a] = _tr_steps(J[a], R[a], radius[a], alpha[a], self.floor)
+            h, alpha[a] = _tr_steps((W[a], s[a], Vt[a]), R[a], radius[a], alpha[a])
             Jh = np.einsum("kmi,ki->km", J[a], h)
             pred = -(2.0 * np.einsum("km,km->k", R[a], Jh) + np.einsum("km,km->k", Jh, Jh))   # |r|² − |r + Jh|²
             if not self.afford(len(a)):
@@ -551,6 +565,7 @@ class _TrustRegions:
                     U[acc] = Un[ok]
                     break
                 U[acc], (R[acc], J[acc]), F[acc] = Un[ok], new, Fn[ok]
+                W[acc], s[acc], Vt[acc] = _svd(J[acc], self.floor)
                 flat = np.max(np.abs(np.einsum("kmi,km->ki", J[acc], R[acc])), axis=1) < 1e-15
                 active[acc[flat]] = False
             active[a[done]] = False

@@ -615,6 +615,26 @@ def _first_failure_final(P, th, status) -> None:
         th[i:] = np.nan
 
 
+def _nearest_coarse(c, fine, last):
+    """For inputs ``fine`` between the coarse inputs ``c`` (none after ``c[last]``;
+    ``last`` a number or one per input): the index of each one's nearest coarse input."""
+    left = np.searchsorted(c, fine, side="right") - 1          # c[left] < fine < c[left+1]
+    right = np.minimum(left + 1, last)
+    return np.where(fine - c[left] <= c[right] - fine, left, right)
+
+
+def _from_coarse(A0, P0, th0, sep0, A1, l0, l1, bb):
+    """Poses at inputs ``A1`` (lengths ``l1``) from their nearest coarse input's (``A0``,
+    ``P0``, ``th0``, ``l0``; ``sep0`` its distance to the nearest other mode): the Taylor
+    prediction Newton-polished, and whether each is accepted — converged, not singular,
+    and within a quarter of ``sep0`` of the prediction and half of it of the coarse pose
+    (well inside the followed mode's basin).  ``P``, ``theta`` and the acceptance."""
+    Pp, dth, sing = _predict(A0, P0, A1, l0, l1)
+    Pf, thf, res = _polish(A1, bb, l1, Pp[..., 0, :], th0 + dth)
+    acc = (res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep0) & (_dist(Pf, P0) <= 0.5 * sep0)
+    return Pf, thf, acc
+
+
 def _track(A, b, l, start, stride, nb=None):
     """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`.
     With ``nb`` (:func:`_kernel`) its all-modes phases run compiled."""
@@ -652,13 +672,8 @@ def _track(A, b, l, start, stride, nb=None):
     fine = np.setdiff1d(np.arange(end + 1), c[kk], assume_unique=True)
     bad_int = np.zeros(len(c), bool)                  # interval k: c[k]..c[k+1]
     if fine.size:
-        left = np.searchsorted(c, fine, side="right") - 1          # c[left] < fine < c[left+1]
-        right = np.minimum(left + 1, kmax)
-        kn = np.where(fine - c[left] <= c[right] - fine, left, right)   # nearest coarse point
-        Pp, dth, sing = _predict(A[c[kn]], Pc[kn], A[fine], l[c[kn]], l[fine])
-        Pf, thf, res = _polish(A[fine], bb, l[fine], Pp[:, 0], thc[kn] + dth)
-        acc = ((res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep[kn])
-               & (_dist(Pf, Pc[kn]) <= 0.5 * sep[kn]))
+        kn = _nearest_coarse(c, fine, kmax)
+        Pf, thf, acc = _from_coarse(A[c[kn]], Pc[kn], thc[kn], sep[kn], A[fine], l[c[kn]], l[fine], bb)
         P[fine[acc]] = Pf[acc]
         th[fine[acc]] = _wrap(thf[acc])
         status[fine[acc]] = 0
@@ -951,14 +966,9 @@ def _partial_prefix(A, b, L, c, kmax, Pm, thm, ic, P, th, status):
     ff = fine[ff]
     accepted = np.ones(G, bool)
     if ff.size:
-        left = np.searchsorted(c, ff, side="right") - 1
-        right = np.minimum(left + 1, kmax[dd])
-        kn = np.where(ff - c[left] <= c[right] - ff, left, right)
-        Pp, dth, sing = _predict(A[dd, c[kn]], Pc[dd, kn], A[dd, ff], L[dd, c[kn]], L[dd, ff])
-        bb = (b - b[:, :1])[dd]
-        Pf, thf, res = _polish(A[dd, ff], bb, L[dd, ff], Pp[:, 0], thc[dd, kn] + dth)
-        acc = ((res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep[dd, kn])
-               & (_dist(Pf, Pc[dd, kn]) <= 0.5 * sep[dd, kn]))
+        kn = _nearest_coarse(c, ff, kmax[dd])
+        Pf, thf, acc = _from_coarse(A[dd, c[kn]], Pc[dd, kn], thc[dd, kn], sep[dd, kn], A[dd, ff], L[dd, c[kn]],
+                                    L[dd, ff], (b - b[:, :1])[dd])
         accepted = ~np.isin(np.arange(G), dd[~acc])
         P[dd[acc], ff[acc]] = Pf[acc]
         th[dd[acc], ff[acc]] = _wrap(thf[acc])
@@ -1036,16 +1046,11 @@ def _fill(A, b, L, start, stride, nb=None):
     fine = np.setdiff1d(np.arange(N), c, assume_unique=True)
     if not fine.size:
         return g, Pc, thc
-    left = np.searchsorted(c, fine, side="right") - 1
-    right = np.minimum(left + 1, len(c) - 1)
-    kn = np.where(fine - c[left] <= c[right] - fine, left, right)
+    kn = _nearest_coarse(c, fine, len(c) - 1)
     if nb is not None:
         return _fill_compiled(nb, g, A, b - b[:, :1], L, (c, fine, kn), Pc, thc, sep)
-    Pp, dth, sing = _predict(A[:, c[kn]], Pc[:, kn], A[:, fine], L[:, c[kn]], L[:, fine])
-    bb = (b - b[:, :1])[:, None]
-    Pf, thf, res = _polish(A[:, fine], bb, L[:, fine], Pp[..., 0, :], thc[:, kn] + dth)
-    acc = ((res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep[:, kn])
-           & (_dist(Pf, Pc[:, kn]) <= 0.5 * sep[:, kn]))
+    Pf, thf, acc = _from_coarse(A[:, c[kn]], Pc[:, kn], thc[:, kn], sep[:, kn], A[:, fine], L[:, c[kn]],
+                                L[:, fine], (b - b[:, :1])[:, None])
     done = acc.all(axis=1)
     Pd = np.empty((len(g), N, 3, 2))
     thd = np.empty((len(g), N))
