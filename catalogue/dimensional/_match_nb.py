@@ -37,20 +37,25 @@ def _sqd(f, t, inv, ang):
 
 
 @numba.njit(**_JIT)
-def _distances(Fp, Tp, idx, valid, inv, ang, d2):
+def _distances(Fp, Tp, idx, valid, inv, ang, fx, fy, d2):
     """``d2[i, k]``: the squared relative distance of target i to the walk's sample k
-    (``inf`` where the sample is not reached)."""
+    (``inf`` where the sample is not reached).  A path's features are first gathered in
+    walk order (``fx``, ``fy``; ``inf`` where not reached, whose distance is then ``inf``
+    too), so that the rows are computed in straight, vectorised loops."""
     N, M, c = Tp.shape[0], idx.size, Fp.shape[1]
     if c == 2 and not ang:                 # a path: the common case, written out
+        for k in range(M):
+            if valid[k]:
+                fx[k], fy[k] = Fp[idx[k], 0], Fp[idx[k], 1]
+            else:
+                fx[k], fy[k] = np.inf, np.inf
         for i in range(N):
             tx, ty = Tp[i, 0], Tp[i, 1]
+            row = d2[i]
             for k in range(M):
-                if valid[k]:
-                    dx = (Fp[idx[k], 0] - tx) * inv
-                    dy = (Fp[idx[k], 1] - ty) * inv
-                    d2[i, k] = dx * dx + dy * dy
-                else:
-                    d2[i, k] = np.inf
+                dx = (fx[k] - tx) * inv
+                dy = (fy[k] - ty) * inv
+                row[k] = dx * dx + dy * dy
         return
     for i in range(N):
         for k in range(M):
@@ -70,31 +75,49 @@ def _leading(ok, p, start, stop, step):
 
 
 @numba.njit(**_JIT)
-def _assign(d2, c0, step, acc):
+def _assign(d2, cols, acc):
     """Cheapest monotone assignment of the targets (rows of ``d2``) to the samples taken
-    in the column order ``c0, c0 + step, …`` (mod M; ``step`` ±1) (``_dp``: acc = d2[0];
-    acc = d2[i] + running min, the running minimum taken in the same pass)."""
+    in the column order ``cols`` (``_dp``: acc = d2[0]; acc = d2[i] + running min, the
+    running minimum taken in the same pass)."""
     N, M = d2.shape
-    c = c0
     for k in range(M):
-        acc[k] = d2[0, c]
-        c += step
-        c = c + M if c < 0 else c - M if c >= M else c
+        acc[k] = d2[0, cols[k]]
     for i in range(1, N):
         m = acc[0]
-        c = c0
         for k in range(M):
             a = acc[k]
-            if a < m:
-                m = a
-            acc[k] = d2[i, c] + m
-            c += step
-            c = c + M if c < 0 else c - M if c >= M else c
+            m = a if a < m else m
+            acc[k] = d2[i, cols[k]] + m
     best = acc[0]
     for k in range(1, M):
-        if acc[k] < best:
-            best = acc[k]
+        best = acc[k] if acc[k] < best else best
     return best
+
+
+@numba.njit(**_JIT)
+def _assign_both(d2, back, accf, accb):
+    """:func:`_assign` of the forward walk (the columns in order) and of the backward one
+    (columns ``back``) in one pass: two independent running minima per cell, so that
+    neither waits on the other's (the pass is bound by the minimum's latency)."""
+    N, M = d2.shape
+    for k in range(M):
+        accf[k] = d2[0, k]
+        accb[k] = d2[0, back[k]]
+    for i in range(1, N):
+        mf, mb = accf[0], accb[0]
+        row = d2[i]
+        for k in range(M):
+            a = accf[k]
+            mf = a if a < mf else mf
+            accf[k] = row[k] + mf
+            b = accb[k]
+            mb = b if b < mb else mb
+            accb[k] = row[back[k]] + mb
+    bf, bb = accf[0], accb[0]
+    for k in range(1, M):
+        bf = accf[k] if accf[k] < bf else bf
+        bb = accb[k] if accb[k] < bb else bb
+    return bf, bb
 
 
 @numba.njit(**_JIT)
@@ -110,7 +133,9 @@ def free_timing_costs(F, T, inv, ok, rotary, ang, forward, backward, out):
     idx = np.empty(M, np.int64)
     valid = np.empty(M, np.bool_)
     d2 = np.empty((N, M))
-    acc = np.empty(M)
+    acc, accb = np.empty(M), np.empty(M)
+    fx, fy = np.empty(M), np.empty(M)
+    ahead, back = np.arange(M), np.empty(M, np.int64)
     for p in range(P):
         full = False
         if rotary:
@@ -138,10 +163,16 @@ def free_timing_costs(F, T, inv, ok, rotary, ang, forward, backward, out):
             for k in range(M):
                 valid[k] = k < b + f
                 idx[k] = (half + (b - 1 - k) if k < b else k - b) if valid[k] else 0
-        _distances(F[p], T[p], idx, valid, inv[p], ang, d2)
-        cost = np.inf
-        if forward:
-            cost = _assign(d2, 0, 1, acc)
-        if backward:                 # the forward walk reversed (a closed curve's shifted by 5)
-            cost = min(cost, _assign(d2, 4 if full else M - 1, -1, acc))
-        out[p] = cost
+        _distances(F[p], T[p], idx, valid, inv[p], ang, fx, fy, d2)
+        c0 = 4 if full else M - 1    # the backward walk: the forward one reversed (a closed curve's shifted by 5)
+        for k in range(M):
+            back[k] = c0 - k if k <= c0 else c0 - k + M
+        if forward and backward:
+            cf, cb = _assign_both(d2, back, acc, accb)
+            out[p] = min(cf, cb)
+        elif forward:
+            out[p] = _assign(d2, ahead, acc)
+        elif backward:
+            out[p] = _assign(d2, back, acc)
+        else:
+            out[p] = np.inf
