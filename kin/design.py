@@ -215,8 +215,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
 def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, bound, steps, X) -> DesignPoses:
     """The designs by the compiled kernel (:func:`kin.kernel.run_designs`): the same
     steps on the same branches as the NumPy route, equal to it to rounding."""
-    origins = np.stack([np.stack(o, axis=-1) for o in G.org])      # (n_links, D, 1, 2)
-    floats = kernel.design_floats(kp, bound, steps, origins, geo.D)
+    floats = kernel.design_floats(kp, bound, steps, geo.origins(), geo.D)
     X = X[None] if X.ndim == 2 else X                 # (inputs shared by the designs)
     links = [i for k in steps for i in sp.steps[k].unknown]
     C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)

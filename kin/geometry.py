@@ -119,6 +119,15 @@ class Geometry:
             return np.zeros((self.D, 1, 2)) if self.batch else np.zeros(2)
         return self.at(j)
 
+    def origins(self) -> np.ndarray:
+        """Every link's reference point in one array ``(n_links, D, 1, 2)`` (batch only;
+        computed once per geometry)."""
+        hit = self._cache.get("origins")
+        if hit is None:
+            hit = self._cache["origins"] = np.stack([self.origin(x) for x in self.mechanism.link_names])
+        return hit
+
     def origins_xy(self) -> tuple:
-        """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only)."""
-        return tuple((o[..., 0], o[..., 1]) for o in (self.origin(x) for x in self.mechanism.link_names))
+        """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only): views
+        of :meth:`origins`."""
+        return tuple((o[..., 0], o[..., 1]) for o in self.origins())
