@@ -263,6 +263,8 @@ def main(argv=None):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import bench_synthesis as bs
     synthesis_goal(bs.pyslvs_python(a.pyslvs_python))
+    synthesis_floor_goal()
+    triad_synthesis_goal()
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from pathlib import Path
 __all__ = ["available", "run_benchmarks"]
 
 #: scripts that accept --quick
-QUICK = ("analyse", "atlas", "designs", "web")
+QUICK = ("analyse", "atlas", "designs", "synthesis_literature", "web")
 
 
 def available(bench_dir: Path) -> list[str]:

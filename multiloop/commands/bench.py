@@ -4,7 +4,7 @@ Each script times our code against the alternatives in the same run and prints t
 ratios; charts go to ``benchmarks/charts/``.  Every line a script prints that states a
 goal (it contains ``goal``) is collected and printed again at the end, so the summary
 lists every ratio against its goal.  ``--goals`` runs the scripts that carry the
-performance goals (analyse, atlas, solve, designs, forces, and the goal table of
+performance goals (analyse, atlas, solve, designs, synthesis_literature, forces, and the goal table of
 ``benchmarks/goals.py``).  Needs a source checkout (the scripts
 are not installed with the package).
 """
@@ -17,7 +17,7 @@ from multiloop.topo.errors import InputError, explain
 
 BENCH_DIR = Path(__file__).resolve().parents[2] / "benchmarks"
 #: the scripts that print the performance goals
-GOAL_SCRIPTS = ("analyse", "atlas", "solve", "designs", "forces", "goals")
+GOAL_SCRIPTS = ("analyse", "atlas", "solve", "designs", "synthesis_literature", "forces", "goals")
 
 
 def add_arguments(p) -> None:
