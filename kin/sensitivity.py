@@ -141,6 +141,12 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
                      tuple(origin[x] for x in m.link_names))
 
 
+def _rows(v, D: int, N: int) -> np.ndarray:
+    """A pose-store row (``(D, N)``, or a value that broadcasts to it) flattened to
+    ``(D·N,)`` (a view where it already has the shape)."""
+    return v.reshape(-1) if np.shape(v) == (D, N) else np.broadcast_to(v, (D, N)).reshape(-1)
+
+
 def _per_design(a: np.ndarray, D: int) -> np.ndarray:
     """A geometry value ``(2,)`` (one design's, shared) or ``(D, 1, 2)`` as ``(D, 2)``."""
     return a[:, 0] if a.ndim == 3 else np.broadcast_to(a, (D, 2))
@@ -219,7 +225,7 @@ class PoseSensitivity:
         cols = {n: i for i, n in enumerate(self.names)}
         o = self.origins[k]
         E = (np.zeros((2, q)) if E is None else E) - (_selection(cols, o, q) if o is not None else 0.0)
-        c, s = (np.broadcast_to(v, (D, N)).reshape(-1) for v in (G.c[k], G.s[k]))
+        c, s = _rows(G.c[k], D, N), _rows(G.s[k], D, N)
         r = np.asarray(r, float) - (_per_design(geo.at(o), D) if o is not None else 0.0)
         arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
         dZ = self.dZ[k]
@@ -331,10 +337,10 @@ def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarra
     blocks' per-design offsets and guides gathered here, the rest compiled once)."""
     f = comp.flat
     blocks = [b for st in comp.steps for b in st.blocks]
-    per = lambda g: np.ascontiguousarray(np.stack([g(b) for b in blocks]))      # noqa: E731
-    rho_a = per(lambda b: v.offset(b.joint, b.origin_a))
-    rho_b = per(lambda b: v.offset(b.joint, b.origin_b))
-    u0 = per(lambda b: v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else np.zeros((v.D, 2)))
+    rho_a, rho_b, u0 = np.empty((3, len(blocks), v.D, 2))
+    for i, b in enumerate(blocks):
+        rho_a[i], rho_b[i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
+        u0[i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
     C, S = (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
     nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
                      f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], rho_a, rho_b, u0, f["step_lo"],
@@ -350,8 +356,8 @@ class _Flat:
         self.st, self.geo, self.D, self.N = st, geo, D, N
         self.X = G.T[:, 0].reshape(G.T.shape[0], -1)
         self.Y = G.T[:, 1].reshape(G.T.shape[0], -1)
-        self.c = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.c]
-        self.s = [np.broadcast_to(v, (D, N)).reshape(-1) for v in G.s]
+        self.c = [_rows(v, D, N) for v in G.c]
+        self.s = [_rows(v, D, N) for v in G.s]
         self._rho: dict = {}
         self._offsets: dict = {}
 

@@ -26,6 +26,7 @@ from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
 from multiloop.kin.design import DesignPoses
 from multiloop.kin.groups.registry import reference_margin
+from multiloop.kin.memo import cached
 from multiloop.kin.rigid import perp, rotate
 from multiloop.topo.errors import InputError, ParameterError, explain
 from multiloop.topo.model import JointKind
@@ -357,6 +358,16 @@ class Problem:
         ua = rotate(ev.axis(X, j.name)[:, None, :], st.th[ka])     # (the guide carried by its link)
         return np.sum((st.world(kb, r) - st.world(ka, r)) * ua, axis=-1)[..., None]
 
+    def kept_features(self, Z: np.ndarray, st: DesignPoses) -> np.ndarray:
+        """:meth:`features` kept beside the poses ``st`` (read-only): the polish asks for
+        the residuals and then the Jacobian at the same point, whose poses the evaluator
+        keeps (:meth:`~.evaluator.Evaluator.poses`)."""
+        def compute(st, Z):
+            F = self.features(Z, st)
+            F.flags.writeable = False
+            return F
+        return cached(st, ("features", Z.shape, Z.tobytes()), compute, Z)
+
     def diff(self, F: np.ndarray, T: np.ndarray, size: np.ndarray) -> np.ndarray:
         """Relative differences of features ``F`` and targets ``T``, both ``(P, N, c)``
         (target by target; angles wrapped)."""
@@ -607,10 +618,10 @@ class Problem:
         T, size = self.targets_for(Z)
         if not self.ev.path_dependent:
             st = self.ev.poses(Z[:, :self.nx], PHI)
-            return self.diff(self.features(Z, st), T, size).reshape(Z.shape[0], -1)
+            return self.diff(self.kept_features(Z, st), T, size).reshape(Z.shape[0], -1)
         W, at = self.walk(PHI)
         st = self.ev.poses(Z[:, :self.nx], W)
-        return self.diff(self.features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
+        return self.diff(self.kept_features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
 
     @property
     def exact_jacobian(self) -> bool:
@@ -642,7 +653,7 @@ class Problem:
         with kernel.for_batches():
             sens = pose_sensitivity(st)
         T, size = self.targets_for(Z)
-        F = self.features(Z, st)
+        F = self.kept_features(Z, st)
         R = self.diff(F[:, at], T, size)
         dF, frame = self._feature_jacobian(Z, st, sens, F)
         c = R.shape[2]
