@@ -267,7 +267,7 @@ def branch_signs(mechanism: Mechanism, names, designs, plan=None) -> np.ndarray:
 def _one_design(sp: SolvePlan, md: Mechanism, steps, X) -> np.ndarray:
     """Poses ``(n_links, 3, N)`` of one design ``md`` by the plan's closed-form steps."""
     geo = Geometry(md)
-    origins = np.stack([geo.origin(x) for x in md.link_names])
+    origins = geo.origins()
     G = Poses(_BoundPlan(md, origins, tuple(map(tuple, np.asarray(origins, float).tolist()))), X.shape[0])
     for k in steps:
         st = sp.steps[k]

@@ -120,8 +120,8 @@ class Geometry:
         return self.at(j)
 
     def origins(self) -> np.ndarray:
-        """Every link's reference point in one array ``(n_links, D, 1, 2)`` (batch only;
-        computed once per geometry)."""
+        """Every link's reference point in one array: ``(n_links, D, 1, 2)`` for designs,
+        ``(n_links, 2)`` for one (computed once per geometry)."""
         hit = self._cache.get("origins")
         if hit is None:
             hit = self._cache["origins"] = np.stack([self.origin(x) for x in self.mechanism.link_names])

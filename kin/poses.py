@@ -10,6 +10,8 @@ arrays ``(D, 1)``).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .rigid import move_point, rotate, transport
@@ -82,7 +84,7 @@ class Poses:
 
     def __init__(self, sp, M, store=None):
         self.shape = (M,) if isinstance(M, int) else tuple(int(v) for v in M)
-        self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else int(np.prod(self.shape))
+        self.sp, self.m, self.M = sp, sp.mechanism, M if isinstance(M, int) else math.prod(self.shape)
         self.reasons = len(self.shape) == 1          # one design (per-position failure texts)
         self.explain = self.reasons                  # the failures' texts are written
         nl = self.m.n_links

@@ -321,10 +321,11 @@ class RRRStep(GroupStep):
         self.dir1, self.dir2 = unit(self.B - self.A), unit(self.B - self.C)
         self.rot1 = pair(self.dir1 / np.asarray(self.la)[..., None])
         self.rot2 = pair(self.dir2 / np.asarray(self.lc)[..., None])
-        self.k1, self.k2, self.l1, self.l2 = (mechanism.link_names.index(x) for x in
-                                              (self.known1, self.known2, lay.link1, lay.link2))
+        names = mechanism.link_names
+        self.k1, self.k2, self.l1, self.l2 = (names.index(x) for x in (self.known1, self.known2, lay.link1, lay.link2))
         # a link whose reference point is B is placed from B
-        self.from_B1, self.from_B2 = (bool(np.all(self.geo.origin(x) == self.B)) for x in (lay.link1, lay.link2))
+        origins = self.geo.origins()
+        self.from_B1, self.from_B2 = (bool(np.all(origins[k] == self.B)) for k in (self.l1, self.l2))
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         lay, la, lc = self.layout, self.la, self.lc
