@@ -1,0 +1,62 @@
+"""Instructions executed by one synthesis run, counted by Valgrind's callgrind: the
+measure of work that this virtual machine's timings (±50 % between runs of the same
+code) cannot give (plain script; needs ``valgrind``, a Debian package).
+
+Run:  python benchmarks/synthesis_instructions.py [--evaluations 30000] [--seed 0]
+
+The four-bar's ten points of ``bench_synthesis`` (free timing, DE, an evaluation budget:
+the same work whatever the load) are synthesised twice in one process under callgrind,
+the first run with another seed so that every compiled function is loaded from numba's
+disk cache before the count (loading links object code with LLVM: billions of
+instructions), the second counted alone (``callgrind_control -i on/off`` around it).
+Two versions of the code compare by their counts when they return the same design
+(the line prints its error)."""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def _child(evaluations: int, seed: int) -> None:
+    sys.path.insert(0, str(HERE))
+    import bench_synthesis as bs
+    T = bs.targets()["four-bar 10 points"]
+    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=seed + 1)
+    subprocess.run(["callgrind_control", "-i", "on", str(os.getpid())], capture_output=True, check=False)
+    r = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=seed)
+    subprocess.run(["callgrind_control", "-i", "off", str(os.getpid())], capture_output=True, check=False)
+    print(f"result: {r.evaluations} evaluations, error {r.error_max:.9e}", flush=True)
+
+
+def count(evaluations: int, seed: int, out: str = os.devnull) -> tuple[int, str]:
+    """The instructions of the counted run and its result line."""
+    cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}",
+           sys.executable, __file__, "--child", "--evaluations", str(evaluations), "--seed", str(seed)]
+    p = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    got = re.search(r"Collected : (\d+)", p.stderr)
+    line = next((x for x in p.stdout.splitlines() if x.startswith("result:")), "")
+    return int(got.group(1)), line
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--evaluations", type=int, default=30_000)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    a = ap.parse_args(argv)
+    if a.child:
+        _child(a.evaluations, a.seed)
+        return
+    n, line = count(a.evaluations, a.seed)
+    print(f"synthesis, four-bar 10 points, {a.evaluations} evaluations, seed {a.seed}: {n:,} instructions "
+          f"({n / a.evaluations:,.0f} an evaluation); {line}")
+
+
+if __name__ == "__main__":
+    main()
