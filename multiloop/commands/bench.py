@@ -4,9 +4,9 @@ Each script times our code against the alternatives in the same run and prints t
 ratios; charts go to ``benchmarks/charts/``.  Every line a script prints that states a
 goal (it contains ``goal``) is collected and printed again at the end, so the summary
 lists every ratio against its goal.  ``--goals`` runs the scripts that carry the
-performance goals (analyse, atlas, solve, designs, synthesis_literature, forces, and the goal table of
-``benchmarks/goals.py``).  Needs a source checkout (the scripts
-are not installed with the package).
+performance goals (analyse, atlas, solve, designs, synthesis_literature, forces, and the
+goal table of ``benchmarks/goals.py``).  Needs a source checkout (the scripts are not
+installed with the package).
 """
 from __future__ import annotations
 
