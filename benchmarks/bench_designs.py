@@ -39,7 +39,6 @@ from multiloop.catalogue.named import load_named  # noqa: E402
 from multiloop.kin import kernel  # noqa: E402
 from multiloop.kin.design import design_mechanism, solve_designs  # noqa: E402
 from multiloop.kin.design import _one_design  # noqa: E402  (the per-candidate route, for the ratio)
-from multiloop.kin import kernel  # noqa: E402
 from multiloop.kin.solve import plan_of  # noqa: E402
 
 
@@ -126,12 +125,20 @@ def triad_goal(D: int, N: int) -> None:
           f"{ratio:.1f}x, {per_dp:.2f} us -> {'MET' if met else 'NOT MET'}")
 
 
+def _four_bar_run(budget: float):
+    """A whole synthesis run of the four-bar's ten points (free timing, DE, seed 0) with a
+    wall-time ``budget``, after a short one that reads numba's disk cache (outside the
+    timing, as Pyslvs's start-up is)."""
+    import bench_synthesis as bs
+    T = bs.targets()["four-bar 10 points"]
+    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=500, seed=0)
+    return bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=float(budget), seed=0)
+
+
 def synthesis_goal(py: str | None, budget: int = 2) -> None:
     import bench_synthesis as bs
     T = bs.targets()["four-bar 10 points"]
-    # numba's import and disk-cache read once, outside the timing (as Pyslvs's start-up is)
-    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=500, seed=0)
-    res = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=float(budget), seed=0)
+    res = _four_bar_run(budget)
     ours = res.evaluations / res.seconds
     de = bs.eval_rates(480)["batched objective"]
     line = (f"ours {ours:,.0f} evaluations/s over the whole run (population and polish; "
@@ -171,15 +178,12 @@ def synthesis_floor_goal(budget: float = 2.0, D: int = 10_000, N: int = 96) -> N
     at least 0.2 of it): the whole run's rate (four-bar, 10 points, free timing, ``budget``
     seconds) and the search's alone, over the designs a second of the floor
     (:func:`bare_curves`, D designs × N inputs in one NumPy pass, the grid's N)."""
-    import bench_synthesis as bs
     m = load_named("four_bar")
     names, X = _population(m, D, 0.02)
     phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)
     floor, _ = _best(lambda: bare_curves(m, names, X, phi))
     floor_rate = D / floor
-    T = bs.targets()["four-bar 10 points"]
-    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=500, seed=0)
-    res = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=budget, seed=0)
+    res = _four_bar_run(budget)
     whole = res.evaluations / res.seconds
     search = search_rate(rounds=3)
     print(f"synthesis against a bare NumPy four-bar pass ({floor_rate:,.0f} designs/s of {N} positions): whole run "

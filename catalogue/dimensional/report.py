@@ -17,7 +17,8 @@ from multiloop.topo.errors import ParameterError, explain
 
 from .objective import Problem, grashof_margins, transmission_angles
 
-__all__ = ["constraint_report", "turns_fully", "certified_transmission", "certified_motion", "reaches_targets", "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
+__all__ = ["constraint_report", "turns_fully", "certified_transmission", "certified_motion", "reaches_targets",
+           "parse_bounds", "synthesis_text", "limits_text", "progress_bar"]
 
 
 def _row(name: str, required, value, violation: float) -> dict:
@@ -31,14 +32,11 @@ def turns_fully(problem: Problem, z: np.ndarray) -> bool:
     limits found by continuation), not only on the driver grid (a design on the edge of
     full rotation may pass every grid sample and still lock between two).  A driver with
     a ``range`` does not turn fully, as ``check`` says."""
-    from multiloop.kin.solve import motion_events
-    from multiloop.topo.errors import LinkageError
     m = problem.ev.with_design(np.asarray(z, float)[:problem.nx])
-    try:
-        motion = motion_events(m)
-    except LinkageError:
+    if not m.is_rotary(0) or m.drivers[0].range is not None:
         return False
-    return bool(motion is not None and motion.rotary and motion.turns_fully and m.drivers[0].range is None)
+    motion = certified_motion(m, ())
+    return bool(motion is not None and motion.rotary and motion.turns_fully)
 
 
 def certified_motion(m, inputs):

@@ -635,6 +635,14 @@ def _from_coarse(A0, P0, th0, sep0, A1, l0, l1, bb):
     return Pf, thf, acc
 
 
+def _separation(Pm, thm, Pc, ic):
+    """The followed mode's distance to the nearest other mode at each coarse input: all
+    modes ``Pm`` (..., MAX_MODES, 3, 2) with angles ``thm`` (NaN: none), the followed
+    pose ``Pc`` (..., 3, 2) and its index ``ic`` (...); ``inf`` where it is alone."""
+    other = np.isfinite(thm) & (np.arange(MAX_MODES) != ic[..., None])
+    return np.min(np.where(other, np.nan_to_num(_dist(Pm, Pc[..., None, :, :]), nan=np.inf), np.inf), axis=-1)
+
+
 def _track(A, b, l, start, stride, nb=None):
     """Mode tracking with per-position lengths ``l`` (N, 3); see :func:`triad_track`.
     With ``nb`` (:func:`_kernel`) its all-modes phases run compiled."""
@@ -649,9 +657,7 @@ def _track(A, b, l, start, stride, nb=None):
         P[ok] = m.P[np.flatnonzero(ok), idx[ok]]
         th[ok] = m.theta[np.flatnonzero(ok), idx[ok]]
         return P, th, st
-    c = np.arange(0, N, stride)
-    if c[-1] != N - 1:
-        c = np.append(c, N - 1)
+    c = _coarse(N, stride)
     # 1. coarse all-modes + following
     mc, ic, sc = _full_follow(A[c], b, l[c], start, nb)
     if ic[0] < 0:
@@ -661,9 +667,7 @@ def _track(A, b, l, start, stride, nb=None):
     kk = np.flatnonzero(good_c)
     Pc = mc.P[kk, ic[kk]]
     thc = mc.theta[kk, ic[kk]]
-    sep = np.min(np.where(np.isfinite(mc.theta[kk]) & (np.arange(MAX_MODES) != ic[kk, None]),
-                          np.nan_to_num(_dist(mc.P[kk], Pc[:, None]), nan=np.inf), np.inf),
-                 axis=-1)
+    sep = _separation(mc.P[kk], mc.theta[kk], Pc, ic[kk])
     P[c[kk]] = Pc
     th[c[kk]] = thc
     status[c[kk]] = 0
@@ -956,8 +960,7 @@ def _partial_prefix(A, b, L, c, kmax, Pm, thm, ic, P, th, status):
     icc = np.where(kk, ic, 0)
     Pc = Pm[np.arange(G)[:, None], ar, icc]                                # (G, nc, 3, 2)
     thc = thm[np.arange(G)[:, None], ar, icc]
-    other = np.isfinite(thm) & (np.arange(MAX_MODES) != icc[..., None])
-    sep = np.min(np.where(other, np.nan_to_num(_dist(Pm, Pc[:, :, None]), nan=np.inf), np.inf), axis=-1)
+    sep = _separation(Pm, thm, Pc, icc)
     g, k = np.nonzero(kk)
     P[g, c[k]], th[g, c[k]], status[g, c[k]] = Pc[g, k], thc[g, k], 0
     end = c[kmax]                                                           # (G,)
@@ -1041,8 +1044,7 @@ def _fill(A, b, L, start, stride, nb=None):
     ar = np.arange(len(c))
     Pc = Pm[g][:, ar][np.arange(len(g))[:, None], ar, ic]            # (G, nc, 3, 2)
     thc = thm[g][np.arange(len(g))[:, None], ar, ic]
-    other = np.isfinite(thm[g]) & (np.arange(MAX_MODES) != ic[..., None])
-    sep = np.min(np.where(other, np.nan_to_num(_dist(Pm[g], Pc[:, :, None]), nan=np.inf), np.inf), axis=-1)
+    sep = _separation(Pm[g], thm[g], Pc, ic)
     fine = np.setdiff1d(np.arange(N), c, assume_unique=True)
     if not fine.size:
         return g, Pc, thc
