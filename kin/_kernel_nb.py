@@ -18,15 +18,15 @@ import numpy as np
 from numba.extending import register_jitable
 
 from .groups.base import SCALAR_HELPERS, arctan2
-from .groups.registry import COMPILED
+from .groups.registry import COMPILED, LOWERING
 
-__all__ = ["solve_positions", "solve_motion", "solve_designs", "finish_rows", "SLOTS"]
+__all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", "finish_rows", "SLOTS"]
 
 
 def _fresh_cache() -> None:
     """Touch this file when a compiled step's source is newer (numba's cache would
     otherwise keep the old code); a read-only install is left alone."""
-    sources = {inspect.getsourcefile(f) for f in (*COMPILED.values(), *SCALAR_HELPERS)}
+    sources = {inspect.getsourcefile(f) for f in (*COMPILED.values(), *LOWERING.values(), *SCALAR_HELPERS)}
     newest = max(os.path.getmtime(f) for f in sources if f)
     if newest > os.path.getmtime(__file__):
         try:
@@ -52,6 +52,55 @@ if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
 _s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7, _s8, _s9, _s10, _s11 = (
     numba.njit(**_JIT)(f) for f in (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
+
+
+def _no_lowering(q, P, U, O, size, out) -> None:  # pragma: no cover - a key without one
+    out[:] = np.nan
+
+
+_l0, _l1, _l2, _l3, _l4, _l5, _l6, _l7, _l8, _l9, _l10, _l11 = (
+    numba.njit(**_JIT)(LOWERING.get(key, _no_lowering)) for key in (*COMPILED, *(None,) * (SLOTS - len(COMPILED))))
+
+
+@numba.njit(**_JIT)
+def _lower(c, q, P, U, O, size, out) -> None:
+    """The lowering of the steps of code ``c`` for every design."""
+    if c == 0:
+        _l0(q, P, U, O, size, out)
+    elif c == 1:
+        _l1(q, P, U, O, size, out)
+    elif c == 2:
+        _l2(q, P, U, O, size, out)
+    elif c == 3:
+        _l3(q, P, U, O, size, out)
+    elif c == 4:
+        _l4(q, P, U, O, size, out)
+    elif c == 5:
+        _l5(q, P, U, O, size, out)
+    elif c == 6:
+        _l6(q, P, U, O, size, out)
+    elif c == 7:
+        _l7(q, P, U, O, size, out)
+    elif c == 8:
+        _l8(q, P, U, O, size, out)
+    elif c == 9:
+        _l9(q, P, U, O, size, out)
+    elif c == 10:
+        _l10(q, P, U, O, size, out)
+    else:
+        _l11(q, P, U, O, size, out)
+
+
+@numba.njit(**_JIT)
+def lower_designs(codes, q, steps, P, U, O, size, out) -> None:
+    """The numbers ``out`` (D, n_steps, width) of D designs for the steps ``steps``,
+    each step lowered by its kind's compiled lowering (:data:`~kin.groups.registry.LOWERING`)
+    from the joints' reference points ``P``, guides ``U`` (D, rows, 2) and the links'
+    reference points ``O`` (D, n_links, 2); ``q`` (n_steps, width) the steps' rows and
+    links."""
+    for i in range(steps.size):
+        k = steps[i]
+        _lower(codes[k], q[k], P, U, O, size, out[:, k])
 
 
 @numba.njit(**_JIT)

@@ -196,13 +196,17 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     X = _as_design_inputs(mechanism, inputs, geo.D)
     shape = (geo.D, X.shape[-2])
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
+    kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
+    if kp is not None and kp.covers(steps) and kernel.design_lowering(sp).covers(steps):
+        floats, origins = kernel.lower_designs(sp, kp, geo.names, geo.X, steps)     # (no step bound in Python)
+        geo.adopt_origins(origins)
+        return _compiled(sp, geo, Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape), kp, floats, steps, X)
     bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
     G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape)
-    kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
     if kp is not None and kp.covers(steps):
-        return _compiled(sp, geo, G, kp, bound, steps, X)
+        return _compiled(sp, geo, G, kp, kernel.design_floats(kp, bound, steps, geo.origins(), geo.D), steps, X)
     for k, step in zip(steps, bound):
         step.jit = kp is not None                # a triad's compiled tracker, say
         okk = step.positions(G, X).ok
@@ -212,10 +216,11 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     return DesignPoses(sp, geo, G, ok)
 
 
-def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, bound, steps, X) -> DesignPoses:
-    """The designs by the compiled kernel (:func:`kin.kernel.run_designs`): the same
-    steps on the same branches as the NumPy route, equal to it to rounding."""
-    floats = kernel.design_floats(kp, bound, steps, geo.origins(), geo.D)
+def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, floats, steps, X) -> DesignPoses:
+    """The designs by the compiled kernel (:func:`kin.kernel.run_designs`) from their
+    numbers ``floats`` (:func:`kin.kernel.lower_designs`, or the bound steps'
+    :func:`kin.kernel.design_floats`): the same steps on the same branches as the NumPy
+    route, equal to it to rounding."""
     X = X[None] if X.ndim == 2 else X                 # (inputs shared by the designs)
     links = [i for k in steps for i in sp.steps[k].unknown]
     C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)

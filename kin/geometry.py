@@ -77,6 +77,7 @@ class Geometry:
                 raise InputError(explain("designs", expected=f"shape (D, {len(names)}) for the variables "
                                          + ", ".join(names), got=f"shape {X.shape}"))
             self.X, self.D = X, X.shape[0]
+            self.names = tuple(names)
             self.cols = {n: i for i, n in enumerate(names)}
 
     def _fixed(self, name: str):
@@ -126,6 +127,11 @@ class Geometry:
         if hit is None:
             hit = self._cache["origins"] = np.stack([self.origin(x) for x in self.mechanism.link_names])
         return hit
+
+    def adopt_origins(self, origins: np.ndarray) -> None:
+        """Take ``origins`` ``(n_links, D, 1, 2)`` as :meth:`origins` (the same floats,
+        gathered by the compiled lowering, :func:`kin.kernel.lower_designs`)."""
+        self._cache["origins"] = origins
 
     def origins_xy(self) -> tuple:
         """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only): views

@@ -12,9 +12,12 @@ triangle.  Each does the NumPy kernel's operations in the same order (the floats
 to rounding) and gives the same statuses.  The drivers' cos and sin are NumPy's own,
 computed before the loop; the angle rows are fdlibm's ``atan2`` (Sun Microsystems 1993,
 within 1 ulp of NumPy's) in the kernel when every step is solved, else NumPy's, later.
-:func:`run_designs` runs the same steps for a batch of D designs (each design's numbers
-lowered by the same adapters, :func:`design_floats`): synthesis's populations
-(:func:`compiled_batches`).  The NumPy path stays as the oracle
+:func:`run_designs` runs the same steps for a batch of D designs: synthesis's populations
+and polish (:func:`compiled_batches`).  Their numbers come from each kind's compiled
+lowering (:func:`lower_designs`: the adapter's ``compiled_lower``, the floats its
+:meth:`~kin.groups.step.GroupStep.lower` gives, bit for bit, ``tests/test_design_batch.py``)
+in one call, no step bound in Python; a kind without one is bound and lowered by its
+adapter (:func:`design_floats`).  The NumPy path stays as the oracle
 (``tests/test_kernels.py``, ``tests/test_synthesis_kernel.py``) and solves what the
 kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
 the continuation walk, velocities and accelerations, and the reasons of the rows that
@@ -57,13 +60,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .groups.registry import COMPILED
+from .groups.registry import COMPILED, LOWERING
 from .groups.step import trig_row
 from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, turn_off, using
 from .memo import cached
 
-__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion", "design_floats",
-           "run_designs", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
+__all__ = ["KernelPlan", "KernelRun", "DesignLowering", "kernel_plan", "lower_plan", "run_positions", "run_motion",
+           "design_floats", "design_lowering", "lower_designs", "run_designs", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 _CODES = {key: i for i, key in enumerate(COMPILED)}
@@ -347,6 +350,90 @@ def design_floats(kp: KernelPlan, bound, steps, origins: np.ndarray, D: int) -> 
         for i, v in enumerate(step.lower(origins).floats):
             row[:, i] = v.ravel() if isinstance(v, np.ndarray) and v.ndim else v
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class DesignLowering:
+    """What the compiled lowering of a plan's steps reads (:func:`lower_designs`), made
+    once per plan: ``q`` (n_steps, width) each step's joint rows and links
+    (:meth:`~kin.groups.step.GroupStep.lower_indices`), the joints' reference points
+    ``at`` and unit guides ``axes`` (n_joints + 1, 2: a zero row last, the reference
+    point of a link without joints), each link's row of its reference point ``first``
+    (:func:`~kin.geometry.origin_joint`), and ``lowers`` (n_steps,) whether the step's
+    adapter has a compiled lowering (:data:`~kin.groups.registry.LOWERING`)."""
+
+    q: np.ndarray
+    at: np.ndarray
+    axes: np.ndarray
+    first: np.ndarray
+    lowers: np.ndarray
+
+    def covers(self, steps) -> bool:
+        """Whether every step of ``steps`` has a compiled lowering."""
+        return bool(np.all(self.lowers[np.asarray(list(steps), int)]))
+
+
+def design_lowering(sp) -> DesignLowering:
+    """The :class:`DesignLowering` of plan ``sp``, kept on it."""
+    return cached(sp, "design lowering", lambda sp, _: _design_lowering(sp))
+
+
+def _design_lowering(sp) -> DesignLowering:
+    from .geometry import origin_joint
+    from .poses import unit
+    m = sp.mechanism
+    rows = {j.name: i for i, j in enumerate(m.joints)}
+    at = np.zeros((len(m.joints) + 1, 2))
+    axes = np.full((len(m.joints) + 1, 2), np.nan)
+    for i, j in enumerate(m.joints):
+        at[i] = j.at
+        if j.axis is not None:
+            axes[i] = unit(np.asarray(j.axis, float))
+    first = np.array([rows.get(origin_joint(m, x), len(m.joints)) for x in m.link_names], np.int64)
+    q, lowers = [], []
+    for st in sp.steps:
+        c = st.closed
+        low = None if c is None else c.lower(sp.origins)
+        ok = low is not None and low.key in LOWERING and getattr(c, "compiled_lower", None) is LOWERING[low.key]
+        lowers.append(ok)
+        q.append(c.lower_indices(rows.__getitem__) if ok else ())
+    return DesignLowering(_table(q, np.int64, -1), at, axes, first, np.array(lowers, bool))
+
+
+def _columns(sp, names: tuple):
+    """The design columns of the joints' positions and guides (:func:`~kin.geometry.design_names`):
+    ``(rows, x columns, y columns)`` and ``(rows, angle columns)``, kept on the plan."""
+    def make(sp, names):
+        m, col = sp.mechanism, {n: i for i, n in enumerate(names)}
+        pos = [(i, col[f"{j.name}.x"], col[f"{j.name}.y"]) for i, j in enumerate(m.joints) if f"{j.name}.x" in col]
+        ang = [(i, col[f"{j.name}.angle"]) for i, j in enumerate(m.joints) if f"{j.name}.angle" in col]
+        return np.array(pos, np.int64).reshape(-1, 3).T, ang
+    return cached(sp, ("lowering columns", names), make, names)
+
+
+def lower_designs(sp, kp: KernelPlan, names: tuple, X: np.ndarray, steps) -> tuple[np.ndarray, np.ndarray]:
+    """The numbers of D designs ``X`` (D, p), columns ``names``, for the steps ``steps``
+    (every one with a compiled lowering, :meth:`DesignLowering.covers`): what
+    :func:`design_floats` gives from the bound steps, by one compiled call; and the
+    links' reference points ``(n_links, D, 1, 2)`` (:meth:`~kin.geometry.Geometry.origins`).
+    The guides of designs with a guide angle are NumPy's cos and sin, as
+    :meth:`~kin.geometry.Geometry.axis` computes them."""
+    dl = design_lowering(sp)
+    (rows, cx, cy), angles = _columns(sp, names)
+    D = X.shape[0]
+    P = np.empty((D,) + dl.at.shape)
+    P[:] = dl.at
+    P[:, rows, 0], P[:, rows, 1] = X[:, cx], X[:, cy]
+    U = np.empty((D,) + dl.axes.shape)
+    U[:] = dl.axes
+    for i, c in angles:
+        a = X[:, c]
+        v = np.stack([np.cos(a), np.sin(a)], axis=-1)
+        U[:, i] = v / np.hypot(v[..., 0], v[..., 1])[..., None]
+    O = P[:, dl.first]
+    out = np.full((D, len(kp.codes), kp.floats.shape[1]), np.nan)
+    load().lower_designs(kp.codes, dl.q, _steps(kp, steps), P, U, O, float(sp.size), out)
+    return out, np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :]
 
 
 def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.ndarray):

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from multiloop.catalogue.dimensional import Evaluator, design_space
 from multiloop.catalogue.named import load_named
 from multiloop.kin import kernel
 from multiloop.kin.design import branch_signs, design_mechanism, solve_designs, unbatched_steps
 from multiloop.kin.geometry import design_names
-from multiloop.kin.solve import solve
+from multiloop.kin.solve import plan_of, solve
 from multiloop.topo.errors import InputError
 from multiloop.topo.model import JointKind
 
@@ -181,3 +182,64 @@ def test_the_facade_solves_designs():
     r = ml.solve("four_bar", x, designs=X, outputs=["P"])
     assert r.ok.shape == (4, len(x))
     np.testing.assert_array_equal(r.point("P"), solve_designs(m, names, X, x).point("P"))
+
+
+def _python_lowering(m, names, X):
+    """The numbers of designs ``X`` by the adapters bound in NumPy (the oracle) and by the
+    compiled lowering (:func:`kin.kernel.lower_designs`), with the links' reference points."""
+    from multiloop.kin.design import _bind
+    from multiloop.kin.geometry import Geometry
+    sp = plan_of(m)
+    kp, steps = kernel.kernel_plan(sp), list(range(len(sp.steps)))
+    assert kp.complete and kernel.design_lowering(sp).covers(steps)
+    geo = Geometry(m, names, X)
+    with np.errstate(all="ignore"):
+        oracle = kernel.design_floats(kp, [_bind(st, m, sp.size, geo) for st in sp.steps], steps, geo.origins(),
+                                      geo.D)
+    got, origins = kernel.lower_designs(sp, kp, names, X, steps)
+    return oracle, got, geo.origins(), origins
+
+
+def _slider_driven():
+    """A crank driven through its slider (a P driver: the one closed-form step no
+    catalogue mechanism has)."""
+    from multiloop.topo.model import MechanismBuilder
+    b = MechanismBuilder()
+    b.add_link("ground", frame=True)
+    b.add_joint("S", "P", ("ground", "slider"), at=(3.0, 0.0), axis=(1.0, 0.0))
+    b.add_joint("B", "R", ("slider", "rod"), at=(3.0, 0.0))
+    b.add_joint("A", "R", ("rod", "crank"), at=(1.0, 1.5))
+    b.add_joint("O", "R", ("crank", "ground"), at=(0.0, 0.0))
+    b.add_driver("S")
+    return b.build()
+
+
+@pytest.mark.parametrize("name", DYAD_MECHANISMS + ["slider driven"])
+def test_compiled_lowering_is_the_adapters_to_the_bit(name):
+    """Every closed-form step's numbers for a batch of designs (guide angles among the
+    variables) come from its compiled lowering with the same bits as the adapter bound in
+    NumPy gives, NaN (a branch boundary) where it gives NaN, and the links' reference
+    points are the geometry's."""
+    pytest.importorskip("numba")
+    m = _slider_driven() if name == "slider driven" else load_named(name)
+    names, X = _designs(m, D=12, rel=0.05)
+    X = np.vstack([X, X[:1]])
+    rrr = next((st.step.layout for st in plan_of(m).steps if str(getattr(st.step, "kind", "")) == "RRR"), None)
+    if rrr is not None and f"{rrr.inner}.x" in names:     # its inner pin on the outer pins' line: a branch boundary
+        mid = 0.5 * (np.asarray(m.joint(rrr.outer1).at) + np.asarray(m.joint(rrr.outer2).at))
+        X[-1, names.index(f"{rrr.inner}.x")], X[-1, names.index(f"{rrr.inner}.y")] = mid
+    oracle, got, o_oracle, o_got = _python_lowering(m, names, X)
+    np.testing.assert_array_equal(got, oracle)
+    np.testing.assert_array_equal(o_got, o_oracle)
+    assert rrr is None or np.isnan(got[-1]).sum() > np.isnan(got[0]).sum()      # (the boundary's sign)
+
+
+@given(st.sampled_from(DYAD_MECHANISMS), st.floats(1e-4, 0.3), st.integers(0, 2**31))
+@settings(max_examples=25, deadline=None)
+def test_compiled_lowering_of_random_designs(name, rel, seed):
+    """Hypothesis: random designs of every dyad kind, lowered compiled and in NumPy, bit for bit."""
+    pytest.importorskip("numba")
+    m = load_named(name)
+    names, X = _designs(m, D=5, rel=rel, seed=seed)
+    oracle, got, _, _ = _python_lowering(m, names, X)
+    np.testing.assert_array_equal(got, oracle)

@@ -30,7 +30,7 @@ from ..result import Status
 from ..rigid import perp
 from multiloop.topo.assur import GroupKind
 
-from .base import pair, carry, length, margin_tol, num, place, place_along
+from .base import branch_sign, put_off, put_rel, pair, carry, length, margin_tol, num, place, place_along
 from .rrr import rrr_branch, rrr_rates, rrr_xy, triangle_apex
 from .step import SINGULAR, AngleDef, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -75,12 +75,36 @@ def actuator_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[kn] = PP[kf] = PP[k2] = 1
 
 
+def actuator_lower(q, P, U, O, size, out) -> None:
+    """:meth:`ActuatorStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of A, B, C and the slide; known1, known2, near, far, link2, the driver
+    of the slide's sense σ as ±1)."""
+    ia, ib, ic, isl, k1, k3, kn, kf, k2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8]
+    for d in range(P.shape[0]):
+        ax, ay, bx, by, cx, cy = P[d, ia, 0], P[d, ia, 1], P[d, ib, 0], P[d, ib, 1], P[d, ic, 0], P[d, ic, 1]
+        lc = np.hypot(bx - cx, by - cy)
+        d2x, d2y = (bx - cx) / lc, (by - cy) / lc
+        h2 = np.hypot(d2x, d2y)
+        out[d, 0], out[d, 1], out[d, 2] = float(q[9]), bx - ax, by - ay
+        out[d, 3], out[d, 4] = U[d, isl, 0], U[d, isl, 1]
+        put_rel(out, d, 5, ax, ay, O, k1)
+        put_rel(out, d, 7, cx, cy, O, k3)
+        out[d, 9] = lc
+        out[d, 10] = branch_sign((cx - ax) * (by - ay) - (cy - ay) * (bx - ax),
+                                 np.hypot(cx - ax, cy - ay) * np.hypot(bx - ax, by - ay))
+        put_off(out, d, 11, ax, ay, O, kn)
+        put_off(out, d, 13, bx, by, O, kf)
+        put_off(out, d, 15, cx, cy, O, k2)
+        out[d, 17], out[d, 18] = d2x / h2, d2y / h2
+
+
 class ActuatorStep(GroupStep):
     """A triangle with a linear actuator as one side (:class:`~topo.assur.ActuatorLayout`),
     compiled once: the actuator's guide, the branch sign, the third side's length."""
 
     kind = GroupKind.ACTUATED
     compiled = staticmethod(actuator_place)
+    compiled_lower = staticmethod(actuator_lower)
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -184,6 +208,11 @@ class ActuatorStep(GroupStep):
         B = R.point(self.layout.far, self.B)[0]
         g = self._guide(R, np.ones(len(self.mechanism.drivers)))
         return np.abs(d2) + _length_curvature(B - A, g)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (row(lay.outer1), row(lay.inner), row(lay.outer2), row(lay.slide),
+                self.k1, self.k3, self.kn, self.kf, self.k2, int(self.sigma))
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

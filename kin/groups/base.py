@@ -22,7 +22,7 @@ from multiloop.topo.errors import SingularityError, explain
 
 __all__ = ["SINGULAR_RTOL", "REACH_RTOL", "scalar", "SCALAR_HELPERS", "angle", "arctan2", "atan_pos",
            "carry", "turned", "place", "place_along", "place_like", "xy", "stack", "cramer", "is_singular",
-           "sign_of", "quiet", "num", "pair", "length", "dot"]
+           "sign_of", "quiet", "num", "pair", "length", "dot", "branch_sign", "put_rel", "put_off"]
 
 #: ``|det| <= SINGULAR_RTOL · |c1| |c2|`` marks a singular system.  For a dyad
 #: near a turning point the relative det behaves like sqrt(2δ) (δ the relative
@@ -217,6 +217,31 @@ def sign_of(value, scale, what, strict: bool = True):
             got=f"a singular reference at {int(np.count_nonzero(bad))} position(s)",
             hint="move the reference so that the group's links are not collinear"))
     return np.where(value > 0, 1.0, -1.0)
+
+
+@scalar
+def branch_sign(value, scale):
+    """:func:`sign_of` of one design of a batch (``strict=False``) for the compiled
+    lowering: ``±1``, NaN where ``|value| <= SINGULAR_RTOL·scale`` (or NaN)."""
+    if not abs(value) > SINGULAR_RTOL * scale:
+        return np.nan
+    return 1.0 if value > 0 else -1.0
+
+
+@scalar
+def put_rel(out, d, i, x, y, O, k) -> None:
+    """``out[d, i:i+2]``: the point ``(x, y)`` of design d relative to link k's reference
+    point ``O[d, k]`` (:meth:`~kin.groups.step.GroupStep.rel`, the same floats)."""
+    out[d, i] = x - O[d, k, 0]
+    out[d, i + 1] = y - O[d, k, 1]
+
+
+@scalar
+def put_off(out, d, i, x, y, O, k) -> None:
+    """``out[d, i:i+2]``: link k's reference point relative to its point ``(x, y)``
+    (:meth:`~kin.groups.step.GroupStep.off`)."""
+    out[d, i] = -(x - O[d, k, 0])
+    out[d, i + 1] = -(y - O[d, k, 1])
 
 
 def num(a):

@@ -13,10 +13,10 @@ import numpy as np
 
 from ..continuation import Probe
 from ..rigid import perp
-from .base import pair, angle, carry, place
+from .base import pair, angle, carry, place, put_off, put_rel
 from .step import GroupStep, Lowered, Outcome, trig_row
 
-__all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place"]
+__all__ = ["DriverStepSolver", "is_closed_form", "turn_place", "slide_place", "turn_lower", "slide_lower"]
 
 
 def is_closed_form(group) -> bool:
@@ -80,6 +80,28 @@ def slide_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[k] = PP[o] = 0
 
 
+def turn_lower(q, P, U, O, size, out) -> None:
+    """:meth:`DriverStepSolver.lower` of a turning driver for D designs (the compiled
+    kernel's lowering): ``q`` = (the pin's row, the link carrying it, the driven link,
+    the sign)."""
+    r, h, k = q[0], q[1], q[2]
+    for d in range(P.shape[0]):
+        out[d, 0] = float(q[3])
+        put_rel(out, d, 1, P[d, r, 0], P[d, r, 1], O, h)
+        put_off(out, d, 3, P[d, r, 0], P[d, r, 1], O, k)
+
+
+def slide_lower(q, P, U, O, size, out) -> None:
+    """:meth:`DriverStepSolver.lower` of a sliding driver for D designs: ``q`` = (the
+    joint's row, the guide's link, the driven link, the sign)."""
+    r, o, k = q[0], q[1], q[2]
+    for d in range(P.shape[0]):
+        out[d, 0] = float(q[3])
+        put_rel(out, d, 1, P[d, r, 0], P[d, r, 1], O, o)
+        out[d, 3], out[d, 4] = U[d, r, 0], U[d, r, 1]
+        put_off(out, d, 5, P[d, r, 0], P[d, r, 1], O, k)
+
+
 class DriverStepSolver(GroupStep):
     """A one-link driver step (see :func:`is_closed_form`), compiled once."""
 
@@ -97,6 +119,7 @@ class DriverStepSolver(GroupStep):
             self.u = None
         else:
             self.r, self.u = self.at(d.joint), self.axis(d.joint)
+        self.compiled_lower = turn_lower if self.u is None else slide_lower
 
     def positions(self, G, X, factor=1.0, probe=False) -> Outcome:
         x = X[..., self.drive.driver]
@@ -123,6 +146,13 @@ class DriverStepSolver(GroupStep):
                            ((d, self.sign),) if frame else ())
         return Lowered("drive_P", (self.drive.driver, o, k),
                        (self.sign, *self.rel(origins, o, r), *pair(self.u), *self.off(origins, k, r)))
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        k, o = self.link_index(self.link), self.link_index(self.other)
+        if self.u is None:
+            pin = next(c for c in self.group.constraints if c.kind == "R").joint
+            return (row(pin), self.link_index(self.host), k, int(self.sign))
+        return (row(self.drive.joint), o, k, int(self.sign))
 
     def rates(self, R, input_rates) -> None:
         rate = input_rates[self.drive.driver]

@@ -23,7 +23,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned, xy, quiet
+from .base import (put_off, put_rel, pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, place_like, stack, turned,
+                   xy, quiet)
 from ..poses import known_on, normal
 from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -175,12 +176,29 @@ def prp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[l1] = PP[l2] = PP[k1] = PP[k2] = 0
 
 
+def prp_lower(q, P, U, O, size, out) -> None:
+    """:meth:`PRPStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of B, P1, P2; k1, k2, link1, link2)."""
+    ib, i1, i2, k1, k2, l1, l2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    for d in range(P.shape[0]):
+        bx, by = P[d, ib, 0], P[d, ib, 1]
+        p1x, p1y, p2x, p2y = P[d, i1, 0], P[d, i1, 1], P[d, i2, 0], P[d, i2, 1]
+        u1x, u1y, u2x, u2y = U[d, i1, 0], U[d, i1, 1], U[d, i2, 0], U[d, i2, 1]
+        put_rel(out, d, 0, p1x, p1y, O, k1)
+        out[d, 2], out[d, 3], out[d, 4] = u1x, u1y, -u1y * (bx - p1x) + u1x * (by - p1y)
+        put_rel(out, d, 5, p2x, p2y, O, k2)
+        out[d, 7], out[d, 8], out[d, 9] = u2x, u2y, -u2y * (bx - p2x) + u2x * (by - p2y)
+        put_off(out, d, 10, bx, by, O, l1)
+        put_off(out, d, 12, bx, by, O, l2)
+
+
 class PRPStep(GroupStep):
     """A PRP dyad of a plan: two sliders pinned together at B, each on the guide of a
     known link; compiled once."""
 
     kind = GroupKind.PRP
     compiled = staticmethod(prp_place)
+    compiled_lower = staticmethod(prp_lower)
     singular_hint = GUIDES_HINT
 
     @classmethod
@@ -213,6 +231,11 @@ class PRPStep(GroupStep):
         f = (*self.rel(o, k1, self.P1), *pair(self.u1), self.h1, *self.rel(o, k2, self.P2), *pair(self.u2),
              self.h2, *self.off(o, l1, self.B), *self.off(o, l2, self.B))
         return Lowered(GroupKind.PRP, (k1, k2, l1, l2), f)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (row(lay.inner), row(lay.outer1), row(lay.outer2),
+                *(self.link_index(x) for x in (self.k1, self.k2, lay.link1, lay.link2)))
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

@@ -6,7 +6,8 @@ here and never switches on the kind:
 
 * the solver's step (:func:`closed_form_step`, :mod:`kin.solve`; batches of designs,
   :mod:`kin.design`) and the advice for a singular reference (:func:`singular_hint`);
-* the compiled kernel's scalar function (:data:`COMPILED`, :mod:`kin.kernel`);
+* the compiled kernel's scalar function (:data:`COMPILED`, :mod:`kin.kernel`) and its
+  lowering of a batch of designs (:data:`LOWERING`);
 * the design check's assembly modes and monitored angles (:func:`mode_count`,
   :func:`angle_defs`, :mod:`kin.check`), which the synthesis's transmission constraint
   reads too;
@@ -26,7 +27,7 @@ from multiloop.topo.assur import AssurGroup, DriverStep, GroupKind, add_kind_rul
 
 from .actuator import ActuatorStep
 from .class4 import Class4Step
-from .driver import DriverStepSolver, is_closed_form, slide_place, turn_place
+from .driver import DriverStepSolver, is_closed_form, slide_lower, slide_place, turn_lower, turn_place
 from .newton import NewtonStep
 from .prp import PRPStep
 from .rpp import RPPStep
@@ -36,7 +37,7 @@ from .rrr import RRRStep
 from .step import GroupStep
 from .triad import TriadStep
 
-__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "register", "unregister", "registered",
+__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "LOWERING", "register", "unregister", "registered",
            "adapter_of", "closed_form_step", "newton_step", "has_closed_form", "mode_count", "angle_defs",
            "reference_margin", "singular_hint"]
 
@@ -64,6 +65,11 @@ del _a
 #: the kernel is imported, so a kind registered at run time reuses a key or has none
 COMPILED: dict = {"drive_R": turn_place, "drive_P": slide_place,
                   **{a.kind: a.compiled for a in BUILT_IN if a.compiled is not None}}
+#: a compiled step's key -> its lowering of a batch of designs (the adapter's
+#: ``compiled_lower``, compiled with the kernel: :func:`kin.kernel.lower_designs`); a key
+#: absent here is lowered by the adapter's own :meth:`~kin.groups.step.GroupStep.lower`
+LOWERING: dict = {"drive_R": turn_lower, "drive_P": slide_lower,
+                  **{a.kind: a.compiled_lower for a in BUILT_IN if a.compiled_lower is not None}}
 
 
 def register(adapter: type[GroupStep]) -> None:

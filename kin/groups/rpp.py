@@ -23,7 +23,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack, turned, xy, quiet
+from .base import (put_off, put_rel, pair, SINGULAR_RTOL, carry, cramer, dot, is_singular, num, place_like, stack,
+                   turned, xy, quiet)
 from ..poses import angle_of, known_on, normal
 from .step import GUIDES_HINT, PARALLEL_GUIDES, GroupStep, Lowered, Outcome, dyad_outcome
 
@@ -178,12 +179,30 @@ def rpp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[l1] = PP[l2] = PP[kq] = 0
 
 
+def rpp_lower(q, P, U, O, size, out) -> None:
+    """:meth:`RPPStep.lower` of D designs for the compiled kernel (the guides' angle by
+    ``atan2``: NumPy's to an ulp). ``q`` = (rows of A, Q and the inner P joint; k1, kq,
+    link1, link2)."""
+    ia, iq, ii, k1, kq, l1, l2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    for d in range(P.shape[0]):
+        ax, ay, qx, qy = P[d, ia, 0], P[d, ia, 1], P[d, iq, 0], P[d, iq, 1]
+        ux, uy, wx, wy = U[d, iq, 0], U[d, iq, 1], U[d, ii, 0], U[d, ii, 1]
+        alpha = np.arctan2(wy, wx) - np.arctan2(uy, ux)
+        put_rel(out, d, 0, ax, ay, O, k1)
+        put_rel(out, d, 2, qx, qy, O, kq)
+        out[d, 4], out[d, 5], out[d, 6], out[d, 7] = ux, uy, np.cos(alpha), np.sin(alpha)
+        out[d, 8] = -wy * (ax - qx) + wx * (ay - qy)
+        put_off(out, d, 9, qx, qy, O, l2)
+        put_off(out, d, 11, ax, ay, O, l1)
+
+
 class RPPStep(GroupStep):
     """An RPP dyad of a plan: link1 pinned at outer1 and sliding in the block link2,
     which slides on the guide of the known link at outer2; compiled once."""
 
     kind = GroupKind.RPP
     compiled = staticmethod(rpp_place)
+    compiled_lower = staticmethod(rpp_lower)
     singular_hint = GUIDES_HINT
 
     @classmethod
@@ -217,6 +236,11 @@ class RPPStep(GroupStep):
              num(np.cos(self.alpha)), num(np.sin(self.alpha)), self.h,
              *self.off(o, l2, self.Q), *self.off(o, l1, self.A))
         return Lowered(GroupKind.RPP, (k1, kq, l1, l2), f)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (row(lay.outer1), row(lay.outer2), row(lay.inner),
+                *(self.link_index(x) for x in (self.k1, self.kq, lay.link1, lay.link2)))
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

@@ -24,9 +24,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (pair, square_curvature, margin_tol, REACH_RTOL, arctan2, carry, cramer, dot, is_singular, num,
-                   place, place_along, sign_of, stack, xy,
-                   quiet)
+from .base import (branch_sign, put_off, put_rel, pair, square_curvature, margin_tol, REACH_RTOL, arctan2, carry,
+                   cramer, dot, is_singular, num, place, place_along, sign_of, stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
@@ -183,12 +182,31 @@ def rpr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[g] = PP[b] = 0
 
 
+def rpr_lower(q, P, U, O, size, out) -> None:
+    """:meth:`RPRStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of X, Y and the P joint; kx, ky, the guide, the block)."""
+    ix, iy, ii, kx, ky, g, b = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    for d in range(P.shape[0]):
+        xx, xy_, yx, yy = P[d, ix, 0], P[d, ix, 1], P[d, iy, 0], P[d, iy, 1]
+        ux, uy = U[d, ii, 0], U[d, ii, 1]
+        hu = np.hypot(ux, uy)
+        put_rel(out, d, 0, xx, xy_, O, kx)
+        put_rel(out, d, 2, yx, yy, O, ky)
+        out[d, 4] = -uy * (yx - xx) + ux * (yy - xy_)
+        out[d, 5] = branch_sign((yx - xx) * ux + (yy - xy_) * uy, np.hypot(yx - xx, yy - xy_))
+        out[d, 6], out[d, 7] = ux / hu, uy / hu
+        put_off(out, d, 8, xx, xy_, O, g)
+        put_off(out, d, 10, yx, yy, O, b)
+        out[d, 12] = SINGULAR * size
+
+
 class RPRStep(GroupStep):
     """An RPR dyad of a plan: the guide (the P joint's first link) pivoted at X, the
     block at Y; compiled once."""
 
     kind = GroupKind.RPR
     compiled = staticmethod(rpr_place)
+    compiled_lower = staticmethod(rpr_lower)
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -262,6 +280,10 @@ class RPRStep(GroupStep):
         Xp, vX, aX = R.point(self.kx, self.X)
         Yp, vY, aY = R.point(self.ky, self.Y)
         return square_curvature(Yp - Xp, vY - vX, aY - aX)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        return (row(self.gx), row(self.bx), row(self.layout.inner),
+                *(self.link_index(x) for x in (self.kx, self.ky, self.guide, self.block)))
 
     def rates(self, R, input_rates) -> None:
         Xp, vX, aX = R.point(self.kx, self.X)

@@ -25,8 +25,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (pair, margin_tol, REACH_RTOL, carry, cramer, dot, is_singular, length, num, place_along, place_like,
-                   sign_of, stack, turned, xy, quiet)
+from .base import (branch_sign, put_off, put_rel, pair, margin_tol, REACH_RTOL, carry, cramer, dot, is_singular,
+                   length, num, place_along, place_like, sign_of, stack, turned, xy, quiet)
 from ..continuation import Probe
 from ..poses import known_on, normal, unit
 from ..result import Status
@@ -209,12 +209,31 @@ def rrp_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[l1], PP[l2], PP[kp] = 1, 0, 0
 
 
+def rrp_lower(q, P, U, O, size, out) -> None:
+    """:meth:`RRPStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of A, B, P; known1, the guide's link, link1, link2)."""
+    ia, ib, ip, k1, kp, l1, l2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    for d in range(P.shape[0]):
+        ax, ay, bx, by, px, py = P[d, ia, 0], P[d, ia, 1], P[d, ib, 0], P[d, ib, 1], P[d, ip, 0], P[d, ip, 1]
+        ux, uy = U[d, ip, 0], U[d, ip, 1]
+        la = np.hypot(bx - ax, by - ay)
+        put_rel(out, d, 0, ax, ay, O, k1)
+        put_rel(out, d, 2, px, py, O, kp)
+        out[d, 4], out[d, 5], out[d, 6] = ux, uy, -uy * (bx - px) + ux * (by - py)
+        out[d, 7], out[d, 8] = la, branch_sign((bx - ax) * ux + (by - ay) * uy, np.hypot(bx - ax, by - ay))
+        out[d, 9], out[d, 10] = (bx - ax) / la, (by - ay) / la
+        put_off(out, d, 11, ax, ay, O, l1)
+        put_off(out, d, 13, bx, by, O, l2)
+        out[d, 15] = SINGULAR * la
+
+
 class RRPStep(GroupStep):
     """An RRP dyad of a plan (link1 pinned at outer1 and at the slider's pin, the slider
     link2 on the guide of the known link at outer2): compiled once."""
 
     kind = GroupKind.RRP
     compiled = staticmethod(rrp_place)
+    compiled_lower = staticmethod(rrp_lower)
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -291,6 +310,11 @@ class RRPStep(GroupStep):
         ydd = (np.sum(ar * n, axis=-1) - 2.0 * w * np.sum(vr * u, axis=-1)
                - np.sum(r * (e[:, None] * u + w2 * w2 * n), axis=-1))
         return np.abs(ydd)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (row(lay.outer1), row(lay.inner), row(lay.outer2),
+                *(self.link_index(x) for x in (self.known1, self.kp, lay.link1, lay.link2)))
 
     def rates(self, R, input_rates) -> None:
         lay = self.layout

@@ -27,8 +27,8 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import (square_curvature, margin_tol, REACH_RTOL, carry, cramer, is_singular, length, num, pair, place,
-                   scalar, sign_of, stack, xy, quiet)
+from .base import (branch_sign, put_off, put_rel, square_curvature, margin_tol, REACH_RTOL, carry, cramer, is_singular,
+                   length, num, pair, place, scalar, sign_of, stack, xy, quiet)
 from ..continuation import Probe
 from ..poses import columns, known_on, unit
 from ..result import Status
@@ -271,6 +271,33 @@ def rrr_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     PP[l1] = PP[l2] = 1
 
 
+def rrr_lower(q, P, U, O, size, out) -> None:
+    """:meth:`RRRStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of A, B, C; known1, known2, link1, link2)."""
+    ia, ib, ic, k1, k2, l1, l2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
+    D = P.shape[0]
+    at_b1 = at_b2 = True                    # a link placed from B (its reference point is B in every design)
+    for d in range(D):
+        at_b1 = at_b1 and O[d, l1, 0] == P[d, ib, 0] and O[d, l1, 1] == P[d, ib, 1]
+        at_b2 = at_b2 and O[d, l2, 0] == P[d, ib, 0] and O[d, l2, 1] == P[d, ib, 1]
+    for d in range(D):
+        ax, ay, bx, by, cx, cy = P[d, ia, 0], P[d, ia, 1], P[d, ib, 0], P[d, ib, 1], P[d, ic, 0], P[d, ic, 1]
+        la, lc = np.hypot(bx - ax, by - ay), np.hypot(bx - cx, by - cy)
+        sign = branch_sign((cx - ax) * (by - ay) - (cy - ay) * (bx - ax),
+                           np.hypot(cx - ax, cy - ay) * np.hypot(bx - ax, by - ay))
+        d1x, d1y = (bx - ax) / la, (by - ay) / la
+        d2x, d2y = (bx - cx) / lc, (by - cy) / lc
+        h1, h2 = np.hypot(d1x, d1y), np.hypot(d2x, d2y)
+        put_rel(out, d, 0, ax, ay, O, k1)
+        put_rel(out, d, 2, cx, cy, O, k2)
+        out[d, 4], out[d, 5], out[d, 6] = la, lc, sign
+        out[d, 7], out[d, 8], out[d, 9], out[d, 10] = d1x / la, d1y / la, d2x / lc, d2y / lc
+        out[d, 11], out[d, 12], out[d, 13], out[d, 14] = d1x / h1, d1y / h1, d2x / h2, d2y / h2
+        put_off(out, d, 15, bx if at_b1 else ax, by if at_b1 else ay, O, l1)
+        put_off(out, d, 17, bx if at_b2 else cx, by if at_b2 else cy, O, l2)
+        out[d, 19], out[d, 20], out[d, 21] = 1.0 if at_b1 else 0.0, 1.0 if at_b2 else 0.0, SINGULAR * (la * lc)
+
+
 @scalar
 def link_turn(dx, dy, exact, rc, rs, uc, us):
     """(c, s) of a link of known length whose side is ``(dx, dy)``: by the compiled
@@ -290,6 +317,7 @@ class RRRStep(GroupStep):
 
     kind = GroupKind.RRR
     compiled = staticmethod(rrr_place)
+    compiled_lower = staticmethod(rrr_lower)
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -370,6 +398,10 @@ class RRRStep(GroupStep):
              *self.off(o, self.l1, at1), *self.off(o, self.l2, at2),
              float(self.from_B1), float(self.from_B2), SINGULAR * (self.la * self.lc))
         return Lowered(GroupKind.RRR, (self.k1, self.k2, self.l1, self.l2), f)
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (row(lay.outer1), row(lay.inner), row(lay.outer2), self.k1, self.k2, self.l1, self.l2)
 
     def margin_curvature(self, R) -> np.ndarray:
         """|d²margin/dx²| along the motion of ``R`` (the reach margin of the probe is

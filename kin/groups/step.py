@@ -119,6 +119,13 @@ class GroupStep:
     kind = None
     #: its scalar function for the compiled kernel (:data:`kin.groups.registry.COMPILED`)
     compiled = None
+    #: its lowering of a batch of designs for the compiled kernel, ``f(q, P, U, O, size,
+    #: out)`` (:data:`kin.groups.registry.LOWERING`, :func:`kin.kernel.lower_designs`):
+    #: every design's :meth:`lower` floats into ``out`` (D, width), from the joints'
+    #: reference points ``P`` and guides ``U`` (D, n_joints + 1, 2), the links' reference
+    #: points ``O`` (D, n_links, 2), the plan's ``size`` and the step's rows and links
+    #: ``q`` (:meth:`lower_indices`); None: :meth:`lower` binds the batch in NumPy
+    compiled_lower = None
     #: whether a batch of designs takes the step's own compiled route, where it has one
     #: (set by :func:`kin.design.solve_designs` from :func:`kin.kernel.wanted`)
     jit = False
@@ -173,6 +180,11 @@ class GroupStep:
         a plan holding it is solved by the NumPy path).  ``origins`` (n_links, 2)
         are the links' reference points."""
         return None
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        """The step's structural numbers that :attr:`compiled_lower` reads (joints by
+        ``row(joint)``, their rows in its arrays; links by index)."""
+        raise NotImplementedError
 
     def link_index(self, name: str) -> int:
         """A link's index in the mechanism."""
