@@ -165,7 +165,7 @@ def _as_design_inputs(m: Mechanism, inputs, D: int) -> np.ndarray:
 
 
 def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None, plan=None,
-                  deadline: float | None = None) -> DesignPoses:
+                  deadline: float | None = None, reuse: bool = False) -> DesignPoses:
     """Solve D designs of ``mechanism`` at N inputs in one pass over its plan.
 
     Parameters
@@ -186,6 +186,11 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
         A ``time.perf_counter()`` value: past it the design-by-design fallback leaves
         the remaining designs unsolved (failed), so that a population cannot overrun a
         time budget.
+    reuse : bool
+        On the compiled route, the pose store and its cos and sin rows are this thread's
+        work arrays (:func:`kin.kernel.design_work`): the result is valid only until the
+        thread's next call with ``reuse`` (for a caller that reads the poses at once and
+        keeps nothing of them, a population's objective).
 
     Returns
     -------
@@ -200,7 +205,9 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     if kp is not None and kp.covers(steps) and kernel.design_lowering(sp).covers(steps):
         floats, origins = kernel.lower_designs(sp, kp, geo.names, geo.X, steps)     # (no step bound in Python)
         geo.adopt_origins(origins)
-        return _compiled(sp, geo, Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape), kp, floats, steps, X)
+        store = kernel.design_work("poses", (mechanism.n_links, 3) + shape) if reuse else None
+        G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape, store)
+        return _compiled(sp, geo, G, kp, floats, steps, X, reuse)
     bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
@@ -216,14 +223,14 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     return DesignPoses(sp, geo, G, ok)
 
 
-def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, floats, steps, X) -> DesignPoses:
+def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, floats, steps, X, reuse: bool = False) -> DesignPoses:
     """The designs by the compiled kernel (:func:`kin.kernel.run_designs`) from their
     numbers ``floats`` (:func:`kin.kernel.lower_designs`, or the bound steps'
     :func:`kin.kernel.design_floats`): the same steps on the same branches as the NumPy
     route, equal to it to rounding."""
     X = X[None] if X.ndim == 2 else X                 # (inputs shared by the designs)
     links = [i for k in steps for i in sp.steps[k].unknown]
-    C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T)
+    C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T, scratch=reuse)
     G.adopt(links, C, S)
     placed = set(links)
     G.pending.update(int(k) for k in pend if k in placed)

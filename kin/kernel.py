@@ -66,7 +66,7 @@ from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, 
 from .memo import cached
 
 __all__ = ["KernelPlan", "KernelRun", "DesignLowering", "kernel_plan", "lower_plan", "run_positions", "run_motion",
-           "design_floats", "design_lowering", "lower_designs", "run_designs", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
+           "design_floats", "design_lowering", "lower_designs", "run_designs", "design_work", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 _CODES = {key: i for i, key in enumerate(COMPILED)}
@@ -230,6 +230,16 @@ def _scratch(name: str, shape: tuple) -> np.ndarray:
         buf = np.empty(n)
         setattr(_SCRATCH, name, buf)
     return buf[:n].reshape(shape)
+
+
+def design_work(name: str, shape: tuple) -> np.ndarray:
+    """A work array of a batch of designs whose poses the caller reads at once
+    (:func:`kin.design.solve_designs` with ``reuse``: a population's objective), reused
+    by this thread's next such batch.  A population's pose store is about a megabyte:
+    allocated afresh at every call, glibc maps it from the system and the first writes
+    fault every page (half the global search's time in a process whose allocation
+    history had kept glibc's adaptive mmap threshold low)."""
+    return _scratch("design " + name, shape)
 
 
 def _trig(kp: KernelPlan, X: np.ndarray) -> np.ndarray:
@@ -436,17 +446,19 @@ def lower_designs(sp, kp: KernelPlan, names: tuple, X: np.ndarray, steps) -> tup
     return out, np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :]
 
 
-def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.ndarray):
+def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.ndarray, scratch: bool = False):
     """Run the plan's steps ``steps`` for D designs (``floats`` from
-    :func:`design_floats`) at the inputs ``X`` (D, N, n_drivers) in one compiled call
+    :func:`lower_designs`) at the inputs ``X`` (D, N, n_drivers) in one compiled call
     (:func:`kin._kernel_nb.solve_designs`): the poses into the store ``T`` (n_links, 3,
     D, N).  Returns the cos and sin rows ``C``, ``S`` (n_links, D, N) and the links
-    whose angle rows are still to be derived from them."""
+    whose angle rows are still to be derived from them; with ``scratch`` ``C`` and ``S``
+    are this thread's work arrays (:func:`design_work`)."""
     nl, D, N = T.shape[0], floats.shape[0], X.shape[1]
     X = np.ascontiguousarray(X, float)
     if not X.flags.writeable:
         X = X.copy()
-    C, S = np.empty((nl, D, N)), np.empty((nl, D, N))
+    C, S = (design_work("C", (nl, D, N)), design_work("S", (nl, D, N))) if scratch else \
+        (np.empty((nl, D, N)), np.empty((nl, D, N)))
     pend = np.zeros(nl, np.int8)
     load().solve_designs(kp.codes, kp.ints, floats, kp.unknown, _steps(kp, steps), kp.trig, kp.frame, X,
                          _scratch("W", (4 * X.shape[2], N)), _scratch("Td", (nl, 3, N)), _scratch("C", (nl, N)),

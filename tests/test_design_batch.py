@@ -243,3 +243,22 @@ def test_compiled_lowering_of_random_designs(name, rel, seed):
     names, X = _designs(m, D=5, rel=rel, seed=seed)
     oracle, got, _, _ = _python_lowering(m, names, X)
     np.testing.assert_array_equal(got, oracle)
+
+
+def test_a_population_read_at_once_reuses_its_work_arrays():
+    """``reuse``: the same poses, in this thread's work arrays (the next such call writes
+    over them, so a population's pose store is not allocated, and faulted in, afresh)."""
+    pytest.importorskip("numba")
+    m = load_named("four_bar")
+    names, X = _designs(m, D=30, rel=0.02)
+    x = _inputs(m, 24)
+    with kernel.using("on"):
+        own = solve_designs(m, names, X, x)
+        first = solve_designs(m, names, X, x, reuse=True)
+        np.testing.assert_array_equal(first.store.T, own.store.T)
+        np.testing.assert_array_equal(first.th, own.th)
+        np.testing.assert_array_equal(first.point("B"), own.point("B"))
+        store = first.store.T
+        again = solve_designs(m, names, X[::-1].copy(), x, reuse=True)
+        assert again.store.T is store or np.shares_memory(again.store.T, store)
+        np.testing.assert_array_equal(again.point("B")[::-1], own.point("B"))

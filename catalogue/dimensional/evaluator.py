@@ -133,7 +133,7 @@ class Evaluator:
         return Geometry(self.mechanism, self.space.names, np.atleast_2d(X)).axis(name)[:, 0]
 
     # -- solving ---------------------------------------------------------------
-    def poses(self, X, phi, outputs=None) -> DesignPoses:
+    def poses(self, X, phi, outputs=None, keep: bool = True) -> DesignPoses:
         """Solve designs ``X`` ``(P, n_var)`` at driver values ``phi`` ``(P, N)`` or ``(N,)``
         (:func:`kin.design.solve_designs`: each design on its reference branches).
 
@@ -142,9 +142,16 @@ class Evaluator:
         The last :data:`KEPT_SOLVES` calls' poses are kept: the same designs at the same
         inputs (the polish asks for its Jacobian at the point whose residuals, and
         constraint penalty over the driver grid, it has just had) are not solved again.
+        With ``keep`` False (a population, read at once) nothing is kept and the poses
+        live in this thread's work arrays until its next such call
+        (:func:`kin.design.solve_designs` with ``reuse``).
         """
         X = np.atleast_2d(np.asarray(X, float))
         phi = np.asarray(phi, float)
+        if not keep:
+            with kernel.for_batches():
+                return solve_designs(self.mechanism, self.space.names, X, phi, outputs=outputs,
+                                     deadline=self.deadline, reuse=True)
         key = (X.shape, X.tobytes(), phi.shape, phi.tobytes(), None if outputs is None else tuple(outputs),
                self.deadline, kernel.mode(), kernel.is_default())
         for k, st in self._last:

@@ -445,7 +445,7 @@ class Problem:
         tim = self.timing_for(Z)
         M = self.M
         st = self.ev.poses(X, self.grid if tim is None else
-                           np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1))
+                           np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1), keep=False)
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         ok = st.ok[:, :M]
