@@ -71,6 +71,9 @@ class Geometry:
         self.batch = designs is not None
         self._pts = {p.name: p for p in mechanism.points}
         self._cache: dict = {}
+        #: ``(P, U)``: every joint's reference point and guide per design, when a compiled
+        #: lowering gathered them (:meth:`adopt`), else None
+        self.joint_table: tuple | None = None
         if self.batch:
             X = np.asarray(designs, float)
             if X.ndim != 2 or X.shape[1] != len(names):
@@ -128,10 +131,13 @@ class Geometry:
             hit = self._cache["origins"] = np.stack([self.origin(x) for x in self.mechanism.link_names])
         return hit
 
-    def adopt_origins(self, origins: np.ndarray) -> None:
-        """Take ``origins`` ``(n_links, D, 1, 2)`` as :meth:`origins` (the same floats,
-        gathered by the compiled lowering, :func:`kin.kernel.lower_designs`)."""
+    def adopt(self, origins: np.ndarray, joints: np.ndarray, guides: np.ndarray) -> None:
+        """Take the compiled lowering's gathers (:func:`kin.kernel.lower_designs`, the same
+        floats): ``origins`` ``(n_links, D, 1, 2)`` as :meth:`origins`, and every joint's
+        reference point and unit guide ``(D, n_joints + 1, 2)`` (mechanism order, a zero
+        row last; an R joint's guide zero) as :attr:`joint_table`."""
         self._cache["origins"] = origins
+        self.joint_table = (joints, guides)
 
     def origins_xy(self) -> tuple:
         """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only): views

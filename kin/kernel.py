@@ -66,7 +66,8 @@ from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, 
 from .memo import cached
 
 __all__ = ["KernelPlan", "KernelRun", "DesignLowering", "kernel_plan", "lower_plan", "run_positions", "run_motion",
-           "design_floats", "design_lowering", "lower_designs", "run_designs", "design_work", "compiled_batches", "for_batches", "load", "is_loaded", "wanted",
+           "design_floats", "design_lowering", "lower_designs", "run_designs", "design_work", "compiled_batches",
+           "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
 _CODES = {key: i for i, key in enumerate(COMPILED)}
@@ -367,8 +368,8 @@ class DesignLowering:
     """What the compiled lowering of a plan's steps reads (:func:`lower_designs`), made
     once per plan: ``q`` (n_steps, width) each step's joint rows and links
     (:meth:`~kin.groups.step.GroupStep.lower_indices`), the joints' reference points
-    ``at`` and unit guides ``axes`` (n_joints + 1, 2: a zero row last, the reference
-    point of a link without joints), each link's row of its reference point ``first``
+    ``at`` and unit guides ``axes`` (n_joints + 1, 2; an R joint's guide zero; a zero
+    row last, the reference point of a link without joints), each link's row of its reference point ``first``
     (:func:`~kin.geometry.origin_joint`), and ``lowers`` (n_steps,) whether the step's
     adapter has a compiled lowering (:data:`~kin.groups.registry.LOWERING`)."""
 
@@ -394,7 +395,7 @@ def _design_lowering(sp) -> DesignLowering:
     m = sp.mechanism
     rows = {j.name: i for i, j in enumerate(m.joints)}
     at = np.zeros((len(m.joints) + 1, 2))
-    axes = np.full((len(m.joints) + 1, 2), np.nan)
+    axes = np.zeros((len(m.joints) + 1, 2))
     for i, j in enumerate(m.joints):
         at[i] = j.at
         if j.axis is not None:
@@ -421,16 +422,17 @@ def _columns(sp, names: tuple):
     return cached(sp, ("lowering columns", names), make, names)
 
 
-def lower_designs(sp, kp: KernelPlan, names: tuple, X: np.ndarray, steps) -> tuple[np.ndarray, np.ndarray]:
-    """The numbers of D designs ``X`` (D, p), columns ``names``, for the steps ``steps``
-    (every one with a compiled lowering, :meth:`DesignLowering.covers`): what
-    :func:`design_floats` gives from the bound steps, by one compiled call; and the
-    links' reference points ``(n_links, D, 1, 2)`` (:meth:`~kin.geometry.Geometry.origins`).
+def lower_designs(sp, kp: KernelPlan, geo, steps) -> np.ndarray:
+    """The numbers of the designs of ``geo`` (:class:`~kin.geometry.Geometry` of a batch)
+    for the steps ``steps`` (every one with a compiled lowering,
+    :meth:`DesignLowering.covers`): what :func:`design_floats` gives from the bound
+    steps, by one compiled call.  The joints' reference points and guides it reads, and
+    the links' reference points, are given to ``geo`` (:meth:`~kin.geometry.Geometry.adopt`).
     The guides of designs with a guide angle are NumPy's cos and sin, as
     :meth:`~kin.geometry.Geometry.axis` computes them."""
     dl = design_lowering(sp)
-    (rows, cx, cy), angles = _columns(sp, names)
-    D = X.shape[0]
+    (rows, cx, cy), angles = _columns(sp, geo.names)
+    X, D = geo.X, geo.D
     P = np.empty((D,) + dl.at.shape)
     P[:] = dl.at
     P[:, rows, 0], P[:, rows, 1] = X[:, cx], X[:, cy]
@@ -443,7 +445,8 @@ def lower_designs(sp, kp: KernelPlan, names: tuple, X: np.ndarray, steps) -> tup
     O = P[:, dl.first]
     out = np.full((D, len(kp.codes), kp.floats.shape[1]), np.nan)
     load().lower_designs(kp.codes, dl.q, _steps(kp, steps), P, U, O, float(sp.size), out)
-    return out, np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :]
+    geo.adopt(np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :], P, U)
+    return out
 
 
 def run_designs(kp: KernelPlan, floats: np.ndarray, X: np.ndarray, steps, T: np.ndarray, scratch: bool = False):

@@ -87,7 +87,18 @@ class _Compiled:
 _KINDS = {"R": 0, "P": 1, "drive_R": 2, "drive_P": 3}
 
 
-def _flatten(steps: tuple[_StepBlocks, ...], n_links: int) -> dict:
+def _rows_of(blocks, m) -> np.ndarray:
+    """(3, n_blocks): each block's joint and its links' reference joints, as rows of a
+    geometry's joint table (:attr:`~kin.geometry.Geometry.joint_table`; a zero row for
+    the origin).  A slider's guide is read at its joint's row, an R joint's is zero."""
+    row = {j.name: i for i, j in enumerate(m.joints)}
+    nj = len(m.joints)
+    return np.array([[row[b.joint] for b in blocks], [row.get(b.origin_a, nj) for b in blocks],
+                     [row.get(b.origin_b, nj) for b in blocks]], np.int64).reshape(3, -1)
+
+
+def _flatten(steps: tuple[_StepBlocks, ...], m) -> dict:
+    n_links = m.n_links
     blocks = [b for st in steps for b in st.blocks]
     bounds = np.cumsum([0] + [len(st.blocks) for st in steps])
     col_of = np.full((len(steps), n_links), -1, np.int64)
@@ -96,7 +107,8 @@ def _flatten(steps: tuple[_StepBlocks, ...], n_links: int) -> dict:
         for i, k in enumerate(st.unknown):
             col_of[s, k], unknown[s, i] = 3 * i, k
     ints = lambda f: np.array([f(b) for b in blocks], np.int64)      # noqa: E731
-    return dict(kind=ints(lambda b: _KINDS[b.kind]), la=ints(lambda b: b.a), lb=ints(lambda b: b.b),
+    return dict(rows=_rows_of(blocks, m),
+                kind=ints(lambda b: _KINDS[b.kind]), la=ints(lambda b: b.a), lb=ints(lambda b: b.b),
                 row=ints(lambda b: b.row), alpha=ints(lambda b: b.alpha), drive=ints(lambda b: b.drive),
                 Ea=np.stack([b.Ea for b in blocks]), Eb=np.stack([b.Eb for b in blocks]),
                 step_lo=bounds[:-1].astype(np.int64), step_hi=bounds[1:].astype(np.int64),
@@ -137,7 +149,7 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
                                  alpha, drive, origin[c.a], origin[c.b]))
             row += c.n_equations
         steps.append(_StepBlocks(tuple(st.unknown), tuple(blocks), row))
-    return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m.n_links),
+    return _Compiled(tuple(names), tuple(steps), _flatten(tuple(steps), m),
                      tuple(origin[x] for x in m.link_names))
 
 
@@ -336,11 +348,19 @@ def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarra
     """Every step's velocity analogue by the compiled kernel, into ``dZ`` in place (the
     blocks' per-design offsets and guides gathered here, the rest compiled once)."""
     f = comp.flat
-    blocks = [b for st in comp.steps for b in st.blocks]
-    rho_a, rho_b, u0 = np.empty((3, len(blocks), v.D, 2))
-    for i, b in enumerate(blocks):
-        rho_a[i], rho_b[i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
-        u0[i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
+    table = v.geo.joint_table if v.geo.batch else None
+    if table is not None:                      # (the compiled lowering's gather: the same floats)
+        P, U = table
+        jr, oa, ob = f["rows"]
+        rho_a = np.ascontiguousarray(np.swapaxes(P[:, jr] - P[:, oa], 0, 1))
+        rho_b = np.ascontiguousarray(np.swapaxes(P[:, jr] - P[:, ob], 0, 1))
+        u0 = np.ascontiguousarray(np.swapaxes(U[:, jr], 0, 1))
+    else:
+        blocks = [b for st in comp.steps for b in st.blocks]
+        rho_a, rho_b, u0 = np.empty((3, len(blocks), v.D, 2))
+        for i, b in enumerate(blocks):
+            rho_a[i], rho_b[i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
+            u0[i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
     C, S = (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
     nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
                      f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], rho_a, rho_b, u0, f["step_lo"],
