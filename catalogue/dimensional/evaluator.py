@@ -125,12 +125,17 @@ class Evaluator:
         self.path_dependent = bool(path_dependent_steps(m))     # (inputs must be walked to from the reference)
 
     # -- decoding --------------------------------------------------------------
+    def geometry(self, X: np.ndarray) -> Geometry:
+        """The geometry of designs ``X`` (every name's position and guide, each computed
+        once)."""
+        return Geometry(self.mechanism, self.space.names, np.atleast_2d(X))
+
     def at(self, X: np.ndarray, name: str) -> np.ndarray:
         """Reference position ``(P, 2)`` of joint or point ``name`` for designs ``X``."""
-        return Geometry(self.mechanism, self.space.names, np.atleast_2d(X)).at(name)[:, 0]
+        return self.geometry(X).at(name)[:, 0]
 
     def axis(self, X: np.ndarray, name: str) -> np.ndarray:
-        return Geometry(self.mechanism, self.space.names, np.atleast_2d(X)).axis(name)[:, 0]
+        return self.geometry(X).axis(name)[:, 0]
 
     # -- solving ---------------------------------------------------------------
     def poses(self, X, phi, outputs=None, keep: bool = True) -> DesignPoses:

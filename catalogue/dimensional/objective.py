@@ -344,7 +344,7 @@ class Problem:
         X = Z[:, :self.nx]
         if isinstance(t, PathTarget):
             k = ev.links[next(p.link for p in ev.mechanism.points if p.name == t.point)]
-            return st.world(k, ev.at(X, t.point))
+            return st.world(k, st.geometry.at(t.point)[:, 0])            # (the solve's designs: X)
         if isinstance(t, MotionTarget):
             k = ev.links[t.link]
             e = Z[:, self.nx:]
@@ -515,9 +515,10 @@ class Problem:
         slide / pivot distance of an RPR).  Zero is a singular reference, which no
         solver accepts."""
         ev = self.ev
+        geo = ev.geometry(X)
         out = np.ones(X.shape[0])
         for g in ev.plan.groups:
-            r = reference_margin(ev.mechanism, g, lambda n: ev.at(X, n), lambda n: ev.axis(X, n))
+            r = reference_margin(ev.mechanism, g, lambda n: geo.at(n)[:, 0], lambda n: geo.axis(n)[:, 0])
             if r is not None:
                 out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
         return out
@@ -549,13 +550,13 @@ class Problem:
 
     def lengths(self, X: np.ndarray) -> np.ndarray:
         """Distances between the joints of each link ``(P, n_lengths)`` (the frame's too)."""
-        m, ev = self.ev.mechanism, self.ev
+        m, geo = self.ev.mechanism, self.ev.geometry(X)
         out = []
         for lk in m.link_names:
             js = [j.name for j in m.joints_of(lk) if j.kind is JointKind.R]
             for a in range(len(js)):
                 for b in range(a + 1, len(js)):
-                    out.append(np.hypot(*(ev.at(X, js[a]) - ev.at(X, js[b])).T))
+                    out.append(np.hypot(*(geo.at(js[a])[:, 0] - geo.at(js[b])[:, 0]).T))
         return np.stack(out, axis=1) if out else np.ones((X.shape[0], 1))
 
     # -- matching and local residuals ------------------------------------------
