@@ -405,10 +405,22 @@ def _design_lowering(sp) -> DesignLowering:
     for st in sp.steps:
         c = st.closed
         low = None if c is None else c.lower(sp.origins)
-        ok = low is not None and low.key in LOWERING and getattr(c, "compiled_lower", None) is LOWERING[low.key]
+        ok = low is not None and _lowers(c, low.key)
         lowers.append(ok)
         q.append(c.lower_indices(rows.__getitem__) if ok else ())
     return DesignLowering(_table(q, np.int64, -1), at, axes, first, np.array(lowers, bool))
+
+
+def _lowers(step, key) -> bool:
+    """Whether plan step ``step`` (lowered under ``key``) has the registry's compiled
+    lowering of ``key`` and lowers as the class that declares it (a subclass with its own
+    :meth:`~kin.groups.step.GroupStep.lower` is bound and lowered in NumPy)."""
+    fn = getattr(step, "compiled_lower", None)
+    if fn is None or LOWERING.get(key) is not fn:
+        return False
+    owner = type(step) if "compiled_lower" in vars(step) else \
+        next(k for k in type(step).__mro__ if "compiled_lower" in vars(k))
+    return type(step).lower is owner.lower
 
 
 def _columns(sp, names: tuple):

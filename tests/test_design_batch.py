@@ -284,3 +284,22 @@ def test_sensitivities_read_the_lowerings_joint_table_to_the_bit(name):
         gathered = pose_sensitivity(st).dZ
         st.geometry.joint_table = None
         np.testing.assert_array_equal(gathered, pose_sensitivity(st).dZ)
+
+
+def test_an_adapter_that_lowers_otherwise_is_bound_in_numpy():
+    """A subclass that changes ``lower`` but not ``compiled_lower`` is not lowered by the
+    compiled function it inherits: its steps are bound and lowered by the adapter."""
+    from multiloop.kin.groups.rrr import RRRStep
+    from multiloop.kin.kernel import _lowers
+
+    class Other(RRRStep):
+        def lower(self, origins):
+            return super().lower(origins)
+
+    step = plan_of(load_named("four_bar")).steps[1].closed
+    assert _lowers(step, step.lower(plan_of(load_named("four_bar")).origins).key)
+    step.__class__ = Other
+    try:
+        assert not _lowers(step, "RRR") and not _lowers(step, step.kind)
+    finally:
+        step.__class__ = RRRStep
