@@ -2,7 +2,7 @@
 measure of work that this virtual machine's timings (±50 % between runs of the same
 code) cannot give (plain script; needs ``valgrind``, a Debian package).
 
-Run:  python benchmarks/synthesis_instructions.py [--evaluations 30000] [--seed 0]
+Run:  python benchmarks/synthesis_instructions.py [--evaluations 30000] [--seed 0] [--search]
 
 The four-bar's ten points of ``bench_synthesis`` (free timing, DE, an evaluation budget:
 the same work whatever the load) are synthesised twice in one process under callgrind,
@@ -23,21 +23,34 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 
-def _child(evaluations: int, seed: int) -> None:
+def _child(evaluations: int, seed: int, search: bool) -> None:
     sys.path.insert(0, str(HERE))
     import bench_synthesis as bs
     T = bs.targets()["four-bar 10 points"]
-    bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=seed + 1)
+    if search:                              # the global search alone (DE, no probes, no polish)
+        from bench_designs import _path_problem
+        from multiloop.catalogue.dimensional.budget import Budget, Meter
+        from multiloop.catalogue.dimensional.optimise import global_search
+        problem = _path_problem(bs.start_mechanism(), T, "P")
+        def run(s):
+            return global_search(problem, seed=s, meter=Meter.start(Budget.of(evaluations)), tol=0.0)
+    else:
+        def run(s):
+            return bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=s)
+    run(seed + 1)
     subprocess.run(["callgrind_control", "-i", "on", str(os.getpid())], capture_output=True, check=False)
-    r = bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", evaluations=evaluations, seed=seed)
+    r = run(seed)
     subprocess.run(["callgrind_control", "-i", "off", str(os.getpid())], capture_output=True, check=False)
-    print(f"result: {r.evaluations} evaluations, error {r.error_max:.9e}", flush=True)
+    error = r.error_max if hasattr(r, "error_max") else r.fun
+    print(f"result: {r.evaluations} evaluations, error {error:.9e}", flush=True)
 
 
-def count(evaluations: int, seed: int, out: str = os.devnull) -> tuple[int, str]:
-    """The instructions of the counted run and its result line."""
+def count(evaluations: int, seed: int, out: str = os.devnull, search: bool = False) -> tuple[int, str]:
+    """The instructions of the counted run (``search``: the global search alone) and its
+    result line."""
     cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}",
-           sys.executable, __file__, "--child", "--evaluations", str(evaluations), "--seed", str(seed)]
+           sys.executable, __file__, "--child", "--evaluations", str(evaluations), "--seed", str(seed),
+           *(["--search"] if search else [])]
     p = subprocess.run(cmd, capture_output=True, text=True, check=True)
     got = re.search(r"Collected : (\d+)", p.stderr)
     line = next((x for x in p.stdout.splitlines() if x.startswith("result:")), "")
@@ -48,13 +61,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--evaluations", type=int, default=30_000)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--search", action="store_true", help="count the global search alone (DE: no probes, no polish)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
-        _child(a.evaluations, a.seed)
+        _child(a.evaluations, a.seed, a.search)
         return
-    n, line = count(a.evaluations, a.seed)
-    print(f"synthesis, four-bar 10 points, {a.evaluations} evaluations, seed {a.seed}: {n:,} instructions "
+    n, line = count(a.evaluations, a.seed, search=a.search)
+    what = "the global search alone" if a.search else "synthesis"
+    print(f"{what}, four-bar 10 points, {a.evaluations} evaluations, seed {a.seed}: {n:,} instructions "
           f"({n / a.evaluations:,.0f} an evaluation); {line}")
 
 

@@ -198,6 +198,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     """
     sp = plan_of(mechanism, plan)
     geo = Geometry(mechanism, tuple(names), designs)
+    geo.gather(sp)                               # (every joint and link origin in a few array operations)
     X = _as_design_inputs(mechanism, inputs, geo.D)
     shape = (geo.D, X.shape[-2])
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)

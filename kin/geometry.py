@@ -12,11 +12,14 @@ alone and in a batch.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from multiloop.topo.errors import InputError, explain
 from multiloop.topo.model import JointKind, Mechanism
 
+from .memo import cached
 from .poses import unit
 
 __all__ = ["Geometry", "design_names", "design_matrix", "origin_joint"]
@@ -53,6 +56,39 @@ def origin_joint(m: Mechanism, link: str) -> str | None:
     return None if lk.is_frame or not js or js[0].at is None else js[0].name
 
 
+class _Tables(NamedTuple):
+    """A mechanism's joints as table rows (:meth:`Geometry.gather`): the reference points
+    ``at`` and unit guides ``axes`` (n_joints + 1, 2), each link's row ``first``, the rows
+    and columns of the design's positions (``rows``, ``cx``, ``cy``) and guide angles
+    (``angles``: (row, column) pairs)."""
+
+    at: np.ndarray
+    axes: np.ndarray
+    first: np.ndarray
+    rows: np.ndarray
+    cx: np.ndarray
+    cy: np.ndarray
+    angles: tuple
+
+
+def _tables(owner, m: Mechanism, names: tuple) -> _Tables:
+    def make(owner, names):
+        nj = len(m.joints)
+        row = {j.name: i for i, j in enumerate(m.joints)}
+        at, axes = np.zeros((nj + 1, 2)), np.zeros((nj + 1, 2))
+        for i, j in enumerate(m.joints):
+            at[i] = j.at
+            if j.axis is not None:
+                axes[i] = unit(np.asarray(j.axis, float))
+        first = np.array([row.get(origin_joint(m, x), nj) for x in m.link_names], np.int64)
+        col = {n: i for i, n in enumerate(names)}
+        pos = np.array([(i, col[f"{j.name}.x"], col[f"{j.name}.y"]) for i, j in enumerate(m.joints)
+                        if f"{j.name}.x" in col], np.int64).reshape(-1, 3).T
+        ang = tuple((i, col[f"{j.name}.angle"]) for i, j in enumerate(m.joints) if f"{j.name}.angle" in col)
+        return _Tables(at, axes, first, pos[0], pos[1], pos[2], ang)
+    return cached(owner, ("joint tables", names), make, names)
+
+
 class Geometry:
     """Reference points, guide directions and link origins of one design or of D designs.
 
@@ -71,8 +107,7 @@ class Geometry:
         self.batch = designs is not None
         self._pts = {p.name: p for p in mechanism.points}
         self._cache: dict = {}
-        #: ``(P, U)``: every joint's reference point and guide per design, when a compiled
-        #: lowering gathered them (:meth:`adopt`), else None
+        #: ``(P, U, O)`` of a batch once :meth:`gather` has gathered them, else None
         self.joint_table: tuple | None = None
         if self.batch:
             X = np.asarray(designs, float)
@@ -131,13 +166,30 @@ class Geometry:
             hit = self._cache["origins"] = np.stack([self.origin(x) for x in self.mechanism.link_names])
         return hit
 
-    def adopt(self, origins: np.ndarray, joints: np.ndarray, guides: np.ndarray) -> None:
-        """Take the compiled lowering's gathers (:func:`kin.kernel.lower_designs`, the same
-        floats): ``origins`` ``(n_links, D, 1, 2)`` as :meth:`origins`, and every joint's
-        reference point and unit guide ``(D, n_joints + 1, 2)`` (mechanism order, a zero
-        row last; an R joint's guide zero) as :attr:`joint_table`."""
-        self._cache["origins"] = origins
-        self.joint_table = (joints, guides)
+    def gather(self, owner) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A batch's joints in three arrays, gathered once: every joint's reference point
+        and unit guide ``(D, n_joints + 1, 2)`` (mechanism order, a zero row last; an R
+        joint's guide zero) and every link's reference point ``(D, n_links, 2)``, the
+        same floats as :meth:`at`, :meth:`axis` and :meth:`origins` (which then reads
+        them).  The design columns' rows are kept on ``owner`` (the mechanism's plan).
+        The guides of designs with a guide angle are NumPy's cos and sin, as
+        :meth:`axis` computes them."""
+        if self.joint_table is None:
+            tab = _tables(owner, self.mechanism, self.names)
+            X, D = self.X, self.D
+            P = np.empty((D,) + tab.at.shape)
+            P[:] = tab.at
+            P[:, tab.rows, 0], P[:, tab.rows, 1] = X[:, tab.cx], X[:, tab.cy]
+            U = np.empty((D,) + tab.axes.shape)
+            U[:] = tab.axes
+            for i, c in tab.angles:
+                a = X[:, c]
+                v = np.stack([np.cos(a), np.sin(a)], axis=-1)
+                U[:, i] = v / np.hypot(v[..., 0], v[..., 1])[..., None]
+            O = P[:, tab.first]
+            self._cache.setdefault("origins", np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :])
+            self.joint_table = (P, U, O)
+        return self.joint_table
 
     def origins_xy(self) -> tuple:
         """Every link's reference point as ``(x, y)`` arrays ``(D, 1)`` (batch only): views

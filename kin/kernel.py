@@ -367,20 +367,17 @@ def design_floats(kp: KernelPlan, bound, steps, origins: np.ndarray, D: int) -> 
 class DesignLowering:
     """What the compiled lowering of a plan's steps reads (:func:`lower_designs`), made
     once per plan: ``q`` (n_steps, width) each step's joint rows and links
-    (:meth:`~kin.groups.step.GroupStep.lower_indices`), the joints' reference points
-    ``at`` and unit guides ``axes`` (n_joints + 1, 2; an R joint's guide zero; a zero
-    row last, the reference point of a link without joints), each link's row of its reference point ``first``
-    (:func:`~kin.geometry.origin_joint`), and ``lowers`` (n_steps,) whether the step's
-    adapter has a compiled lowering (:data:`~kin.groups.registry.LOWERING`)."""
+    (:meth:`~kin.groups.step.GroupStep.lower_indices`; the rows of
+    :meth:`~kin.geometry.Geometry.gather`'s tables) and ``lowers`` (n_steps,) whether the
+    step's adapter has a compiled lowering (:data:`~kin.groups.registry.LOWERING`)."""
 
     q: np.ndarray
-    at: np.ndarray
-    axes: np.ndarray
-    first: np.ndarray
     lowers: np.ndarray
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled lowering."""
+        if len(steps) == len(self.lowers):
+            return bool(self.lowers.all())
         return bool(np.all(self.lowers[np.asarray(list(steps), int)]))
 
 
@@ -390,17 +387,7 @@ def design_lowering(sp) -> DesignLowering:
 
 
 def _design_lowering(sp) -> DesignLowering:
-    from .geometry import origin_joint
-    from .poses import unit
-    m = sp.mechanism
-    rows = {j.name: i for i, j in enumerate(m.joints)}
-    at = np.zeros((len(m.joints) + 1, 2))
-    axes = np.zeros((len(m.joints) + 1, 2))
-    for i, j in enumerate(m.joints):
-        at[i] = j.at
-        if j.axis is not None:
-            axes[i] = unit(np.asarray(j.axis, float))
-    first = np.array([rows.get(origin_joint(m, x), len(m.joints)) for x in m.link_names], np.int64)
+    rows = {j.name: i for i, j in enumerate(sp.mechanism.joints)}
     q, lowers = [], []
     for st in sp.steps:
         c = st.closed
@@ -408,7 +395,7 @@ def _design_lowering(sp) -> DesignLowering:
         ok = low is not None and _lowers(c, low.key)
         lowers.append(ok)
         q.append(c.lower_indices(rows.__getitem__) if ok else ())
-    return DesignLowering(_table(q, np.int64, -1), at, axes, first, np.array(lowers, bool))
+    return DesignLowering(_table(q, np.int64, -1), np.array(lowers, bool))
 
 
 def _lowers(step, key) -> bool:
@@ -423,41 +410,14 @@ def _lowers(step, key) -> bool:
     return type(step).lower is owner.lower
 
 
-def _columns(sp, names: tuple):
-    """The design columns of the joints' positions and guides (:func:`~kin.geometry.design_names`):
-    ``(rows, x columns, y columns)`` and ``(rows, angle columns)``, kept on the plan."""
-    def make(sp, names):
-        m, col = sp.mechanism, {n: i for i, n in enumerate(names)}
-        pos = [(i, col[f"{j.name}.x"], col[f"{j.name}.y"]) for i, j in enumerate(m.joints) if f"{j.name}.x" in col]
-        ang = [(i, col[f"{j.name}.angle"]) for i, j in enumerate(m.joints) if f"{j.name}.angle" in col]
-        return np.array(pos, np.int64).reshape(-1, 3).T, ang
-    return cached(sp, ("lowering columns", names), make, names)
-
-
 def lower_designs(sp, kp: KernelPlan, geo, steps) -> np.ndarray:
     """The numbers of the designs of ``geo`` (:class:`~kin.geometry.Geometry` of a batch)
     for the steps ``steps`` (every one with a compiled lowering,
     :meth:`DesignLowering.covers`): what :func:`design_floats` gives from the bound
-    steps, by one compiled call.  The joints' reference points and guides it reads, and
-    the links' reference points, are given to ``geo`` (:meth:`~kin.geometry.Geometry.adopt`).
-    The guides of designs with a guide angle are NumPy's cos and sin, as
-    :meth:`~kin.geometry.Geometry.axis` computes them."""
-    dl = design_lowering(sp)
-    (rows, cx, cy), angles = _columns(sp, geo.names)
-    X, D = geo.X, geo.D
-    P = np.empty((D,) + dl.at.shape)
-    P[:] = dl.at
-    P[:, rows, 0], P[:, rows, 1] = X[:, cx], X[:, cy]
-    U = np.empty((D,) + dl.axes.shape)
-    U[:] = dl.axes
-    for i, c in angles:
-        a = X[:, c]
-        v = np.stack([np.cos(a), np.sin(a)], axis=-1)
-        U[:, i] = v / np.hypot(v[..., 0], v[..., 1])[..., None]
-    O = P[:, dl.first]
-    out = np.full((D, len(kp.codes), kp.floats.shape[1]), np.nan)
-    load().lower_designs(kp.codes, dl.q, _steps(kp, steps), P, U, O, float(sp.size), out)
-    geo.adopt(np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :], P, U)
+    steps, by one compiled call on the joints' table (:meth:`~kin.geometry.Geometry.gather`)."""
+    P, U, O = geo.gather(sp)
+    out = np.full((geo.D, len(kp.codes), kp.floats.shape[1]), np.nan)
+    load().lower_designs(kp.codes, design_lowering(sp).q, _steps(kp, steps), P, U, O, float(sp.size), out)
     return out
 
 

@@ -349,8 +349,8 @@ def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarra
     blocks' per-design offsets and guides gathered here, the rest compiled once)."""
     f = comp.flat
     table = v.geo.joint_table if v.geo.batch else None
-    if table is not None:                      # (the compiled lowering's gather: the same floats)
-        P, U = table
+    if table is not None:                      # (the batch's gathered joints: the same floats)
+        P, U, _ = table
         jr, oa, ob = f["rows"]
         rho_a = np.ascontiguousarray(np.swapaxes(P[:, jr] - P[:, oa], 0, 1))
         rho_b = np.ascontiguousarray(np.swapaxes(P[:, jr] - P[:, ob], 0, 1))

@@ -198,7 +198,7 @@ def _python_lowering(m, names, X):
                                       geo.D)
     mine = Geometry(m, names, X)
     got = kernel.lower_designs(sp, kp, mine, steps)
-    P, U = mine.joint_table
+    P, U, _ = mine.joint_table
     for i, j in enumerate(m.joints):                    # the gathered table is the geometry's
         np.testing.assert_array_equal(P[:, i], geo.at(j.name)[:, 0])
         if j.kind is JointKind.P:

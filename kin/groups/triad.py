@@ -30,6 +30,8 @@ References
 """
 from __future__ import annotations
 
+import functools
+
 from typing import NamedTuple
 
 import numpy as np
@@ -749,9 +751,25 @@ def triad_track(A, b, l, start, *, stride=32, jit=False) -> TriadTrack:
 # prediction off its nearest coarse input, accepted only well inside its mode's basin.
 # A design whose path needs more (a coarse loss, a refused interval, a non-finite known
 # pin) is handed to the single-design tracker itself: every design gets its result alone.
+@functools.lru_cache(maxsize=64)
 def _coarse(N: int, stride: int) -> np.ndarray:
+    """The coarse inputs of a path of N inputs: every ``stride``-th and the last
+    (read-only, kept: every design batch of the same grid asks for them)."""
     c = np.arange(0, N, stride)
-    return c if c[-1] == N - 1 else np.append(c, N - 1)
+    c = c if c[-1] == N - 1 else np.append(c, N - 1)
+    c.flags.writeable = False
+    return c
+
+
+@functools.lru_cache(maxsize=64)
+def _fine(N: int, stride: int) -> tuple[np.ndarray, np.ndarray]:
+    """The other inputs of :func:`_coarse`'s path and each one's nearest coarse input
+    (:func:`_nearest_coarse`), read-only and kept."""
+    c = _coarse(N, stride)
+    fine = np.setdiff1d(np.arange(N), c, assume_unique=True)
+    kn = _nearest_coarse(c, fine, len(c) - 1)
+    fine.flags.writeable = kn.flags.writeable = False
+    return fine, kn
 
 
 def _coarse_follow(A, b, l, start, nb=None):
@@ -1045,10 +1063,9 @@ def _fill(A, b, L, start, stride, nb=None):
     Pc = Pm[g][:, ar][np.arange(len(g))[:, None], ar, ic]            # (G, nc, 3, 2)
     thc = thm[g][np.arange(len(g))[:, None], ar, ic]
     sep = _separation(Pm[g], thm[g], Pc, ic)
-    fine = np.setdiff1d(np.arange(N), c, assume_unique=True)
+    fine, kn = _fine(N, stride)
     if not fine.size:
         return g, Pc, thc
-    kn = _nearest_coarse(c, fine, len(c) - 1)
     if nb is not None:
         return _fill_compiled(nb, g, A, b - b[:, :1], L, (c, fine, kn), Pc, thc, sep)
     Pf, thf, acc = _from_coarse(A[:, c[kn]], Pc[:, kn], thc[:, kn], sep[:, kn], A[:, fine], L[:, c[kn]],
@@ -1065,7 +1082,7 @@ def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
     """Phase 2 of :func:`_fill` by :func:`kin.groups._triad_nb.fill_fine`."""
     Gn, N = A.shape[:2]
     Pd, thd, done = np.empty((Gn, N, 3, 2)), np.empty((Gn, N)), np.empty(Gn, bool)
-    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.ascontiguousarray(a, np.int64))  # noqa: E731
+    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.array(a, np.int64))  # noqa: E731  (writeable: one signature)
     nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
                  SINGULAR_RTOL, Pd, thd, done)
     return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
