@@ -192,14 +192,11 @@ def synthesis_floor_goal(budget: float = 2.0, D: int = 10_000, N: int = 96) -> N
           f"(whole run), {'MET' if search >= 0.2 * floor_rate else 'NOT MET'} (search)")
 
 
-def triad_synthesis_goal(budget: float = 2.0) -> None:
-    """The issue's row "synthesis evaluations/s, Stephenson III triad" (goal 6 500/s): ten
-    points of the catalogue triad six-bar's tracer curve over 60° of its driver (free
-    timing, an exact target), from the mechanism with its joints moved by 0.3 % of its
-    size, ``budget`` seconds; the whole run's rate (it may stop early at the tolerance:
-    the polish's share then weighs more) and the search's alone."""
+def triad_case():
+    """The triad goal's case: (start, ten target points, tracer point): the catalogue
+    triad six-bar's tracer curve over 60° of its driver, from the mechanism with its joints
+    moved by 0.3 % of its size."""
     from dataclasses import replace
-    from multiloop.catalogue.dimensional import synthesise
     from multiloop.kin.solve import solve
     m = load_named("stephenson_3_triad")
     pt = m.points[0].name
@@ -209,6 +206,17 @@ def triad_synthesis_goal(budget: float = 2.0) -> None:
     size = float(np.ptp(np.array([j.at for j in m.joints]), axis=0).max())
     start = replace(m, joints=tuple(replace(j, at=tuple(np.asarray(j.at) + rng.normal(0.0, 0.003 * size, 2)))
                                     for j in m.joints))
+    return start, T, pt
+
+
+def triad_synthesis_goal(budget: float = 2.0) -> None:
+    """The issue's row "synthesis evaluations/s, Stephenson III triad" (goal 6 500/s): ten
+    points of the catalogue triad six-bar's tracer curve over 60° of its driver (free
+    timing, an exact target), from the mechanism with its joints moved by 0.3 % of its
+    size, ``budget`` seconds; the whole run's rate (it may stop early at the tolerance:
+    the polish's share then weighs more) and the search's alone."""
+    from multiloop.catalogue.dimensional import synthesise
+    start, T, pt = triad_case()
     synthesise(start, path=T, point=pt, evaluations=500, seed=0)                  # (warm: numba's cache)
     res = synthesise(start, path=T, point=pt, budget=budget, seed=0)
     rate = res.evaluations / res.seconds
