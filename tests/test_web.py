@@ -729,7 +729,37 @@ TARGET_POINT_JS = """([k]) => { const doc = Bokeh.documents[0];
           src.data.x[k], src.data.y[k], src.data.x.length]; }"""
 
 
-def _stroke_in(page, box, t0, t1):
+#: the target figure's canvas box once the page is ready for :func:`_stroke_in`'s stroke
+#: starting at angle t0, else null: the figure drawn, the freehand tool active, the box
+#: where the previous poll measured it (the layout settled), and the canvas itself on top
+#: at the stroke's first point (no other element, tooltip or panel over it)
+STROKE_READY_JS = """([t0]) => { const doc = Bokeh.documents[0];
+  const view = Bokeh.index.find_one(doc.get_model_by_name('ml-target'));
+  const tool = doc.get_model_by_name('ml-freehand');
+  if (view == null || !view.has_finished()) { return null; }
+  if (!tool.active) { tool.active = true; return null; }
+  view.el.scrollIntoView({block: 'center'});
+  const r = view.canvas_view.el.getBoundingClientRect();
+  const box = {x: r.left, y: r.top, width: r.width, height: r.height};
+  const last = window.__mlStrokeBox; window.__mlStrokeBox = box;
+  if (last == null || JSON.stringify(last) != JSON.stringify(box)) { return null; }
+  const r0 = 0.18 * box.height;
+  const x = box.x + 0.5 * box.width + 1.4 * r0 * Math.cos(t0), y = box.y + 0.5 * box.height + r0 * Math.sin(t0);
+  let el = document.elementFromPoint(x, y);
+  while (el != null && el.shadowRoot != null) {
+    const inner = el.shadowRoot.elementFromPoint(x, y);
+    if (inner == null || inner === el) { break; }
+    el = inner; }
+  for (let n = el; n != null; n = n.parentNode || n.host) { if (n === view.canvas_view.el) { return box; } }
+  return null; }"""
+
+
+def _stroke_in(page, t0, t1):
+    """A freehand stroke on the synthesis target, an arc of angles ``t0`` to ``t1`` (rad)
+    about the figure's centre, drawn once the page is ready for it (:data:`STROKE_READY_JS`:
+    waits on the page's state, so a stroke is not drawn on a figure that is still moving)."""
+    page.evaluate("() => { window.__mlStrokeBox = null; }")
+    box = page.wait_for_function(STROKE_READY_JS, arg=[t0], timeout=120000).json_value()
     cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
     page.mouse.move(cx + 1.4 * r * math.cos(t0), cy + r * math.sin(t0))
     page.mouse.down()
@@ -750,13 +780,13 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
     _clear_target(page)
     n0 = page.evaluate(STROKES_JS)
-    _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 2.0)
+    _stroke_in(page, 0.0, 2.0)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
     # the server's answer to the first stroke (its target points) before the second: the
     # page's figure settles (its ranges follow the data) before the mouse draws on it
     page.wait_for_function("() => Bokeh.documents[0].get_model_by_name('ml-target-points').data.x.length > 0",
                            timeout=120000)
-    _stroke_in(page, page.evaluate(TARGET_BOX_JS), 2.2, 4.5)
+    _stroke_in(page, 2.2, 4.5)
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 2}", timeout=120000)
     page.locator(".ml-target-undo button").click()
     page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
@@ -907,7 +937,7 @@ def test_units_mm_and_rad_reach_the_verdict_and_the_synthesis_tab(page):
         page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-freehand').active = true; }")
         _clear_target(page)
         n0 = page.evaluate(STROKES_JS)
-        _stroke_in(page, page.evaluate(TARGET_BOX_JS), 0.0, 5.0)
+        _stroke_in(page, 0.0, 5.0)
         page.wait_for_function(f"() => ({STROKES_JS})() == {n0 + 1}", timeout=120000)
         page.get_by_role("button", name="Run").click()
         # this run's: an earlier test's run left its status done and its candidates listed
