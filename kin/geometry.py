@@ -22,7 +22,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from .memo import cached
 from .poses import unit
 
-__all__ = ["Geometry", "design_names", "design_matrix", "origin_joint"]
+__all__ = ["Geometry", "design_names", "design_matrix", "origin_joint", "joint_rows"]
 
 
 def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
@@ -71,13 +71,19 @@ class _Tables(NamedTuple):
     angles: tuple
 
 
+def joint_rows(m: Mechanism) -> dict[str, int]:
+    """Each joint's row in a batch's joint table (:meth:`Geometry.gather`): its index in
+    ``m.joints`` (the row after the last is the origin's)."""
+    return {j.name: i for i, j in enumerate(m.joints)}
+
+
 def _tables(owner, m: Mechanism, names: tuple) -> _Tables:
     def make(owner, names):
         nj = len(m.joints)
-        row = {j.name: i for i, j in enumerate(m.joints)}
+        row = joint_rows(m)
         at, axes = np.zeros((nj + 1, 2)), np.zeros((nj + 1, 2))
         for i, j in enumerate(m.joints):
-            at[i] = j.at
+            at[i] = j.at if j.at is not None else np.nan
             if j.axis is not None:
                 axes[i] = unit(np.asarray(j.axis, float))
         first = np.array([row.get(origin_joint(m, x), nj) for x in m.link_names], np.int64)

@@ -60,6 +60,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .geometry import joint_rows
 from .groups.registry import COMPILED, LOWERING
 from .groups.step import trig_row
 from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, turn_off, using
@@ -387,7 +388,7 @@ def design_lowering(sp) -> DesignLowering:
 
 
 def _design_lowering(sp) -> DesignLowering:
-    rows = {j.name: i for i, j in enumerate(sp.mechanism.joints)}
+    rows = joint_rows(sp.mechanism)
     q, lowers = [], []
     for st in sp.steps:
         c = st.closed

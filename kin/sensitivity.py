@@ -40,7 +40,7 @@ import numpy as np
 from multiloop.topo.model import JointKind
 
 from .design import DesignPoses
-from .geometry import origin_joint
+from .geometry import joint_rows, origin_joint
 from .memo import cached
 from .rigid import perp
 
@@ -91,8 +91,7 @@ def _rows_of(blocks, m) -> np.ndarray:
     """(3, n_blocks): each block's joint and its links' reference joints, as rows of a
     geometry's joint table (:attr:`~kin.geometry.Geometry.joint_table`; a zero row for
     the origin).  A slider's guide is read at its joint's row, an R joint's is zero."""
-    row = {j.name: i for i, j in enumerate(m.joints)}
-    nj = len(m.joints)
+    row, nj = joint_rows(m), len(m.joints)
     return np.array([[row[b.joint] for b in blocks], [row.get(b.origin_a, nj) for b in blocks],
                      [row.get(b.origin_b, nj) for b in blocks]], np.int64).reshape(3, -1)
 
