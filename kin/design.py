@@ -231,10 +231,13 @@ def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, floats, steps, X, reus
     X = X[None] if X.ndim == 2 else X                 # (inputs shared by the designs)
     links = [i for k in steps for i in sp.steps[k].unknown]
     C, S, pend = kernel.run_designs(kp, floats, X, steps, G.T, scratch=reuse)
-    G.adopt(links, C, S)
+    C[G.frame_k], S[G.frame_k] = 1.0, 0.0              # (the frame's rows: the store's own values)
+    G.adopt(links + [G.frame_k], C, S)
     placed = set(links)
     G.pending.update(int(k) for k in pend if k in placed)
     G.unset_to_nan()
+    if len(placed) == G.m.n_links - 1:                  # (every link's rows are the kernel's)
+        G.keep_rows(C, S)
     return DesignPoses(sp, geo, G, G.finite(links))
 
 

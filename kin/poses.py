@@ -284,6 +284,21 @@ class Poses:
             self.points[k] = {}
         self.derived.update(int(k) for k in derived if k in set(links))
 
+    def keep_rows(self, C, S) -> None:
+        """Record that every link's cos and sin are the rows of ``C``, ``S`` (n_links,
+        *shape) (the compiled kernel's arrays, adopted whole): :meth:`stacked_rows` then
+        gives them without stacking, as long as no row was replaced since."""
+        self._rows = (C, S, tuple(self.c), tuple(self.s))
+
+    def stacked_rows(self):
+        """Every link's cos and sin as two arrays ``(n_links, *shape)``: the kernel's own
+        when :meth:`keep_rows` recorded them and no link's rows changed since, else None."""
+        kept = getattr(self, "_rows", None)
+        if kept is None or any(a is not b for a, b in zip(kept[2], self.c)) or \
+                any(a is not b for a, b in zip(kept[3], self.s)):
+            return None
+        return kept[0], kept[1]
+
     # -- conversion to / from the (M, n_links, 3) pose array --------------------------
     def to_Z(self, links=None) -> np.ndarray:
         """The ``(M, n_links, 3)`` pose array: with ``links`` None (every link placed),

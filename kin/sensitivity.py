@@ -33,6 +33,8 @@ References
 """
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -336,11 +338,16 @@ def _compiled_route(n_positions: int):
     from . import kernel
     if not kernel.wanted(n_positions):
         return None
-    try:
-        from . import _sensitivity_nb
-    except (ImportError, RuntimeError):        # no numba, or no writable cache directory
-        return None
-    return _sensitivity_nb
+    if not _NB:
+        try:
+            from . import _sensitivity_nb
+        except (ImportError, RuntimeError):        # no numba, or no writable cache directory
+            return None
+        _NB.append(_sensitivity_nb)
+    return _NB[0]
+
+
+_NB: list = []
 
 
 def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarray) -> None:
@@ -360,7 +367,9 @@ def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarra
         for i, b in enumerate(blocks):
             rho_a[i], rho_b[i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
             u0[i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
-    C, S = (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
+    rows = v.st.store.stacked_rows()
+    C, S = (np.ascontiguousarray(x.reshape(x.shape[0], -1)) for x in rows) if rows is not None else \
+        (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
     nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
                      f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], rho_a, rho_b, u0, f["step_lo"],
                      f["step_hi"], f["neq"], f["col_of"], f["unknown"], np.ascontiguousarray(ok), dZ)
@@ -375,10 +384,18 @@ class _Flat:
         self.st, self.geo, self.D, self.N = st, geo, D, N
         self.X = G.T[:, 0].reshape(G.T.shape[0], -1)
         self.Y = G.T[:, 1].reshape(G.T.shape[0], -1)
-        self.c = [_rows(v, D, N) for v in G.c]
-        self.s = [_rows(v, D, N) for v in G.s]
         self._rho: dict = {}
         self._offsets: dict = {}
+
+    @functools.cached_property
+    def c(self) -> list:
+        """Each link's cos row over the batch (B,)."""
+        return [_rows(v, self.D, self.N) for v in self.st.store.c]
+
+    @functools.cached_property
+    def s(self) -> list:
+        """Each link's sin row over the batch (B,)."""
+        return [_rows(v, self.D, self.N) for v in self.st.store.s]
 
     def offset(self, joint: str, origin: str | None) -> np.ndarray:
         """``ρ = r_joint − c`` per design (D, 2), ``c`` the reference position of joint

@@ -303,3 +303,23 @@ def test_an_adapter_that_lowers_otherwise_is_bound_in_numpy():
         assert not _lowers(step, "RRR") and not _lowers(step, step.kind)
     finally:
         step.__class__ = RRRStep
+
+
+def test_the_kernels_cos_and_sin_rows_are_kept_whole_while_they_are_the_links():
+    """The compiled route keeps the kernel's cos and sin arrays (the sensitivities read them
+    without stacking): equal to every link's rows; none kept for a partial solve (its
+    unsolved links' rows are NaN, not the kernel's) or once a link's rows change."""
+    pytest.importorskip("numba")
+    m = load_named("watt_1")
+    names, X = _designs(m, D=5, rel=0.02)
+    with kernel.using("on"):
+        st = solve_designs(m, names, X, _inputs(m, 9))
+        C, S = st.store.stacked_rows()
+        np.testing.assert_array_equal(C, np.stack(st.store.c))
+        np.testing.assert_array_equal(S, np.stack(st.store.s))
+        part = solve_designs(m, names, X, _inputs(m, 9), outputs=[m.joint_names[1]])
+        assert part.store.stacked_rows() is None
+        bad = np.zeros(st.store.shape, bool)
+        bad[0, 0] = True
+        st.store.invalidate([1], bad)
+        assert st.store.stacked_rows() is None
