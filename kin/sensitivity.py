@@ -220,12 +220,15 @@ class PoseSensitivity:
         each column (:class:`TangentView`)."""
         return TangentView(self, eps)
 
+    @functools.cached_property
+    def _cols(self) -> dict:
+        return {n: i for i, n in enumerate(self.names)}
+
     def world(self, k: int, name: str) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of the material point of link ``k`` at the reference
         position of joint or tracer point ``name``: ``(D, N, 2, q)``."""
         geo = self.poses.geometry
-        cols = {n: i for i, n in enumerate(self.names)}
-        return self.material(k, _per_design(geo.at(name), self.shape[0]), _selection(cols, name, len(self.names)))
+        return self.material(k, _per_design(geo.at(name), self.shape[0]), _selection(self._cols, name, len(self.names)))
 
     def material(self, k: int, r: np.ndarray, E: np.ndarray | None = None) -> np.ndarray:
         """``∂W/∂(x, inputs)`` of the material point of link ``k`` at reference position
@@ -235,9 +238,8 @@ class PoseSensitivity:
         G, geo = st.store, st.geometry
         D, N = self.shape
         q = len(self.names)
-        cols = {n: i for i, n in enumerate(self.names)}
         o = self.origins[k]
-        E = (np.zeros((2, q)) if E is None else E) - (_selection(cols, o, q) if o is not None else 0.0)
+        E = (np.zeros((2, q)) if E is None else E) - (_selection(self._cols, o, q) if o is not None else 0.0)
         c, s = _rows(G.c[k], D, N), _rows(G.s[k], D, N)
         r = np.asarray(r, float) - (_per_design(geo.at(o), D) if o is not None else 0.0)
         arm = _rotate(c, s, np.repeat(r, N, axis=0))                                    # R(θ)(r − c)
@@ -328,7 +330,8 @@ def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
         for step in comp.steps:
             _step_sensitivity(step, view, dZ, q)
     bad = ~st.ok.reshape(-1)
-    dZ[:, bad] = np.nan
+    if bad.any():
+        dZ[:, bad] = np.nan
     return PoseSensitivity(st, names + tuple(f"input:{d.joint}" for d in m.drivers), dZ, comp.origins)
 
 

@@ -658,8 +658,9 @@ class Problem:
         R = self.diff(F[:, at], T, size)
         dF, frame = self._feature_jacobian(Z, st, sens, F)
         c = R.shape[2]
-        over = np.broadcast_to(size[:, None, None, None], (P, 1, c, 1)).copy()
+        over = size[:, None, None, None]
         if isinstance(self.target, MotionTarget):
+            over = np.broadcast_to(over, (P, 1, c, 1)).copy()
             over[:, :, 2] = 1.0                                               # (the angle: not over the size)
         dF, frame = dF[:, at] / over, None if frame is None else frame[:, at] / over
         J = np.zeros((P, N, c, len(self.names) + (N if self.free_timing else 0)))

@@ -282,7 +282,9 @@ def _unit_jacobians(problem, split: tuple, scale: np.ndarray) -> tuple[np.ndarra
     polish's points ``split`` = (Z, PHI), in its unit variables (``scale``), a
     non-finite entry zero."""
     R, J = problem.jacobian_batch(*split)
-    return R, np.nan_to_num(J * scale, nan=0.0, posinf=0.0, neginf=0.0)
+    J = J * scale
+    J[~np.isfinite(J)] = 0.0
+    return R, J
 
 
 def _exact_jacobian(problem, split: tuple, scale: np.ndarray) -> np.ndarray:
