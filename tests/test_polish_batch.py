@@ -191,3 +191,13 @@ def test_the_elite_is_the_greedy_choice(n, seed, k):
     c._keep(U, f, k=k)
     ref = _greedy(f, U, k, 0.05)
     assert np.array_equal(c.elite_u, U[ref]) and np.array_equal(c.elite_f, f[ref])
+
+
+@given(st.integers(1, 6), st.integers(0, 25), st.integers(0, 2**31))
+@settings(max_examples=40, deadline=None)
+def test_row_norms_are_numpys_bit_for_bit(k, n, seed):
+    """The trust region's row norms are ``np.linalg.norm(x, axis=1)``'s, bit for bit."""
+    from multiloop.catalogue.dimensional.optimise import _norms
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal((k, n)) * 10.0 ** rng.uniform(-150, 150, (k, n))
+    np.testing.assert_array_equal(_norms(x), np.linalg.norm(x, axis=1))

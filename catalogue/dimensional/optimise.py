@@ -399,6 +399,12 @@ def _svd(J: np.ndarray, floor: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return W, s, Vt
 
 
+def _norms(x: np.ndarray) -> np.ndarray:
+    """The 2-norms of the rows of ``x`` (K, n): ``np.linalg.norm(x, axis=1)``'s own
+    arithmetic (the squares summed by ``add.reduce``), without its wrapper's cost."""
+    return np.sqrt(np.add.reduce(x * x, axis=1))
+
+
 def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
     (``J`` ``(m, n)`` given by its :func:`_svd`) within ``|h| <= radius``, and their
@@ -413,14 +419,14 @@ def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) 
     suf = s * uf
     full = (m >= n) & (s[:, -1] > np.finfo(float).eps * m * s[:, 0])
     gn = -np.einsum("kij,ki->kj", Vt, np.divide(uf, s, out=np.zeros_like(uf), where=full[:, None]))
-    fits = full & (np.linalg.norm(gn, axis=1) <= radius)
+    fits = full & (_norms(gn) <= radius)
 
     def phi(al):
         den = s * s + al[:, None]
-        norm = np.linalg.norm(suf / den, axis=1)
+        norm = _norms(suf / den)
         return norm - radius, -np.sum(suf ** 2 / den ** 3, axis=1) / norm
 
-    upper = np.linalg.norm(suf, axis=1) / radius
+    upper = _norms(suf) / radius
     f0, d0 = phi(np.zeros(K))
     lower = np.where(full, -f0 / d0, 0.0)
     reset = np.maximum(1e-3 * upper, np.sqrt(np.maximum(lower * upper, 0.0)))     # (rows that fit: unused)
@@ -438,7 +444,7 @@ def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) 
         alpha = np.where(live, alpha - (f + radius) * ratio / radius, alpha)
         live &= ~(np.abs(f) < 0.01 * radius)
     h = -np.einsum("kij,ki->kj", Vt, suf / (s * s + alpha[:, None]))
-    h *= (radius / np.linalg.norm(h, axis=1))[:, None]
+    h *= (radius / _norms(h))[:, None]
     return np.where(fits[:, None], gn, h), np.where(fits, 0.0, alpha)
 
 
@@ -533,7 +539,7 @@ class _TrustRegions:
         R, J = first
         F = np.einsum("km,km->k", R, R)
         self._keep(np.arange(len(U)), U, F)
-        norm = np.linalg.norm(U, axis=1)
+        norm = _norms(U)
         radius, alpha = np.where(norm > 0, norm, 1.0), np.zeros(len(U))
         rounding = R.shape[1] * ROUNDING_RMS ** 2
         active = (F > rounding) & (np.max(np.abs(np.einsum("kmi,km->ki", J, R)), axis=1) >= 1e-15)
@@ -553,10 +559,10 @@ class _TrustRegions:
             self._keep(a, Un, Fn)
             gain = F[a] - Fn
             rho = np.where(pred > 0, gain / np.where(pred > 0, pred, 1.0), np.where((pred == 0) & (gain == 0), 1.0, 0.0))
-            step = np.linalg.norm(h, axis=1)
+            step = _norms(h)
             new_radius = np.where(rho < 0.25, 0.25 * step,
                                   np.where((rho > 0.75) & (step > 0.95 * radius[a]), 2.0 * radius[a], radius[a]))
-            done = ((gain < 1e-15 * F[a]) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + np.linalg.norm(U[a], axis=1)))
+            done = ((gain < 1e-15 * F[a]) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + _norms(U[a])))
             alpha[a] = np.where(done, alpha[a], alpha[a] * radius[a] / np.where(new_radius > 0, new_radius, 1.0))
             radius[a] = np.where(done, radius[a], new_radius)
             ok = gain > 0
