@@ -1015,17 +1015,17 @@ def _partial_tail(A, b, L, c, kmax, rows, P, th, status, nb, chunk: int = 16):
         n = np.minimum(lo + chunk, N - 1) - lo + 1
         j = np.minimum(lo[:, None] + np.arange(int(n.max()))[None, :], N - 1)
         Pt, tht, idx, st = _coarse_follow(A[d[:, None], j], b[d], L[d[:, None], j], P[d, lo], nb)
-        on = np.zeros(len(live), bool)
-        for i, (dd, l0, m) in enumerate(zip(d, lo, n)):
-            if idx[i, 0] < 0:                      # (the start has no mode: nothing reached)
-                if first[live[i]]:
-                    status[dd, l0:] = 1
-                continue
-            ok = np.flatnonzero(idx[i, :m] >= 0)
-            P[dd, l0 + ok] = Pt[i, ok, idx[i, ok]]
-            th[dd, l0 + ok] = tht[i, ok, idx[i, ok]]
-            status[dd, l0:l0 + m] = st[i, :m]
-            on[i] = idx[i, m - 1] >= 0 and l0 + m < N
+        started = idx[:, 0] >= 0                   # (else the start has no mode: nothing reached)
+        lost = np.flatnonzero(~started & first[live])
+        if lost.size:
+            status[d[lost]] = np.where(np.arange(N)[None, :] >= lo[lost, None], 1, status[d[lost]])
+        inside = started[:, None] & (np.arange(j.shape[1])[None, :] < n[:, None])     # (each one's chunk)
+        g, k = np.nonzero(inside & (idx >= 0))
+        P[d[g], lo[g] + k] = Pt[g, k, idx[g, k]]
+        th[d[g], lo[g] + k] = tht[g, k, idx[g, k]]
+        g, k = np.nonzero(inside)
+        status[d[g], lo[g] + k] = st[g, k]
+        on = started & (idx[np.arange(len(live)), n - 1] >= 0) & (lo + n < N)
         first[live] = False
         cur[live] = lo + n - 1
         live = live[on]
