@@ -997,7 +997,7 @@ def _partial_prefix(A, b, L, c, kmax, Pm, thm, ic, P, th, status):
     return accepted, P, th, status
 
 
-def _partial_tail(A, b, L, c, kmax, rows, P, th, status, nb, chunk: int = 16):
+def _partial_tail(A, b, L, c, kmax, rows, P, th, status, nb, chunk: int = 8):
     """:func:`_refine`'s tail for designs ``rows`` at once, in place: every input from
     ``c[kmax]`` to the last followed at full resolution from the pose there, ``chunk``
     inputs at a time for the designs still followed (a design's mode is almost always
