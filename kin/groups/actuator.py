@@ -77,8 +77,8 @@ def actuator_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
 
 def actuator_lower(q, P, U, O, size, out) -> None:
     """:meth:`ActuatorStep.lower` of D designs for the compiled kernel: the same floats.
-    ``q`` = (rows of A, B, C and the slide; known1, known2, near, far, link2, the driver
-    of the slide's sense σ as ±1)."""
+    ``q`` = (rows of A, B, C and the slide; known1, known2, near, far, link2; the slide's
+    sense σ as ±1)."""
     ia, ib, ic, isl, k1, k3, kn, kf, k2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], q[8]
     for d in range(P.shape[0]):
         ax, ay, bx, by, cx, cy = P[d, ia, 0], P[d, ia, 1], P[d, ib, 0], P[d, ib, 1], P[d, ic, 0], P[d, ic, 1]
