@@ -1,6 +1,6 @@
 """The numba side of the batched triad tracker (:func:`kin.groups.triad.track_designs`):
 all the modes at the coarse inputs (:func:`modes_many`), their predictions and following
-(:func:`predict_many`, :func:`follow_batch`), and the Taylor prediction, Newton polish
+(:func:`predict_modes`, :func:`follow_batch`), and the Taylor prediction, Newton polish
 and acceptance of every other input (:func:`fill_fine`), compiled.
 
 Imported only when the compiled route is wanted (:func:`kin.kernel.wanted`, passed down
@@ -25,7 +25,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["fill_fine", "modes_many", "predict_many", "follow_batch", "companion_roots"]
+__all__ = ["fill_fine", "modes_many", "predict_modes", "follow_batch", "companion_roots"]
 
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -169,12 +169,14 @@ def fill_fine(A, bb, L, Pc, thc, sep, c, fine, kn, iters, tol, accept, rtol, Pd,
 
 
 @numba.njit(**_JIT)
-def predict_many(A0, P0, A1, l0, l1, rtol, P, dth, sing):
-    """``triad._predict`` over K inputs (arrays (K, 3, 2) and (K, 3)); writes ``P``
-    (K, 3, 2), ``dth`` and ``sing`` (K,)."""
+def predict_modes(A0, P0, A1, l0, l1, rtol, P, dth, sing):
+    """``triad._predict`` of every mode at M inputs: ``P0`` (M, modes, 3, 2) the modes'
+    points at inputs ``A0`` (M, 3, 2) (lengths ``l0`` (M, 3)), predicted at ``A1``, ``l1``;
+    writes ``P`` (M, modes, 3, 2), ``dth`` and ``sing`` (M, modes)."""
     w = np.empty(24)
-    for k in range(A0.shape[0]):
-        dth[k], sing[k] = _predict(A0[k], P0[k], A1[k], l0[k], l1[k], P[k], w, rtol)
+    for m in range(A0.shape[0]):
+        for j in range(P0.shape[1]):
+            dth[m, j], sing[m, j] = _predict(A0[m], P0[m, j], A1[m], l0[m], l1[m], P[m, j], w, rtol)
 
 
 @numba.njit(**_JIT)

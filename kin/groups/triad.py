@@ -186,15 +186,16 @@ def _flat(a, shape):
     return np.ascontiguousarray(np.broadcast_to(a, shape), float)
 
 
-def _predict_nb(nb):
-    """:func:`_predict` over a flat batch (K, ...) by :func:`kin.groups._triad_nb.predict_many`."""
-    def predict(A0, P0, A1, l0, l1):
-        K = A0.shape[0]
-        P, dth, sing = np.empty((K, 3, 2)), np.empty(K), np.empty(K, bool)
-        nb.predict_many(_flat(A0, (K, 3, 2)), _flat(P0, (K, 3, 2)), _flat(A1, (K, 3, 2)), _flat(l0, (K, 3)),
-                        _flat(l1, (K, 3)), SINGULAR_RTOL, P, dth, sing)
-        return P, dth, sing
-    return predict
+def _predict_modes(nb, A0, P0, A1, l0, l1):
+    """:func:`_predict`'s points for every mode ``P0`` (D, n, modes, 3, 2) at inputs ``A0``
+    (D, n, 3, 2), lengths ``l0`` (D, n, 3), predicted at ``A1``, ``l1``, by
+    :func:`kin.groups._triad_nb.predict_modes`: ``(D·n, modes, 3, 2)``."""
+    M = A0.shape[0] * A0.shape[1]
+    P0 = _flat(P0, P0.shape).reshape(M, *P0.shape[2:])
+    P, dth, sing = np.empty(P0.shape), np.empty(P0.shape[:2]), np.empty(P0.shape[:2], bool)
+    nb.predict_modes(_flat(A0, A0.shape).reshape(M, 3, 2), P0, _flat(A1, A1.shape).reshape(M, 3, 2),
+                     _flat(l0, l0.shape).reshape(M, 3), _flat(l1, l1.shape).reshape(M, 3), SINGULAR_RTOL, P, dth, sing)
+    return P
 
 
 def _modes_nb(nb, A, bb, l):
@@ -790,10 +791,12 @@ def _coarse_follow(A, b, l, start, nb=None):
     d0 = np.where(np.isnan(d0), np.inf, d0)
     j0 = np.where(np.isfinite(d0).any(axis=1), np.argmin(d0, axis=1), -1)
     Pi = np.where(valid[:, :-1, :, None, None], P[:, :-1], A[:, :-1, None])
-    rep = lambda a: np.repeat(a[:, :, None], MAX_MODES, axis=2).reshape(-1, *a.shape[2:])  # noqa: E731
-    pred = (_predict if nb is None else _predict_nb(nb))(
-        rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]), rep(l[:, 1:]))[0].reshape(
-        Dn, n - 1, MAX_MODES, 3, 2)
+    if nb is None:
+        rep = lambda a: np.repeat(a[:, :, None], MAX_MODES, axis=2).reshape(-1, *a.shape[2:])  # noqa: E731
+        pred = _predict(rep(A[:, :-1]), Pi.reshape(-1, 3, 2), rep(A[:, 1:]), rep(l[:, :-1]), rep(l[:, 1:]))[0]
+    else:                                         # (every mode of an input predicted from its one copy)
+        pred = _predict_modes(nb, A[:, :-1], Pi, A[:, 1:], l[:, :-1], l[:, 1:])
+    pred = pred.reshape(Dn, n - 1, MAX_MODES, 3, 2)
     if nb is None:
         idx, status = follow_modes_batch(P, valid, pred, j0)
     else:                                         # kin.groups._triad_nb.follow_batch
