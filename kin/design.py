@@ -203,7 +203,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     shape = (geo.D, X.shape[-2])
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
-    if kp is not None and kp.covers(steps) and kernel.design_lowering(sp).covers(steps):
+    if kp is not None and kp.covers(steps) and kp.lowered(steps):
         floats = kernel.lower_designs(sp, kp, geo, steps)           # (no step bound in Python)
         store = kernel.design_work("poses", (mechanism.n_links, 3) + shape) if reuse else None
         G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape, store)

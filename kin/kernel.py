@@ -66,8 +66,8 @@ from .groups.step import trig_row
 from .kernel_mode import LAZY_MIN, MODES, chooses, is_default, is_loaded, mode, turn_off, using
 from .memo import cached
 
-__all__ = ["KernelPlan", "KernelRun", "DesignLowering", "kernel_plan", "lower_plan", "run_positions", "run_motion",
-           "design_floats", "design_lowering", "lower_designs", "run_designs", "design_work", "compiled_batches",
+__all__ = ["KernelPlan", "KernelRun", "kernel_plan", "lower_plan", "run_positions", "run_motion",
+           "design_floats", "lower_designs", "run_designs", "design_work", "compiled_batches",
            "for_batches", "load", "is_loaded", "wanted",
            "mode", "using", "MODES", "LAZY_MIN"]
 
@@ -83,7 +83,11 @@ class KernelPlan:
     (driver, ±1) whose cos and sin of ``±input`` the steps read from the table ``W``,
     ``hosts`` / ``offs`` the link carrying each joint and tracer point and the point's
     offset from that link's reference point, ``complete`` whether every step has a
-    compiled step."""
+    compiled step, ``lowers`` (n_steps,) whether its adapter has a compiled lowering
+    for batches of designs (:data:`~kin.groups.registry.LOWERING`) and ``rows``
+    (n_steps, width) the joint rows and links that lowering reads
+    (:meth:`~kin.groups.step.GroupStep.lower_indices`; rows of
+    :meth:`~kin.geometry.Geometry.gather`'s tables)."""
 
     codes: np.ndarray
     ints: np.ndarray
@@ -94,12 +98,24 @@ class KernelPlan:
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
     complete: bool = False
+    lowers: np.ndarray | None = None
+    rows: np.ndarray | None = None
 
     def covers(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled step."""
-        if len(steps) == len(self.codes):
-            return self.complete
-        return bool(np.all(self.codes[np.asarray(list(steps), int)] >= 0))
+        return _every(self.codes >= 0, steps, self.complete)
+
+    def lowered(self, steps) -> bool:
+        """Whether every step of ``steps`` has a compiled lowering for batches of designs
+        (:func:`lower_designs`)."""
+        return _every(self.lowers, steps, bool(self.lowers.all()))
+
+
+def _every(mask: np.ndarray, steps, whole: bool) -> bool:
+    """Whether ``mask`` holds at every step of ``steps`` (``whole``: at every step)."""
+    if len(steps) == len(mask):
+        return whole
+    return bool(np.all(mask[np.asarray(list(steps), int)]))
 
 
 def _table(rows, dtype, fill) -> np.ndarray:
@@ -116,6 +132,10 @@ def lower_plan(sp) -> KernelPlan:
     low = [st.closed.lower(sp.origins) if st.closed is not None else None for st in sp.steps]
     codes = np.array([_CODES.get(lw.key, -1) if lw is not None else -1 for lw in low], np.int64)
     codes.flags.writeable = False
+    lowers = np.array([lw is not None and _lowers(st.closed, lw.key) for st, lw in zip(sp.steps, low)], bool)
+    lowers.flags.writeable = False
+    row = joint_rows(sp.mechanism).__getitem__
+    rows = _table([st.closed.lower_indices(row) if ok else () for st, ok in zip(sp.steps, lowers)], np.int64, -1)
     trig = np.array(sorted({(d, 1 if sign > 0 else -1) for lw in low if lw is not None for d, sign in lw.trig}),
                     np.int64).reshape(-1, 2)
     trig.flags.writeable = False
@@ -123,7 +143,7 @@ def lower_plan(sp) -> KernelPlan:
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
                       sp.mechanism.link_names.index(sp.mechanism.frame), trig,
-                      *_hosts(sp), bool(np.all(codes >= 0)))
+                      *_hosts(sp), bool(np.all(codes >= 0)), lowers, rows)
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:
@@ -364,41 +384,6 @@ def design_floats(kp: KernelPlan, bound, steps, origins: np.ndarray, D: int) -> 
     return out
 
 
-@dataclass(frozen=True, eq=False)
-class DesignLowering:
-    """What the compiled lowering of a plan's steps reads (:func:`lower_designs`), made
-    once per plan: ``q`` (n_steps, width) each step's joint rows and links
-    (:meth:`~kin.groups.step.GroupStep.lower_indices`; the rows of
-    :meth:`~kin.geometry.Geometry.gather`'s tables) and ``lowers`` (n_steps,) whether the
-    step's adapter has a compiled lowering (:data:`~kin.groups.registry.LOWERING`)."""
-
-    q: np.ndarray
-    lowers: np.ndarray
-
-    def covers(self, steps) -> bool:
-        """Whether every step of ``steps`` has a compiled lowering."""
-        if len(steps) == len(self.lowers):
-            return bool(self.lowers.all())
-        return bool(np.all(self.lowers[np.asarray(list(steps), int)]))
-
-
-def design_lowering(sp) -> DesignLowering:
-    """The :class:`DesignLowering` of plan ``sp``, kept on it."""
-    return cached(sp, "design lowering", lambda sp, _: _design_lowering(sp))
-
-
-def _design_lowering(sp) -> DesignLowering:
-    rows = joint_rows(sp.mechanism)
-    q, lowers = [], []
-    for st in sp.steps:
-        c = st.closed
-        low = None if c is None else c.lower(sp.origins)
-        ok = low is not None and _lowers(c, low.key)
-        lowers.append(ok)
-        q.append(c.lower_indices(rows.__getitem__) if ok else ())
-    return DesignLowering(_table(q, np.int64, -1), np.array(lowers, bool))
-
-
 def _lowers(step, key) -> bool:
     """Whether plan step ``step`` (lowered under ``key``) has the registry's compiled
     lowering of ``key`` and lowers as the class that declares it (a subclass with its own
@@ -414,11 +399,11 @@ def _lowers(step, key) -> bool:
 def lower_designs(sp, kp: KernelPlan, geo, steps) -> np.ndarray:
     """The numbers of the designs of ``geo`` (:class:`~kin.geometry.Geometry` of a batch)
     for the steps ``steps`` (every one with a compiled lowering,
-    :meth:`DesignLowering.covers`): what :func:`design_floats` gives from the bound
+    :meth:`KernelPlan.lowered`): what :func:`design_floats` gives from the bound
     steps, by one compiled call on the joints' table (:meth:`~kin.geometry.Geometry.gather`)."""
     P, U, O = geo.gather(sp)
     out = np.full((geo.D, len(kp.codes), kp.floats.shape[1]), np.nan)
-    load().lower_designs(kp.codes, design_lowering(sp).q, _steps(kp, steps), P, U, O, float(sp.size), out)
+    load().lower_designs(kp.codes, kp.rows, _steps(kp, steps), P, U, O, float(sp.size), out)
     return out
 
 

@@ -191,7 +191,7 @@ def _python_lowering(m, names, X):
     from multiloop.kin.geometry import Geometry
     sp = plan_of(m)
     kp, steps = kernel.kernel_plan(sp), list(range(len(sp.steps)))
-    assert kp.complete and kernel.design_lowering(sp).covers(steps)
+    assert kp.complete and kp.lowered(steps)
     geo = Geometry(m, names, X)
     with np.errstate(all="ignore"):
         oracle = kernel.design_floats(kp, [_bind(st, m, sp.size, geo) for st in sp.steps], steps, geo.origins(),
