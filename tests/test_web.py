@@ -733,7 +733,7 @@ TARGET_POINT_JS = """([k]) => { const doc = Bokeh.documents[0];
 #: starting at angle t0, else null: the figure drawn, the freehand tool active, the box
 #: where the previous poll measured it (the layout settled), and the canvas itself on top
 #: at the stroke's first point (no other element, tooltip or panel over it)
-STROKE_READY_JS = """([t0]) => { const doc = Bokeh.documents[0];
+STROKE_READY_JS = """([t0, rf, ax]) => { const doc = Bokeh.documents[0];
   const view = Bokeh.index.find_one(doc.get_model_by_name('ml-target'));
   const tool = doc.get_model_by_name('ml-freehand');
   if (view == null || !view.has_finished()) { return null; }
@@ -743,8 +743,8 @@ STROKE_READY_JS = """([t0]) => { const doc = Bokeh.documents[0];
   const box = {x: r.left, y: r.top, width: r.width, height: r.height};
   const last = window.__mlStrokeBox; window.__mlStrokeBox = box;
   if (last == null || JSON.stringify(last) != JSON.stringify(box)) { return null; }
-  const r0 = 0.18 * box.height;
-  const x = box.x + 0.5 * box.width + 1.4 * r0 * Math.cos(t0), y = box.y + 0.5 * box.height + r0 * Math.sin(t0);
+  const r0 = rf * box.height;
+  const x = box.x + 0.5 * box.width + ax * r0 * Math.cos(t0), y = box.y + 0.5 * box.height + r0 * Math.sin(t0);
   let el = document.elementFromPoint(x, y);
   while (el != null && el.shadowRoot != null) {
     const inner = el.shadowRoot.elementFromPoint(x, y);
@@ -754,17 +754,23 @@ STROKE_READY_JS = """([t0]) => { const doc = Bokeh.documents[0];
   return null; }"""
 
 
+#: the stroke's ellipse: its half-height (a fraction of the canvas's height) and its width
+#: over its height
+STROKE_RADIUS, STROKE_ASPECT = 0.18, 1.4
+
+
 def _stroke_in(page, t0, t1):
     """A freehand stroke on the synthesis target, an arc of angles ``t0`` to ``t1`` (rad)
     about the figure's centre, drawn once the page is ready for it (:data:`STROKE_READY_JS`:
     waits on the page's state, so a stroke is not drawn on a figure that is still moving)."""
     page.evaluate("() => { window.__mlStrokeBox = null; }")
-    box = page.wait_for_function(STROKE_READY_JS, arg=[t0], timeout=120000).json_value()
-    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
-    page.mouse.move(cx + 1.4 * r * math.cos(t0), cy + r * math.sin(t0))
+    box = page.wait_for_function(STROKE_READY_JS, arg=[t0, STROKE_RADIUS, STROKE_ASPECT],
+                                 timeout=120000).json_value()
+    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], STROKE_RADIUS * box["height"]
+    page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t0), cy + r * math.sin(t0))
     page.mouse.down()
     for t in np.linspace(t0, t1, 20):
-        page.mouse.move(cx + 1.4 * r * math.cos(t), cy + r * math.sin(t))
+        page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t), cy + r * math.sin(t))
     page.mouse.up()
 
 

@@ -1085,7 +1085,8 @@ def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
     """Phase 2 of :func:`_fill` by :func:`kin.groups._triad_nb.fill_fine`."""
     Gn, N = A.shape[:2]
     Pd, thd, done = np.empty((Gn, N, 3, 2)), np.empty((Gn, N)), np.empty(Gn, bool)
-    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.array(a, np.int64))  # noqa: E731  (writeable: one signature)
+    # (the indices copied: the kept read-only ones would be another compiled signature)
+    f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.array(a, np.int64))  # noqa: E731
     nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
                  SINGULAR_RTOL, Pd, thd, done)
     return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
