@@ -115,9 +115,11 @@ class DriverStepSolver(GroupStep):
         if d.kind == "drive_R":
             p = next(c for c in cons if c.kind == "R")
             self.host = p.a if p.b == lk else p.b      # the known link carrying the pin
+            self.joint = p.joint
             self.r = self.at(p.joint)
             self.u = None
         else:
+            self.joint, self.host = d.joint, self.other    # (the guide's link carries the joint)
             self.r, self.u = self.at(d.joint), self.axis(d.joint)
         self.compiled_lower = turn_lower if self.u is None else slide_lower
 
@@ -148,11 +150,7 @@ class DriverStepSolver(GroupStep):
                        (self.sign, *self.rel(origins, o, r), *pair(self.u), *self.off(origins, k, r)))
 
     def lower_indices(self, row) -> tuple[int, ...]:
-        k, o = self.link_index(self.link), self.link_index(self.other)
-        if self.u is None:
-            pin = next(c for c in self.group.constraints if c.kind == "R").joint
-            return (row(pin), self.link_index(self.host), k, int(self.sign))
-        return (row(self.drive.joint), o, k, int(self.sign))
+        return (row(self.joint), self.link_index(self.host), self.link_index(self.link), int(self.sign))
 
     def rates(self, R, input_rates) -> None:
         rate = input_rates[self.drive.driver]
