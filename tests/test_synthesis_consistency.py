@@ -98,3 +98,25 @@ def test_a_walk_starts_at_the_reference_and_meets_every_input_by_small_steps(val
         assert W.shape[1] <= max(SHORT_WALK, dense / 3 + 2 * len(values) + 1)
     W, at = pr.walk(np.array([[1e3, -1e3]]))           # far inputs: at most two turns' steps a stretch
     assert W.shape[1] == 1 + 2 * 2 * pr.M and np.array_equal(W[:, at], [[1e3, -1e3]])
+
+
+def test_targets_starting_at_the_reference_are_matched_in_the_first_turn():
+    """A fully turning design whose targets start at the reference is matched at driver
+    values from about 0, each its grid sample's own value modulo a turn, so that the
+    polish's walk (a triad's) reaches them from the reference instead of a whole turn on
+    (the forward order started two samples before the first target's, which had wrapped
+    to the end of the turn: the targets matched at 2π and beyond)."""
+    m, pt, ev = _triad_evaluator()
+    phi = np.radians(np.linspace(0.0, 60.0, 10))
+    motion = solve(m, phi)
+    pr = Problem(ev, PathTarget(motion.point_positions[:, motion.point_index(pt)], pt))
+    got = pr.match(pr.x0)
+    assert np.all(np.abs(got - phi) <= pr.delta / 2 + 1e-12)
+    W, _ = pr.walk(got[None])
+    assert W.shape[1] <= 2 * len(phi) + 1                   # (a whole turn first: 57 inputs)
+    st = ev.poses(pr.x0[None, :pr.nx], pr.grid)
+    T, size = pr.targets_for(pr.x0[None])
+    (idx, valid, ophi), _ = pr.orders(st.ok, pr.sqdist(pr.features(pr.x0[None], st), T, size)[:, 0])
+    assert valid.all() and ophi[0, 0] == -2 * pr.delta
+    assert np.allclose(np.mod(ophi - idx * pr.delta + np.pi, 2 * np.pi) - np.pi, 0.0, atol=1e-12)
+    assert np.allclose(pr.residuals_batch(pr.x0[None], phi[None]), 0.0, atol=1e-12)

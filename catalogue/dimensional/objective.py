@@ -585,7 +585,9 @@ class Problem:
 
         A fully rotating driver's curve is closed: it is cut one turn long, starting
         two samples before the sample nearest to the first target, so the targets
-        are met within one turn.  Otherwise the reachable arc is walked from one
+        are met within one turn (forward from the sample nearest the reference, that
+        is from −2δ: a path-dependent plan's polish then walks to its targets from the
+        reference, not a whole turn round to them).  Otherwise the reachable arc is walked from one
         end to the other.
         """
         idx, valid, phi, full = self.curve(ok)
@@ -597,7 +599,7 @@ class Problem:
             return out
         k0 = np.argmin(np.where(ok, d0, np.inf), axis=1)[:, None]
         f = full[:, None]
-        s = (k0 - 2) % M
+        s = k0 - 2
         sr = (k0 + 2) % M
         fw = (np.where(f, (s + k) % M, idx), valid | f, np.where(f, (s + k) * self.delta, phi))
         bw = (np.where(f, (sr - k) % M, out[1][0]), out[1][1] | f,
@@ -746,6 +748,13 @@ class Problem:
         return out
 
     def walk(self, PHI: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_walk`, kept for the last few ``PHI`` (read-only): the polish asks for the
+        residuals and then the Jacobian at the same driver values."""
+        PHI = np.asarray(PHI, float)
+        return cached(self, ("walk", PHI.shape, PHI.tobytes(), max_steps), lambda _, a: _frozen(self._walk(*a)),
+                      (PHI, max_steps))
+
+    def _walk(self, PHI: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Driver values ``W`` (P, L) that walk from the reference (0) through each design's
         ``PHI`` (P, N) in order by steps of at most the grid's spacing, and the columns
         ``at`` (N,) with ``W[:, at] == PHI``.  The designs share the number of steps of
@@ -773,6 +782,13 @@ class Problem:
         W = prev[:, which] + gap[:, which] * frac
         W[:, ends - 1] = PHI                      # (exactly, not by a fraction of 1)
         return np.concatenate([np.zeros((P, 1)), W], axis=1), ends
+
+
+def _frozen(arrays: tuple) -> tuple:
+    """``arrays`` made read-only (values kept in a memo)."""
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
 
 
 def grashof_margins(problem: Problem, X: np.ndarray) -> np.ndarray:
