@@ -620,8 +620,10 @@ class Problem:
         first target."""
         T, size = self.targets_for(Z)
         if not self.ev.path_dependent:
-            st = self.ev.poses(Z[:, :self.nx], PHI)
-            return self.diff(self.kept_features(Z, st), T, size).reshape(Z.shape[0], -1)
+            tracer = self._tracer()
+            F = tracer.solve(Z[:, :self.nx], PHI)[0] if tracer is not None else \
+                self.kept_features(Z, self.ev.poses(Z[:, :self.nx], PHI))
+            return self.diff(F, T, size).reshape(Z.shape[0], -1)
         W, at = self.walk(PHI)
         st = self.ev.poses(Z[:, :self.nx], W)
         return self.diff(self.kept_features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
@@ -648,17 +650,16 @@ class Problem:
         (``timing.offset`` by 1, an absolute timing by minus the design's own zero,
         :meth:`~.evaluator.Evaluator.driver_zero_gradient`); a shape-only target's
         similarity moves the target and its size."""
-        from multiloop.kin.sensitivity import pose_sensitivity
         P, N = PHI.shape
         X = Z[:, :self.nx]
-        W, at = (PHI, np.arange(N)) if not self.ev.path_dependent else self.walk(PHI)
-        st = self.ev.poses(X, W)
-        with kernel.for_batches():
-            sens = pose_sensitivity(st)
         T, size = self.targets_for(Z)
-        F = self.kept_features(Z, st)
+        tracer = None if self.ev.path_dependent else self._tracer()
+        if tracer is not None:
+            at = np.arange(N)
+            (F, dF), frame = tracer.solve(X, PHI, jacobian=True), None
+        else:
+            F, dF, frame, at = self._features_and_jacobian(Z, PHI)
         R = self.diff(F[:, at], T, size)
-        dF, frame = self._feature_jacobian(Z, st, sens, F)
         c = R.shape[2]
         over = size[:, None, None, None]
         if isinstance(self.target, MotionTarget):
@@ -683,6 +684,28 @@ class Problem:
             R = np.concatenate([R, self.penalty_batch(Z)[:, None]], axis=1)
             J = np.concatenate([J, self._penalty_gradient(X, J.shape[2])[:, None, :]], axis=1)
         return R, J
+
+    def _tracer(self):
+        """A path target's tracer point on the compiled kernels straight from the design
+        matrix (:class:`multiloop.kin.tracer_batch.TracerBatch`: the same floats as the
+        pose store's, without it) when populations run compiled and the plan has a
+        compiled step and lowering for every step and no path-dependent one; else None."""
+        if not (isinstance(self.target, PathTarget) and kernel.compiled_batches()) or self.ev.path_dependent:
+            return None
+        from multiloop.kin.tracer_batch import TracerBatch
+        return TracerBatch.of(self.ev.mechanism, tuple(self.ev.space.names), self.target.point)
+
+    def _features_and_jacobian(self, Z: np.ndarray, PHI: np.ndarray):
+        """:meth:`features` ``F`` and their derivatives ``dF`` (:meth:`_feature_jacobian`,
+        and the frame's) by the pose store and its sensitivities, along :meth:`walk` for a
+        path-dependent plan, and the walk's columns ``at`` of the driver values ``PHI``."""
+        from multiloop.kin.sensitivity import pose_sensitivity
+        W, at = (PHI, np.arange(PHI.shape[1])) if not self.ev.path_dependent else self.walk(PHI)
+        st = self.ev.poses(Z[:, :self.nx], W)
+        with kernel.for_batches():
+            sens = pose_sensitivity(st)
+        F = self.kept_features(Z, st)
+        return (F,) + self._feature_jacobian(Z, st, sens, F) + (at,)
 
     def _feature_jacobian(self, Z: np.ndarray, st: DesignPoses, sens, F: np.ndarray):
         """The derivatives ``(P, L, c, nx + 1)`` of :meth:`features` by the design and

@@ -1065,10 +1065,10 @@ def _fill(A, b, L, start, stride, nb=None):
     ar = np.arange(len(c))
     Pc = Pm[g][:, ar][np.arange(len(g))[:, None], ar, ic]            # (G, nc, 3, 2)
     thc = thm[g][np.arange(len(g))[:, None], ar, ic]
-    sep = _separation(Pm[g], thm[g], Pc, ic)
     fine, kn = _fine(N, stride)
-    if not fine.size:
+    if not fine.size:                             # (a short path: every input's modes already followed)
         return g, Pc, thc
+    sep = _separation(Pm[g], thm[g], Pc, ic)
     if nb is not None:
         return _fill_compiled(nb, g, A, b - b[:, :1], L, (c, fine, kn), Pc, thc, sep)
     Pf, thf, acc = _from_coarse(A[:, c[kn]], Pc[:, kn], thc[:, kn], sep[:, kn], A[:, fine], L[:, c[kn]],

@@ -1,0 +1,97 @@
+"""A tracer point of a few designs straight from the design matrix by the compiled kernels
+(kin.tracer_batch) against the pose store's route (solve_designs and pose_sensitivity) to
+the bit, its derivatives against central differences, the plans it refuses, and the
+polish's residuals and Jacobian by both routes."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from multiloop.catalogue.dimensional.objective import Problem
+from multiloop.catalogue.named import load_named
+from multiloop.kin import kernel
+from multiloop.kin.design import solve_designs
+from multiloop.kin.sensitivity import pose_sensitivity
+from multiloop.kin.tracer_batch import TracerBatch
+
+from test_design_batch import DYAD_MECHANISMS, _designs
+
+pytestmark = pytest.mark.skipif(kernel.load() is None, reason="numba is not installed")
+
+
+def _case(name, D=3, N=12, seed=2):
+    m = load_named(name)
+    names, X = _designs(m, D=D, rel=0.01, seed=seed)
+    rng = np.random.default_rng(seed)
+    rotary = m.is_rotary(0)
+    span = (np.pi if rotary else 0.3 * m.size)
+    PHI = np.sort(rng.uniform(-span, span, (D, N)), axis=1)
+    return m, names, X, PHI
+
+
+@pytest.mark.parametrize("name", DYAD_MECHANISMS)
+def test_the_point_and_its_derivatives_are_the_pose_stores_to_the_bit(name):
+    m, names, X, PHI = _case(name)
+    pts = [p.name for p in m.points] or [next(j.name for j in m.joints[::-1] if m.frame not in j.links)]
+    with kernel.for_batches():
+        st = solve_designs(m, names, X, PHI)
+        sens = pose_sensitivity(st)
+    for pt in pts:
+        tb = TracerBatch.of(m, names, pt)
+        assert tb is not None
+        W, dW = tb.solve(X, PHI, jacobian=True)
+        assert np.array_equal(W, st.point(pt), equal_nan=True)
+        assert np.array_equal(dW, sens.point(pt), equal_nan=True)
+        assert np.array_equal(tb.solve(X, PHI)[0], W, equal_nan=True) and tb.solve(X, PHI)[1] is None
+
+
+def test_the_derivatives_are_central_differences_of_the_point():
+    m, names, X, PHI = _case("watt_1", D=2, N=6)
+    tb = TracerBatch.of(m, names, m.points[0].name)
+    W, dW = tb.solve(X, PHI, jacobian=True)
+    assert np.all(np.isfinite(W))
+    h = 1e-6 * m.size
+    for c in range(len(names) + 1):
+        Xp, Xm, Pp, Pm = X.copy(), X.copy(), PHI.copy(), PHI.copy()
+        if c < len(names):
+            Xp[:, c] += h
+            Xm[:, c] -= h
+            step = h
+        else:
+            Pp += 1e-6
+            Pm -= 1e-6
+            step = 1e-6
+        fd = (tb.solve(Xp, Pp)[0] - tb.solve(Xm, Pm)[0]) / (2 * step)
+        assert np.allclose(dW[..., c], fd, atol=1e-6 * max(1.0, np.abs(fd).max())), names[c] if c < len(names) else "input"
+
+
+def test_plans_without_a_compiled_route_and_frame_points_are_refused():
+    tri = load_named("stephenson_3_triad")
+    names, _ = _designs(tri, D=2)
+    assert TracerBatch.of(tri, names, tri.points[0].name) is None          # (a triad: no compiled step)
+    m = load_named("four_bar")
+    names, _ = _designs(m, D=2)
+    ground = next(j.name for j in m.joints if m.frame in j.links)
+    assert TracerBatch.of(m, names, ground) is None                         # (on the frame: nothing to solve)
+
+
+def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(monkeypatch):
+    from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
+    from multiloop.catalogue.dimensional.targets import PathTarget
+    from multiloop.kin.solve import solve
+    m = load_named("four_bar")
+    x = np.linspace(0.2, 2.0, 8)
+    st = solve(m, x)
+    T = st.point_positions[:, st.point_index("P")] * 1.01
+    ev = Evaluator(m, design_space(m, ["P"]))
+    pr = Problem(ev, PathTarget(T, "P"))
+    assert pr._tracer() is not None
+    rng = np.random.default_rng(0)
+    Z = pr.x0[None] + 1e-3 * m.size * rng.standard_normal((3, len(pr.x0)))
+    PHI = x[None] + 0.01 * rng.standard_normal((3, len(x)))
+    fast = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
+    monkeypatch.setattr(Problem, "_tracer", lambda self: None)
+    store = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
+    assert np.array_equal(fast[0], store[0], equal_nan=True)
+    for a, b in zip(fast[1], store[1]):
+        assert np.array_equal(a, b, equal_nan=True)
