@@ -135,25 +135,33 @@ def _four_bar_run(budget: float):
     return bs.synthesise(bs.start_mechanism(), path=T, point="P", method="de", budget=float(budget), seed=0)
 
 
-def synthesis_goal(py: str | None, budget: int = 2) -> None:
+def synthesis_goal(py: str | None, budget: int = 2, rounds: int = 3) -> None:
+    """The issue's row "synthesis evaluations/s, four-bar, 10 points" against Pyslvs: our
+    whole run (:func:`_four_bar_run`, ``budget`` seconds) and Pyslvs's DE (the same
+    seconds) alternated ``rounds`` times, the fastest of each (this machine's speed moves
+    by ±40 % within minutes: alternated rounds see the same machine), and the search alone."""
     import bench_synthesis as bs
     T = bs.targets()["four-bar 10 points"]
-    res = _four_bar_run(budget)
-    ours = res.evaluations / res.seconds
+    ours, theirs, last = [], [], None
+    for _ in range(rounds if py is not None else 1):
+        last = _four_bar_run(budget)
+        ours.append(last.evaluations / last.seconds)
+        if py is not None:
+            theirs.append(bs.pyslvs_run(T, budget, py)[2] / budget)
     de = bs.eval_rates(480)["batched objective"]
-    line = (f"ours {ours:,.0f} evaluations/s over the whole run (population and polish; "
-            f"{res.evaluations:,} in {res.seconds:.2f} s, each population member on a 96-position grid, "
-            f"continuity checked), the population objective alone {de:,.0f}/s")
+    best = max(ours)
+    line = (f"ours {best:,.0f} evaluations/s over the whole run (population and polish; fastest of "
+            f"{' '.join(f'{r:,.0f}' for r in ours)}; each population member on a 96-position grid, continuity "
+            f"checked), the population objective alone {de:,.0f}/s")
     if py is None:
         print(f"synthesis, four-bar 10 points, free timing: {line}; Pyslvs not run")
         return
-    _, _, n = bs.pyslvs_run(T, budget, py)
-    theirs = n / budget
     search = search_rate(rounds=3)               # (like for like: Pyslvs's run is its DE alone)
-    print(f"synthesis evaluations per second, four-bar 10 points, free timing, DE {budget} s: {line}; "
-          f"Pyslvs FPlanar {theirs:,.0f}; goal ratio >= 2: {ours / theirs:.2f} "
-          f"(the search alone {search / theirs:.2f}, population objective {de / theirs:.2f}) "
-          f"-> {'MET' if ours >= 2 * theirs else 'NOT MET'}")
+    top = max(theirs)
+    print(f"synthesis evaluations per second, four-bar 10 points, free timing, DE {budget} s, {rounds} alternated "
+          f"rounds: {line}; Pyslvs FPlanar {top:,.0f} (fastest of {' '.join(f'{r:,.0f}' for r in theirs)}); "
+          f"goal ratio >= 2: {best / top:.2f} (the search alone {search / top:.2f}, population objective "
+          f"{de / top:.2f}) -> {'MET' if best >= 2 * top else 'NOT MET'}")
 
 
 def synthesis_rate(evaluations: int = 30_000, seeds=(0, 1, 2)) -> list[float]:
@@ -209,22 +217,25 @@ def triad_case():
     return start, T, pt
 
 
-def triad_synthesis_goal(budget: float = 2.0) -> None:
+def triad_synthesis_goal(budget: float = 2.0, rounds: int = 3) -> None:
     """The issue's row "synthesis evaluations/s, Stephenson III triad" (goal 6 500/s): ten
     points of the catalogue triad six-bar's tracer curve over 60° of its driver (free
     timing, an exact target), from the mechanism with its joints moved by 0.3 % of its
     size, ``budget`` seconds; the whole run's rate (it may stop early at the tolerance:
-    the polish's share then weighs more) and the search's alone."""
+    the polish's share then weighs more), the fastest of ``rounds`` runs (the same work
+    each: the same seed), and the search's alone."""
     from multiloop.catalogue.dimensional import synthesise
     start, T, pt = triad_case()
     synthesise(start, path=T, point=pt, evaluations=500, seed=0)                  # (warm: numba's cache)
-    res = synthesise(start, path=T, point=pt, budget=budget, seed=0)
-    rate = res.evaluations / res.seconds
+    runs = [synthesise(start, path=T, point=pt, budget=budget, seed=0) for _ in range(rounds)]
+    rates = [r.evaluations / r.seconds for r in runs]
+    res, rate = runs[int(np.argmax(rates))], max(rates)
     search = _search_alone(_path_problem(start, T, pt), 5000, 3)
     print(f"synthesis evaluations per second, Stephenson III triad, 10 points, free timing, {budget:g} s: "
-          f"whole run {rate:,.0f}/s ({res.evaluations:,} in {res.seconds:.2f} s, error {res.error_max:.1e}, "
-          f"stopped {res.stopped}), the search alone {search:,.0f}/s; goal >= 6500 -> "
-          f"{'MET' if rate >= 6500 else 'NOT MET'} (whole run), {'MET' if search >= 6500 else 'NOT MET'} (search)")
+          f"whole run {rate:,.0f}/s (fastest of {' '.join(f'{r:,.0f}' for r in rates)}; {res.evaluations:,} in "
+          f"{res.seconds:.2f} s, error {res.error_max:.1e}, stopped {res.stopped}), the search alone {search:,.0f}/s; "
+          f"goal >= 6500 -> {'MET' if rate >= 6500 else 'NOT MET'} (whole run), "
+          f"{'MET' if search >= 6500 else 'NOT MET'} (search)")
 
 
 def _search_alone(problem, evaluations: int, rounds: int) -> float:
