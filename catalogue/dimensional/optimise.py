@@ -100,6 +100,8 @@ class _Counter:
     def _keep(self, U: np.ndarray, f: np.ndarray, k: int = ELITE, gap: float = 0.05) -> None:
         """The ``k`` best designs seen that differ pairwise by more than ``gap`` in some
         unit-box coordinate (the designs the probe polishes)."""
+        if len(self.elite_f) >= k and not np.min(f) < np.max(self.elite_f):
+            return                  # (no better design: the elites come first and fill the k places)
         F = np.concatenate([self.elite_f, f])
         A = np.vstack([self.elite_u, U])
         order = np.argsort(F, kind="stable")
