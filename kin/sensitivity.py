@@ -46,7 +46,8 @@ from .geometry import joint_rows, origin_joint
 from .memo import cached
 from .rigid import perp
 
-__all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity", "material_derivative", "compiled_sensitivities"]
+__all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity", "material_derivative", "compiled_sensitivities",
+           "offset_columns", "sensitivity_plan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,6 +127,19 @@ def _selection(cols: dict, name: str, q: int) -> np.ndarray:
     return E
 
 
+def offset_columns(cols: dict, name: str, origin: str | None, q: int) -> np.ndarray:
+    """``∂(r_name − r_origin)/∂x`` (2, q): the design columns ``cols`` that move the
+    reference position of joint or tracer point ``name`` from that of joint ``origin``
+    (a link's reference point; None: the origin)."""
+    return _selection(cols, name, q) - (_selection(cols, origin, q) if origin is not None else 0.0)
+
+
+def sensitivity_plan(sp, names: tuple[str, ...]) -> _Compiled:
+    """The blocks of plan ``sp`` for the design columns ``names``, compiled once and kept
+    on the plan."""
+    return cached(sp, ("sensitivity", tuple(names)), _compile, tuple(names))
+
+
 def _compile(sp, names: tuple[str, ...]) -> _Compiled:
     m = sp.mechanism
     p = len(names)
@@ -136,9 +150,9 @@ def _compile(sp, names: tuple[str, ...]) -> _Compiled:
     zero = np.zeros((2, q))
 
     def rho(joint: str, link: str) -> np.ndarray:
-        o = origin[link]
-        E = _selection(cols, joint, q) if m.joint(joint).kind is JointKind.R else zero.copy()
-        return E - (_selection(cols, o, q) if o is not None else zero)
+        if m.joint(joint).kind is JointKind.R:
+            return offset_columns(cols, joint, origin[link], q)
+        return zero - (_selection(cols, origin[link], q) if origin[link] is not None else zero)
 
     steps = []
     for st in sp.steps:
@@ -322,7 +336,7 @@ def pose_sensitivity(st: DesignPoses) -> PoseSensitivity:
     sp, geo = st.plan, st.geometry
     m = sp.mechanism
     names = tuple(geo.cols) if geo.batch else ()
-    comp = cached(sp, ("sensitivity", names), _compile, names)
+    comp = sensitivity_plan(sp, names)
     D, N = st.store.shape
     B = D * N
     q = len(names) + len(m.drivers)
