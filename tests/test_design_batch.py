@@ -206,9 +206,9 @@ def _python_lowering(m, names, X):
     return oracle, got, geo.origins(), mine.origins()
 
 
-def _slider_driven():
+def _slider_driven(point: bool = False):
     """A crank driven through its slider (a P driver: the one closed-form step no
-    catalogue mechanism has)."""
+    catalogue mechanism has), with a tracer point ``T`` on the crank when ``point``."""
     from multiloop.topo.model import MechanismBuilder
     b = MechanismBuilder()
     b.add_link("ground", frame=True)
@@ -216,6 +216,8 @@ def _slider_driven():
     b.add_joint("B", "R", ("slider", "rod"), at=(3.0, 0.0))
     b.add_joint("A", "R", ("rod", "crank"), at=(1.0, 1.5))
     b.add_joint("O", "R", ("crank", "ground"), at=(0.0, 0.0))
+    if point:
+        b.add_point("T", "crank", at=(0.5, 1.2))
     b.add_driver("S")
     return b.build()
 

@@ -12,21 +12,12 @@ from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
 from multiloop.catalogue.dimensional.objective import Constraints, Problem
 from multiloop.catalogue.dimensional.targets import PathTarget
 from multiloop.catalogue.named import load_named
-from multiloop.topo.model import MechanismBuilder
+
+from test_design_batch import _slider_driven as _slider_driven_with
 
 
 def _slider_driven():
-    """A crank driven through its slider (a P driver, which no catalogue mechanism has),
-    with a tracer point on the crank."""
-    b = MechanismBuilder()
-    b.add_link("ground", frame=True)
-    b.add_joint("S", "P", ("ground", "slider"), at=(3.0, 0.0), axis=(1.0, 0.0))
-    b.add_joint("B", "R", ("slider", "rod"), at=(3.0, 0.0))
-    b.add_joint("A", "R", ("rod", "crank"), at=(1.0, 1.5))
-    b.add_joint("O", "R", ("crank", "ground"), at=(0.0, 0.0))
-    b.add_point("T", "crank", at=(0.5, 1.2))
-    b.add_driver("S")
-    return b.build()
+    return _slider_driven_with(point=True)
 
 
 def _problem(name, timing, cons=Constraints()):
