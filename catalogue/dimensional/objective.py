@@ -747,8 +747,10 @@ class Problem:
         compiled step and lowering for every step and no path-dependent one; else None."""
         if not (isinstance(self.target, PathTarget) and kernel.compiled_batches()) or self.ev.path_dependent:
             return None
-        from multiloop.kin.tracer_batch import TracerBatch
-        return TracerBatch.of(self.ev.mechanism, tuple(self.ev.space.names), self.target.point)
+        if not hasattr(self, "_tracer_batch"):              # (looked up once: the plan and names are fixed)
+            from multiloop.kin.tracer_batch import TracerBatch
+            self._tracer_batch = TracerBatch.of(self.ev.mechanism, tuple(self.ev.space.names), self.target.point)
+        return self._tracer_batch
 
     def _features_and_jacobian(self, Z: np.ndarray, PHI: np.ndarray):
         """:meth:`features` ``F`` and their derivatives ``dF`` (:meth:`_feature_jacobian`,
