@@ -67,3 +67,50 @@ def test_narrow_timing_solves_a_few_samples_and_constraints_on_the_motion_keep_t
         assert pr._reach_span(pr.timing_for(pr.x0[None])) is None
     _, pr = _problem("four_bar", np.radians([-179.0, 179.0]))                     # (a whole turn's span)
     assert pr._reach_span(pr.timing_for(pr.x0[None])) is None
+
+
+# -- a path-dependent plan (a triad's mode followed along the inputs) -----------------------------
+# Its targets were solved after the grid, as one path: a design that does not turn fully lost
+# them all ("mode lost earlier in the path"), and a first target far from the grid's last
+# sample was a jump the tracker refuses.  Synthesis started from the exact design of the
+# first test below returned an error of 29 times the target's size.
+
+from multiloop.catalogue.dimensional import synthesise  # noqa: E402
+from multiloop.kin.solve import solve  # noqa: E402
+
+
+def _triad_short_of_a_turn():
+    """A Stephenson III triad design that assembles over its first 30° but does not turn
+    fully, its evaluator and its tracer point."""
+    m = load_named("stephenson_3_triad")
+    pt = m.points[0].name
+    ev = Evaluator(m, design_space(m, [pt]))
+    grid = Problem(ev, PathTarget(np.zeros((2, 2)), pt, timing=np.array([0.0, 0.1]))).grid
+    rng = np.random.default_rng(3)
+    while True:
+        X = np.asarray(ev.space.x0)[None] + rng.normal(0.0, 0.08 * m.size, (1, ev.space.size))
+        ok = ev.poses(X, grid).ok[0]
+        if not ok.all() and ok[:9].all():
+            return ev.with_design(X[0]), pt
+
+
+def test_a_triad_short_of_a_turn_meets_its_prescribed_targets():
+    md, pt = _triad_short_of_a_turn()
+    x = np.radians(np.linspace(0.0, 30.0, 6))
+    motion = solve(md, x)
+    T = motion.point_positions[:, motion.point_index(pt)]
+    pr = Problem(Evaluator(md, design_space(md, [pt])), PathTarget(T, pt, timing=x))
+    assert not pr.ev.poses(pr.x0[None, :pr.nx], pr.grid).ok.all()              # (it does not turn fully)
+    assert pr.batch(pr.x0[None])[0] <= 1e-12
+    r = synthesise(md, path=np.c_[T, np.degrees(x)], point=pt, evaluations=3000, seed=0)
+    assert r.error_max <= 1e-9 and np.max(np.abs(np.asarray(r.achieved) - T)) <= 1e-9 * md.size
+
+
+def test_a_triads_far_targets_are_walked_to():
+    m = load_named("stephenson_3_triad")
+    pt = m.points[0].name
+    x = np.radians(np.linspace(120.0, 200.0, 8))
+    motion = solve(m, x)
+    T = motion.point_positions[:, motion.point_index(pt)]
+    pr = Problem(Evaluator(m, design_space(m, [pt])), PathTarget(T, pt, timing=x))
+    assert pr.batch(pr.x0[None])[0] <= 1e-12                                     # (1000, a failure, before)

@@ -443,6 +443,8 @@ class Problem:
     def _batch(self, Z: np.ndarray) -> np.ndarray:
         X = Z[:, :self.nx]
         tim = self.timing_for(Z)
+        if tim is not None and self.ev.path_dependent:
+            return self._prescribed_walk(Z, tim)
         span = None if tim is None else self._reach_span(tim)
         if span is not None:
             return self._prescribed(Z, tim, span)
@@ -472,11 +474,10 @@ class Problem:
         forward to the first sample at or past the largest value, then backward (−δ, −2δ,
         …) past the smallest; the samples beyond them cannot change the test.  None when
         the whole grid is needed: a constraint read over the whole motion (full rotation,
-        transmission), a path-dependent plan (its poses depend on the inputs before
-        them), or a span as long as the grid.  Returns the indices and how many of them
-        are forward."""
+        transmission), or a span as long as the grid.  Returns the indices and how many of
+        them are forward.  (A path-dependent plan has :meth:`_prescribed_walk`.)"""
         c = self.cons
-        if c.full_rotation or c.min_transmission or self.ev.path_dependent or not np.all(np.isfinite(tim)):
+        if c.full_rotation or c.min_transmission or not np.all(np.isfinite(tim)):
             return None
         d, top, low = self.delta, float(np.max(tim)), float(np.min(tim))
         nf = max(1, int(np.ceil((top - 1e-12) / d)) + 1)
@@ -515,6 +516,30 @@ class Problem:
         inside = (tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12)
         cost = np.where(inside.all(1), np.sum(np.square(self.diff(F[:, K:], T, size)), axis=(1, 2)), np.inf)
         f = np.sqrt(cost / self.n_targets) + self.cons.weight * self.violation(X, st, None)
+        return np.where(np.isfinite(f), f, _FAIL)
+
+    def _prescribed_walk(self, Z: np.ndarray, tim: np.ndarray) -> np.ndarray:
+        """:meth:`_batch` with prescribed timing on a path-dependent plan (a triad's or
+        class IV group's mode is followed along the inputs): the targets solved along
+        :meth:`walk` from the reference, on the mode the motion itself reaches (as the
+        polish's residuals and the certified motion have them), and reached when every
+        input of the walk assembles.  The grid is solved on its own, and only for a
+        constraint that reads the whole motion.  (Solved after the grid as one path, the
+        targets inherited the grid's end: a design that does not turn fully lost them all,
+        and a first target far from the grid's last sample was a jump the tracker refuses.)"""
+        X = Z[:, :self.nx]
+        W, at = self.walk(tim)
+        st = self.ev.poses(X, W, keep=False)
+        T, size = self.targets_for(Z)
+        F = self.features(Z, st)[:, at]
+        cost = np.where(st.ok.all(axis=1), np.sum(np.square(self.diff(F, T, size)), axis=(1, 2)), np.inf)
+        c = self.cons
+        if c.full_rotation or c.min_transmission:
+            st = self.ev.poses(X, self.grid)
+            v = self.violation(X, st, self.curve(st.ok[:, :self.M])[3])
+        else:
+            v = self.violation(X, st, None)
+        f = np.sqrt(cost / self.n_targets) + c.weight * v
         return np.where(np.isfinite(f), f, _FAIL)
 
     def free_costs(self, F: np.ndarray, T: np.ndarray, size: np.ndarray, ok: np.ndarray,

@@ -231,11 +231,8 @@ def _assess(problem: Problem, z: np.ndarray, phi: np.ndarray):
 
 def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     Z = z[None, :]
-    # the grid (what the motion reaches), then the targets' inputs: walked to from the
-    # reference when a step's mode depends on the path (as the polish's residuals are)
-    W, at = problem.walk(phi[None, :]) if problem.ev.path_dependent else (phi[None, :], np.arange(len(phi)))
-    st = problem.ev.poses(Z[:, :problem.nx], np.concatenate([problem.grid, W[0]]))
-    _, valid, cphi, full = problem.curve(st.ok[:, :problem.M])
+    grid, targets = _grid_and_targets(problem, Z, phi)
+    _, valid, cphi, full = problem.curve(grid)
     d = np.diff(phi)
     ordered = bool(np.all(d >= -1e-12) or np.all(d <= 1e-12))
     if valid.any():
@@ -243,15 +240,33 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
         inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
     else:                   # (the design does not assemble at its reference: nothing is reached)
         inside = False
-    ok = ordered and inside and bool(st.ok[0, problem.M + at].all())
+    F, reached = targets
+    ok = ordered and inside and reached
     T, size = problem.targets_for(Z)
-    r = problem.diff(problem.features(Z, st)[:, problem.M + at], T, size).reshape(len(phi), -1)
+    r = problem.diff(F, T, size).reshape(len(phi), -1)
     ang = None
     if isinstance(problem.target, MotionTarget):
         ang = np.degrees(np.abs(r[:, 2]))
         r = r[:, :2]
     rel = np.sqrt(np.sum(np.square(r), axis=1))
     return np.where(np.isfinite(rel), rel, np.inf), ang, ok
+
+
+def _grid_and_targets(problem: Problem, Z: np.ndarray, phi: np.ndarray):
+    """Design ``Z`` (1, n)'s driver grid's statuses ``(1, M)`` (what the motion reaches) and,
+    at the targets' driver values ``phi``, its features ``(1, N, c)`` and whether every
+    one is reached.  A path-dependent plan (a triad's or class IV group's mode followed
+    along the inputs) is solved along :meth:`~.objective.Problem.walk` from the reference,
+    apart from the grid, and reaches its targets when every input of the walk assembles;
+    any other at the grid and the targets' values in one call."""
+    X = Z[:, :problem.nx]
+    if problem.ev.path_dependent:
+        W, at = problem.walk(phi[None, :])
+        grid, st = problem.ev.poses(X, problem.grid).ok[:, :problem.M], problem.ev.poses(X, W)
+        return grid, (problem.features(Z, st)[:, at], bool(st.ok.all()))
+    st = problem.ev.poses(X, np.concatenate([problem.grid, phi]))
+    M, F = problem.M, problem.features(Z, st)
+    return st.ok[:, :M], (F[:, M:], bool(st.ok[0, M:].all()))
 
 
 def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_only: bool = False,
@@ -579,8 +594,7 @@ def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndar
     """What design ``z`` does at ``phi`` and the target, in user units: points (N, 2),
     poses (N, 3; angle deg) or outputs (N,; deg or m)."""
     Z = z[None, :]
-    st = problem.ev.poses(Z[:, :problem.nx], phi)
-    F = problem.features(Z, st)[0]
+    F = _grid_and_targets(problem, Z, np.asarray(phi, float))[1][0][0]      # (a path-dependent plan: walked to)
     T = problem.targets_for(Z)[0][0]
     t = problem.target
     if isinstance(t, MotionTarget):
