@@ -1,7 +1,9 @@
 """Prescribed timing solves the targets' driver values and only the grid samples between
 the reference and them (objective.Problem._reach_span): the objective equals the whole
 grid's bit for bit, on R and P drivers, with targets inside, beyond and on both sides of
-the reachable motion; the whole grid is kept where a constraint reads the whole motion."""
+the reachable motion; the whole grid is kept where a constraint reads the whole motion.
+A path-dependent plan's targets are solved along the walk from the reference, apart from
+the grid, in the search and in the final assessment (free timing too)."""
 from __future__ import annotations
 
 import numpy as np
@@ -114,3 +116,15 @@ def test_a_triads_far_targets_are_walked_to():
     T = motion.point_positions[:, motion.point_index(pt)]
     pr = Problem(Evaluator(m, design_space(m, [pt])), PathTarget(T, pt, timing=x))
     assert pr.batch(pr.x0[None])[0] <= 1e-12                                     # (1000, a failure, before)
+
+
+def test_a_triad_short_of_a_turn_is_assessed_on_its_walk_with_free_timing_too():
+    """The final assessment solved the walk to the targets after the grid as one path too:
+    with free timing the same design came back with an infinite error, "not reached by
+    continuous motion"."""
+    md, pt = _triad_short_of_a_turn()
+    motion = solve(md, np.radians(np.linspace(0.0, 30.0, 6)))
+    T = motion.point_positions[:, motion.point_index(pt)]
+    r = synthesise(md, path=T, point=pt, evaluations=3000, seed=0)
+    assert r.error_max <= 1e-9 and not r.notes
+    assert np.max(np.abs(np.asarray(r.achieved) - T)) <= 1e-9 * md.size
