@@ -57,6 +57,19 @@ def test_the_span_gives_the_whole_grids_objective_to_the_bit(name, seed, reach, 
         mp.undo()
 
 
+def test_a_function_target_on_its_span_is_the_whole_grids_to_the_bit(monkeypatch):
+    from multiloop.catalogue.dimensional.targets import FunctionTarget
+    m = load_named("four_bar")
+    pr = Problem(Evaluator(m, design_space(m, [])),
+                 FunctionTarget(np.radians([0.0, 15.0, 30.0, 45.0, 60.0]), np.radians([0.0, 5.0, 12.0, 20.0, 26.0]), "O4"))
+    Z = np.clip(pr.x0[None] + 0.05 * m.size * np.random.default_rng(0).standard_normal((100, len(pr.x0))),
+                pr.lower, pr.upper)
+    assert len(pr._reach_span(pr.timing_for(Z))[0]) == 17
+    got = pr.batch(Z)
+    monkeypatch.setattr(pr, "_reach_span", lambda tim: None)
+    assert np.array_equal(got, pr.batch(Z))
+
+
 def test_narrow_timing_solves_a_few_samples_and_constraints_on_the_motion_keep_the_grid():
     m, pr = _problem("four_bar", np.radians([0.0, 20.0, 40.0, 60.0]))
     idx, nf = pr._reach_span(pr.timing_for(pr.x0[None]))
