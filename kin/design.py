@@ -41,7 +41,7 @@ from . import kernel
 from .poses import Poses
 from .solve import SolvePlan, check_finite_inputs, needed_steps, plan_of, solve
 
-__all__ = ["DesignPoses", "solve_designs", "design_names", "design_mechanism", "branch_signs",
+__all__ = ["DesignPoses", "solve_designs", "with_cells", "design_names", "design_mechanism", "branch_signs",
            "unbatched_steps"]
 
 
@@ -221,6 +221,23 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     G.unset_to_nan()
     ok = G.finite([i for k in steps for i in sp.steps[k].unknown])
     return DesignPoses(sp, geo, G, ok)
+
+
+def with_cells(st: DesignPoses, at: tuple, src: DesignPoses, src_at: tuple) -> DesignPoses:
+    """Poses ``st`` with the (design, input) cells ``at`` (two index arrays) replaced by
+    the cells ``src_at`` of ``src``, poses of the same plan (those designs solved along
+    another path of inputs: a path-dependent step's poses depend on the inputs before
+    them).  A new store: every link's rows, its cos and sin from its angle row."""
+    G, S = st.store, src.store
+    G.angles()
+    S.angles()
+    T = G.T.copy()
+    T[:, :, at[0], at[1]] = S.T[:, :, src_at[0], src_at[1]]
+    ok = st.ok.copy()
+    ok[at] = src.ok[src_at]
+    out = Poses(_BoundPlan(st.plan.mechanism, None, st.geometry.origins_xy()), G.shape)
+    out.from_T(T)
+    return DesignPoses(st.plan, st.geometry, out, ok)
 
 
 def _compiled(sp: SolvePlan, geo: Geometry, G: Poses, kp, floats, steps, X, reuse: bool = False) -> DesignPoses:

@@ -24,7 +24,7 @@ import numpy as np
 from multiloop.kin import kernel
 from multiloop.kin.check.angle_types import angle_type
 from multiloop.kin.check.transmission import angle_specs, spec_value
-from multiloop.kin.design import DesignPoses
+from multiloop.kin.design import DesignPoses, with_cells
 from multiloop.kin.groups.registry import reference_margin
 from multiloop.kin.memo import cached
 from multiloop.kin.rigid import perp, rotate
@@ -210,6 +210,34 @@ class Problem:
         self._size = target.size if target.size > 0 else 1.0
         self.n_targets = len(self._targets)
 
+    def grid_poses(self, X: np.ndarray, keep: bool = True) -> DesignPoses:
+        """Designs ``X``'s poses on the driver grid, every sample as the motion from the
+        reference reaches it.  A plan without a path-dependent step is solved at the grid's
+        values in one call.  A path-dependent one (a triad's or class IV group's mode
+        followed along the inputs) follows the grid as one path forward from the reference
+        (a slider's forward half), and its samples behind the reference (past where a
+        design stops short of a full turn; a slider's backward half) come from a path of
+        their own backward from the reference (−δ, −2δ, …,
+        :func:`multiloop.kin.design.with_cells`).  (As one path, those samples had
+        inherited the forward path's loss: such a design's curve lost its arc behind the
+        reference.)"""
+        st = self.ev.poses(X, self.grid, keep=keep)
+        if not self.ev.path_dependent:
+            return st
+        M = self.M
+        fw = M if self.rotary else M // 2
+        ok = st.ok[:, :fw]
+        first = np.where(ok.all(axis=1), fw, np.argmin(ok, axis=1))        # (the forward path's first loss)
+        lead = (M - 1 - first) if self.rotary else np.full(len(first), M - fw)
+        rows = np.flatnonzero((first > 0) & (lead > 0))
+        if not rows.size:
+            return st
+        back = self.ev.poses(X[rows], -self.delta * np.arange(int(lead[rows].max()) + 1))
+        n = lead[rows]
+        d = np.repeat(np.arange(rows.size), n)
+        k = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1          # (1 .. lead: the input −kδ)
+        return with_cells(st, (rows[d], M - k if self.rotary else fw + k - 1), back, (d, k))
+
     def init_motion_frame(self) -> None:
         """Motion generation: the frame on the link that meets pose 0 exactly at the
         best grid position of the start design (all grid positions scored in one call)."""
@@ -217,7 +245,7 @@ class Problem:
         if not isinstance(t, MotionTarget):
             return
         X = self.x0[None, :self.nx]
-        st = self.ev.poses(X, self.grid)
+        st = self.grid_poses(X)
         k = self.ev.links[t.link]
         th, tx, ty = st.th[k][0], st.tx[k][0], st.ty[k][0]
         good = np.isfinite(th)
@@ -253,7 +281,7 @@ class Problem:
         if not (isinstance(t, PathTarget) and t.shape_only):
             return
         Z0 = self.x0[None, :]
-        st = self.ev.poses(Z0[:, :self.nx], self.grid)
+        st = self.grid_poses(Z0[:, :self.nx])
         F = self.features(Z0, st)[0][st.ok[0]]
         if len(F) < 3:
             return
@@ -449,8 +477,8 @@ class Problem:
         if span is not None:
             return self._prescribed(Z, tim, span)
         M = self.M
-        st = self.ev.poses(X, self.grid if tim is None else
-                           np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1), keep=False)
+        st = self.grid_poses(X, keep=False) if tim is None else \
+            self.ev.poses(X, np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1), keep=False)
         T, size = self.targets_for(Z)
         F = self.features(Z, st)
         ok = st.ok[:, :M]
@@ -535,7 +563,7 @@ class Problem:
         cost = np.where(st.ok.all(axis=1), np.sum(np.square(self.diff(F, T, size)), axis=(1, 2)), np.inf)
         c = self.cons
         if c.full_rotation or c.min_transmission:
-            st = self.ev.poses(X, self.grid)
+            st = self.grid_poses(X)
             v = self.violation(X, st, self.curve(st.ok[:, :self.M])[3])
         else:
             v = self.violation(X, st, None)
@@ -584,7 +612,7 @@ class Problem:
         """The constraint penalty of :meth:`batch` alone, ``(P,)``: the weighted
         violation over the driver grid walked from the reference."""
         X = np.atleast_2d(Z)[:, :self.nx]
-        st = self.ev.poses(X, self.grid)
+        st = self.grid_poses(X)
         full = self.curve(st.ok[:, :self.M])[3]
         return self.cons.weight * self.violation(X, st, full)
 
@@ -646,7 +674,7 @@ class Problem:
         tim = self.timing_for(Z)
         if tim is not None:
             return np.array(tim[0], float)
-        st = self.ev.poses(Z[:, :self.nx], self.grid)
+        st = self.grid_poses(Z[:, :self.nx])
         T, size = self.targets_for(Z)
         d2g = self.sqdist(self.features(Z, st), T, size)
         best = None

@@ -107,7 +107,7 @@ def constraint_report(problem: Problem, z: np.ndarray, phi: np.ndarray, continuo
     configuration (relative determinant of every dyad at least 1e-3)."""
     c, ev = problem.cons, problem.ev
     X = np.asarray(z, float)[None, :problem.nx]
-    st = ev.poses(X, problem.grid)
+    st = problem.grid_poses(X)
     ok = st.ok[:, :problem.M]
     full = bool(problem.curve(ok)[3][0])
     margin = float(problem.reference_margin(X)[0])

@@ -262,7 +262,7 @@ def _grid_and_targets(problem: Problem, Z: np.ndarray, phi: np.ndarray):
     X = Z[:, :problem.nx]
     if problem.ev.path_dependent:
         W, at = problem.walk(phi[None, :])
-        grid, st = problem.ev.poses(X, problem.grid).ok[:, :problem.M], problem.ev.poses(X, W)
+        grid, st = problem.grid_poses(X).ok[:, :problem.M], problem.ev.poses(X, W)
         return grid, (problem.features(Z, st)[:, at], bool(st.ok.all()))
     st = problem.ev.poses(X, np.concatenate([problem.grid, phi]))
     M, F = problem.M, problem.features(Z, st)
@@ -574,7 +574,7 @@ def _violation(problem: Problem, z: np.ndarray) -> float:
     full rotation, transmission, lengths, ratio, a non-singular reference)."""
     X = z[None, :problem.nx]
     with _unbounded(problem.ev):
-        st = problem.ev.poses(X, problem.grid)
+        st = problem.grid_poses(X)
     full = problem.curve(st.ok)[3]
     return float(problem.violation(X, st, full)[0])
 
