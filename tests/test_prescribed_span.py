@@ -164,3 +164,23 @@ def test_a_triad_short_of_a_turn_has_its_curve_behind_the_reference():
         T = motion.point_positions[:, motion.point_index(pt)]
         r = synthesise(md, path=T, point=pt, evaluations=3000, seed=0)
         assert r.error_max <= 1e-9, (lo, hi, r.error_max)
+
+
+@pytest.mark.parametrize("name", ["four_bar", "slider driven"])
+def test_the_two_path_grid_puts_each_sample_in_its_place(name, monkeypatch):
+    """A plan without a path-dependent step gives every grid sample the same pose along any
+    path, so the two-path grid (forward, then backward from the reference) taken for it
+    must be the one-call grid: every sample in its place, R driver and P driver."""
+    m = _slider_driven() if name == "slider driven" else load_named(name)
+    pt = m.points[0].name
+    ev = Evaluator(m, design_space(m, [pt]))
+    pr = Problem(ev, PathTarget(np.zeros((2, 2)), pt))
+    rng = np.random.default_rng(5)
+    X = np.asarray(ev.space.x0)[None] + 0.15 * m.size * rng.standard_normal((40, ev.space.size))
+    one = ev.poses(X, pr.grid)
+    monkeypatch.setattr(ev, "path_dependent", True)
+    two = pr.grid_poses(X)
+    short = ~one.ok.all(axis=1) & one.ok[:, 0]
+    assert short.any()                                          # (designs short of a full turn, or a slider)
+    assert np.array_equal(two.ok, one.ok)
+    assert np.allclose(two.point(pt), one.point(pt), atol=1e-12 * m.size, equal_nan=True)
