@@ -206,12 +206,12 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     if kp is not None and kp.covers(steps) and kp.lowered(steps):
         floats = kernel.lower_designs(sp, kp, geo, steps)           # (no step bound in Python)
         store = kernel.design_work("poses", (mechanism.n_links, 3) + shape) if reuse else None
-        G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape, store)
+        G = _batch_store(geo, shape, store)
         return _compiled(sp, geo, G, kp, floats, steps, X, reuse)
     bound = [_bind(sp.steps[k], mechanism, sp.size, geo) for k in steps]
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
-    G = Poses(_BoundPlan(mechanism, None, geo.origins_xy()), shape)
+    G = _batch_store(geo, shape)
     if kp is not None and kp.covers(steps):
         return _compiled(sp, geo, G, kp, kernel.design_floats(kp, bound, steps, geo.origins(), geo.D), steps, X)
     for k, step in zip(steps, bound):
@@ -221,6 +221,12 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     G.unset_to_nan()
     ok = G.finite([i for k in steps for i in sp.steps[k].unknown])
     return DesignPoses(sp, geo, G, ok)
+
+
+def _batch_store(geo: Geometry, shape: tuple, store=None) -> Poses:
+    """An empty pose store ``shape`` (D, N) for the designs of ``geo`` (their links'
+    reference points per design; ``store``: the array to use, else a new one)."""
+    return Poses(_BoundPlan(geo.mechanism, None, geo.origins_xy()), shape, store)
 
 
 def with_cells(st: DesignPoses, at: tuple, src: DesignPoses, src_at: tuple) -> DesignPoses:
@@ -235,7 +241,7 @@ def with_cells(st: DesignPoses, at: tuple, src: DesignPoses, src_at: tuple) -> D
     T[:, :, at[0], at[1]] = S.T[:, :, src_at[0], src_at[1]]
     ok = st.ok.copy()
     ok[at] = src.ok[src_at]
-    out = Poses(_BoundPlan(st.plan.mechanism, None, st.geometry.origins_xy()), G.shape)
+    out = _batch_store(st.geometry, G.shape)
     out.from_T(T)
     return DesignPoses(st.plan, st.geometry, out, ok)
 
@@ -313,8 +319,7 @@ def _one_design(sp: SolvePlan, md: Mechanism, steps, X) -> np.ndarray:
 def _per_design(sp: SolvePlan, geo: Geometry, X, shape, outputs, deadline) -> DesignPoses:
     """The fallback for plans with a step that has no batched form: each design alone
     (no design after ``deadline``)."""
-    m = sp.mechanism
-    G = Poses(_BoundPlan(m, None, geo.origins_xy()), shape)
+    G = _batch_store(geo, shape)
     T = np.full(G.T.shape, np.nan)
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     closed = all(sp.steps[k].closed is not None for k in steps)

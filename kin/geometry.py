@@ -190,8 +190,7 @@ class Geometry:
             U[:] = tab.axes
             for i, c in tab.angles:
                 a = X[:, c]
-                v = np.stack([np.cos(a), np.sin(a)], axis=-1)
-                U[:, i] = v / np.hypot(v[..., 0], v[..., 1])[..., None]
+                U[:, i] = unit(np.stack([np.cos(a), np.sin(a)], axis=-1))
             O = P[:, tab.first]
             self._cache.setdefault("origins", np.ascontiguousarray(O.transpose(1, 0, 2))[:, :, None, :])
             self.joint_table = (P, U, O)

@@ -30,6 +30,12 @@ def unit(v):
     return v / np.hypot(v[..., 0], v[..., 1])[..., None]
 
 
+def carried(x, y, c, s, rx, ry):
+    """The components of a link's material point at ``(rx, ry)`` from the link's reference
+    point ``(x, y)``, the link rotated by ``(c, s)`` (arrays broadcast)."""
+    return x + (c * rx - s * ry), y + (s * rx + c * ry)
+
+
 def columns(x, y, M) -> np.ndarray:
     """An ``(*shape, 2)`` array of the components ``x, y`` (arrays of the batch shape,
     or broadcastable); ``M`` is the batch size or shape."""
@@ -177,8 +183,7 @@ class Poses:
             key = _key(rx, ry)
         hit = self.points[k].get(key)
         if hit is None:
-            c, s = self.c[k], self.s[k]
-            hit = self.points[k][key] = (self.x[k] + (c * rx - s * ry), self.y[k] + (s * rx + c * ry))
+            hit = self.points[k][key] = carried(self.x[k], self.y[k], self.c[k], self.s[k], rx, ry)
         return hit
 
     def keep_point(self, k: int, r, px, py) -> None:

@@ -26,6 +26,7 @@ import numpy as np
 from . import kernel
 from .geometry import Geometry, origin_joint
 from .memo import cached
+from .poses import carried
 from .sensitivity import compiled_sensitivities, material_derivative, offset_columns, sensitivity_plan
 from .solve import SolvePlan, plan_of
 
@@ -75,9 +76,7 @@ class TracerBatch:
         C, S, _ = kernel.run_designs(kp, kernel.lower_designs(sp, kp, geo, every), inputs[..., None], every, T)
         C[f], S[f] = 1.0, 0.0
         r = geo.at(self.point)[:, 0] - table[2][:, h]                   # (as Poses.carry: from its reference point)
-        rx, ry = r[:, :1], r[:, 1:]
-        c, s = C[h], S[h]
-        W = np.stack([T[h, 0] + (c * rx - s * ry), T[h, 1] + (s * rx + c * ry)], axis=-1)
+        W = np.stack(carried(T[h, 0], T[h, 1], C[h], S[h], r[:, :1], r[:, 1:]), axis=-1)
         if not jacobian:
             return W, None
         q = len(self.names) + 1

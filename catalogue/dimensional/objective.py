@@ -491,8 +491,13 @@ class Problem:
             lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
             inside = full[:, None] | ((tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12))
             cost = np.where(inside.all(1), cost, np.inf)
-        f = np.sqrt(cost / self.n_targets)
-        f = f + self.cons.weight * self.violation(X, st, full)
+        return self._score(cost, self.violation(X, st, full))
+
+    def _score(self, cost: np.ndarray, violation: np.ndarray) -> np.ndarray:
+        """The objective ``(P,)`` from the targets' summed squared relative errors and the
+        constraint violation: the RMS error plus the weighted violation, :data:`_FAIL`
+        where either is not finite."""
+        f = np.sqrt(cost / self.n_targets) + self.cons.weight * violation
         return np.where(np.isfinite(f), f, _FAIL)
 
     def _reach_span(self, tim: np.ndarray) -> tuple[np.ndarray, int] | None:
@@ -543,8 +548,7 @@ class Problem:
         hi, lo = reach
         inside = (tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12)
         cost = np.where(inside.all(1), np.sum(np.square(self.diff(F[:, K:], T, size)), axis=(1, 2)), np.inf)
-        f = np.sqrt(cost / self.n_targets) + self.cons.weight * self.violation(X, st, None)
-        return np.where(np.isfinite(f), f, _FAIL)
+        return self._score(cost, self.violation(X, st, None))
 
     def _prescribed_walk(self, Z: np.ndarray, tim: np.ndarray) -> np.ndarray:
         """:meth:`_batch` with prescribed timing on a path-dependent plan (a triad's or
@@ -561,14 +565,10 @@ class Problem:
         T, size = self.targets_for(Z)
         F = self.features(Z, st)[:, at]
         cost = np.where(st.ok.all(axis=1), np.sum(np.square(self.diff(F, T, size)), axis=(1, 2)), np.inf)
-        c = self.cons
-        if c.full_rotation or c.min_transmission:
+        if self.cons.full_rotation or self.cons.min_transmission:
             st = self.grid_poses(X)
-            v = self.violation(X, st, self.curve(st.ok[:, :self.M])[3])
-        else:
-            v = self.violation(X, st, None)
-        f = np.sqrt(cost / self.n_targets) + c.weight * v
-        return np.where(np.isfinite(f), f, _FAIL)
+            return self._score(cost, self.violation(X, st, self.curve(st.ok[:, :self.M])[3]))
+        return self._score(cost, self.violation(X, st, None))
 
     def free_costs(self, F: np.ndarray, T: np.ndarray, size: np.ndarray, ok: np.ndarray,
                    full: np.ndarray) -> np.ndarray:

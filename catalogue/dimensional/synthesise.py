@@ -252,18 +252,25 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     return np.where(np.isfinite(rel), rel, np.inf), ang, ok
 
 
+def _at_targets(problem: Problem, Z: np.ndarray, phi: np.ndarray):
+    """Design ``Z`` (1, n)'s features ``(1, N, c)`` at the targets' driver values ``phi``
+    and whether every one is reached.  A path-dependent plan (a triad's or class IV
+    group's mode followed along the inputs) is solved along
+    :meth:`~.objective.Problem.walk` from the reference and reaches its targets when every
+    input of the walk assembles."""
+    X = Z[:, :problem.nx]
+    W, at = problem.walk(phi[None, :]) if problem.ev.path_dependent else (phi, np.arange(len(phi)))
+    st = problem.ev.poses(X, W)
+    return problem.features(Z, st)[:, at], bool(st.ok.all())
+
+
 def _grid_and_targets(problem: Problem, Z: np.ndarray, phi: np.ndarray):
-    """Design ``Z`` (1, n)'s driver grid's statuses ``(1, M)`` (what the motion reaches) and,
-    at the targets' driver values ``phi``, its features ``(1, N, c)`` and whether every
-    one is reached.  A path-dependent plan (a triad's or class IV group's mode followed
-    along the inputs) is solved along :meth:`~.objective.Problem.walk` from the reference,
-    apart from the grid, and reaches its targets when every input of the walk assembles;
-    any other at the grid and the targets' values in one call."""
+    """Design ``Z`` (1, n)'s driver grid's statuses ``(1, M)`` (what the motion reaches)
+    and :func:`_at_targets`: a path-dependent plan's grid (:meth:`~.objective.Problem.grid_poses`)
+    apart from its walk to the targets, any other's grid and targets' values in one call."""
     X = Z[:, :problem.nx]
     if problem.ev.path_dependent:
-        W, at = problem.walk(phi[None, :])
-        grid, st = problem.grid_poses(X).ok[:, :problem.M], problem.ev.poses(X, W)
-        return grid, (problem.features(Z, st)[:, at], bool(st.ok.all()))
+        return problem.grid_poses(X).ok[:, :problem.M], _at_targets(problem, Z, phi)
     st = problem.ev.poses(X, np.concatenate([problem.grid, phi]))
     M, F = problem.M, problem.features(Z, st)
     return st.ok[:, :M], (F[:, M:], bool(st.ok[0, M:].all()))
@@ -594,7 +601,7 @@ def _achieved(problem: Problem, z: np.ndarray, phi: np.ndarray) -> tuple[np.ndar
     """What design ``z`` does at ``phi`` and the target, in user units: points (N, 2),
     poses (N, 3; angle deg) or outputs (N,; deg or m)."""
     Z = z[None, :]
-    F = _grid_and_targets(problem, Z, np.asarray(phi, float))[1][0][0]      # (a path-dependent plan: walked to)
+    F = _at_targets(problem, Z, np.asarray(phi, float))[0][0]          # (a path-dependent plan: walked to)
     T = problem.targets_for(Z)[0][0]
     t = problem.target
     if isinstance(t, MotionTarget):
