@@ -11,12 +11,12 @@ cache is then rebuilt once.
 from __future__ import annotations
 
 import inspect
-import os
 
 import numba
 import numpy as np
 from numba.extending import register_jitable
 
+from ._jit_cache import as_new_as
 from .groups.base import SCALAR_HELPERS, arctan2
 from .groups.registry import COMPILED, LOWERING
 
@@ -26,13 +26,7 @@ __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", 
 def _fresh_cache() -> None:
     """Touch this file when a compiled step's source is newer (numba's cache would
     otherwise keep the old code); a read-only install is left alone."""
-    sources = {inspect.getsourcefile(f) for f in (*COMPILED.values(), *LOWERING.values(), *SCALAR_HELPERS)}
-    newest = max(os.path.getmtime(f) for f in sources if f)
-    if newest > os.path.getmtime(__file__):
-        try:
-            os.utime(__file__, (newest, newest))
-        except OSError:
-            pass
+    as_new_as(__file__, {inspect.getsourcefile(f) for f in (*COMPILED.values(), *LOWERING.values(), *SCALAR_HELPERS)})
 
 
 _fresh_cache()                             # before the decorators read the timestamp

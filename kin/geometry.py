@@ -22,7 +22,7 @@ from multiloop.topo.model import JointKind, Mechanism
 from .memo import cached
 from .poses import unit
 
-__all__ = ["Geometry", "design_names", "design_matrix", "origin_joint", "joint_rows"]
+__all__ = ["Geometry", "design_names", "design_matrix", "origin_joint", "joint_rows", "joint_tables"]
 
 
 def design_names(m: Mechanism, points=()) -> tuple[str, ...]:
@@ -77,7 +77,10 @@ def joint_rows(m: Mechanism) -> dict[str, int]:
     return {j.name: i for i, j in enumerate(m.joints)}
 
 
-def _tables(owner, m: Mechanism, names: tuple) -> _Tables:
+def joint_tables(owner, m: Mechanism, names: tuple) -> _Tables:
+    """The template of a batch's joint table (:meth:`Geometry.gather`) for the design
+    columns ``names``: the mechanism's reference points and unit guides, the rows the
+    columns set, and each link's reference joint's row; kept on ``owner`` (the plan)."""
     def make(owner, names):
         nj = len(m.joints)
         row = joint_rows(m)
@@ -181,7 +184,7 @@ class Geometry:
         The guides of designs with a guide angle are NumPy's cos and sin, as
         :meth:`axis` computes them."""
         if self.joint_table is None:
-            tab = _tables(owner, self.mechanism, self.names)
+            tab = joint_tables(owner, self.mechanism, self.names)
             X, D = self.X, self.D
             P = np.empty((D,) + tab.at.shape)
             P[:] = tab.at

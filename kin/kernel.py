@@ -290,6 +290,11 @@ def _steps(kp: KernelPlan, steps) -> np.ndarray:
 _ALL: dict = {}
 
 
+def every_step(kp: KernelPlan) -> np.ndarray:
+    """Every step of ``kp`` as the array the kernels run (read-only, shared)."""
+    return _steps(kp, range(len(kp.codes)))
+
+
 def run_motion(kp: KernelPlan, X: np.ndarray, T: np.ndarray, P: np.ndarray, fail: np.ndarray,
                pend: np.ndarray, want_links: np.ndarray, want_points: np.ndarray) -> int:
     """Every step at the inputs ``X`` (M, n_drivers, C-contiguous, writable) on the

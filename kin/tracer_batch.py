@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel
-from .geometry import Geometry, origin_joint
+from .geometry import joint_tables, origin_joint
 from .memo import cached
-from .poses import carried
-from .sensitivity import compiled_sensitivities, material_derivative, offset_columns, sensitivity_plan
+from .poses import unit
+from .sensitivity import offset_columns, sensitivity_plan
 from .solve import SolvePlan, plan_of
 
 __all__ = ["TracerBatch"]
@@ -43,6 +43,13 @@ class TracerBatch:
     point: str
     host: int                       # the link that carries the point in ``kin.solve.solve``
     E: np.ndarray                   # ∂(point − host's reference point)/∂(design, input) (2, q)
+    plan_args: tuple                # the kernel plan's arrays (:func:`kin._tracer_nb.tracer_point`)
+    table: tuple                    # the joint table's template (:meth:`kin.geometry.Geometry.gather`)
+    first: np.ndarray               # each link's reference joint's row
+    blocks: tuple                   # the sensitivity blocks (:func:`kin.sensitivity.sensitivity_plan`)
+    at: np.ndarray                  # the point's own reference position, where no column moves it
+    pcols: np.ndarray               # the point's x and y columns (-1: none)
+    angle_cols: tuple               # the guide angles' columns, in the table's order
 
     @classmethod
     def of(cls, mechanism, names, point: str) -> "TracerBatch | None":
@@ -63,31 +70,15 @@ class TracerBatch:
         """The point ``W`` ``(D, N, 2)`` of designs ``designs`` ``(D, p)`` at their inputs
         ``inputs`` ``(D, N)``, NaN where a design does not assemble, and with ``jacobian``
         its derivatives ``(D, N, 2, p + 1)`` by the design columns and the input (else
-        None)."""
-        sp, m = self.plan, self.plan.mechanism
-        kp = kernel.kernel_plan(sp)
-        geo = Geometry(m, self.names, designs)
-        table = geo.gather(sp)
-        every = range(len(sp.steps))
-        D, N = inputs.shape
-        nl, f, h = m.n_links, kp.frame, self.host
-        T = np.empty((nl, 3, D, N))
-        T[f] = 0.0
-        C, S, _ = kernel.run_designs(kp, kernel.lower_designs(sp, kp, geo, every), inputs[..., None], every, T)
-        C[f], S[f] = 1.0, 0.0
-        r = geo.at(self.point)[:, 0] - table[2][:, h]                   # (as Poses.carry: from its reference point)
-        W = np.stack(carried(T[h, 0], T[h, 1], C[h], S[h], r[:, :1], r[:, 1:]), axis=-1)
-        if not jacobian:
-            return W, None
-        q = len(self.names) + 1
-        ok = np.all(np.isfinite(C), axis=0).reshape(-1)
-        dZ = np.full((nl, D * N, 3, q), np.nan)
-        dZ[f] = 0.0
-        nb = _sensitivity_kernel()
-        flat = lambda a: a.reshape(nl, -1)                  # noqa: E731
-        compiled_sensitivities(nb, sensitivity_plan(sp, self.names),
-                               (flat(T[:, 0]), flat(T[:, 1]), flat(C), flat(S)), N, table, ok, dZ)
-        return W, material_derivative(dZ[h], flat(C)[h], flat(S)[h], r, self.E).reshape(D, N, 2, q)
+        None): one compiled call (:func:`kin._tracer_nb.tracer_point`)."""
+        X = np.ascontiguousarray(designs, float)
+        Uang = np.empty((len(X), len(self.angle_cols), 2))
+        for k, c in enumerate(self.angle_cols):             # (NumPy's cos, sin and hypot, as gather's)
+            Uang[:, k] = unit(np.stack([np.cos(X[:, c]), np.sin(X[:, c])], axis=-1))
+        W, dW = _tracer_kernel().tracer_point(*self.plan_args, *self.table, Uang, self.first, X,
+                                              np.ascontiguousarray(inputs, float)[..., None], self.at, self.pcols,
+                                              self.host, bool(jacobian), *self.blocks, self.E)
+        return W, (dW if jacobian else None)
 
 
 def _make(sp: SolvePlan, arg) -> TracerBatch:
@@ -98,10 +89,28 @@ def _make(sp: SolvePlan, arg) -> TracerBatch:
     q = len(names) + 1
     cols = {n: i for i, n in enumerate(names)}
     E = offset_columns(cols, point, origin_joint(m, m.link_names[host]), q)
-    E.flags.writeable = False
-    return TracerBatch(sp, names, point, host, E)
+    kp = kernel.kernel_plan(sp)
+    tab = joint_tables(sp, m, names)
+    plan_args = (kp.codes, kp.ints, kp.floats.shape[1], kp.rows, kp.unknown, kernel.every_step(kp), kp.trig,
+                 kp.frame, float(sp.size))
+    table = (tab.at, tab.axes, tab.rows, tab.cx, tab.cy, np.array([i for i, _ in tab.angles], np.int64))
+    f = sensitivity_plan(sp, names).flat
+    blocks = (f["kind"], f["la"], f["lb"], f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], *f["rows"],
+              f["step_lo"], f["step_hi"], f["neq"], f["col_of"], f["unknown"])
+    at = np.asarray(m.joint(point).at if point not in points else m.points[points.index(point)].at, float)
+    pcols = np.array([cols.get(f"{point}.x", -1), cols.get(f"{point}.y", -1)], np.int64)
+    for a in (E, at, pcols):
+        a.flags.writeable = False
+    return TracerBatch(sp, names, point, host, E, plan_args, table, tab.first, blocks, at, pcols,
+                       tuple(c for _, c in tab.angles))
 
 
-def _sensitivity_kernel():
-    from . import _sensitivity_nb
-    return _sensitivity_nb
+def _tracer_kernel():
+    """:mod:`kin._tracer_nb`, imported on first use (with numba)."""
+    if not _KERNEL:
+        from . import _tracer_nb
+        _KERNEL.append(_tracer_nb)
+    return _KERNEL[0]
+
+
+_KERNEL: list = []

@@ -95,3 +95,21 @@ def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(monkeypat
     assert np.array_equal(fast[0], store[0], equal_nan=True)
     for a, b in zip(fast[1], store[1]):
         assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_the_fused_kernel_is_rebuilt_after_an_edit_of_a_kernel_it_calls(tmp_path, monkeypatch):
+    """numba keys kin._tracer_nb's cache on its own file only, though its code inlines the
+    design kernel and the sensitivities: a newer kernel file makes it as new (its cache is
+    then rebuilt once); an older one leaves it alone."""
+    import os
+    from multiloop.kin import _kernel_nb, _tracer_nb
+    me = tmp_path / "_tracer_nb.py"
+    me.write_text("")
+    newest = os.path.getmtime(_kernel_nb.__file__)
+    os.utime(me, (newest - 100.0, newest - 100.0))
+    monkeypatch.setattr(_tracer_nb, "__file__", str(me))
+    _tracer_nb._fresh_cache()
+    assert os.path.getmtime(me) >= newest
+    os.utime(me, (newest + 100.0, newest + 100.0))
+    _tracer_nb._fresh_cache()
+    assert os.path.getmtime(me) == newest + 100.0
