@@ -65,8 +65,9 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
                  at, axes, prow, pcx, pcy, arow, Uang, first, X, inputs, point, pcols, host, jac,
                  kind, la, lb, brow, alpha, drive, Ea, Eb, jr, oa, ob, step_lo, step_hi, neq, col_of, sunknown, E):
     """The point ``W`` (D, N, 2) of designs ``X`` (D, p) at their inputs ``inputs``
-    (D, N, 1), NaN where a design does not assemble, and with ``jac`` its derivatives
-    ``dW`` (D, N, 2, q) by the design columns and the input (else an empty array).
+    (D, N, 1) (or (1, N, 1), shared), NaN where a design does not assemble, with ``jac``
+    its derivatives ``dW`` (D, N, 2, q) by the design columns and the input (else an empty
+    array), and ``ok`` (D, N) where every link assembled.
 
     The plan (:class:`kin.kernel.KernelPlan`): ``codes``, ``ints``, the numbers' ``width``,
     the lowering's rows ``qrows``, ``unknown``, the ``steps`` to run, ``trig``, ``frame``
@@ -76,7 +77,7 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
     ``kind`` … ``sunknown`` of :func:`kin._sensitivity_nb.sensitivities`, the blocks'
     joint and origin rows ``jr``, ``oa``, ``ob``) and the point's offset columns ``E`` (2, q).
     """
-    D, N = inputs.shape[0], inputs.shape[1]
+    D, N = X.shape[0], inputs.shape[1]
     nl, ns = first.size, codes.shape[0]
     P, U, O = _joint_table(at, axes, prow, pcx, pcy, arow, Uang, first, X)
     numbers = np.full((D, ns, width), np.nan)
@@ -102,10 +103,16 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
             c, s = C[host, d, n], S[host, d, n]
             W[d, n, 0] = T[host, 0, d, n] + (c * rx - s * ry)
             W[d, n, 1] = T[host, 1, d, n] + (s * rx + c * ry)
+    B = D * N
+    Cf, Sf = C.reshape(nl, B), S.reshape(nl, B)
+    ok = np.ones(B, np.bool_)
+    for b in range(B):
+        for k in range(nl):
+            if not np.isfinite(Cf[k, b]):
+                ok[b] = False
     q = E.shape[1]
     if not jac:
-        return W, np.empty((0, 0, 2, q))
-    B = D * N
+        return W, np.empty((0, 0, 2, q)), ok.reshape(D, N)
     Xf = np.empty((nl, B))
     Yf = np.empty((nl, B))
     for k in range(nl):
@@ -113,12 +120,6 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
             for n in range(N):
                 Xf[k, d * N + n] = T[k, 0, d, n]
                 Yf[k, d * N + n] = T[k, 1, d, n]
-    Cf, Sf = C.reshape(nl, B), S.reshape(nl, B)
-    ok = np.ones(B, np.bool_)
-    for b in range(B):
-        for k in range(nl):
-            if not np.isfinite(Cf[k, b]):
-                ok[b] = False
     nb = jr.size
     rho_a = np.empty((nb, D, 2))
     rho_b = np.empty((nb, D, 2))
@@ -145,4 +146,4 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
                 dt = dZ[host, b, 2, j]
                 dW[d, n, 0, j] = dZ[host, b, 0, j] + -ay * dt + (c * E[0, j] - s * E[1, j])
                 dW[d, n, 1, j] = dZ[host, b, 1, j] + ax * dt + (s * E[0, j] + c * E[1, j])
-    return W, dW
+    return W, dW, ok.reshape(D, N)

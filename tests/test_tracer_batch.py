@@ -113,3 +113,39 @@ def test_the_fused_kernel_is_rebuilt_after_an_edit_of_a_kernel_it_calls(tmp_path
     os.utime(me, (newest + 100.0, newest + 100.0))
     _tracer_nb._fresh_cache()
     assert os.path.getmtime(me) == newest + 100.0
+
+
+@pytest.mark.parametrize("name", ["four_bar", "crank_slider", "watt_1"])
+def test_the_curve_on_shared_inputs_is_the_pose_stores_with_its_statuses(name):
+    m = load_named(name)
+    names, X = _designs(m, D=6, rel=0.15, seed=2)             # (some cells out of reach: four_bar, watt_1)
+    phi = np.linspace(-np.pi, np.pi, 40) if m.is_rotary(0) else np.linspace(-0.5, 0.5, 40) * m.size
+    pt = m.points[0].name if m.points else next(j.name for j in m.joints[::-1] if m.frame not in j.links)
+    with kernel.for_batches():
+        st = solve_designs(m, names, X, phi)
+    W, ok = TracerBatch.of(m, names, pt).curve(X, phi)
+    assert np.array_equal(W, st.point(pt), equal_nan=True) and np.array_equal(ok, st.ok)
+    assert ok.all() == (name == "crank_slider")
+
+
+@pytest.mark.parametrize("cons", [{}, {"full_rotation": True}, {"shape_only": True}], ids=["free", "rotation", "shape"])
+def test_the_population_objective_is_the_same_by_both_routes(cons, monkeypatch):
+    """Free timing's population objective on the tracer's curve (no pose store) equals
+    the pose store's, bit for bit, with and without a full rotation's violation."""
+    from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
+    from multiloop.catalogue.dimensional.objective import Constraints
+    from multiloop.catalogue.dimensional.synthesise import path_target
+    from multiloop.kin.solve import solve
+    m = load_named("four_bar")
+    T = solve(m, np.radians(np.arange(7.0, 360.0, 33.0))).point_positions[:, 0]
+    shape = cons.pop("shape_only", False)
+    pr = Problem(Evaluator(m, design_space(m, ["P"], region=T)), path_target(m, T, "P", shape_only=shape),
+                 Constraints(**cons), 96)
+    pr.init_shape()
+    rng = np.random.default_rng(5)
+    Z = pr.x0 + 0.08 * (pr.upper - pr.lower) * rng.uniform(-1, 1, (60, len(pr.x0)))
+    assert pr._tracer() is not None
+    fast = pr.batch(Z)
+    monkeypatch.setattr(Problem, "_tracer", lambda self: None)
+    slow = pr.batch(Z)
+    assert np.array_equal(fast, slow) and np.isfinite(fast).sum() > 10

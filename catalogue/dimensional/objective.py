@@ -477,11 +477,15 @@ class Problem:
         if span is not None:
             return self._prescribed(Z, tim, span)
         M = self.M
-        st = self.grid_poses(X, keep=False) if tim is None else \
-            self.ev.poses(X, np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1), keep=False)
+        tracer = self._tracer() if tim is None and not self.cons.min_transmission else None
+        if tracer is not None:              # (a path's curve straight from the design matrix: no pose store)
+            st, (F, ok) = None, tracer.curve(X, self.grid)
+        else:
+            st = self.grid_poses(X, keep=False) if tim is None else \
+                self.ev.poses(X, np.concatenate([np.broadcast_to(self.grid, (Z.shape[0], M)), tim], axis=1), keep=False)
+            F, ok = self.features(Z, st), st.ok
         T, size = self.targets_for(Z)
-        F = self.features(Z, st)
-        ok = st.ok[:, :M]
+        ok = ok[:, :M]
         if tim is None:
             full = ok.all(axis=1) if self.rotary else np.zeros(len(ok), bool)    # (as curve's)
             cost = self.free_costs(F[:, :M], T, size, ok, full)
@@ -491,7 +495,7 @@ class Problem:
             lo, hi = np.nanmin(np.where(valid, cphi, np.nan), 1), np.nanmax(np.where(valid, cphi, np.nan), 1)
             inside = full[:, None] | ((tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12))
             cost = np.where(inside.all(1), cost, np.inf)
-        return self._score(cost, self.violation(X, st, full))
+        return self._score(cost, self.violation(X, st, full, ok))
 
     def _score(self, cost: np.ndarray, violation: np.ndarray) -> np.ndarray:
         """The objective ``(P,)`` from the targets' summed squared relative errors and the
@@ -631,13 +635,16 @@ class Problem:
                 out = np.fmin(out, np.where(np.isfinite(r), r, 0.0))
         return out
 
-    def violation(self, X: np.ndarray, st: DesignPoses, full: np.ndarray) -> np.ndarray:
+    def violation(self, X: np.ndarray, st: DesignPoses | None, full: np.ndarray,
+                  ok: np.ndarray | None = None) -> np.ndarray:
         """Sum of the relative constraint violations ``(P,)``; a reference configuration
-        within 1e-3 of a singular one always counts."""
+        within 1e-3 of a singular one always counts.  ``ok`` (P, M) where the grid's
+        samples assembled (default: the poses' ``st``; without poses no
+        ``min_transmission``)."""
         c = self.cons
         v = np.maximum(0.0, 1e-3 - self.reference_margin(X)) / 1e-3
         if c.full_rotation:
-            v += np.where(full, 0.0, 1.0 - np.mean(st.ok[:, :self.M], axis=1))
+            v += np.where(full, 0.0, 1.0 - np.mean((st.ok if ok is None else ok)[:, :self.M], axis=1))
         if c.min_transmission:
             mu = np.where(st.ok[:, :self.M], transmission_angles(self.ev, X, st)[:, :self.M], np.inf)
             mu = _lowest(mu, self.rotary)
