@@ -17,8 +17,8 @@ Measured in one run, each the best of a few repeats (CPU, one thread):
   ``synthesise`` (its objective scores each candidate on a 96-position grid for order
   and continuity) against Pyslvs 22.07's ``FPlanar`` with its DE
   (``benchmarks/peers/pyslvs_synthesis.py``, run in an interpreter that has Pyslvs:
-  ``--pyslvs-python`` or ``$MULTILOOP_PYSLVS_PYTHON``), evaluations over its
-  ``max_time``.
+  ``--pyslvs-python`` or ``$MULTILOOP_PYSLVS_PYTHON``), evaluations over its search's
+  own wall time (it stops its ``max_time`` by whole seconds, often early).
 
 Each line that states a goal is collected by ``multiloop bench --goals``.
 """

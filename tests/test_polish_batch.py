@@ -56,13 +56,44 @@ def test_the_steps_are_scipys(m, n, rank, seed, radius, alpha0):
     J = rng.normal(size=(K, m, min(rank, m, n))) @ rng.normal(size=(K, min(rank, m, n), n))
     R = rng.normal(size=(K, m))
     svd = optimise._svd(J, False)
-    for route in (optimise._tr_steps_numpy, optimise._tr_steps):      # (NumPy's, and compiled with numba)
+    compiled = lambda svd, R, r, a: optimise._tr_propose(svd, R, J, r, a)[:2]     # noqa: E731 (with numba)
+    for route in (optimise._tr_steps, compiled):
         h, alpha = route(svd, R, np.full(K, radius), np.full(K, alpha0))
         for k in range(K):
             W, s, Vt = np.linalg.svd(J[k], full_matrices=False)
             ref, ref_alpha, _ = solve_lsq_trust_region(n, m, W.T @ R[k], s, Vt.T, radius, initial_alpha=alpha0)
             assert np.allclose(h[k], ref, rtol=1e-9, atol=1e-12 * max(1.0, radius)), (h[k], ref)
             assert np.isclose(alpha[k], ref_alpha, rtol=1e-9, atol=1e-14)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2 ** 31), K=st.integers(1, 6), n=st.integers(1, 8))
+def test_the_compiled_proposal_and_verdict_are_numpys(seed, K, n):
+    """The predicted reductions and SciPy ``trf``'s verdicts (radius, parameter, stop)
+    compiled against the NumPy route: ratios below 0.25, above 0.75 on the boundary and
+    between, no gain, zero and negative predictions, a non-finite residual."""
+    from unittest import mock
+    rng = np.random.default_rng(seed)
+    m = n + 2
+    J, R, h = rng.normal(size=(K, m, n)), rng.normal(size=(K, m)), rng.normal(size=(K, n))
+    svd = optimise._svd(J, False)
+    radius = np.abs(rng.normal(size=K)) + 0.1
+    alpha = np.abs(rng.normal(size=K))
+    F = np.abs(rng.normal(size=K)) + 1.0
+    pred = rng.choice([-1.0, 0.0, 1e-3, 0.5, 2.0], size=K)
+    Fn = F - pred * rng.choice([0.0, 0.1, 0.5, 0.9, 1.0, 1.5], size=K)
+    Fn[rng.random(K) < 0.15] = np.nan
+    h *= (radius * rng.choice([0.5, 0.96, 1.0], size=K) / np.linalg.norm(h, axis=1))[:, None]
+    U = rng.normal(size=(K, n))
+    assert optimise._compiled_trust() is not None
+    fast = optimise._tr_propose(svd, R, J, radius, alpha), optimise._tr_accept(F, Fn, pred, h, U, radius, alpha)
+    with mock.patch.object(optimise, "_compiled_trust", lambda: None):
+        slow = optimise._tr_propose(svd, R, J, radius, alpha), optimise._tr_accept(F, Fn, pred, h, U, radius, alpha)
+    for a, b in zip(fast[0], slow[0]):
+        assert np.allclose(a, b, rtol=1e-12, atol=1e-14)
+    (r1, a1, d1), (r2, a2, d2) = fast[1], slow[1]
+    assert np.array_equal(d1, d2)                     # (the norms' sums in another order: rounding)
+    assert np.allclose(r1, r2, rtol=1e-14, atol=0) and np.allclose(a1, a2, rtol=1e-14, atol=0)
 
 
 def test_a_floored_step_is_the_step_of_the_floored_jacobian():

@@ -1,10 +1,10 @@
 """The numba side of the batched polish's trust-region step
-(:func:`.optimise._tr_steps`): K least-squares subproblems, each solved from its
+(:func:`.optimise._tr_propose`, :func:`.optimise._tr_accept`): K least-squares subproblems, each solved from its
 Jacobian's SVD, in one compiled call.
 
 Imported only when populations run compiled (:func:`multiloop.kin.kernel.compiled_batches`),
 with the kernel's disk cache (``cache=True``).  Each design's step is the NumPy route's
-(:func:`.optimise._tr_steps_numpy`, itself SciPy's ``solve_lsq_trust_region``: Moré 1977)
+(:func:`.optimise._tr_steps`, itself SciPy's ``solve_lsq_trust_region``: Moré 1977)
 operation for operation, its sums in index order where NumPy's ``einsum`` may pair them
 otherwise: the two agree to rounding (``tests/test_polish_batch.py``).  The NumPy route
 took about 150 µs a call whatever K (some forty array operations of a few elements).
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["tr_steps"]
+__all__ = ["tr_steps", "tr_propose", "tr_accept"]
 
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -100,3 +100,58 @@ def tr_steps(W, s, Vt, R, radius, alpha):
             h[k, j] *= scale
         out[k] = al
     return h, out
+
+
+@numba.njit(**_JIT)
+def tr_propose(W, s, Vt, R, J, radius, alpha):
+    """:func:`tr_steps`'s steps and parameters, and each step's predicted reduction
+    ``|r|² − |r + J h|² = −(2 r·Jh + |Jh|²)`` (``J`` (K, m, n))."""
+    h, al = tr_steps(W, s, Vt, R, radius, alpha)
+    K, m, n = J.shape
+    pred = np.empty(K)
+    for k in range(K):
+        rj, jj = 0.0, 0.0
+        for i in range(m):
+            jh = 0.0
+            for j in range(n):
+                jh += J[k, i, j] * h[k, j]
+            rj += R[k, i] * jh
+            jj += jh * jh
+        pred[k] = -(2.0 * rj + jj)
+    return h, al, pred
+
+
+@numba.njit(**_JIT)
+def tr_accept(F, Fn, pred, h, U, radius, alpha):
+    """SciPy ``trf``'s verdict on K steps (:func:`.optimise._tr_accept`, the same tests in
+    the same order): the new radii, parameters and whether each design has stopped."""
+    K, n = h.shape
+    new_r = np.empty(K)
+    new_a = np.empty(K)
+    done = np.empty(K, np.bool_)
+    for k in range(K):
+        gain = F[k] - Fn[k]
+        p = pred[k]
+        if p > 0:
+            rho = gain / p
+        elif p == 0 and gain == 0:
+            rho = 1.0
+        else:
+            rho = 0.0
+        sh, su = 0.0, 0.0
+        for j in range(n):
+            sh += h[k, j] * h[k, j]
+            su += U[k, j] * U[k, j]
+        step = np.sqrt(sh)
+        r = radius[k]
+        if rho < 0.25:
+            nr = 0.25 * step
+        elif rho > 0.75 and step > 0.95 * r:
+            nr = 2.0 * r
+        else:
+            nr = r
+        d = (gain < 1e-15 * F[k] and rho > 0.25) or step < 1e-15 * (1e-15 + np.sqrt(su))
+        done[k] = d
+        new_r[k] = r if d else nr
+        new_a[k] = alpha[k] if d else alpha[k] * r / (nr if nr > 0 else 1.0)
+    return new_r, new_a, done

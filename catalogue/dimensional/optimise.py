@@ -410,13 +410,35 @@ def _norms(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.add.reduce(x * x, axis=1))
 
 
-def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_tr_steps_numpy`'s steps, compiled when populations run compiled
-    (``_trust_nb.tr_steps``: the same operations design by design, equal to rounding)."""
+def _tr_propose(svd: tuple, R: np.ndarray, J: np.ndarray, radius: np.ndarray, alpha: np.ndarray):
+    """:func:`_tr_steps`'s steps ``h`` and parameters, and each step's predicted
+    reduction ``|r|² − |r + J h|²`` (compiled as ``_trust_nb.tr_propose`` when populations
+    run compiled)."""
     nb = _compiled_trust()
-    if nb is None:
-        return _tr_steps_numpy(svd, R, radius, alpha)
-    return nb.tr_steps(*(np.ascontiguousarray(a, float) for a in (*svd, R, radius, alpha)))
+    if nb is not None:
+        return nb.tr_propose(*(np.ascontiguousarray(x, float) for x in (*svd, R, J, radius, alpha)))
+    h, alpha = _tr_steps(svd, R, radius, alpha)
+    Jh = np.einsum("kmi,ki->km", J, h)
+    return h, alpha, -(2.0 * np.einsum("km,km->k", R, Jh) + np.einsum("km,km->k", Jh, Jh))
+
+
+def _tr_accept(F: np.ndarray, Fn: np.ndarray, pred: np.ndarray, h: np.ndarray, U: np.ndarray,
+               radius: np.ndarray, alpha: np.ndarray):
+    """SciPy ``trf``'s verdict on K steps ``h`` from ``U`` (squared residuals ``F`` before,
+    ``Fn`` after, ``pred`` predicted): the new radii and Levenberg–Marquardt parameters
+    (the ratio of actual to predicted reduction below 0.25: a quarter of the step; above
+    0.75 on the boundary: doubled) and whether each design has stopped (``ftol``,
+    ``xtol`` at 1e-15); compiled as ``_trust_nb.tr_accept`` when populations run compiled."""
+    nb = _compiled_trust()
+    if nb is not None:
+        return nb.tr_accept(*(np.ascontiguousarray(x, float) for x in (F, Fn, pred, h, U, radius, alpha)))
+    gain = F - Fn
+    rho = np.where(pred > 0, gain / np.where(pred > 0, pred, 1.0), np.where((pred == 0) & (gain == 0), 1.0, 0.0))
+    step = _norms(h)
+    new_radius = np.where(rho < 0.25, 0.25 * step, np.where((rho > 0.75) & (step > 0.95 * radius), 2.0 * radius, radius))
+    done = ((gain < 1e-15 * F) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + _norms(U)))
+    alpha = np.where(done, alpha, alpha * radius / np.where(new_radius > 0, new_radius, 1.0))
+    return np.where(done, radius, new_radius), alpha, done
 
 
 def _compiled_trust():
@@ -428,7 +450,7 @@ def _compiled_trust():
     return _trust_nb
 
 
-def _tr_steps_numpy(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The trust-region steps ``h`` ``(K, n)`` of K least-squares problems ``|r + J h|``
     (``J`` ``(m, n)`` given by its :func:`_svd`) within ``|h| <= radius``, and their
     Levenberg–Marquardt parameters ``alpha`` (the last ones, ``alpha``, start the
@@ -571,9 +593,7 @@ class _TrustRegions:
         W, s, Vt = _svd(J, self.floor)           # (a rejected step's design keeps its Jacobian's)
         while active.any():
             a = np.flatnonzero(active)
-            h, alpha[a] = _tr_steps((W[a], s[a], Vt[a]), R[a], radius[a], alpha[a])
-            Jh = np.einsum("kmi,ki->km", J[a], h)
-            pred = -(2.0 * np.einsum("km,km->k", R[a], Jh) + np.einsum("km,km->k", Jh, Jh))   # |r|² − |r + Jh|²
+            h, alpha[a], pred = _tr_propose((W[a], s[a], Vt[a]), R[a], J[a], radius[a], alpha[a])
             if not self.afford(len(a)):
                 break
             Un = U[a] + h
@@ -582,15 +602,8 @@ class _TrustRegions:
             self.nfev[a] += 1
             Fn = np.einsum("km,km->k", Rn, Rn)
             self._keep(a, Un, Fn)
-            gain = F[a] - Fn
-            rho = np.where(pred > 0, gain / np.where(pred > 0, pred, 1.0), np.where((pred == 0) & (gain == 0), 1.0, 0.0))
-            step = _norms(h)
-            new_radius = np.where(rho < 0.25, 0.25 * step,
-                                  np.where((rho > 0.75) & (step > 0.95 * radius[a]), 2.0 * radius[a], radius[a]))
-            done = ((gain < 1e-15 * F[a]) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + _norms(U[a])))
-            alpha[a] = np.where(done, alpha[a], alpha[a] * radius[a] / np.where(new_radius > 0, new_radius, 1.0))
-            radius[a] = np.where(done, radius[a], new_radius)
-            ok = gain > 0
+            radius[a], alpha[a], done = _tr_accept(F[a], Fn, pred, h, U[a], radius[a], alpha[a])
+            ok = F[a] - Fn > 0
             acc = a[ok]
             if len(acc):
                 new = with_jacobian(Un[ok])
