@@ -207,6 +207,7 @@ class Problem:
             self.delta = 2.0 * size / half
             self.grid = np.concatenate([self.delta * np.arange(half), -self.delta * np.arange(1, half + 1)])
         self._targets = self.target_values()           # (the target is immutable)
+        self._fixed_targets: dict = {}                 # (targets_for's arrays by batch size)
         self._size = target.size if target.size > 0 else 1.0
         self.n_targets = len(self._targets)
 
@@ -364,7 +365,12 @@ class Problem:
             x = s[:, None] * (cs * d[:, 0] - sn * d[:, 1]) + c0[0] + e[:, 2:3]
             y = s[:, None] * (sn * d[:, 0] + cs * d[:, 1]) + c0[1] + e[:, 3:4]
             return np.stack([x, y], axis=-1), s * t.size
-        return np.broadcast_to(T, (P,) + T.shape), np.full(P, self._size)
+        hit = self._fixed_targets.get(P)
+        if hit is None:                     # (read-only views, the same for every batch of P designs)
+            size = np.full(P, self._size)
+            size.flags.writeable = False
+            hit = self._fixed_targets[P] = (np.broadcast_to(T, (P,) + T.shape), size)
+        return hit
 
     def features(self, Z: np.ndarray, st: DesignPoses) -> np.ndarray:
         """What is compared with the targets, ``(P, N, c)``, from poses ``st``."""
