@@ -113,6 +113,22 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
     q = E.shape[1]
     if not jac:
         return W, np.empty((0, 0, 2, q)), ok.reshape(D, N)
+    dW = _point_derivatives(T, Cf, Sf, P, U, r, ok, host, frame, N, kind, la, lb, brow, alpha, drive, Ea, Eb, jr, oa,
+                            ob, step_lo, step_hi, neq, col_of, sunknown, E)
+    return W, dW, ok.reshape(D, N)
+
+
+@numba.njit(**_JIT)
+def _point_derivatives(T, Cf, Sf, P, U, r, ok, host, frame, N, kind, la, lb, brow, alpha, drive, Ea, Eb, jr, oa, ob,
+                       step_lo, step_hi, neq, col_of, sunknown, E):
+    """:func:`tracer_point`'s derivatives ``dW`` (D, N, 2, q): every step's velocity
+    analogue (:func:`kin._sensitivity_nb.sensitivities`) on the poses ``T`` (n_links, 3, D,
+    N) and their cos and sin ``Cf``, ``Sf`` (n_links, D·N), the blocks' offsets and guides
+    read from the joint table ``P``, ``U``, then the material point at ``r`` (D, 2) from
+    link ``host``'s reference point (:func:`kin.sensitivity.material_derivative`)."""
+    nl, D = T.shape[0], T.shape[2]
+    B = D * N
+    q = E.shape[1]
     Xf = np.empty((nl, B))
     Yf = np.empty((nl, B))
     for k in range(nl):
@@ -146,4 +162,4 @@ def tracer_point(codes, ints, width, qrows, unknown, steps, trig, frame, size,
                 dt = dZ[host, b, 2, j]
                 dW[d, n, 0, j] = dZ[host, b, 0, j] + -ay * dt + (c * E[0, j] - s * E[1, j])
                 dW[d, n, 1, j] = dZ[host, b, 1, j] + ax * dt + (s * E[0, j] + c * E[1, j])
-    return W, dW, ok.reshape(D, N)
+    return dW
