@@ -16,7 +16,8 @@ from multiloop.kin.tracer_batch import TracerBatch
 
 from test_design_batch import DYAD_MECHANISMS, _designs
 
-pytestmark = pytest.mark.skipif(kernel.load() is None, reason="numba is not installed")
+pytestmark = pytest.mark.skipif(not kernel.compiled_batches(),
+                                reason="design batches do not run compiled (no numba, or MULTILOOP_KERNEL=off)")
 
 
 def _case(name, D=3, N=12, seed=2):
