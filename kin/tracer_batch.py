@@ -71,18 +71,19 @@ class TracerBatch:
         ``inputs`` ``(D, N)``, NaN where a design does not assemble, and with ``jacobian``
         its derivatives ``(D, N, 2, p + 1)`` by the design columns and the input (else
         None): one compiled call (:func:`kin._tracer_nb.tracer_point`)."""
-        W, dW, _ = self._run(designs, np.ascontiguousarray(inputs, float)[..., None], jacobian)
+        W, dW, _ = self._run(designs, np.asarray(inputs, float)[..., None], jacobian)
         return W, (dW if jacobian else None)
 
     def curve(self, designs: np.ndarray, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The point ``W`` ``(D, N, 2)`` of designs ``designs`` ``(D, p)`` at the same
         inputs ``inputs`` ``(N,)`` (their cos and sin computed once), and ``ok`` ``(D, N)``
         where every link assembled (``solve_designs(...).ok``)."""
-        W, _, ok = self._run(designs, np.ascontiguousarray(inputs, float).reshape(1, -1, 1), False)
+        W, _, ok = self._run(designs, np.asarray(inputs, float).reshape(1, -1, 1), False)
         return W, ok
 
     def _run(self, designs, inputs3: np.ndarray, jacobian: bool):
-        X = np.ascontiguousarray(designs, float)
+        X = _writable(designs)
+        inputs3 = _writable(inputs3)
         Uang = np.empty((len(X), len(self.angle_cols), 2))
         for k, c in enumerate(self.angle_cols):             # (NumPy's cos, sin and hypot, as gather's)
             Uang[:, k] = unit(np.stack([np.cos(X[:, c]), np.sin(X[:, c])], axis=-1))
@@ -112,6 +113,13 @@ def _make(sp: SolvePlan, arg) -> TracerBatch:
         a.flags.writeable = False
     return TracerBatch(sp, names, point, host, E, plan_args, table, tab.first, blocks, at, pcols,
                        tuple(c for _, c in tab.angles))
+
+
+def _writable(a) -> np.ndarray:
+    """``a`` as a C-contiguous, writable float array (numba compiles read-only arrays as
+    another type: one signature for every call)."""
+    a = np.ascontiguousarray(a, float)
+    return a if a.flags.writeable else a.copy()
 
 
 def _tracer_kernel():

@@ -150,3 +150,15 @@ def test_the_population_objective_is_the_same_by_both_routes(cons, monkeypatch):
     monkeypatch.setattr(Problem, "_tracer", lambda self: None)
     slow = pr.batch(Z)
     assert np.array_equal(fast, slow) and np.isfinite(fast).sum() > 10
+
+
+def test_read_only_designs_and_inputs_use_the_one_compiled_signature():
+    """Read-only arrays (numba types them apart) are copied, not compiled for again."""
+    from multiloop.kin import tracer_batch
+    m, names, X, PHI = _case("four_bar", D=2, N=5)
+    tb = TracerBatch.of(m, names, "P")
+    W0 = tb.solve(X, PHI)[0]
+    n = len(tracer_batch._tracer_kernel().tracer_point.signatures)
+    X.flags.writeable = PHI.flags.writeable = False
+    assert np.array_equal(tb.solve(X, PHI)[0], W0) and np.array_equal(tb.curve(X, PHI[0])[0], tb.curve(X.copy(), PHI[0])[0])
+    assert len(tracer_batch._tracer_kernel().tracer_point.signatures) == n
