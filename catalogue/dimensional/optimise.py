@@ -23,7 +23,7 @@ it has one (``exact_jacobian``: the poses' design sensitivities,
 one batched call (all perturbed designs together).  :func:`polish_batch` runs the
 same trust region (SciPy's ``trf`` iteration, ported to act on K designs at once) for
 several designs together, each residual and Jacobian call one batch over the compiled
-plan, each step's subproblem one compiled call (``_trust_nb``): synthesis polishes its
+plan, each iteration's proposal and verdict one compiled call (``_trust_nb``): synthesis polishes its
 probes' designs and its final candidates so, one or several.  When the
 problem has constraints, the polish's residual vector carries the same weighted
 violation as the global objective (:meth:`~.objective.Problem.penalty_batch`) as one
