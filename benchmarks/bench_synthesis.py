@@ -153,7 +153,7 @@ def pyslvs_run(T: np.ndarray, budget: int, py: str) -> tuple[float, float, int, 
     (the subprocess's wall time, the error, Pyslvs's evaluations, its search's own wall
     time).  A rate is the evaluations over the search's own time: Pyslvs stops its
     ``max_time`` by whole seconds, so its search ran 1.4–1.95 s of a 2-s budget in four
-    runs (11:50 UTC 2026-11-30), and over the budget its rate read up to 30 % low."""
+    runs (11:30–11:36 UTC 2026-11-30), and over the budget its rate read up to 30 % low."""
     import json
     import subprocess
     from multiloop.topo.pyslvs import expression_of, mechanism_from_expression

@@ -46,8 +46,8 @@ from .geometry import joint_rows, origin_joint
 from .memo import cached
 from .rigid import perp
 
-__all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity", "material_derivative", "compiled_sensitivities",
-           "offset_columns", "sensitivity_plan"]
+__all__ = ["PoseSensitivity", "TangentView", "pose_sensitivity", "material_derivative", "offset_columns",
+           "sensitivity_plan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -375,43 +375,27 @@ _NB: list = []
 
 def _run_compiled(nb, comp: _Compiled, v: "_Flat", ok: np.ndarray, dZ: np.ndarray) -> None:
     """Every step's velocity analogue by the compiled kernel, into ``dZ`` in place (the
-    blocks' per-design offsets and guides gathered here, the rest compiled once)."""
+    blocks' per-design offsets ρ on links a and b and reference guides gathered here, the
+    rest compiled once)."""
     table = v.geo.joint_table if v.geo.batch else None
     rows = v.st.store.stacked_rows()
     C, S = (np.ascontiguousarray(x.reshape(x.shape[0], -1)) for x in rows) if rows is not None else \
         (np.ascontiguousarray(np.stack(x)) for x in (v.c, v.s))
+    f = comp.flat
     if table is not None:                      # (the batch's gathered joints: the same floats)
-        compiled_sensitivities(nb, comp, (v.X, v.Y, C, S), v.N, table, ok, dZ)
-        return
-    blocks = [b for st in comp.steps for b in st.blocks]
-    rho = np.empty((3, len(blocks), v.D, 2))
-    for i, b in enumerate(blocks):
-        rho[0, i], rho[1, i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
-        rho[2, i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
-    _call(nb, comp.flat, (v.X, v.Y, C, S), v.N, rho, ok, dZ)
-
-
-def compiled_sensitivities(nb, comp: _Compiled, poses: tuple, N: int, table: tuple, ok: np.ndarray,
-                           dZ: np.ndarray) -> None:
-    """Every step's velocity analogue by the compiled kernel
-    (:func:`kin._sensitivity_nb.sensitivities`) into ``dZ`` ``(n_links, B, 3, q)`` in
-    place: the poses ``(X, Y, C, S)`` each ``(n_links, B)`` (B = D·N, design by design),
-    the batch's joint table ``(P, U, O)`` (:meth:`~kin.geometry.Geometry.gather`), from
-    which each block's offsets and guide are read, and ``ok`` (B,) where they assembled."""
-    P, U, _ = table
-    jr, oa, ob = comp.flat["rows"]
-    rho = np.stack([P[:, jr] - P[:, oa], P[:, jr] - P[:, ob], U[:, jr]]).swapaxes(1, 2)
-    _call(nb, comp.flat, poses, N, rho, ok, dZ)
-
-
-def _call(nb, f: dict, poses: tuple, N: int, rho: np.ndarray, ok: np.ndarray, dZ: np.ndarray) -> None:
-    """:func:`kin._sensitivity_nb.sensitivities` on the poses and the blocks' offsets and
-    guides ``rho`` ``(3, n_blocks, D, 2)`` (ρ on links a and b, the reference guide)."""
-    X, Y, C, S = (np.ascontiguousarray(a) for a in poses)
+        P, U, _ = table
+        jr, oa, ob = f["rows"]
+        rho = np.stack([P[:, jr] - P[:, oa], P[:, jr] - P[:, ob], U[:, jr]]).swapaxes(1, 2)
+    else:
+        blocks = [b for st in comp.steps for b in st.blocks]
+        rho = np.empty((3, len(blocks), v.D, 2))
+        for i, b in enumerate(blocks):
+            rho[0, i], rho[1, i] = v.offset(b.joint, b.origin_a), v.offset(b.joint, b.origin_b)
+            rho[2, i] = v.reference_axis(b.joint) if b.kind in ("P", "drive_P") else 0.0
     rho_a, rho_b, u0 = (np.ascontiguousarray(a) for a in rho)
-    nb.sensitivities(X, Y, C, S, N, f["kind"], f["la"], f["lb"], f["row"], f["alpha"], f["drive"], f["Ea"],
-                     f["Eb"], rho_a, rho_b, u0, f["step_lo"], f["step_hi"], f["neq"], f["col_of"], f["unknown"],
-                     np.ascontiguousarray(ok), dZ)
+    nb.sensitivities(np.ascontiguousarray(v.X), np.ascontiguousarray(v.Y), C, S, v.N, f["kind"], f["la"], f["lb"],
+                     f["row"], f["alpha"], f["drive"], f["Ea"], f["Eb"], rho_a, rho_b, u0, f["step_lo"],
+                     f["step_hi"], f["neq"], f["col_of"], f["unknown"], np.ascontiguousarray(ok), dZ)
 
 
 class _Flat:

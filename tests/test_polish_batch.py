@@ -66,7 +66,7 @@ def test_the_steps_are_scipys(m, n, rank, seed, radius, alpha0):
             assert np.isclose(alpha[k], ref_alpha, rtol=1e-9, atol=1e-14)
 
 
-@pytest.mark.skipif(optimise._compiled_trust() is None, reason="populations do not run compiled (no numba, or off)")
+@pytest.mark.skipif(optimise.compiled_module("_trust_nb") is None, reason="populations do not run compiled (no numba, or off)")
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2 ** 31), K=st.integers(1, 6), n=st.integers(1, 8))
 def test_the_compiled_proposal_and_verdict_are_numpys(seed, K, n):
@@ -87,7 +87,7 @@ def test_the_compiled_proposal_and_verdict_are_numpys(seed, K, n):
     h *= (radius * rng.choice([0.5, 0.96, 1.0], size=K) / np.linalg.norm(h, axis=1))[:, None]
     U = rng.normal(size=(K, n))
     fast = optimise._tr_propose(svd, R, J, radius, alpha), optimise._tr_accept(F, Fn, pred, h, U, radius, alpha)
-    with mock.patch.object(optimise, "_compiled_trust", lambda: None):
+    with mock.patch.object(optimise, "compiled_module", lambda name: None):
         slow = optimise._tr_propose(svd, R, J, radius, alpha), optimise._tr_accept(F, Fn, pred, h, U, radius, alpha)
     for a, b in zip(fast[0], slow[0]):
         assert np.allclose(a, b, rtol=1e-12, atol=1e-14)

@@ -17,6 +17,7 @@ on the ratio of the longest to the shortest.
 """
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -588,7 +589,7 @@ class Problem:
         from the reference (``ok`` (P, M), ``full`` (P,) from :meth:`curve`), ``(P,)``.
         The compiled route (:mod:`._match_nb`) when the kernel is in use, else NumPy's;
         the two agree bit for bit."""
-        nb = _compiled_matching()
+        nb = compiled_module("_match_nb")
         if nb is not None:
             out = np.empty(F.shape[0])
             walks = self.walks()
@@ -813,10 +814,7 @@ class Problem:
         compiled step and lowering for every step and no path-dependent one; else None."""
         if not (isinstance(self.target, PathTarget) and kernel.compiled_batches()) or self.ev.path_dependent:
             return None
-        if not hasattr(self, "_tracer_batch"):              # (looked up once: the plan and names are fixed)
-            from multiloop.kin.tracer_batch import TracerBatch
-            self._tracer_batch = TracerBatch.of(self.ev.mechanism, tuple(self.ev.space.names), self.target.point)
-        return self._tracer_batch
+        return cached(self, "tracer batch", _tracer_batch)[0]            # (the plan and names are fixed)
 
     def _features_and_jacobian(self, Z: np.ndarray, PHI: np.ndarray):
         """:meth:`features` ``F`` and their derivatives ``dF`` (:meth:`_feature_jacobian`,
@@ -930,6 +928,12 @@ class Problem:
         return np.concatenate([np.zeros((P, 1)), W], axis=1), ends
 
 
+def _tracer_batch(problem: Problem, _) -> tuple:
+    """:meth:`Problem._tracer`'s batch, in a tuple (a memo keeps no None)."""
+    from multiloop.kin.tracer_batch import TracerBatch
+    return (TracerBatch.of(problem.ev.mechanism, tuple(problem.ev.space.names), problem.target.point),)
+
+
 def _frozen(arrays: tuple) -> tuple:
     """``arrays`` made read-only (values kept in a memo)."""
     for a in arrays:
@@ -954,13 +958,19 @@ def grashof_margins(problem: Problem, X: np.ndarray) -> np.ndarray:
     return np.stack([g, np.maximum(0.0, L[:, k] - others) / mean], axis=1)
 
 
-def _compiled_matching():
-    """The compiled matching module when populations run compiled
-    (:func:`multiloop.kin.kernel.compiled_batches`), else None."""
+def compiled_module(name: str):
+    """This package's numba module ``name`` (``"_match_nb"``: free timing's matching,
+    ``"_trust_nb"``: the polish's trust-region step) when populations run compiled
+    (:func:`multiloop.kin.kernel.compiled_batches`), else None (the NumPy route)."""
     if not kernel.compiled_batches():
         return None
-    from . import _match_nb
-    return _match_nb
+    hit = _COMPILED.get(name)
+    if hit is None:
+        hit = _COMPILED[name] = importlib.import_module(f".{name}", __package__)
+    return hit
+
+
+_COMPILED: dict = {}
 
 
 def _dp(d2: np.ndarray) -> np.ndarray:

@@ -36,10 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from multiloop.kin import kernel
-
 from .budget import Budget, Meter
-from .objective import Problem
+from .objective import Problem, compiled_module
 
 __all__ = ["SearchResult", "global_search", "polish", "polish_batch", "METHODS"]
 
@@ -414,7 +412,7 @@ def _tr_propose(svd: tuple, R: np.ndarray, J: np.ndarray, radius: np.ndarray, al
     """:func:`_tr_steps`'s steps ``h`` and parameters, and each step's predicted
     reduction ``|r|² − |r + J h|²`` (compiled as ``_trust_nb.tr_propose`` when populations
     run compiled)."""
-    nb = _compiled_trust()
+    nb = compiled_module("_trust_nb")
     if nb is not None:
         return nb.tr_propose(*(np.ascontiguousarray(x, float) for x in (*svd, R, J, radius, alpha)))
     h, alpha = _tr_steps(svd, R, radius, alpha)
@@ -429,7 +427,7 @@ def _tr_accept(F: np.ndarray, Fn: np.ndarray, pred: np.ndarray, h: np.ndarray, U
     (the ratio of actual to predicted reduction below 0.25: a quarter of the step; above
     0.75 on the boundary: doubled) and whether each design has stopped (``ftol``,
     ``xtol`` at 1e-15); compiled as ``_trust_nb.tr_accept`` when populations run compiled."""
-    nb = _compiled_trust()
+    nb = compiled_module("_trust_nb")
     if nb is not None:
         return nb.tr_accept(*(np.ascontiguousarray(x, float) for x in (F, Fn, pred, h, U, radius, alpha)))
     gain = F - Fn
@@ -439,15 +437,6 @@ def _tr_accept(F: np.ndarray, Fn: np.ndarray, pred: np.ndarray, h: np.ndarray, U
     done = ((gain < 1e-15 * F) & (rho > 0.25)) | (step < 1e-15 * (1e-15 + _norms(U)))
     alpha = np.where(done, alpha, alpha * radius / np.where(new_radius > 0, new_radius, 1.0))
     return np.where(done, radius, new_radius), alpha, done
-
-
-def _compiled_trust():
-    """The compiled trust-region step's module when populations run compiled
-    (:func:`multiloop.kin.kernel.compiled_batches`), else None."""
-    if not kernel.compiled_batches():
-        return None
-    from . import _trust_nb
-    return _trust_nb
 
 
 def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
