@@ -18,7 +18,10 @@ Measured in one run, each the best of a few repeats (CPU, one thread):
   and continuity) against Pyslvs 22.07's ``FPlanar`` with its DE
   (``benchmarks/peers/pyslvs_synthesis.py``, run in an interpreter that has Pyslvs:
   ``--pyslvs-python`` or ``$MULTILOOP_PYSLVS_PYTHON``), evaluations over its search's
-  own wall time (it stops its ``max_time`` by whole seconds, often early).
+  own wall time (it stops its ``max_time`` by whole seconds, often early);
+* where that synthesis's time goes (:func:`synthesis_parts`): the population objective
+  per candidate and its curves, and each part of one trust-region iteration of the
+  polish beside the pose store's route that its tracer call replaced.
 
 Each line that states a goal is collected by ``multiloop bench --goals``.
 """
@@ -312,6 +315,53 @@ def search_rate(evaluations: int = 20_000, rounds: int = 5) -> float:
     return rate
 
 
+def synthesis_parts(P: int = 80, n: int = 2000) -> None:
+    """Where a four-bar synthesis's time goes (the ten points, free timing; each part the
+    fastest of three timings of ``n`` calls, BLAS on one thread as a run has it): the
+    population objective per candidate (``P`` of them) and its curves alone (the tracer
+    kernel on the 96-position grid), and per trust-region iteration of one design its
+    residuals, exact Jacobian (the tracer call with derivatives inside), SVD, proposal and
+    verdict; beside them the pose store's route to the same point and derivatives
+    (``solve_designs`` + ``pose_sensitivity``) that the tracer call replaced."""
+    import timeit
+    import bench_synthesis as bs
+    from multiloop.catalogue.dimensional import optimise as O
+    from multiloop.catalogue.dimensional.synthesise import one_blas_thread
+    from multiloop.kin.sensitivity import pose_sensitivity
+    pr = _path_problem(bs.start_mechanism(), bs.targets()["four-bar 10 points"], "P")
+    z = pr.x0
+    phi = pr.match(z)
+    rng = np.random.default_rng(0)
+    Z = z[None] + 0.02 * (pr.upper - pr.lower) * rng.uniform(-1, 1, (P, len(z)))
+    u0, _, _, scale, split = O.unit_variables(pr, z, phi)
+    U = u0[None]
+    R, J = O._unit_jacobians(pr, split(U), scale)
+    svd = O._svd(J, True)
+    h, _, pred = O._tr_propose(svd, R, J, np.ones(1), np.zeros(1))
+    F = np.einsum("km,km->k", R, R)
+    tb, X1, PHI1 = pr._tracer(), z[None, :pr.nx], phi[None]
+    m = pr.ev.mechanism
+
+    def store_route():
+        with kernel.for_batches():
+            st = solve_designs(m, pr.ev.space.names, X1, PHI1)
+            return st.point("P"), pose_sensitivity(st).point("P")
+    parts = [("population objective, per candidate", lambda: pr.batch(Z), P),
+             ("  its curves alone (tracer kernel), per candidate", lambda: tb.curve(Z[:, :pr.nx], pr.grid), P),
+             ("polish residuals, one design", lambda: O._residuals(pr, *split(U)), 1),
+             ("polish exact Jacobian, one design", lambda: O._unit_jacobians(pr, split(U), scale), 1),
+             ("  its tracer call with derivatives", lambda: tb.solve(X1, PHI1, jacobian=True), 1),
+             ("  the pose store's route to the same (replaced)", store_route, 1),
+             ("polish SVD (floored), one 20 x 20 Jacobian", lambda: O._svd(J, True), 1),
+             ("polish proposal (step, predicted reduction)", lambda: O._tr_propose(svd, R, J, np.ones(1), np.zeros(1)), 1),
+             ("polish verdict (radius, parameter, stop)",
+              lambda: O._tr_accept(F, 0.9 * F, pred, h, U, np.ones(1), np.zeros(1)), 1)]
+    with one_blas_thread():
+        for name, f, per in parts:
+            t = min(timeit.repeat(f, number=n, repeat=3)) / n
+            print(f"synthesis part, four-bar 10 points: {name}: {t / per * 1e6:.2f} µs")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer designs")
@@ -327,6 +377,7 @@ def main(argv=None):
     synthesis_floor_goal()
     triad_synthesis_goal()
     prescribed_timing_rate()
+    synthesis_parts()
 
 
 if __name__ == "__main__":
