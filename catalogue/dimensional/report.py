@@ -175,7 +175,8 @@ def synthesis_text(doc: dict) -> str:
              f"error (relative to the target size): max {doc['error_max']:.3g}, RMS {doc['error_rms']:.3g}"]
     if doc.get("angle_error_max_deg") is not None:
         lines.append(f"pose angle error: max {doc['angle_error_max_deg']:.3g}°")
-    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s ({doc['method']}, seed {doc['seed']}; "
+    timing = f", free timing {doc['free_timing']}" if doc.get("free_timing") else ""
+    lines.append(f"{doc['evaluations']} evaluations in {doc['seconds']:.2f} s ({doc['method']}, seed {doc['seed']}{timing}; "
                  f"limits: {limits_text(doc['limits'])}; stopped: {doc['stopped']})")
     for c in doc["constraints"]:
         state = "met" if c["met"] else f"NOT met, violated by {c['violation']:.3g}"

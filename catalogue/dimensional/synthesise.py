@@ -15,6 +15,7 @@ from .budget import Budget, Meter
 from .evaluator import Evaluator, design_space
 from .objective import Constraints, Problem
 from .optimise import METHODS, global_search, polish_batch
+from .searched_timing import FREE_TIMINGS, SearchedTiming
 from .report import certified_transmission, constraint_report, reaches_targets, turns_fully
 from .targets import MAX_ROWS, TIMINGS, FunctionTarget, MotionTarget, PathTarget, check_rows, read_table, resample
 
@@ -32,7 +33,8 @@ class SynthesisResult:
     from the reference) at which the targets are met, in driver order.
     ``evaluations`` counts the designs the search and the polish scored, ``limits``
     the run's :class:`~.budget.Budget`, and ``stopped`` which one ended it (one of
-    :data:`~.budget.STOPS`).
+    :data:`~.budget.STOPS`).  ``free_timing`` is what the search varied with free timing
+    (:data:`~.searched_timing.FREE_TIMINGS`; None with prescribed driver values).
     """
 
     mechanism: Mechanism
@@ -53,6 +55,7 @@ class SynthesisResult:
     notes: tuple[str, ...] = ()
     constraints: tuple = ()
     limits: Budget = Budget()
+    free_timing: str | None = None
 
     def inputs_cli(self) -> np.ndarray:
         """``inputs`` in command-line units: degrees for an R driver, m for a P driver."""
@@ -66,7 +69,8 @@ class SynthesisResult:
                 "error_rms": self.error_rms, "angle_error_max_deg": self.angle_error_max,
                 "evaluations": self.evaluations, "seconds": round(self.seconds, 4),
                 "evaluations_per_second": self.evaluations / self.seconds if self.seconds > 0 else None,
-                "method": self.method, "seed": self.seed, "stopped": self.stopped, "limits": self.limits.as_dict(),
+                "method": self.method, "seed": self.seed, "free_timing": self.free_timing, "stopped": self.stopped,
+                "limits": self.limits.as_dict(),
                 "inputs": [float(x) for x in self.inputs_cli()],
                 "achieved": np.asarray(self.achieved).tolist(), "target": np.asarray(self.target).tolist(),
                 "design": dict(self.design), "constraints": [dict(c) for c in self.constraints],
@@ -283,7 +287,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
                bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
                length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
                timing: str = "reference", grashof: str = "any", mode: str = "any", direction: str = "any",
-               popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
+               free_timing: str = "matched", popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
     """Dimensional synthesis of ``start``: path, function or motion generation.
 
     Parameters
@@ -330,6 +334,10 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     direction : {"any", "ccw", "cw"}
         The driven link's turning sense through the targets (a slider: ``"ccw"`` is
         forward along its guide), for free and ``step`` timing.
+    free_timing : {"matched", "searched"}
+        Free timing (a path without driver values, a motion): the search varies the
+        design and matches the targets to its curve on the driver grid, or varies the
+        targets' driver values too and solves only those (:mod:`.searched_timing`).
     progress : callable(fraction, best), optional
 
     Returns
@@ -343,7 +351,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     ParameterError
         A limit out of range (``evaluations`` not a whole number in [1, 10**12],
         ``budget`` not a number of seconds up to a day), ``tol`` not a finite number >= 0,
-        a bad ``seed``.
+        a bad ``seed``, ``free_timing`` unknown or ``"searched"`` with prescribed timing.
     AssemblyError, SingularityError
         The start does not assemble in its reference configuration.
     """
@@ -352,12 +360,12 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     with one_blas_thread():
         return _synthesise(start, path, point, shape_only, function, output, motion, link, seed, limits, method,
                            tol, bounds, full_rotation, min_transmission, length_bounds, max_ratio, timing, grashof,
-                           mode, direction, popsize, grid, progress)
+                           mode, direction, free_timing, popsize, grid, progress)
 
 
 def _synthesise(m, path, point, shape_only, function, output, motion, link, seed, limits: Budget, method, tol,
                 bounds, full_rotation, min_transmission, length_bounds, max_ratio, timing, grashof, mode, direction,
-                popsize, grid, progress) -> SynthesisResult:
+                free_timing, popsize, grid, progress) -> SynthesisResult:
     """:func:`synthesise`'s work (its arguments, checked here).  The search has 60 % of
     what the run has left after set-up (its probes included), the final polish the rest."""
     t0 = time.perf_counter()
@@ -368,15 +376,18 @@ def _synthesise(m, path, point, shape_only, function, output, motion, link, seed
     target, sampled = _checked(task, target, direction)
     problem = _problem(m, task, target, bounds, cons, grid, None if limits.seconds is None else t0 + limits.seconds)
     start_note = _closed_form(problem)
+    view = _search_view(problem, free_timing)
     work = Meter.start(limits, _search_deadline(problem, t0, limits.seconds))
     problem.ev.deadline = work.deadline
     polished: list = []
     search = work.share(0.6)
-    res = global_search(problem, method=method, seed=seed, meter=search, tol=tol, popsize=popsize,
-                        progress=progress, probe=None if method == "local" else _prober(problem, polished, search, tol))
-    best = _best(problem, res.z, polished, skip=res.stopped == "tolerance", meter=work)
-    return _result(problem, replace(res, stopped=_stopped(res.stopped, method, best, tol, work)), best,
-                   [sampled, start_note], task, target, method, seed, t0, limits)
+    res = global_search(view, method=method, seed=seed, meter=search, tol=tol, popsize=popsize, progress=progress,
+                        probe=None if method == "local" else _prober(problem, view, polished, search, tol))
+    z, phi = _designs(problem, view, res.z[None, :])
+    best = _best(problem, z[0], phi[0], polished, skip=res.stopped == "tolerance", meter=work)
+    out = _result(problem, replace(res, stopped=_stopped(res.stopped, method, best, tol, work)), best,
+                  [sampled, start_note], task, target, method, seed, t0, limits)
+    return replace(out, free_timing=free_timing if problem.free_timing else None)
 
 
 def _stopped(searched: str, method: str, best, tol: float, work: Meter) -> str:
@@ -424,15 +435,40 @@ def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: i
     return problem
 
 
-def _prober(problem: Problem, polished: list, meter: Meter, tol: float):
-    """The global search's probe: polish designs ``Z`` ``(k, n)`` together
-    (:func:`~.optimise.polish_batch`, charged to the search's ``meter``), keep each
-    result in ``polished``, and say whether one meets the tolerance and every constraint."""
-    def probe(Z):
+def _search_view(problem: Problem, free_timing: str):
+    """What the global search varies: the problem itself, or with ``free_timing``
+    ``"searched"`` its :class:`~.searched_timing.SearchedTiming` view."""
+    if free_timing not in FREE_TIMINGS:
+        raise ParameterError(explain("free_timing", expected=" or ".join(map(repr, FREE_TIMINGS)),
+                                     got=repr(free_timing)), "free_timing")
+    if free_timing == "matched":
+        return problem
+    if not problem.free_timing:
+        raise ParameterError(explain("free_timing 'searched'", expected="free timing (a path without driver values, "
+                                     "or a motion)", got="prescribed driver values",
+                                     hint="leave free_timing at 'matched'"), "free_timing")
+    with _unbounded(problem.ev):
+        return SearchedTiming(problem)
+
+
+def _designs(problem: Problem, view, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The designs ``(k, n)`` and their driver values ``(k, N)`` of the search's points
+    ``Y``: the view's own, or each design's match on the driver grid."""
+    if view is not problem:
+        return view.split(Y)
+    with _unbounded(problem.ev):
+        return Y, np.array([problem.match(z) for z in Y])
+
+
+def _prober(problem: Problem, view, polished: list, meter: Meter, tol: float):
+    """The global search's probe: polish the designs of search points ``Y`` ``(k, ·)``
+    together (:func:`~.optimise.polish_batch`, charged to the search's ``meter``), keep
+    each result in ``polished``, and say whether one meets the tolerance and every
+    constraint."""
+    def probe(Y):
         if meter.stop() is not None:
             return False
-        with _unbounded(problem.ev):
-            PHI = np.array([problem.match(z) for z in Z])
+        Z, PHI = _designs(problem, view, Y)
         Z2, PHI2, n = polish_batch(problem, Z, PHI, max_nfev=100, meter=meter)
         met = False
         for i, (z2, phi2) in enumerate(zip(Z2, PHI2)):
@@ -507,8 +543,10 @@ def _closed_form(problem: Problem) -> str | None:
 FINAL_STARTS = 2
 
 
-def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, meter: Meter | None = None):
-    """The best of the global design, its polish and the probes' polished designs:
+def _best(problem: Problem, z: np.ndarray, phi: np.ndarray, polished: list, skip: bool = False,
+          meter: Meter | None = None):
+    """The best of the global design ``z`` (at driver values ``phi``), its polish and the
+    probes' polished designs:
     a design meeting the targets on the continuous branch beats one that does not.
 
     What ``meter`` has left is split: the global design and the best
@@ -517,8 +555,6 @@ def _best(problem: Problem, z: np.ndarray, polished: list, skip: bool = False, m
     candidate so far with the rest.  When the search stopped at the tolerance
     (``skip``), only the best candidate is polished, a little (100 residual evaluations:
     near a solution the steps converge quickly)."""
-    with _unbounded(problem.ev):
-        phi = problem.match(z)
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
 

@@ -16,6 +16,7 @@ from multiloop.catalogue.dimensional.budget import Budget
 from multiloop.catalogue.dimensional.objective import DIRECTIONS, GRASHOF, MODES
 from multiloop.catalogue.dimensional.optimise import METHODS
 from multiloop.catalogue.dimensional.report import parse_bounds, progress_bar, synthesis_text
+from multiloop.catalogue.dimensional.searched_timing import FREE_TIMINGS
 from multiloop.catalogue.dimensional.targets import TIMINGS
 
 __all__ = ["add_arguments", "run"]
@@ -72,6 +73,9 @@ def add_arguments(p) -> None:
                    help="reference: every dyad keeps the start's assembly branch")
     p.add_argument("--direction", choices=DIRECTIONS, default="any",
                    help="the driven link's turning sense through the targets (free or step timing)")
+    p.add_argument("--free-timing", choices=FREE_TIMINGS, default=FREE_TIMINGS[0],
+                   help="free timing: the search matches the targets to each design's curve on the driver grid "
+                        "(matched, default) or varies their driver values too and solves only those (searched)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
@@ -126,7 +130,7 @@ def run(args) -> int:
                          **limits, method=args.method, tol=1e-6 if args.tol is None else args.tol,
                          full_rotation=args.full_rotation, min_transmission=args.min_transmission, max_ratio=args.max_ratio,
                          length_bounds=args.length_bounds, progress=cb, timing=args.timing,
-                         grashof=args.grashof, mode=args.mode, direction=args.direction,
+                         grashof=args.grashof, mode=args.mode, direction=args.direction, free_timing=args.free_timing,
                          bounds=parse_bounds(args.bounds))
     outs.add(args.out, dumps_mechanism(res.mechanism, args.out), "--out")
     if args.plot is not None:
