@@ -238,3 +238,63 @@ def test_row_norms_are_numpys_bit_for_bit(k, n, seed):
     rng = np.random.default_rng(seed)
     x = rng.standard_normal((k, n)) * 10.0 ** rng.uniform(-150, 150, (k, n))
     np.testing.assert_array_equal(_norms(x), np.linalg.norm(x, axis=1))
+
+
+# ---------------------------------------------------------------------------------
+# the compiled iteration (a path target's tracer, free timing, no constraint)
+
+def _routes(pr, Z, PHI, monkeypatch, budget=None, **kw):
+    """``polish_batch`` on the compiled iteration, then on the NumPy one (each with a
+    fresh meter of ``budget`` evaluations): ``[(Z, PHI, n, meter), ...]``."""
+    if optimise._CompiledRegions.route(pr) is None:
+        pytest.skip("no compiled route (numba absent)")
+    out = []
+    for compiled in (True, False):
+        meter = None if budget is None else Meter.start(Budget.of(budget))
+        with monkeypatch.context() as mp:
+            if not compiled:
+                mp.setattr(optimise._CompiledRegions, "route", staticmethod(lambda problem: None))
+            out.append(optimise.polish_batch(pr, Z, PHI, meter=meter, **kw) + (meter,))
+    return out
+
+
+@pytest.mark.parametrize("spread,seed", [(0.002, 0), (0.02, 1), (0.03, 2)])
+def test_the_compiled_iteration_is_the_numpy_iteration(spread, seed, monkeypatch):
+    """The same steps, charges and end as :class:`optimise._TrustRegions` (its SVD from
+    numba's LAPACK binding: rounding apart), near an exact design and far from it."""
+    pr = _four_bar_problem()
+    Z, PHI = _starts(pr, 3, spread, seed=seed)
+    (Zc, Pc, nc, _), (Zn, Pn, nn, _) = _routes(pr, Z, PHI, monkeypatch, max_nfev=60)
+    assert nc == nn > 0
+    for k in range(3):
+        assert np.isclose(_rms(pr, Zc[k], Pc[k]), _rms(pr, Zn[k], Pn[k]), rtol=1e-6, atol=1e-13)
+        assert np.allclose(Zc[k], Zn[k], rtol=0, atol=1e-6) and np.allclose(Pc[k], Pn[k], rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("budget", [5, 40, 700])
+def test_the_compiled_iteration_spends_the_meter_as_the_numpy_one(budget, monkeypatch):
+    """Charged to a meter of N evaluations (too few for the first Jacobians, a few rounds,
+    many): the same evaluations on both routes, at most N, the same designs, and a refused
+    charge is the meter's ``evaluations`` stop."""
+    pr = _four_bar_problem()
+    Z, PHI = _starts(pr, 2, 0.03, seed=3)
+    (Zc, Pc, nc, mc), (Zn, Pn, nn, mn) = _routes(pr, Z, PHI, monkeypatch, budget=budget, max_nfev=500)
+    assert nc == nn == mc.used == mn.used <= budget
+    assert mc.stop() == mn.stop() and (mc.stop() == "evaluations") == mn.refused
+    assert np.allclose(Zc, Zn, rtol=0, atol=1e-6) and np.allclose(Pc, Pn, rtol=0, atol=1e-6)
+
+
+def test_the_compiled_route_is_taken_only_where_it_applies():
+    """A path target with free timing and no constraint has it; a constraint (its penalty
+    row), prescribed timing or a shape-only target keep the NumPy iteration."""
+    if not optimise.compiled_module("_polish_nb"):
+        pytest.skip("numba absent")
+    assert optimise._CompiledRegions.route(_four_bar_problem()) is not None
+    assert optimise._CompiledRegions.route(_four_bar_problem(full_rotation=True)) is None
+    m = load_named("four_bar")
+    T = solve(m, np.radians([0.0, 40.0, 80.0, 120.0])).point_positions[:, 0]
+    timed = path_target(m, np.column_stack([T, [0.0, 40.0, 80.0, 120.0]]), "P")
+    shape = path_target(m, T, "P", shape_only=True)
+    for tgt in (timed, shape):
+        pr = Problem(Evaluator(m, design_space(m, ["P"], region=T)), tgt, Constraints(), 96)
+        assert optimise._CompiledRegions.route(pr) is None

@@ -48,6 +48,8 @@ METHODS = ("de", "cmaes", "local")
 ELITE = 3
 #: whether the polish takes a problem's exact Jacobian (``jacobian_batch``) where it has one
 EXACT = True
+#: rounds of the compiled polish between two reads of the run's clock (:class:`_CompiledRegions`)
+ROUNDS = 16
 #: the smallest singular value of an exact Jacobian the polish passes on, relative to the
 #: largest (:func:`_floored`)
 SINGULAR_FLOOR = 1e-8
@@ -534,8 +536,14 @@ def polish_batch(problem: Problem, Z: np.ndarray, PHI: np.ndarray, *, max_nfev: 
         return np.where(np.isfinite(R), R, 1.0), J
 
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        run = _TrustRegions(problem, U, lo, hi, split, afford, meter, floor=exact)
-        run.iterate(with_jacobian, max_nfev)
+        tracer = _CompiledRegions.route(problem) if exact and free else None
+        if tracer is not None:
+            run = _CompiledRegions(problem, tracer, U, lo, hi, scale, meter)
+            run.iterate(max_nfev, 1 + nz + int(free))
+            count[0] += run.used
+        else:
+            run = _TrustRegions(problem, U, lo, hi, split, afford, meter, floor=exact)
+            run.iterate(with_jacobian, max_nfev)
     Zs, PHIs = split(run.best_u)
     Zs, PHIs = Zs.copy(), np.array(PHIs, float)
     for k in np.flatnonzero(run.left_box & (meter is None or meter.stop() is None)):
@@ -605,4 +613,73 @@ class _TrustRegions:
                 active[acc[flat]] = False
             active[a[done]] = False
             active &= (self.nfev < max_nfev) & (F > rounding)
+        self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)
+
+
+class _CompiledRegions:
+    """:class:`_TrustRegions`'s iteration compiled (:mod:`._polish_nb`) for a path
+    target's tracer with free timing and no constraint (:meth:`route`): rounds of the
+    same iteration in one call, the run's ``meter`` charged and its clock read between
+    calls (every :data:`ROUNDS` rounds).  ``best_u``, ``nfev``, ``left_box`` as
+    :class:`_TrustRegions` has them; ``used`` the evaluations charged."""
+
+    def __init__(self, problem: Problem, tracer, U: np.ndarray, lo, hi, scale, meter):
+        self.problem, self.U, self.lo, self.hi, self.meter = problem, U, lo, hi, meter
+        self.scale = np.ascontiguousarray(scale, float)
+        self.origin = np.concatenate([problem.lower, np.zeros(U.shape[1] - len(problem.lower))])
+        self.tr = (tracer.plan_args, tracer.table, tracer.blocks, tracer.first, tracer.at, tracer.pcols,
+                   int(tracer.host), tracer.E, np.array(tracer.angle_cols, np.int64))
+        T, size = problem.targets_for(U[:1])
+        self.T, self.size = np.ascontiguousarray(T[0], float), float(size[0])
+        self.best_u, self.best_f = U.copy(), np.full(len(U), np.inf)
+        self.nfev = np.ones(len(U), np.int64)
+        self.left_box = np.zeros(len(U), bool)
+        self.used = 0
+
+    @staticmethod
+    def route(problem: Problem):
+        """The problem's tracer batch when this route applies (a path target, not shape
+        only, free timing, no constraint, the tracer compiled), else None."""
+        t = problem.target
+        if problem.constrained or not problem.free_timing or getattr(t, "shape_only", True):
+            return None
+        return problem._tracer()
+
+    def _charge(self, n: float, refused: bool) -> bool:
+        """Charge ``n`` evaluations to the meter; False once the iteration must stop."""
+        self.used += int(n)
+        if self.meter is not None:
+            self.meter.spend(int(n))
+            self.meter.refused = self.meter.refused or refused
+        return not refused
+
+    def _avail(self) -> float:
+        return np.inf if self.meter is None else float(self.meter.left())
+
+    def iterate(self, max_nfev: int, cost: int) -> None:
+        """Until each design has stopped (see :meth:`_TrustRegions.iterate`)."""
+        nb = compiled_module("_polish_nb")
+        U, K = self.U, len(self.U)
+        m = 2 * self.problem.n_targets
+        r = min(m, U.shape[1])
+        R, J = np.empty((K, m)), np.empty((K, m, U.shape[1]))
+        Wsv, s, Vt, F = np.empty((K, m, r)), np.empty((K, r)), np.empty((K, r, U.shape[1])), np.empty(K)
+        if self.meter is not None and self.meter.late():
+            return
+        if not self._charge(*((K * cost, False) if self._avail() >= K * cost else (0, True))):
+            return
+        common = (self.tr, self.origin, self.scale, len(self.problem.lower), self.T, self.size)
+        flat = nb.begin(*common, U, R, J, Wsv, s, Vt, F, SINGULAR_FLOOR)
+        inside = np.all((U >= self.lo) & (U <= self.hi), axis=1)
+        self.best_u[inside], self.best_f[inside] = U[inside], F[inside]
+        norm = _norms(U)
+        radius, alpha = np.where(norm > 0, norm, 1.0), np.zeros(K)
+        rounding = m * ROUNDING_RMS ** 2
+        active = (F > rounding) & ~flat
+        while active.any() and not (self.meter is not None and self.meter.late()):
+            used, refused = nb.rounds(*common, self.lo, self.hi, U, R, J, Wsv, s, Vt, F, radius, alpha, active,
+                                      self.nfev, self.best_u, self.best_f, max_nfev, rounding, SINGULAR_FLOOR,
+                                      self._avail(), float(cost), ROUNDS)
+            if not self._charge(used, refused):
+                break
         self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)
