@@ -3,7 +3,7 @@ measure of work that this virtual machine's timings (±50 % between runs of the 
 code) cannot give (plain script; needs ``valgrind``, a Debian package).
 
 Run:  python benchmarks/synthesis_instructions.py [--evaluations 30000] [--seed 0] [--search]
-      [--case four-bar|triad]
+      [--case four-bar|triad] [--free-timing matched|searched]
 
 The four-bar's ten points of ``bench_synthesis`` (or the Stephenson III triad's,
 ``--case triad``; free timing, DE, an evaluation budget: the same work whatever the
@@ -37,19 +37,21 @@ def _case(case: str):
     return triad_case()
 
 
-def _child(evaluations: int, seed: int, search: bool, case: str) -> None:
+def _child(evaluations: int, seed: int, search: bool, case: str, free_timing: str) -> None:
     from multiloop.catalogue.dimensional import synthesise
     start, T, point = _case(case)
     if search:                              # the global search alone (DE, no probes, no polish)
         from bench_designs import _path_problem
         from multiloop.catalogue.dimensional.budget import Budget, Meter
         from multiloop.catalogue.dimensional.optimise import global_search
-        problem = _path_problem(start, T, point)
+        from multiloop.catalogue.dimensional.synthesise import _search_view
+        problem = _search_view(_path_problem(start, T, point), free_timing)
         def run(s):
             return global_search(problem, seed=s, meter=Meter.start(Budget.of(evaluations)), tol=0.0)
     else:
         def run(s):
-            return synthesise(start, path=T, point=point, method="de", evaluations=evaluations, seed=s)
+            return synthesise(start, path=T, point=point, method="de", evaluations=evaluations, seed=s,
+                              free_timing=free_timing)
     run(seed + 1)
     subprocess.run(["callgrind_control", "-i", "on", str(os.getpid())], capture_output=True, check=False)
     r = run(seed)
@@ -59,12 +61,12 @@ def _child(evaluations: int, seed: int, search: bool, case: str) -> None:
 
 
 def count(evaluations: int, seed: int, out: str = os.devnull, search: bool = False,
-          case: str = "four-bar") -> tuple[int, str]:
+          case: str = "four-bar", free_timing: str = "matched") -> tuple[int, str]:
     """The instructions of the counted run (``search``: the global search alone) and its
     result line."""
     cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no", f"--callgrind-out-file={out}",
            sys.executable, __file__, "--child", "--evaluations", str(evaluations), "--seed", str(seed),
-           "--case", case, *(["--search"] if search else [])]
+           "--case", case, "--free-timing", free_timing, *(["--search"] if search else [])]
     p = subprocess.run(cmd, capture_output=True, text=True, check=True)
     got = re.search(r"Collected : (\d+)", p.stderr)
     line = next((x for x in p.stdout.splitlines() if x.startswith("result:")), "")
@@ -78,14 +80,17 @@ def main(argv=None):
     ap.add_argument("--search", action="store_true", help="count the global search alone (DE: no probes, no polish)")
     ap.add_argument("--case", choices=("four-bar", "triad"), default="four-bar",
                     help="the four-bar's ten points, or the Stephenson III triad's (the triad goal's case)")
+    ap.add_argument("--free-timing", choices=("matched", "searched"), default="matched",
+                    help="synthesise's free_timing (what the search varies)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
-        _child(a.evaluations, a.seed, a.search, a.case)
+        _child(a.evaluations, a.seed, a.search, a.case, a.free_timing)
         return
-    n, line = count(a.evaluations, a.seed, search=a.search, case=a.case)
+    n, line = count(a.evaluations, a.seed, search=a.search, case=a.case, free_timing=a.free_timing)
     what = "the global search alone" if a.search else "synthesis"
-    print(f"{what}, {a.case} 10 points, {a.evaluations} evaluations, seed {a.seed}: {n:,} instructions "
+    print(f"{what}, {a.case} 10 points, free timing {a.free_timing}, {a.evaluations} evaluations, seed {a.seed}: "
+          f"{n:,} instructions "
           f"({n / a.evaluations:,.0f} an evaluation); {line}")
 
 

@@ -335,9 +335,8 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
         The driven link's turning sense through the targets (a slider: ``"ccw"`` is
         forward along its guide), for free and ``step`` timing.
     free_timing : {"matched", "searched"}
-        Free timing (a path without driver values, a motion): the search varies the
-        design and matches the targets to its curve on the driver grid, or varies the
-        targets' driver values too and solves only those (:mod:`.searched_timing`).
+        Free timing: the targets matched to each design's curve on the driver grid, or
+        their driver values among the search's variables (:mod:`.searched_timing`).
     progress : callable(fraction, best), optional
 
     Returns
