@@ -21,6 +21,9 @@ python3 -m compileall -q multiloop topo kin catalogue >/dev/null
 # the counts run on the Python route (the same rows, slower)
 python3 -m multiloop.catalogue.synthesis.counter_build \
   || echo "install.sh: could not build the atlas counter (counts run on the Python route)" >&2
+# numba's kernels compiled into their disk cache now (tens of seconds of CPU once), not
+# by the first synthesis of the install nor by each test worker of a fresh checkout
+python3 -m multiloop.warmup
 if [ -z "${MULTILOOP_NO_APT:-}" ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
   need=""
   command -v nauty-geng >/dev/null 2>&1 || command -v geng >/dev/null 2>&1 || need="$need nauty"

@@ -27,13 +27,16 @@ from multiloop.kin._jit_cache import as_new_as
 
 from . import _trust_nb
 
-__all__ = ["begin", "rounds"]
+__all__ = ["rounds"]
 
 as_new_as(__file__, [_tracer_nb.__file__, _trust_nb.__file__])     # (before the decorators read it)
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
+#: the helpers are inlined into :func:`rounds` (numba IR), so that the tracer's kernel tree,
+#: which every compiled caller links and optimises again, is compiled into one caller only
+_INLINE = dict(_JIT, inline="always")
 
 
-@numba.njit(**_JIT)
+@numba.njit(**_INLINE)
 def _tracer(pa, tb, bl, first, at, pcols, host, E, acols, X, PHI, jac):
     """The tracer point ``W`` (D, N, 2) of designs ``X`` at their driver values ``PHI``
     (D, N) and its derivatives (:func:`~multiloop.kin._tracer_nb.tracer_point`; the guide
@@ -53,7 +56,7 @@ def _tracer(pa, tb, bl, first, at, pcols, host, E, acols, X, PHI, jac):
     return W, dW
 
 
-@numba.njit(**_JIT)
+@numba.njit(**_INLINE)
 def _residuals(tr, U, origin, scale, nz, T, size, jac):
     """The residuals ``(K, 2N)`` at unit variables ``U`` (K, n) (a non-finite one 1.0, as
     the NumPy route has them) and with ``jac`` their Jacobian ``(K, 2N, n)`` in the unit
@@ -88,7 +91,7 @@ def _residuals(tr, U, origin, scale, nz, T, size, jac):
     return R, J
 
 
-@numba.njit(**_JIT)
+@numba.njit(**_INLINE)
 def _factor(J, Wsv, s, Vt, k, floor):
     """Row ``k`` of the SVD ``Wsv``, ``s``, ``Vt`` of Jacobian ``J`` (m, n), its singular
     values raised to ``floor`` of the largest (:func:`.optimise._svd`)."""
@@ -100,7 +103,7 @@ def _factor(J, Wsv, s, Vt, k, floor):
     Vt[k] = vt
 
 
-@numba.njit(**_JIT)
+@numba.njit(**_INLINE)
 def _flat(J, R) -> bool:
     """Whether the gradient ``Jᵀ R`` is below 1e-15 everywhere (SciPy's ``gtol`` test)."""
     m, n = J.shape
@@ -113,7 +116,7 @@ def _flat(J, R) -> bool:
     return top < 1e-15
 
 
-@numba.njit(**_JIT)
+@numba.njit(**_INLINE)
 def _sq(R):
     out = np.empty(R.shape[0])
     for k in range(R.shape[0]):
@@ -125,29 +128,27 @@ def _sq(R):
 
 
 @numba.njit(**_JIT)
-def begin(tr, origin, scale, nz, T, size, U, R, J, Wsv, s, Vt, F, floor):
-    """The residuals, Jacobians, squared norms and floored SVDs at the starts ``U``."""
-    R0, J0 = _residuals(tr, U, origin, scale, nz, T, size, True)
-    R[:] = R0
-    J[:] = J0
-    F[:] = _sq(R0)
-    for k in range(U.shape[0]):
-        _factor(J0[k], Wsv, s, Vt, k, floor)
-    flat = np.empty(U.shape[0], np.bool_)
-    for k in range(U.shape[0]):
-        flat[k] = _flat(J0[k], R0[k])
-    return flat
-
-
-@numba.njit(**_JIT)
 def rounds(tr, origin, scale, nz, T, size, lo, hi, U, R, J, Wsv, s, Vt, F, radius, alpha, active, nfev, best_u,
            best_f, max_nfev, rounding, floor, avail, cost, most):
     """Up to ``most`` rounds of the iteration over the ``active`` designs, the state
     arrays updated in place, charging one evaluation a residual and ``cost`` a Jacobian
     against ``avail``.  Returns the evaluations charged and whether a charge was refused
-    (the iteration is over: :meth:`.optimise._TrustRegions.iterate` breaks there too)."""
+    (the iteration is over: :meth:`.optimise._TrustRegions.iterate` breaks there too).
+    ``most`` 0 starts the iteration instead: the residuals, Jacobians, squared norms and
+    floored SVDs at the starts ``U``, and ``active`` cleared where the gradient is flat
+    (nothing charged: the caller charged the first Jacobians)."""
     used = 0.0
     n = U.shape[1]
+    if most == 0:
+        R0, J0 = _residuals(tr, U, origin, scale, nz, T, size, True)
+        R[:] = R0
+        J[:] = J0
+        F[:] = _sq(R0)
+        for k in range(U.shape[0]):
+            _factor(J0[k], Wsv, s, Vt, k, floor)
+            if _flat(J0[k], R0[k]):
+                active[k] = False
+        return used, False
     for _ in range(most):
         a = np.flatnonzero(active)
         Ka = a.size

@@ -668,18 +668,20 @@ class _CompiledRegions:
             return
         if not self._charge(*((K * cost, False) if self._avail() >= K * cost else (0, True))):
             return
-        common = (self.tr, self.origin, self.scale, len(self.problem.lower), self.T, self.size)
-        flat = nb.begin(*common, U, R, J, Wsv, s, Vt, F, SINGULAR_FLOOR)
-        inside = np.all((U >= self.lo) & (U <= self.hi), axis=1)
-        self.best_u[inside], self.best_f[inside] = U[inside], F[inside]
         norm = _norms(U)
         radius, alpha = np.where(norm > 0, norm, 1.0), np.zeros(K)
         rounding = m * ROUNDING_RMS ** 2
-        active = (F > rounding) & ~flat
+        active = np.ones(K, bool)
+
+        def run(most: int):
+            return nb.rounds(self.tr, self.origin, self.scale, len(self.problem.lower), self.T, self.size, self.lo,
+                             self.hi, U, R, J, Wsv, s, Vt, F, radius, alpha, active, self.nfev, self.best_u,
+                             self.best_f, max_nfev, rounding, SINGULAR_FLOOR, self._avail(), float(cost), most)
+        run(0)                                     # (the starts: residuals, Jacobians, SVDs; flat ones stop)
+        inside = np.all((U >= self.lo) & (U <= self.hi), axis=1)
+        self.best_u[inside], self.best_f[inside] = U[inside], F[inside]
+        active &= F > rounding
         while active.any() and not (self.meter is not None and self.meter.late()):
-            used, refused = nb.rounds(*common, self.lo, self.hi, U, R, J, Wsv, s, Vt, F, radius, alpha, active,
-                                      self.nfev, self.best_u, self.best_f, max_nfev, rounding, SINGULAR_FLOOR,
-                                      self._avail(), float(cost), ROUNDS)
-            if not self._charge(used, refused):
+            if not self._charge(*run(ROUNDS)):
                 break
         self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)
