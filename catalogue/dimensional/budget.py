@@ -186,6 +186,13 @@ class Meter:
         self.spend(k)
         return k
 
+    def settle(self, n: int, refused: bool) -> None:
+        """Charge ``n`` evaluations that a compiled loop spent within :meth:`left` (read
+        before it ran); ``refused`` when it stopped for want of more (as :meth:`take`
+        remembers a refusal)."""
+        self.spend(n)
+        self.refused = self.refused or refused
+
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
 

@@ -649,8 +649,7 @@ class _CompiledRegions:
         """Charge ``n`` evaluations to the meter; False once the iteration must stop."""
         self.used += int(n)
         if self.meter is not None:
-            self.meter.spend(int(n))
-            self.meter.refused = self.meter.refused or refused
+            self.meter.settle(int(n), refused)
         return not refused
 
     def _avail(self) -> float:
