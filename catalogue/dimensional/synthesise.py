@@ -445,7 +445,7 @@ def _search_view(problem: Problem, free_timing: str):
     if not problem.free_timing:
         raise ParameterError(explain("free_timing 'searched'", expected="free timing (a path without driver values, "
                                      "or a motion)", got="prescribed driver values",
-                                     hint="leave free_timing at 'matched'"), "free_timing")
+                                     hint="leave it at 'matched' (the default)"), "free_timing")
     with _unbounded(problem.ev):
         return SearchedTiming(problem)
 
