@@ -15,7 +15,8 @@ variables.
 The driver values are encoded so that every point of the unit box meets the targets
 in driver order, one way, within one turn (within the slider's ±2 sizes):
 
-* ``timing.start`` — the first target's driver value from the reference,
+* ``timing.start`` — the first target's driver value from the reference (within a turn
+  either way: a design short of a full turn may reach past ±π on one side),
 * ``timing.span`` — the driver's travel from the first target to the last,
 * ``timing.sense`` — which way (only when ``direction`` is ``"any"``: ≥ 0.5 forward),
 * ``timing.step1`` … ``timing.step{N−1}`` — the steps' shares of the span.
@@ -46,12 +47,16 @@ class SearchedTiming:
     def __init__(self, problem):
         self.problem = problem
         n = problem.n_targets
-        reach = 2.0 * np.pi if problem.rotary else 4.0 * problem.mech_size
+        # the first value within a turn of the reference either way (a design short of a full
+        # turn may reach past ±π on one side), the travel within one turn; a slider's both
+        # within the grid's ±2 sizes
+        first, reach = (2.0 * np.pi, 2.0 * np.pi) if problem.rotary else (2.0 * problem.mech_size,
+                                                                          4.0 * problem.mech_size)
         self.sensed = len(problem.walks()) == 2
         names = ["timing.start", "timing.span"] + (["timing.sense"] if self.sensed else []) + \
                 [f"timing.step{i}" for i in range(1, n)]
-        lo = [-reach / 2.0, 0.0] + ([0.0] if self.sensed else []) + [0.0] * (n - 1)
-        hi = [reach / 2.0, reach] + ([1.0] if self.sensed else []) + [1.0] * (n - 1)
+        lo = [-first, 0.0] + ([0.0] if self.sensed else []) + [0.0] * (n - 1)
+        hi = [first, reach] + ([1.0] if self.sensed else []) + [1.0] * (n - 1)
         self.nz = len(problem.names)
         self.names = tuple(problem.names) + tuple(names)
         self.lower = np.r_[problem.lower, lo]
