@@ -69,13 +69,11 @@ def add_arguments(p) -> None:
                    help="bounds of design variables by name (e.g. O2.x=-1:1; names in the JSON report's design)")
     p.add_argument("--grashof", choices=GRASHOF, default="any",
                    help="four-bar: crank-rocker (driven link shortest, Grashof) or double-crank (frame shortest)")
-    p.add_argument("--mode", choices=MODES, default="any",
-                   help="reference: every dyad keeps the start's assembly branch")
+    p.add_argument("--mode", choices=MODES, default="any", help="reference: each dyad keeps the start's branch")
     p.add_argument("--direction", choices=DIRECTIONS, default="any",
                    help="the driven link's turning sense through the targets (free or step timing)")
-    p.add_argument("--free-timing", choices=FREE_TIMINGS, default=FREE_TIMINGS[0],
-                   help="free timing: the search matches the targets to each design's curve on the driver grid "
-                        "(matched, default) or varies their driver values too and solves only those (searched)")
+    p.add_argument("--free-timing", choices=FREE_TIMINGS, default=FREE_TIMINGS[0], help="free timing: the targets "
+                   "matched to each design's curve on the driver grid (default), or their driver values searched")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
@@ -90,12 +88,11 @@ def run_without_start(args, limits: dict) -> int:
     if args.plot is not None:        # refused, not ignored: the atlas route draws no figure
         raise InputError(explain("--plot", expected="a START mechanism", got=f"--plot {args.plot!r} without one",
                                  hint="draw a design it writes: multiloop solve OUT.toml --plot P.png"))
-    links = parse_links(args.links)
     outs = Outputs("multiloop synthesise")
     outs.target(args.out, "--out", formats=("toml", "json"))
     # (the library checks the target and the options before it reads or builds an atlas)
-    res = topo_synthesise(args.path, links=links, atlas=args.atlas, top=args.top, **limits, point=args.point or "P",
-                          closed=args.closed,
+    res = topo_synthesise(args.path, links=parse_links(args.links), atlas=args.atlas, top=args.top, **limits,
+                          point=args.point or "P", closed=args.closed,
                           tol=1e-4 if args.tol is None else args.tol, seed=args.seed, build_progress=sys.stderr.isatty(),
                           say=lambda text: print(f"multiloop synthesise: {text}", file=sys.stderr, flush=True))
     if not res.designs:
@@ -138,7 +135,6 @@ def run(args) -> int:
         with quiet_warnings("multiloop synthesise"):
             outs.add_figure(args.plot, plot_synthesis(res))
     outs.commit()
-    doc = res.as_dict()
-    doc["out"] = str(args.out)
+    doc = dict(res.as_dict(), out=str(args.out))
     print(dumps_json(doc) if args.json else synthesis_text(doc))
     return 0
