@@ -81,6 +81,14 @@ class TracerBatch:
         W, _, ok = self._run(designs, np.asarray(inputs, float).reshape(1, -1, 1), False)
         return W, ok
 
+    def compiled_parts(self) -> tuple:
+        """What a compiled caller of :func:`kin._tracer_nb.tracer_point` passes besides the
+        designs and inputs: the plan's arrays, the joint table's template, the sensitivity
+        blocks, each link's reference joint's row, the point's reference and columns, its
+        host link, its offset columns and the guide angles' columns (int64)."""
+        return (self.plan_args, self.table, self.blocks, self.first, self.at, self.pcols, int(self.host), self.E,
+                np.array(self.angle_cols, np.int64))
+
     def _run(self, designs, inputs3: np.ndarray, jacobian: bool):
         X = _writable(designs)
         inputs3 = _writable(inputs3)

@@ -613,27 +613,27 @@ class _TrustRegions:
                 active[acc[flat]] = False
             active[a[done]] = False
             active &= (self.nfev < max_nfev) & (F > rounding)
+        self._ended(U)
+
+    def _ended(self, U: np.ndarray) -> None:
+        """Record whether each design's iteration ended outside the box."""
         self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)
 
 
-class _CompiledRegions:
+class _CompiledRegions(_TrustRegions):
     """:class:`_TrustRegions`'s iteration compiled (:mod:`._polish_nb`) for a path
     target's tracer with free timing and no constraint (:meth:`route`): rounds of the
     same iteration in one call, the run's ``meter`` charged and its clock read between
-    calls (every :data:`ROUNDS` rounds).  ``best_u``, ``nfev``, ``left_box`` as
-    :class:`_TrustRegions` has them; ``used`` the evaluations charged."""
+    calls (every :data:`ROUNDS` rounds).  The same ``best_u``, ``nfev`` and ``left_box``;
+    ``used`` the evaluations charged."""
 
     def __init__(self, problem: Problem, tracer, U: np.ndarray, lo, hi, scale, meter):
-        self.problem, self.U, self.lo, self.hi, self.meter = problem, U, lo, hi, meter
+        super().__init__(problem, U, lo, hi, None, None, meter, floor=True)
         self.scale = np.ascontiguousarray(scale, float)
         self.origin = np.concatenate([problem.lower, np.zeros(U.shape[1] - len(problem.lower))])
-        self.tr = (tracer.plan_args, tracer.table, tracer.blocks, tracer.first, tracer.at, tracer.pcols,
-                   int(tracer.host), tracer.E, np.array(tracer.angle_cols, np.int64))
+        self.tr = tracer.compiled_parts()
         T, size = problem.targets_for(U[:1])
         self.T, self.size = np.ascontiguousarray(T[0], float), float(size[0])
-        self.best_u, self.best_f = U.copy(), np.full(len(U), np.inf)
-        self.nfev = np.ones(len(U), np.int64)
-        self.left_box = np.zeros(len(U), bool)
         self.used = 0
 
     @staticmethod
@@ -683,4 +683,4 @@ class _CompiledRegions:
         while active.any() and not (self.meter is not None and self.meter.late()):
             if not self._charge(*run(ROUNDS)):
                 break
-        self.left_box = ~np.all((U >= self.lo) & (U <= self.hi), axis=1)
+        self._ended(U)
