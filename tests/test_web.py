@@ -759,19 +759,41 @@ STROKE_READY_JS = """([t0, rf, ax]) => { const doc = Bokeh.documents[0];
 STROKE_RADIUS, STROKE_ASPECT = 0.18, 1.4
 
 
-def _stroke_in(page, t0, t1):
+#: what the page shows of a stroke that did not reach the figure (for the failure's message)
+STROKE_MISSED_JS = """() => { const doc = Bokeh.documents[0];
+  const view = Bokeh.index.find_one(doc.get_model_by_name('ml-target'));
+  const r = view.canvas_view.el.getBoundingClientRect();
+  return {tool_active: doc.get_model_by_name('ml-freehand').active, box_then: window.__mlStrokeBox,
+          box_now: {x: r.left, y: r.top, width: r.width, height: r.height}}; }"""
+
+
+def _stroke_in(page, t0, t1, attempts: int = 3):
     """A freehand stroke on the synthesis target, an arc of angles ``t0`` to ``t1`` (rad)
     about the figure's centre, drawn once the page is ready for it (:data:`STROKE_READY_JS`:
-    waits on the page's state, so a stroke is not drawn on a figure that is still moving)."""
-    page.evaluate("() => { window.__mlStrokeBox = null; }")
-    box = page.wait_for_function(STROKE_READY_JS, arg=[t0, STROKE_RADIUS, STROKE_ASPECT],
-                                 timeout=120000).json_value()
-    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], STROKE_RADIUS * box["height"]
-    page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t0), cy + r * math.sin(t0))
-    page.mouse.down()
-    for t in np.linspace(t0, t1, 20):
-        page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t), cy + r * math.sin(t))
-    page.mouse.up()
+    waits on the page's state, so a stroke is not drawn on a figure that is still moving).
+
+    The freehand tool adds the stroke to the page's source at the pan's start, in the
+    pointer event's own handler, so the page's count tells at once whether the gesture
+    was a stroke.  On a loaded machine it may not be: BokehJS takes a pointer held still
+    for 300 ms after it went down for a press, not a pan (``UIGestures.press_threshold``),
+    and the first move can arrive later than that (CI's failure: no stroke, the count never
+    grew).  Such a gesture is drawn again, at most ``attempts`` times, and the failure says
+    what the page showed."""
+    n0, missed = page.evaluate(STROKES_JS), []
+    for _ in range(attempts):
+        page.evaluate("() => { window.__mlStrokeBox = null; }")
+        box = page.wait_for_function(STROKE_READY_JS, arg=[t0, STROKE_RADIUS, STROKE_ASPECT],
+                                     timeout=120000).json_value()
+        cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], STROKE_RADIUS * box["height"]
+        page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t0), cy + r * math.sin(t0))
+        page.mouse.down()
+        for t in np.linspace(t0, t1, 20):
+            page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t), cy + r * math.sin(t))
+        page.mouse.up()
+        if page.evaluate(STROKES_JS) > n0:
+            return
+        missed.append(page.evaluate(STROKE_MISSED_JS))
+    raise AssertionError(f"{attempts} strokes drawn, none reached the target's source: {missed}")
 
 
 def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_path_factory):

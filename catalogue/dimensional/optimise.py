@@ -463,7 +463,8 @@ def _tr_steps(svd: tuple, R: np.ndarray, radius: np.ndarray, alpha: np.ndarray) 
         return norm - radius, -np.sum(suf ** 2 / den ** 3, axis=1) / norm
 
     upper = _norms(suf) / radius
-    f0, d0 = phi(np.zeros(K))
+    with np.errstate(divide="ignore", invalid="ignore"):     # (a zero singular value: its row not full, unused)
+        f0, d0 = phi(np.zeros(K))
     lower = np.where(full, -f0 / d0, 0.0)
     reset = np.maximum(1e-3 * upper, np.sqrt(np.maximum(lower * upper, 0.0)))     # (rows that fit: unused)
     alpha = np.where(~full & (alpha == 0), reset, alpha)
