@@ -318,11 +318,8 @@ def test_drawn_curve_gives_a_design_that_solves(page, tmp_path, tmp_path_factory
     _clear_target(page)
     box = page.evaluate(TARGET_BOX_JS)
     cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], 0.18 * box["height"]
-    page.mouse.move(cx + r, cy)
-    page.mouse.down()
-    for t in np.linspace(0, 1.6 * math.pi, 40):
-        page.mouse.move(cx + r * math.cos(t) * 1.4, cy + r * math.sin(t))
-    page.mouse.up()
+    _drag(page, "ml-target", [(cx + r * math.cos(t) * 1.4, cy + r * math.sin(t))
+                              for t in np.linspace(0, 1.6 * math.pi, 40)])
     page.wait_for_function(f"() => ({STROKES_JS})() == 1", timeout=120000)
     page.get_by_role("button", name="Run").click()
     page.wait_for_selector("#ml-synthesis-status[data-state=done]", state="attached", timeout=300000)
@@ -477,10 +474,7 @@ def test_drag_a_joint_with_the_mouse_then_ctrl_z(page, tmp_path_factory):
     page.evaluate(MOVE_JS, [90])                             # the player away from the reference
     sx, sy, x0, y0 = page.evaluate(HANDLE_JS, ["B"])
     assert (x0, y0) == tuple(original.joint("B").at)
-    page.mouse.move(sx, sy)
-    page.mouse.down()
-    for k in range(1, 9):
-        page.mouse.move(sx + 3 * k, sy + 2 * k)
+    _drag(page, "ml-mechanism", [(sx + 3 * k, sy + 2 * k) for k in range(9)], release=False)
     # during the drag the drawing is at the reference frame and its joint B follows the handle
     following = """() => { const doc = Bokeh.documents[0];
       const h = doc.get_model_by_name('ml-handles'), j = doc.get_model_by_name('ml-joints');
@@ -540,11 +534,7 @@ def test_drag_is_checked_on_two_cores_as_check_json(page, server, name, joint, s
     original = load_mechanism(name)
     sx, sy, x0, y0 = page.evaluate(HANDLE_JS, [joint])
     before = len(stderr_of(proc))
-    page.mouse.move(sx, sy)
-    page.mouse.down()
-    for k in range(1, 9):
-        page.mouse.move(sx + k, sy + k)
-    page.mouse.up()
+    _drag(page, "ml-mechanism", [(sx + k, sy + k) for k in range(9)])
     edited = f"""() => {{ const r = ({DEEP_JS})('#ml-positions')[0];
         return r && r.getAttribute('data-mechanism') == 'edited: {name}' && r.getAttribute('data-positions')
           && ({DEEP_JS})('#ml-check-status[data-ok]').length > 0; }}"""
@@ -759,41 +749,48 @@ STROKE_READY_JS = """([t0, rf, ax]) => { const doc = Bokeh.documents[0];
 STROKE_RADIUS, STROKE_ASPECT = 0.18, 1.4
 
 
-#: what the page shows of a stroke that did not reach the figure (for the failure's message)
-STROKE_MISSED_JS = """() => { const doc = Bokeh.documents[0];
-  const view = Bokeh.index.find_one(doc.get_model_by_name('ml-target'));
-  const r = view.canvas_view.el.getBoundingClientRect();
-  return {tool_active: doc.get_model_by_name('ml-freehand').active, box_then: window.__mlStrokeBox,
-          box_now: {x: r.left, y: r.top, width: r.width, height: r.height}}; }"""
+#: the phase of BokehJS's gesture recogniser on the canvas of the figure named ``name``
+GESTURE_PHASE_JS = """(name) => Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name(name))
+  .canvas_view.ui_event_bus.ui_gestures.phase"""
 
 
-def _stroke_in(page, t0, t1, attempts: int = 3):
+def _drag(page, figure: str, path, attempts: int = 3, release: bool = True) -> None:
+    """Press the mouse at ``path[0]`` on the figure named ``figure``, move it through the
+    other points, and release it (``release``; else the caller does).
+
+    BokehJS takes a pointer held still for 300 ms after it went down for a press, not a
+    pan (``UIGestures.press_threshold``), and on a loaded machine the first move can
+    arrive later than that (CI's failure: a stroke never drawn, the count never grew).
+    The recogniser's own phase tells at once whether the gesture became a pan; one that
+    did not is let go and made again, at most ``attempts`` times (waits on the page's
+    state, not on time)."""
+    phases = []
+    for _ in range(attempts):
+        page.mouse.move(*path[0])
+        page.mouse.down()
+        for p in path[1:]:
+            page.mouse.move(*p)
+        phases.append(page.evaluate(GESTURE_PHASE_JS, figure))
+        if phases[-1] == "panning":
+            break
+        page.mouse.up()
+    else:
+        raise AssertionError(f"{attempts} drags on {figure}, none became a pan: the gesture's phases {phases}")
+    if release:
+        page.mouse.up()
+
+
+def _stroke_in(page, t0, t1):
     """A freehand stroke on the synthesis target, an arc of angles ``t0`` to ``t1`` (rad)
     about the figure's centre, drawn once the page is ready for it (:data:`STROKE_READY_JS`:
-    waits on the page's state, so a stroke is not drawn on a figure that is still moving).
-
-    The freehand tool adds the stroke to the page's source at the pan's start, in the
-    pointer event's own handler, so the page's count tells at once whether the gesture
-    was a stroke.  On a loaded machine it may not be: BokehJS takes a pointer held still
-    for 300 ms after it went down for a press, not a pan (``UIGestures.press_threshold``),
-    and the first move can arrive later than that (CI's failure: no stroke, the count never
-    grew).  Such a gesture is drawn again, at most ``attempts`` times, and the failure says
-    what the page showed."""
-    n0, missed = page.evaluate(STROKES_JS), []
-    for _ in range(attempts):
-        page.evaluate("() => { window.__mlStrokeBox = null; }")
-        box = page.wait_for_function(STROKE_READY_JS, arg=[t0, STROKE_RADIUS, STROKE_ASPECT],
-                                     timeout=120000).json_value()
-        cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], STROKE_RADIUS * box["height"]
-        page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t0), cy + r * math.sin(t0))
-        page.mouse.down()
-        for t in np.linspace(t0, t1, 20):
-            page.mouse.move(cx + STROKE_ASPECT * r * math.cos(t), cy + r * math.sin(t))
-        page.mouse.up()
-        if page.evaluate(STROKES_JS) > n0:
-            return
-        missed.append(page.evaluate(STROKE_MISSED_JS))
-    raise AssertionError(f"{attempts} strokes drawn, none reached the target's source: {missed}")
+    waits on the page's state, so a stroke is not drawn on a figure that is still moving),
+    by :func:`_drag` (a gesture taken for a press is made again)."""
+    page.evaluate("() => { window.__mlStrokeBox = null; }")
+    box = page.wait_for_function(STROKE_READY_JS, arg=[t0, STROKE_RADIUS, STROKE_ASPECT],
+                                 timeout=120000).json_value()
+    cx, cy, r = box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"], STROKE_RADIUS * box["height"]
+    _drag(page, "ml-target", [(cx + STROKE_ASPECT * r * math.cos(t), cy + r * math.sin(t))
+                              for t in np.linspace(t0, t1, 20)])
 
 
 def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_path_factory):
@@ -833,11 +830,7 @@ def test_target_two_strokes_undo_closed_drag_and_prescribed_timing(page, tmp_pat
     _shot(page, "web_target.png", tmp_path_factory)
     page.evaluate("() => { Bokeh.documents[0].get_model_by_name('ml-target-drag').active = true; }")
     sx, sy, x0, y0, _ = page.evaluate(TARGET_POINT_JS, [5])
-    page.mouse.move(sx, sy)
-    page.mouse.down()
-    for k in range(1, 7):
-        page.mouse.move(sx + 4 * k, sy)
-    page.mouse.up()
+    _drag(page, "ml-target", [(sx + 4 * k, sy) for k in range(7)])
     page.wait_for_function(f"() => ({points})()[0][5] > {x0!r}", timeout=120000)
     page.locator(".ml-target-undo button").click()                  # the server undoes the drag
     page.wait_for_function(f"() => ({points})()[0][5] == {x0!r}", timeout=120000)
