@@ -109,3 +109,25 @@ def test_cli_free_timing(tmp_path, capsys):
         main(["synthesise", "four_bar", "--path", str(f), "--out", str(tmp_path / "p.toml"), "--free-timing", "grid"])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--free-timing" in err and not (tmp_path / "p.toml").exists()
+
+
+def test_the_default_free_timing_is_searched_with_a_search_and_matched_for_a_polish():
+    """Left out, free timing is searched when a global search runs (the same run as asked
+    for by name, design and evaluations), matched for ``method="local"`` (no search to
+    vary the driver values in: the same run as ``"matched"``) and with a constraint on
+    the whole motion, and None with prescribed driver values, where ``"matched"`` is
+    accepted and said as None too."""
+    _, m, T = _problem(n=5)
+    runs = {ft: synthesise(m, path=T, point="P", evaluations=3000, seed=1, free_timing=ft)
+            for ft in (None, "searched")}
+    assert runs[None].free_timing == "searched"
+    assert runs[None].design == runs["searched"].design and runs[None].evaluations == runs["searched"].evaluations
+    local = {ft: synthesise(m, path=T, point="P", evaluations=500, method="local", free_timing=ft)
+             for ft in (None, "matched")}
+    assert local[None].free_timing == "matched" and local[None].design == local["matched"].design
+    for kw in (dict(full_rotation=True), dict(min_transmission=20.0)):
+        assert synthesise(m, path=T, point="P", evaluations=300, **kw).free_timing == "matched"
+        assert synthesise(m, path=T, point="P", evaluations=300, free_timing="searched", **kw).free_timing == "searched"
+    timed = np.column_stack([T, np.arange(len(T)) * 60.0])
+    for ft in (None, "matched"):
+        assert synthesise(m, path=timed, point="P", evaluations=300, free_timing=ft).free_timing is None

@@ -75,6 +75,12 @@ class Constraints:
         if self.max_ratio is not None and not (np.isfinite(self.max_ratio) and self.max_ratio >= 1):
             raise ParameterError(explain("max_ratio", expected="a number >= 1", got=str(self.max_ratio)), "max_ratio")
 
+    @property
+    def on_motion(self) -> bool:
+        """Whether a constraint reads the whole motion (the driver grid), not the design
+        or its targets alone: full rotation, a minimum transmission angle."""
+        return bool(self.full_rotation or self.min_transmission)
+
 
 def transmission_angles(ev: Evaluator, X: np.ndarray, st: DesignPoses) -> np.ndarray:
     """Smallest folded transmission angle (deg, in [0, 90]; 90 is ideal) over the groups,
@@ -521,7 +527,7 @@ class Problem:
         transmission), or a span as long as the grid.  Returns the indices and how many of
         them are forward.  (A path-dependent plan has :meth:`_prescribed_walk`.)"""
         c = self.cons
-        if c.full_rotation or c.min_transmission or not np.all(np.isfinite(tim)):
+        if c.on_motion or not np.all(np.isfinite(tim)):
             return None
         d, top, low = self.delta, float(np.max(tim)), float(np.min(tim))
         nf = max(1, int(np.ceil((top - 1e-12) / d)) + 1)
@@ -576,7 +582,7 @@ class Problem:
         T, size = self.targets_for(Z)
         F = self.features(Z, st)[:, at]
         cost = np.where(st.ok.all(axis=1), np.sum(np.square(self.diff(F, T, size)), axis=(1, 2)), np.inf)
-        if self.cons.full_rotation or self.cons.min_transmission:
+        if self.cons.on_motion:
             st = self.grid_poses(X)
             return self._score(cost, self.violation(X, st, self.curve(st.ok[:, :self.M])[3]))
         return self._score(cost, self.violation(X, st, None))
@@ -616,7 +622,7 @@ class Problem:
     def constrained(self) -> bool:
         """Whether any design constraint is set (the reference margin always counts)."""
         c = self.cons
-        return bool(c.full_rotation or c.min_transmission or c.length_bounds or c.max_ratio
+        return bool(c.on_motion or c.length_bounds or c.max_ratio
                     or c.grashof != "any" or c.mode != "any")
 
     def penalty_batch(self, Z: np.ndarray) -> np.ndarray:

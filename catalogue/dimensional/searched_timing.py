@@ -1,12 +1,12 @@
 """Free timing with the driver values among the global search's variables.
 
-With free timing the targets' driver values are unknowns.  The default
-(``free_timing="matched"``, :meth:`~.objective.Problem.batch`) solves each candidate
-on the whole driver grid, walked from the reference, and matches the targets to that
-curve in driver order by dynamic programming: the search's variables are the design's
-alone.  ``free_timing="searched"`` makes the driver values search variables instead,
-as Pyslvs's ``FPlanar`` and much of the literature since Cabrera, Simon & Prado
-(2002) do: a candidate is solved at its own ``N`` target inputs
+With free timing the targets' driver values are unknowns.  ``free_timing="matched"``
+(:meth:`~.objective.Problem.batch`) solves each candidate on the whole driver grid,
+walked from the reference, and matches the targets to that curve in driver order by
+dynamic programming: the search's variables are the design's alone.
+``free_timing="searched"`` (the default with a global search) makes the driver values
+search variables instead, as Pyslvs's ``FPlanar`` and much of the literature since
+Cabrera, Simon & Prado (2002) do: a candidate is solved at its own ``N`` target inputs
 only, and scored by the same relative residuals the local polish minimises
 (:meth:`~.objective.Problem.residuals_batch`).  A candidate then costs ``N`` positions
 instead of the grid's ``M`` (96) and the matching, and the search has ``N + 2`` more
@@ -97,7 +97,7 @@ class SearchedTiming:
         Z, PHI = self.split(Y)
         R = p.residuals_batch(Z, PHI)
         cost = np.einsum("pk,pk->p", R, R)
-        if p.cons.full_rotation or p.cons.min_transmission:
+        if p.cons.on_motion:
             violation = p.penalty_batch(Z) / p.cons.weight
         else:
             violation = p.violation(Z[:, :p.nx], None, np.zeros(len(Z), bool))

@@ -287,7 +287,7 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
                bounds: dict | None = None, full_rotation: bool = False, min_transmission: float | None = None,
                length_bounds: tuple[float, float] | None = None, max_ratio: float | None = None,
                timing: str = "reference", grashof: str = "any", mode: str = "any", direction: str = "any",
-               free_timing: str = "matched", popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
+               free_timing: str | None = None, popsize: int = 8, grid: int = 96, progress=None) -> SynthesisResult:
     """Dimensional synthesis of ``start``: path, function or motion generation.
 
     Parameters
@@ -334,9 +334,14 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
     direction : {"any", "ccw", "cw"}
         The driven link's turning sense through the targets (a slider: ``"ccw"`` is
         forward along its guide), for free and ``step`` timing.
-    free_timing : {"matched", "searched"}
-        Free timing: the targets matched to each design's curve on the driver grid, or
-        their driver values among the search's variables (:mod:`.searched_timing`).
+    free_timing : {"searched", "matched"}, optional
+        Free timing: the targets' driver values among the search's variables
+        (:mod:`.searched_timing`), or the targets matched to each design's curve on the
+        driver grid.  Default: ``"searched"`` when a global search runs and no
+        constraint reads the whole motion; ``"matched"`` for ``method="local"`` (no
+        search to vary the values: the polish starts from the match) and with
+        ``full_rotation`` or ``min_transmission`` (the grid is solved for them anyway,
+        and the matched search met them as well or better: the README's ellipse).
     progress : callable(fraction, best), optional
 
     Returns
@@ -375,6 +380,7 @@ def _synthesise(m, path, point, shape_only, function, output, motion, link, seed
     target, sampled = _checked(task, target, direction)
     problem = _problem(m, task, target, bounds, cons, grid, None if limits.seconds is None else t0 + limits.seconds)
     start_note = _closed_form(problem)
+    free_timing = _free_timing(problem, free_timing, method)
     view = _search_view(problem, free_timing)
     work = Meter.start(limits, _search_deadline(problem, t0, limits.seconds))
     problem.ev.deadline = work.deadline
@@ -386,7 +392,7 @@ def _synthesise(m, path, point, shape_only, function, output, motion, link, seed
     best = _best(problem, z[0], phi[0], polished, skip=res.stopped == "tolerance", meter=work)
     out = _result(problem, replace(res, stopped=_stopped(res.stopped, method, best, tol, work)), best,
                   [sampled, start_note], task, target, method, seed, t0, limits)
-    return replace(out, free_timing=free_timing if problem.free_timing else None)
+    return replace(out, free_timing=free_timing)
 
 
 def _stopped(searched: str, method: str, best, tol: float, work: Meter) -> str:
@@ -434,18 +440,30 @@ def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: i
     return problem
 
 
-def _search_view(problem: Problem, free_timing: str):
-    """What the global search varies: the problem itself, or with ``free_timing``
-    ``"searched"`` its :class:`~.searched_timing.SearchedTiming` view."""
+def _free_timing(problem: Problem, free_timing: str | None, method: str) -> str | None:
+    """The free timing of a run: ``free_timing`` as asked (checked), or by default
+    ``"searched"`` with a global search and no constraint on the whole motion, else
+    ``"matched"``; None with prescribed timing (where ``"searched"`` is refused)."""
+    if free_timing is None:
+        if not problem.free_timing:
+            return None
+        return "matched" if method == "local" or problem.cons.on_motion else "searched"
     if free_timing not in FREE_TIMINGS:
         raise ParameterError(explain("free_timing", expected=" or ".join(map(repr, FREE_TIMINGS)),
                                      got=repr(free_timing)), "free_timing")
-    if free_timing == "matched":
-        return problem
-    if not problem.free_timing:
+    if free_timing == "searched" and not problem.free_timing:
         raise ParameterError(explain("free_timing 'searched'", expected="free timing (a path without driver values, "
                                      "or a motion)", got="prescribed driver values",
-                                     hint="leave it at 'matched' (the default)"), "free_timing")
+                                     hint="leave it out (prescribed timing searches the design alone)"), "free_timing")
+    return free_timing if problem.free_timing else None
+
+
+def _search_view(problem: Problem, free_timing: str | None):
+    """What the global search varies for the run's ``free_timing`` (see
+    :func:`_free_timing`): the problem itself, or with ``"searched"`` its
+    :class:`~.searched_timing.SearchedTiming` view."""
+    if free_timing != "searched":
+        return problem
     with _unbounded(problem.ev):
         return SearchedTiming(problem)
 
