@@ -337,13 +337,8 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
         The driven link's turning sense through the targets (a slider: ``"ccw"`` is
         forward along its guide), for free and ``step`` timing.
     free_timing : {"searched", "matched"}, optional
-        Free timing: the targets' driver values among the search's variables
-        (:mod:`.searched_timing`), or the targets matched to each design's curve on the
-        driver grid.  Default: ``"searched"`` when a global search runs and no
-        constraint reads the whole motion; ``"matched"`` for ``method="local"`` (no
-        search to vary the values: the polish starts from the match) and with
-        ``full_rotation`` or ``min_transmission`` (the grid is solved for them anyway,
-        and the matched search met them as well or better: the README's ellipse).
+        The targets' driver values searched (:mod:`.searched_timing`) or matched to each
+        design's curve on the driver grid; default :func:`_free_timing`'s choice.
     progress : callable(fraction, best), optional
 
     Returns
@@ -445,7 +440,10 @@ def _problem(m: Mechanism, task: str, target, bounds, cons: Constraints, grid: i
 def _free_timing(problem: Problem, free_timing: str | None, method: str) -> str | None:
     """The free timing of a run: ``free_timing`` as asked (checked), or by default
     ``"searched"`` with a global search and no constraint on the whole motion, else
-    ``"matched"``; None with prescribed timing (where ``"searched"`` is refused)."""
+    ``"matched"``: for ``method="local"`` (no search to vary the values: the polish starts
+    from the match) and with ``full_rotation`` or ``min_transmission`` (the grid is solved
+    for them anyway, and the matched search met them as well or better: the README's
+    ellipse).  None with prescribed timing (where ``"searched"`` is refused)."""
     if free_timing is None:
         if not problem.free_timing:
             return None

@@ -72,9 +72,8 @@ def add_arguments(p) -> None:
     p.add_argument("--mode", choices=MODES, default="any", help="reference: each dyad keeps the start's branch")
     p.add_argument("--direction", choices=DIRECTIONS, default="any",
                    help="the driven link's turning sense through the targets (free or step timing)")
-    p.add_argument("--free-timing", choices=FREE_TIMINGS, default=None, help="free timing: the targets' driver "
-                   "values searched (the default with a global search), or the targets matched to each design's "
-                   "curve on the driver grid (the default of --method local)")
+    p.add_argument("--free-timing", choices=FREE_TIMINGS, default=None, help="free timing: driver values searched "
+                   "(default with a search), or matched to the curve (--method local, --full-rotation, --min-transmission)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.add_argument("--plot", metavar="P.png", default=None, help="target vs achieved and the mechanism")
 
