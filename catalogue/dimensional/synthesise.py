@@ -580,29 +580,67 @@ def _best(problem: Problem, z: np.ndarray, phi: np.ndarray, polished: list, skip
     near a solution the steps converge quickly)."""
     cands = [(_assess(problem, z, phi), z, phi, 0)] + polished
     notes = []
-
-    keys: dict = {}
-
-    def key(c):
-        if id(c[1]) not in keys:
-            keys[id(c[1])] = (not c[0][2], _violation(problem, c[1]) > 0.0, not _solvable(problem, c[1]),
-                              float(np.sqrt(np.mean(c[0][0] ** 2))))
-        return keys[id(c[1])]
+    ranked = _Ranking(problem)
     for first in ((False,) if skip else (True, False)):
         if meter is not None and meter.stop() is not None:
             break
         part = None if meter is None else meter.share(0.5) if first else meter
-        picks = [cands[0]] + sorted(cands[1:], key=key)[:FINAL_STARTS - 1] if first else [min(cands, key=key)]
+        picks = [cands[0]] + ranked.first(cands[1:], FINAL_STARTS - 1) if first else ranked.first(cands, 1)
         Z2, PHI2, n = polish_batch(problem, np.array([c[1] for c in picks]), np.array([c[2] for c in picks]),
                                    max_nfev=100 if skip else 1500, meter=part)
         for i, (z2, phi2) in enumerate(zip(Z2, PHI2)):
             cands.append((_assess(problem, z2, phi2), z2, phi2, n if i == 0 else 0))
             if first and i == 0 and not cands[-1][0][2]:
                 notes.append("the local polish left the continuous branch")
-    a, zb, phib, _ = _certified(problem, sorted(cands, key=key))
+    a, zb, phib, _ = _certified(problem, ranked.first(cands, CERTIFIED))
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
     return a, zb, phib, sum(c[3] for c in cands), notes
+
+
+class _Ranking:
+    """Candidates ``(assessment, z, phi, n)`` ranked best first: reaching the targets on
+    the continuous branch, then meeting every constraint, then accepted by ``kin.solve``
+    (:func:`_solvable`: a plan compiled, the costliest test), then by RMS error.  The
+    solvability is tested only where it decides the first places asked for, and every
+    test is kept for the next ranking."""
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        self.known: dict = {}           # id of a design -> (its cheap key, solvable or None)
+
+    def _cheap(self, c) -> tuple:
+        hit = self.known.get(id(c[1]))
+        if hit is None:
+            hit = self.known[id(c[1])] = [(not c[0][2], _violation(self.problem, c[1]) > 0.0,
+                                           float(np.sqrt(np.mean(c[0][0] ** 2)))), None]
+        return hit
+
+    def _solvable(self, c) -> bool:
+        hit = self._cheap(c)
+        if hit[1] is None:
+            hit[1] = _solvable(self.problem, c[1])
+        return hit[1]
+
+    def first(self, cands: list, n: int) -> list:
+        """The first ``n`` of ``cands`` in the ranking (all of them when fewer): within
+        each class of the first two criteria, the solvable ones by error, then the others
+        by error (a stable order: ties keep the candidates' order)."""
+        out: list = []
+        order = sorted(cands, key=lambda c: self._cheap(c)[0])
+        i = 0
+        while i < len(order) and len(out) < n:
+            cls, later = self._cheap(order[i])[0][:2], []
+            while i < len(order) and self._cheap(order[i])[0][:2] == cls:
+                if len(out) < n:
+                    (out if self._solvable(order[i]) else later).append(order[i])
+                i += 1
+            out += later[:n - len(out)]
+        return out
+
+
+#: how many of the best ranked candidates the certified walk may try
+CERTIFIED = 5
 
 
 def _certified(problem: Problem, ranked: list):
@@ -615,7 +653,7 @@ def _certified(problem: Problem, ranked: list):
     by ``check``'s exact extremes (one on the threshold at the grid's samples may dip
     below it between two)."""
     c = problem.cons
-    for cand in ranked[:5]:
+    for cand in ranked[:CERTIFIED]:
         if not (cand[0][2] and _reached(problem, cand)):
             continue
         if c.full_rotation and not turns_fully(problem, cand[1]):
