@@ -200,8 +200,9 @@ def synthesis_rate(evaluations: int = 30_000, seeds=(0, 1, 2)) -> list[float]:
 def synthesis_floor_goal(budget: float = 2.0, D: int = 10_000, N: int = 96) -> None:
     """The issue's row "synthesis evaluations/s against a bare NumPy four-bar pass" (goal
     at least 0.2 of it): the whole run's rate (four-bar, 10 points, free timing as the
-    library's default: searched, ``budget`` seconds) and the search's alone, over the designs a second of the floor
-    (:func:`bare_curves`, D designs × N inputs in one NumPy pass, the grid's N)."""
+    library's default: searched, ``budget`` seconds) and the search's alone, over the
+    designs a second of the floor (:func:`bare_curves`, D designs × N inputs in one NumPy
+    pass, the grid's N)."""
     m = load_named("four_bar")
     names, X = _population(m, D, 0.02)
     phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)
