@@ -77,9 +77,10 @@ class KinematicState(BatchStatus):
     def frozen_from(cls, **values) -> "KinematicState":
         """The state of ``values`` (every required field; the others default) whose
         arrays the caller made read-only already (fresh arrays it owns, frozen in
-        place), built without the frozen dataclass's per-field ``__setattr__``:
-        the solver's compiled route, where building the state cost a third of a
-        360-position call.  A still-writable array gets its read-only view as usual."""
+        place, and views of them), ``inputs`` excepted: the caller's own array, it gets
+        its read-only view here.  Built without the frozen dataclass's per-field
+        ``__setattr__`` nor a check of every array's flags: the solver's compiled route,
+        where building the state cost a third of a 360-position call."""
         obj = object.__new__(cls)
         d = obj.__dict__
         d.update(_DEFAULTS)
@@ -87,7 +88,7 @@ class KinematicState(BatchStatus):
         if len(d) != len(_DEFAULTS) + len(_REQUIRED) or not _REQUIRED <= values.keys():
             raise TypeError(f"KinematicState.frozen_from: expected the fields {sorted(_REQUIRED)} and known ones, "
                             f"got {sorted(values)}")
-        _read_only(d, values)              # (the defaults hold no array)
+        _read_only(d, ("inputs",))
         return obj
 
     def as_dict(self, formula: str | None = None, inputs_cli=None, derivatives: bool | None = None) -> dict:
