@@ -7,8 +7,9 @@ and the polish's rounds, each caller linking and optimising the kernels it calls
 does each test worker of a fresh checkout.  ``install.sh`` runs this module after the
 install: a small solve on the compiled plan and small syntheses that take every compiled
 route (a four-bar path with free timing matched and searched, prescribed timing, a triad
-six-bar).  Without numba there is nothing to compile and it says so.  Exit 0 either way:
-a failed warm-up only leaves the compile to the first use.
+six-bar with either free timing), each route named, not left to the library's default.
+Without numba there is nothing to compile and it says so.  Exit 0 either way: a failed
+warm-up only leaves the compile to the first use.
 """
 from __future__ import annotations
 
@@ -44,8 +45,10 @@ def warm() -> list[str]:
     triad = load_named("stephenson_3_triad")
     pt = triad.points[0].name
     st = solve(triad, np.radians(np.linspace(0.0, 60.0, 5)))
-    synthesise(triad, path=st.point_positions[:, st.point_index(pt)], point=pt, evaluations=200, seed=0)
-    done.append("triad six-bar synthesis")
+    for how in ("matched", "searched"):
+        synthesise(triad, path=st.point_positions[:, st.point_index(pt)], point=pt, evaluations=200, seed=0,
+                   free_timing=how)
+    done.append("triad six-bar synthesis, free timing matched and searched")
     return done
 
 

@@ -4,7 +4,8 @@ With free timing the targets' driver values are unknowns.  ``free_timing="matche
 (:meth:`~.objective.Problem.batch`) solves each candidate on the whole driver grid,
 walked from the reference, and matches the targets to that curve in driver order by
 dynamic programming: the search's variables are the design's alone.
-``free_timing="searched"`` (the default with a global search) makes the driver values
+``free_timing="searched"`` (the default with a global search and no constraint on the
+whole motion) makes the driver values
 search variables instead, as Pyslvs's ``FPlanar`` and much of the literature since
 Cabrera, Simon & Prado (2002) do: a candidate is solved at its own ``N`` target inputs
 only, and scored by the same relative residuals the local polish minimises

@@ -337,8 +337,8 @@ def synthesise(start: Mechanism, *, path=None, point: str | None = None, shape_o
         The driven link's turning sense through the targets (a slider: ``"ccw"`` is
         forward along its guide), for free and ``step`` timing.
     free_timing : {"searched", "matched"}, optional
-        The targets' driver values searched (:mod:`.searched_timing`) or matched to each
-        design's curve on the driver grid; default :func:`_free_timing`'s choice.
+        Driver values searched (:mod:`.searched_timing`) or matched to each design's curve
+        on the grid; default searched, matched for ``method="local"`` or a whole-motion constraint.
     progress : callable(fraction, best), optional
 
     Returns
