@@ -17,7 +17,7 @@ import numpy as np
 from numba.extending import register_jitable
 
 from ._jit_cache import as_new_as
-from .groups.base import SCALAR_HELPERS, arctan2
+from .groups.base import INLINE_HELPERS, SCALAR_HELPERS, SINCOS_MEDIUM, arctan2, sincos_medium
 from .groups.registry import COMPILED, LOWERING
 
 __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", "finish_rows", "SLOTS"]
@@ -41,7 +41,7 @@ def _unused(ip, fp, X, W, F, T, C, S, PP, out) -> None:  # pragma: no cover - a 
 
 
 for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
-    register_jitable(**_JIT)(_helper)
+    register_jitable(**_JIT, **({"inline": "always"} if _helper in INLINE_HELPERS else {}))(_helper)
 if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
 _s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7, _s8, _s9, _s10, _s11 = (
@@ -171,15 +171,35 @@ def _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend) ->
 
 
 @numba.njit(**_JIT)
-def _trig_table(trig, X, W) -> None:
+def _trig_table(trig, X, W, simd) -> None:
     """The table ``W``: cos and sin of ``sign × input`` for each (driver, sign) row of
-    ``trig`` at every row of ``X`` (M, n_drivers)."""
+    ``trig`` at every row of ``X`` (M, n_drivers): libm's, as NumPy's (the design
+    batches, whose poses are the NumPy path's bit for bit), or with ``simd`` fdlibm's
+    in SIMD registers (:func:`_sincos_row`: within 1 ulp of libm's; the lean route of
+    ``solve``, which agrees with the NumPy path to rounding)."""
     for t in range(trig.shape[0]):
         d, r = trig[t, 0], 4 * trig[t, 0] + (2 if trig[t, 1] < 0 else 0)
+        sign = 1.0 if trig[t, 1] > 0 else -1.0
+        if simd:
+            x = X.ravel() if X.shape[1] == 1 else np.ascontiguousarray(X[:, d])
+            _sincos_row(x, sign, W[r], W[r + 1])
+            continue
         for n in range(X.shape[0]):
-            a = X[n, d] if trig[t, 1] > 0 else -X[n, d]
+            a = sign * X[n, d]
             W[r, n] = np.cos(a)
             W[r + 1, n] = np.sin(a)
+
+
+@numba.njit(**_JIT)
+def _sincos_row(x, sign, c, s) -> None:
+    """``c``, ``s`` = cos and sin of ``sign × x`` (1-D, contiguous) by
+    :func:`~kin.groups.base.sincos_medium` (a SIMD loop: no branch nor call), then libm's beyond :func:`~kin.groups.base.sincos_medium`'s range
+    (and for NaN)."""
+    for n in range(x.size):
+        c[n], s[n] = sincos_medium(sign * x[n])
+    for n in range(x.size):
+        if not abs(x[n]) <= SINCOS_MEDIUM:
+            c[n], s[n] = np.cos(sign * x[n]), np.sin(sign * x[n])
 
 
 @numba.njit(**_JIT)
@@ -197,14 +217,20 @@ def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail,
     """Every step of a lowered plan at every row of ``X`` (M, n_drivers) on the
     reference branch, in one call (the per-call work of :func:`solve_positions`'s
     caller done here): the table ``W`` (4 n_drivers, M) of cos and sin of ``sign ×
-    input`` for each (driver, sign) row of ``trig`` (K, 2), the frame's pose and cos and
+    input`` for each (driver, sign) row of ``trig`` (K, 2) (fdlibm's in SIMD registers,
+    within 1 ulp of NumPy's: :func:`_trig_table`), the frame's pose and cos and
     sin rows in ``C``, ``S`` (n_links, M: the caller's work arrays, reused between calls
     so that a large batch touches no fresh page), and the factors.  ``T`` (n_links, 3, M), ``fail`` (M,) zeros, ``pend`` (n_links,)
     zeros and ``P`` as :func:`solve_positions`; only the derived angle rows of
     ``want_links`` and the points of ``want_points`` (int8 masks) are computed, the
     others NaN (what ``outputs=`` leaves out).  Returns the number of failed rows (an
-    array returned would be boxed with its dtype unpickled on every call)."""
-    _trig_table(trig, X, W)
+    array returned would be boxed with its dtype unpickled on every call), or -1 without
+    solving when an input is not finite (the caller's checks then name it)."""
+    for n in range(X.shape[0]):
+        for d in range(X.shape[1]):
+            if not np.isfinite(X[n, d]):
+                return -1
+    _trig_table(trig, X, W, True)
     _frame_rows(frame, T, C, S)
     failed = _steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
                     np.ones((codes.shape[0], 1)), T, C, S, fail, pend)
@@ -230,7 +256,7 @@ def solve_designs(codes, ints, floats, unknown, steps, trig, frame, X, W, Tw, Cw
     for d in range(D):
         Xd = X[d if X.shape[0] > 1 else 0]
         if d == 0 or X.shape[0] > 1:
-            _trig_table(trig, Xd, W)
+            _trig_table(trig, Xd, W, False)
         _frame_rows(frame, Tw, Cw, Sw)
         failw[:] = 0
         pend[:] = 0

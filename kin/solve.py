@@ -176,6 +176,9 @@ def _offsets(items, hosts, origins: np.ndarray) -> tuple:
 
 # ---------------------------------------------------------------------------------
 def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
+    """``inputs`` as an (N, n_drivers) array of floats and whether it was one position;
+    their shape checked, not their values (:func:`_check_inputs`: the compiled
+    route's kernel refuses a NaN or an infinity itself, and the general route checks)."""
     x = np.asarray(inputs, float)
     nd = len(m.drivers)
     single = x.ndim == 0 or (x.ndim == 1 and nd > 1 and x.shape[0] == nd)
@@ -186,7 +189,6 @@ def _as_inputs(m: Mechanism, inputs) -> tuple[np.ndarray, bool]:
     if x.ndim != 2 or x.shape[1] != nd:
         raise InputError(explain("inputs", expected=f"shape (N,) for one driver or (N, {nd}) for {nd} drivers",
                                  got=f"shape {np.shape(inputs)}"))
-    check_finite_inputs(m, x)
     return x, single
 
 
@@ -858,7 +860,6 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool | str = False, inpu
         raise InputError(explain("method", expected=" or ".join(repr(x) for x in METHODS), got=repr(method)))
     m, sp = mechanism, plan_of(mechanism, plan)
     X, single = _as_inputs(m, inputs)
-    _check_range(sp, X)
     wanted = (*([only] if isinstance(only, str) else (only or ())),
               *([outputs] if isinstance(outputs, str) else (outputs or ())))
     needed = list(range(len(sp.steps))) if not wanted else cached(sp, ("needed", wanted), needed_steps, wanted)
@@ -866,7 +867,8 @@ def solve(mechanism: Mechanism, inputs, *, derivatives: bool | str = False, inpu
     keep = None if rows is None else _rows_of(rows, X.shape[0])
     if not (assemble or derivatives or method == "newton" or keep is not None) and len(needed) == len(sp.steps) \
             and (state := _compiled_motion(sp, X, select)) is not None:
-        return state                        # the compiled plan alone
+        return state                        # the compiled plan alone (its inputs finite and in range)
+    _check_inputs(sp, X)
     kernels = method != "newton"            # closed forms allowed
     run, notes = _solve_batch(sp, X, needed, kernels, assemble)
     _mark_out_of_range(sp, X, run)
@@ -901,7 +903,8 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     """The whole answer from the compiled kernel alone, or None (the general path then
     decides): one driver without a ``range`` whose cached chart puts every input on the
     reference branch (a full turn, no flip, no crossing), every step compiled, and every
-    row assembled.  The state is the one :func:`_solve_chart` and :func:`_finish` give
+    row assembled, its inputs finite (a P driver's slides within :data:`MAX_SLIDE`: the
+    general path names the fault).  The state is the one :func:`_solve_chart` and :func:`_finish` give
     then (with ``select``, the outputs asked for: the other points NaN, and the angles
     computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
     m = sp.mechanism
@@ -912,7 +915,9 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     call = cached(sp, ("motion", select), _motion_call, select)
     if call is None:
         return None
-    kp, want_links, want_points, names = call
+    kp, want_links, want_points, names, slide = call
+    if slide is not None and not (np.abs(X) <= slide).all():
+        return None                         # a runaway slide: the general route refuses it
     M, nj = X.shape[0], m.n_joints
     T = np.empty((m.n_links, 3, M))
     P = np.empty((kp.hosts.size, 2, M))
@@ -930,12 +935,15 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
 
 def _motion_call(sp: SolvePlan, select):
     """What :func:`_compiled_motion` passes on every call for ``outputs=`` ``select``,
-    looked up once: the lowered plan, the wanted rows' masks and the tracer points'
-    names; None when a step is not compiled."""
+    looked up once: the lowered plan, the wanted rows' masks, the tracer points' names
+    and the largest slide of a P driver (None for an R driver, :func:`_check_inputs`);
+    None when a step is not compiled."""
     kp = kernel.kernel_plan(sp)
     if not kp.complete:
         return None
-    return (kp, *_wanted_rows(sp, select), tuple(p.name for p in sp.mechanism.points))
+    m = sp.mechanism
+    slide = None if m.is_rotary(m.drivers[0]) else MAX_SLIDE * sp.size
+    return (kp, *_wanted_rows(sp, select), tuple(p.name for p in m.points), slide)
 
 
 def _all_ok(M: int) -> np.ndarray:
@@ -998,8 +1006,11 @@ def _mark_out_of_range(sp: SolvePlan, X: np.ndarray, run: _Run) -> None:
         run.G.invalidate(range(m.n_links), out)
 
 
-def _check_range(sp: SolvePlan, X: np.ndarray) -> None:
+def _check_inputs(sp: SolvePlan, X: np.ndarray) -> None:
+    """Refuse a NaN or an infinity (:func:`check_finite_inputs`), then a runaway slide of
+    a P driver."""
     m = sp.mechanism
+    check_finite_inputs(m, X)
     for k, d in enumerate(m.drivers):
         if not m.is_rotary(d) and np.any(np.abs(X[:, k]) > MAX_SLIDE * sp.size):
             raise InputError(explain(f"input of the P driver {d.joint}",

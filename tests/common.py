@@ -13,7 +13,7 @@ import numpy as np
 
 from hypothesis import strategies as st
 
-from multiloop.topo.model import Mechanism, chain_from_joint_lists
+from multiloop.topo.model import Mechanism, MechanismBuilder, chain_from_joint_lists
 
 
 def random_joint_lists(rng: random.Random, n_links: int, extra: int, p_multiple: float) -> list[list[str]]:
@@ -226,3 +226,15 @@ def routes_agree(m, a, b):
     assert np.nanmax(np.abs(Ta - Tb) / scale, initial=0.0) <= 1e-12
     np.testing.assert_array_equal(np.isnan(a.th), np.isnan(b.th))
     assert np.nanmax(np.abs(a.th - b.th), initial=0.0) <= 1e-12
+
+
+def slide_driven() -> Mechanism:
+    """A slider (P driver on the frame) that moves an RRR dyad."""
+    b = MechanismBuilder(name="slide-driven")
+    b.add_link("f", frame=True)
+    b.add_joint("S", "P", ("f", "s"), at=(0, 0), axis=(1, 0))
+    b.add_joint("A", "R", ("s", "r"), at=(0, 0))
+    b.add_joint("B", "R", ("r", "k"), at=(0.5, 0.8))
+    b.add_joint("C", "R", ("k", "f"), at=(1.0, 0.0))
+    b.add_driver("S")
+    return b.build()

@@ -211,6 +211,73 @@ def test_arctan2_within_one_ulp():
     assert np.isnan(arctan2(np.nan, 1.0))
 
 
+def _sincos_cases():
+    """Inputs for the kernel's sincos: a turn and more, far arguments, the multiples of
+    pi/2 to 2**20 (where the reduction cancels) with their neighbours, signed zeros,
+    subnormals, the range's end and beyond, infinities and NaN."""
+    rng = np.random.default_rng(5)
+    k = np.concatenate([np.arange(-3000, 3001), rng.integers(1, 2 ** 20, 4000), -rng.integers(1, 2 ** 20, 4000)])
+    near = (k * (np.pi / 2))[:, None] + np.spacing(k * (np.pi / 2))[:, None] * np.arange(-2, 3)
+    return np.concatenate([rng.uniform(-7, 7, 20000), rng.uniform(-1.7e6, 1.7e6, 20000), near.ravel(),
+                           [0.0, -0.0, 5e-324, -5e-324, 1e-300, np.pi / 4, -np.pi / 4, 1647099.0, -1647099.0,
+                            1647100.0, 1e22, -1e300, np.inf, -np.inf, np.nan]])
+
+
+def test_sincos_within_one_ulp_compiled_and_in_python():
+    """The solve route's cos and sin (fdlibm's reduction and polynomials, in SIMD
+    registers) against NumPy's within 1 ulp, the signed zeros and NaN kept; the compiled
+    row and the plain Python function give the same bits (one algorithm)."""
+    from multiloop.kin import _kernel_nb as nb
+    from multiloop.kin.groups.base import sincos
+    x = _sincos_cases()
+    c, s = np.empty_like(x), np.empty_like(x)
+    for sign in (1.0, -1.0):
+        nb._sincos_row(x, sign, c, s)
+        with np.errstate(invalid="ignore"):                   # (cos and sin of infinities)
+            rc, rs = np.cos(sign * x), np.sin(sign * x)
+        assert np.array_equal(np.isnan(c), np.isnan(rc)) and np.array_equal(np.isnan(s), np.isnan(rs))
+        ok = np.isfinite(rc)
+        assert np.all(np.abs(c[ok] - rc[ok]) <= np.spacing(np.abs(rc[ok])))
+        assert np.all(np.abs(s[ok] - rs[ok]) <= np.spacing(np.abs(rs[ok])))
+        assert np.array_equal(np.signbit(s[x == 0]), np.signbit(rs[x == 0]))   # sin(-0.0) is -0.0
+    nb._sincos_row(x, 1.0, c, s)
+    pick = np.random.default_rng(6).choice(x.size, 3000, replace=False)
+    py = np.array([sincos(float(v)) for v in x[pick]])
+    np.testing.assert_array_equal(py, np.stack([c[pick], s[pick]], axis=1))
+
+
+@given(st.floats(-2e6, 2e6, allow_nan=False))
+def test_sincos_property(x):
+    """Hypothesis: any argument, Python's sincos within 1 ulp of the libm's."""
+    from multiloop.kin.groups.base import sincos
+    c, s = sincos(x)
+    assert abs(c - np.cos(x)) <= np.spacing(abs(np.cos(x))) and abs(s - np.sin(x)) <= np.spacing(abs(np.sin(x)))
+
+
+def test_the_compiled_route_refuses_what_the_numpy_path_refuses():
+    """The lean compiled route (a full turn's chart) checks its inputs in the kernel: NaN
+    and infinities get the NumPy path's messages, the first bad index named; so do a
+    slider's, and its runaway slide."""
+    from multiloop.topo.errors import InputError
+    from multiloop.kin.solve import MAX_SLIDE
+    from tests.common import slide_driven
+    slider = slide_driven()
+    for m, x in ((load_named("four_bar"), np.linspace(0.0, 6.0, 360)), (slider, np.linspace(-0.2, 0.2, 50))):
+        with kernel.using("on"):
+            solve(m, x)                                   # the chart cached: the lean route next
+            lean = solve_mod._compiled_motion(plan_of(m), x.reshape(-1, 1)) is not None
+            assert lean == (m is not slider)              # (a stroke's chart has its limits)
+            for bad, got in ((np.nan, "nan"), (np.inf, "inf"), (-np.inf, "-inf")):
+                y = x.copy()
+                y[7] = bad
+                with pytest.raises(InputError,
+                                   match=rf"^inputs\[7, 0\] \(driver '{m.drivers[0].joint}'\): expected finite numbers, got {got}$"):
+                    solve(m, y)
+            assert np.array_equal(solve(m, x).positions, solve(m, x.copy()).positions)
+    with kernel.using("on"), pytest.raises(InputError, match="input of the P driver S: expected a slide of at most"):
+        solve(slider, [0.0, 2 * MAX_SLIDE * plan_of(slider).size])
+
+
 def test_modes():
     with pytest.raises(ValueError):
         with kernel.using("fast"):
@@ -219,6 +286,10 @@ def test_modes():
         assert not kernel.wanted(10 ** 9)
     with kernel.using("on"):
         assert kernel.wanted(1)
+        with kernel.using("off"):                        # nested blocks restore their outer mode
+            assert kernel.mode() == "off" and not kernel.is_default()
+        assert kernel.mode() == "on"
+    assert kernel.is_default() == ("MULTILOOP_KERNEL" not in os.environ)
 
 
 def test_a_mode_block_is_its_threads_own():

@@ -18,6 +18,7 @@ import pytest
 from multiloop.kin.groups.newton import ConstraintSystem, track
 from multiloop.kin.solve import compile_plan, solve
 from multiloop.kin.state import KinematicState
+from tests.common import slide_driven
 from test_assur import (class4_mechanism, crank_slider, dyad_mechanism, four_bar, knitting_needle,
                         six_bar_slider, stephenson3_triad, vtwin)
 from multiloop.topo.assur import Constraint
@@ -270,14 +271,7 @@ def test_two_drivers_five_bar():
 
 
 def test_prismatic_driver():
-    b = MechanismBuilder(name="slide-driven")
-    b.add_link("f", frame=True)
-    b.add_joint("S", "P", ("f", "s"), at=(0, 0), axis=(1, 0))
-    b.add_joint("A", "R", ("s", "r"), at=(0, 0))
-    b.add_joint("B", "R", ("r", "k"), at=(0.5, 0.8))
-    b.add_joint("C", "R", ("k", "f"), at=(1.0, 0.0))
-    b.add_driver("S")
-    m = b.build()
+    m = slide_driven()
     st = solve(m, np.linspace(-0.2, 0.2, 9), derivatives=True)
     assert st.success
     assert np.allclose(st.positions[:, 1, 0], np.linspace(-0.2, 0.2, 9), atol=1e-14)

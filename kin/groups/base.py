@@ -20,7 +20,8 @@ import numpy as np
 
 from multiloop.topo.errors import SingularityError, explain
 
-__all__ = ["SINGULAR_RTOL", "REACH_RTOL", "scalar", "SCALAR_HELPERS", "angle", "arctan2", "atan_pos",
+__all__ = ["SINGULAR_RTOL", "REACH_RTOL", "scalar", "scalar_inline", "SCALAR_HELPERS", "INLINE_HELPERS", "angle",
+           "arctan2", "atan_pos", "sincos", "sincos_medium", "SINCOS_MEDIUM",
            "carry", "turned", "place", "place_along", "place_like", "xy", "stack", "cramer", "is_singular",
            "sign_of", "quiet", "num", "pair", "length", "dot", "branch_sign", "put_rel", "put_off"]
 
@@ -37,6 +38,8 @@ REACH_RTOL = 1e-14
 
 #: the scalar helpers that compiled steps call (:func:`scalar`)
 SCALAR_HELPERS: list = []
+#: those of them numba inlines into its callers' code (:func:`scalar_inline`)
+INLINE_HELPERS: set = set()
 
 
 def scalar(func):
@@ -45,6 +48,14 @@ def scalar(func):
     kernel loads).  Without numba it stays a plain Python function."""
     SCALAR_HELPERS.append(func)
     return func
+
+
+def scalar_inline(func):
+    """:func:`scalar`, inlined by numba into its callers (``inline="always"``): a loop
+    that calls it can then run in SIMD registers (LLVM does not vectorise over numba's
+    calls)."""
+    INLINE_HELPERS.add(func)
+    return scalar(func)
 
 
 @scalar
@@ -110,6 +121,68 @@ def arctan2(y, x):
     if x < 0.0:
         z = _PI - (z - _PI_LO)
     return z if y > 0.0 else -z
+
+
+#: fdlibm's reduction by pi/2 (``e_rem_pio2.c``): 2/pi, and pi/2 in three 33-bit parts
+#: with their tails
+_INV_PIO2 = 6.36619772367581382433e-01
+_PIO2 = (1.57079632673412561417e+00, 6.07710050630396597660e-11, 2.02226624871116645580e-21)
+_PIO2_T = (6.07710050650619224932e-11, 2.02226624879595063154e-21, 8.47842766036889956997e-32)
+#: how far (a share of |x|) the reduction's first parts may cancel before the next is taken
+_CANCELLED = (1.0, 3.0517578125e-05, 3.552713678800501e-15)
+#: the largest |x| reduced here (about 2**20 pi/2, fdlibm's "medium" case); larger: libm's
+SINCOS_MEDIUM = 1647099.0
+#: fdlibm's ``k_sin.c`` and ``k_cos.c`` minimax coefficients on [-pi/4, pi/4]
+_KS = (-1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04,
+       2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10)
+_KC = (4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05,
+       -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11)
+
+
+@scalar
+def sincos(x):
+    """``(cos x, sin x)`` for the compiled kernel: :func:`sincos_medium` where ``|x|``
+    is at most about 2**20 pi/2, NumPy's own elsewhere (and for NaN and infinities)."""
+    if not abs(x) <= SINCOS_MEDIUM:
+        return np.cos(x), np.sin(x)
+    return sincos_medium(x)
+
+
+@scalar_inline
+def sincos_medium(x):
+    """``(cos x, sin x)`` for ``|x| <= 2**20 pi/2`` (fdlibm ``e_rem_pio2.c``, ``k_sin.c``,
+    ``k_cos.c``, Sun Microsystems 1993): ``|x|`` reduced by pi/2 to ``y0 + y1``,
+    ``|y0| <= pi/4``, by Cody-Waite in up to three parts, then minimax polynomials
+    of degree 13 and 14 and the quadrant's signs.  Error below 1 ulp, so within 1 ulp of
+    NumPy's (97 % of values bit for bit, tested).  Without a branch or a libm call, a
+    loop over it runs in SIMD registers: 360 pairs in a third of glibc's ``sincos``
+    time.  Larger ``|x|``: :func:`sincos`."""
+    t = abs(x)
+    fn = np.floor(t * _INV_PIO2 + 0.5)
+    r = t - fn * _PIO2[0]
+    w = fn * _PIO2_T[0]                    # good to 85 bits
+    for i in range(1, 3):                 # fdlibm's next parts (118 bits, then 151) where
+        p = fn * _PIO2[i]                 # r - w cancelled to 2**-15, then 2**-48, of |x|
+        r2 = r - p                        # (fdlibm's test on exponents, widened: a part
+        w2 = fn * _PIO2_T[i] - ((r - r2) - p)     # taken that fdlibm skips keeps its
+        take = abs(r - w) < _CANCELLED[i] * t     # rounding error); selects, not branches
+        r, w = (r2 if take else r), (w2 if take else w)
+    y0 = r - w
+    y1 = (r - y0) - w
+    z = y0 * y0
+    v = z * y0
+    rs = _KS[1] + z * (_KS[2] + z * (_KS[3] + z * (_KS[4] + z * _KS[5])))
+    s = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * _KS[0])
+    zz = z * z
+    rc = z * (_KC[0] + z * (_KC[1] + z * _KC[2])) + zz * zz * (_KC[3] + z * (_KC[4] + z * _KC[5]))
+    hz = 0.5 * z
+    h = 1.0 - hz
+    c = h + (((1.0 - h) - hz) + (z * rc - y0 * y1))
+    q = np.int64(fn) & 3                  # the quadrant: (c, s) turned by q quarter turns
+    odd, half = (q & 1) == 1, q >= 2
+    c, s = (-s if odd else c), (c if odd else s)
+    c, s = (-c if half else c), (-s if half else s)
+    return c, np.copysign(1.0, x) * s     # sin is odd (-0.0 kept)
 
 
 @scalar
