@@ -41,5 +41,15 @@ def test_the_first_places_are_the_full_orders_and_few_plans_are_compiled(rows, n
             last = (not got[-1][0][2], violates[int(got[-1][1][0])])
             assert all((not cands[i][0][2], violates[i]) <= last for i in compiled)
         assert ranking.first(cands, n) == got and len(compiled) == len(set(compiled))   # kept for the next ranking
+        fresh = S._Ranking(None)
+        compiled.clear()
+        assert list(fresh.ordered(cands)) == full                       # the lazy order is the full order
+        lazy = S._Ranking(None).ordered(cands)
+        compiled.clear()
+        head = next(lazy, None)                                         # the first place alone:
+        assert head is (full[0] if full else None)
+        if head is not None:                                            # no plan past its class
+            assert all((not cands[i][0][2], violates[i]) <= (not head[0][2], violates[int(head[1][0])])
+                       for i in compiled)
     finally:
         mp.undo()

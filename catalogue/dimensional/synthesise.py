@@ -1,6 +1,7 @@
 """The public entry point :func:`synthesise` and its frozen :class:`SynthesisResult`."""
 from __future__ import annotations
 
+import itertools
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -592,7 +593,7 @@ def _best(problem: Problem, z: np.ndarray, phi: np.ndarray, polished: list, skip
             cands.append((_assess(problem, z2, phi2), z2, phi2, n if i == 0 else 0))
             if first and i == 0 and not cands[-1][0][2]:
                 notes.append("the local polish left the continuous branch")
-    a, zb, phib, _ = _certified(problem, ranked.first(cands, CERTIFIED))
+    a, zb, phib, _ = _certified(problem, ranked.ordered(cands))
     if not a[2]:
         notes.append("the targets are not all reached by continuous motion from the reference")
     return a, zb, phib, sum(c[3] for c in cands), notes
@@ -622,29 +623,34 @@ class _Ranking:
             hit[1] = _solvable(self.problem, c[1])
         return hit[1]
 
-    def first(self, cands: list, n: int) -> list:
-        """The first ``n`` of ``cands`` in the ranking (all of them when fewer): within
-        each class of the first two criteria, the solvable ones by error, then the others
-        by error (a stable order: ties keep the candidates' order)."""
-        out: list = []
+    def ordered(self, cands: list):
+        """``cands`` in the ranking, lazily (a plan is compiled only when the next place
+        asks for it): within each class of the first two criteria, the solvable ones by
+        error, then the others by error (a stable order: ties keep the candidates' order)."""
         order = sorted(cands, key=lambda c: self._cheap(c)[0])
         i = 0
-        while i < len(order) and len(out) < n:
+        while i < len(order):
             cls, later = self._cheap(order[i])[0][:2], []
             while i < len(order) and self._cheap(order[i])[0][:2] == cls:
-                if len(out) < n:
-                    (out if self._solvable(order[i]) else later).append(order[i])
+                if self._solvable(order[i]):
+                    yield order[i]
+                else:
+                    later.append(order[i])
                 i += 1
-            out += later[:n - len(out)]
-        return out
+            yield from later
+
+    def first(self, cands: list, n: int) -> list:
+        """The first ``n`` of ``cands`` in the ranking (all of them when fewer)."""
+        return list(itertools.islice(self.ordered(cands), n))
 
 
 #: how many of the best ranked candidates the certified walk may try
 CERTIFIED = 5
 
 
-def _certified(problem: Problem, ranked: list):
-    """The first of the best five ``ranked`` candidates whose certified motion
+def _certified(problem: Problem, ranked):
+    """The first of the best five ``ranked`` candidates (an iterable, read no further
+    than needed: :meth:`_Ranking.ordered`) whose certified motion
     (``multiloop check``'s walk, :func:`~.report.reaches_targets`) reaches its targets in
     order without passing a limit and that meets the certified constraints, else the
     first, with its assessment's ``ok`` replaced by the certified answer: the targets'
@@ -653,7 +659,9 @@ def _certified(problem: Problem, ranked: list):
     by ``check``'s exact extremes (one on the threshold at the grid's samples may dip
     below it between two)."""
     c = problem.cons
-    for cand in ranked[:CERTIFIED]:
+    first = None
+    for cand in itertools.islice(ranked, CERTIFIED):
+        first = cand if first is None else first
         if not (cand[0][2] and _reached(problem, cand)):
             continue
         if c.full_rotation and not turns_fully(problem, cand[1]):
@@ -661,7 +669,6 @@ def _certified(problem: Problem, ranked: list):
         if c.min_transmission and not certified_transmission(problem, cand[1]) >= c.min_transmission:
             continue
         return cand
-    first = ranked[0]
     (rel, ang, ok), rest = first[0], first[1:]
     return ((rel, ang, bool(ok and _reached(problem, first))),) + tuple(rest)
 
