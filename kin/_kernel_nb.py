@@ -193,8 +193,8 @@ def _trig_table(trig, X, W, simd) -> None:
 @numba.njit(**_JIT)
 def _sincos_row(x, sign, c, s) -> None:
     """``c``, ``s`` = cos and sin of ``sign × x`` (1-D, contiguous) by
-    :func:`~kin.groups.base.sincos_medium` (a SIMD loop: no branch nor call), then libm's beyond :func:`~kin.groups.base.sincos_medium`'s range
-    (and for NaN)."""
+    :func:`~kin.groups.base.sincos_medium` (a SIMD loop: no branch nor call), then
+    libm's beyond its range (and for NaN)."""
     for n in range(x.size):
         c[n], s[n] = sincos_medium(sign * x[n])
     for n in range(x.size):

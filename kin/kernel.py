@@ -305,8 +305,9 @@ def run_motion(kp: KernelPlan, X: np.ndarray, T: np.ndarray, P: np.ndarray, fail
     from their cos and sin; only the derived angles of ``want_links`` and the points of
     ``want_points`` (int8 masks) are computed, the others NaN.  Returns the number of
     failed rows, or -1 when an input is not finite (nothing solved).  The work rows (cos
-    and sin tables) are this thread's scratch arrays (:func:`_scratch`).  The lean route of :func:`kin.solve.solve` for a whole motion;
-    :func:`run_positions` serves every other caller."""
+    and sin tables) are this thread's scratch arrays (:func:`_scratch`).  The lean route
+    of :func:`kin.solve.solve` for a whole motion; :func:`run_positions` serves every
+    other caller."""
     W, C, S = _motion_work(X.shape[1], T.shape[0], X.shape[0])
     return load().solve_motion(kp.codes, kp.ints, kp.floats, kp.unknown, kp.trig, kp.frame, X, W, C, S,
                                T, fail, pend, want_links, kp.hosts, kp.offs, want_points, P)

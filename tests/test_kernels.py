@@ -270,8 +270,8 @@ def test_the_compiled_route_refuses_what_the_numpy_path_refuses():
             for bad, got in ((np.nan, "nan"), (np.inf, "inf"), (-np.inf, "-inf")):
                 y = x.copy()
                 y[7] = bad
-                with pytest.raises(InputError,
-                                   match=rf"^inputs\[7, 0\] \(driver '{m.drivers[0].joint}'\): expected finite numbers, got {got}$"):
+                want = rf"^inputs\[7, 0\] \(driver '{m.drivers[0].joint}'\): expected finite numbers, got {got}$"
+                with pytest.raises(InputError, match=want):
                     solve(m, y)
             assert np.array_equal(solve(m, x).positions, solve(m, x.copy()).positions)
     with kernel.using("on"), pytest.raises(InputError, match="input of the P driver S: expected a slide of at most"):

@@ -14,3 +14,5 @@ def test_the_warm_up_takes_every_compiled_route(capsys):
     for what in ("solve (compiled plan)", "free timing matched", "free timing searched", "prescribed timing",
                  "triad six-bar"):
         assert what in out
+    from multiloop.kin import _kernel_nb
+    assert _kernel_nb.solve_motion.signatures            # solve's lean route (a whole turn, its chart cached)
