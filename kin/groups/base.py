@@ -21,7 +21,7 @@ import numpy as np
 from multiloop.topo.errors import SingularityError, explain
 
 __all__ = ["SINGULAR_RTOL", "REACH_RTOL", "scalar", "scalar_inline", "SCALAR_HELPERS", "INLINE_HELPERS", "angle",
-           "arctan2", "atan_pos", "sincos", "sincos_medium", "SINCOS_MEDIUM",
+           "arctan2", "atan_pos", "sincos_medium", "SINCOS_MEDIUM",
            "carry", "turned", "place", "place_along", "place_like", "xy", "stack", "cramer", "is_singular",
            "sign_of", "quiet", "num", "pair", "length", "dot", "branch_sign", "put_rel", "put_off"]
 
@@ -130,22 +130,13 @@ _PIO2 = (1.57079632673412561417e+00, 6.07710050630396597660e-11, 2.0222662487111
 _PIO2_T = (6.07710050650619224932e-11, 2.02226624879595063154e-21, 8.47842766036889956997e-32)
 #: how far (a share of |x|) the reduction's first parts may cancel before the next is taken
 _CANCELLED = (1.0, 3.0517578125e-05, 3.552713678800501e-15)
-#: the largest |x| reduced here (about 2**20 pi/2, fdlibm's "medium" case); larger: libm's
+#: the largest |x| that :func:`sincos_medium` reduces (about 2**20 pi/2, fdlibm's "medium" case)
 SINCOS_MEDIUM = 1647099.0
 #: fdlibm's ``k_sin.c`` and ``k_cos.c`` minimax coefficients on [-pi/4, pi/4]
 _KS = (-1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04,
        2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10)
 _KC = (4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05,
        -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11)
-
-
-@scalar
-def sincos(x):
-    """``(cos x, sin x)`` for the compiled kernel: :func:`sincos_medium` where ``|x|``
-    is at most about 2**20 pi/2, NumPy's own elsewhere (and for NaN and infinities)."""
-    if not abs(x) <= SINCOS_MEDIUM:
-        return np.cos(x), np.sin(x)
-    return sincos_medium(x)
 
 
 @scalar_inline
@@ -156,7 +147,7 @@ def sincos_medium(x):
     of degree 13 and 14 and the quadrant's signs.  Error below 1 ulp, so within 1 ulp of
     NumPy's (97 % of values bit for bit, tested).  Without a branch or a libm call, a
     loop over it runs in SIMD registers: 360 pairs in a third of glibc's ``sincos``
-    time.  Larger ``|x|``: :func:`sincos`."""
+    time.  Larger ``|x|``: libm's (the caller's test on :data:`SINCOS_MEDIUM`)."""
     t = abs(x)
     fn = np.floor(t * _INV_PIO2 + 0.5)
     r = t - fn * _PIO2[0]
