@@ -45,8 +45,11 @@ def columns(x, y, M) -> np.ndarray:
 
 
 def _zero(a) -> bool:
-    """Whether an offset (a float, or an array over designs) is zero everywhere."""
-    return a == 0.0 if isinstance(a, float) else not np.any(a)
+    """Whether an offset (a float, or an array over designs) is zero everywhere (an
+    array's own ``any``: ``np.any``'s wrapper costs twice as much)."""
+    if isinstance(a, float):
+        return a == 0.0
+    return not (a.any() if isinstance(a, np.ndarray) else np.any(a))
 
 
 def normal(u):
