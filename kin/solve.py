@@ -903,8 +903,8 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     """The whole answer from the compiled kernel alone, or None (the general path then
     decides): one driver without a ``range`` whose cached chart puts every input on the
     reference branch (a full turn, no flip, no crossing), every step compiled, and every
-    row assembled, its inputs finite (a P driver's slides within :data:`MAX_SLIDE`: the
-    general path names the fault).  The state is the one :func:`_solve_chart` and :func:`_finish` give
+    row assembled, its inputs finite (else the general path names the fault; a P
+    driver's slides are checked first, :func:`_check_inputs`).  The state is the one :func:`_solve_chart` and :func:`_finish` give
     then (with ``select``, the outputs asked for: the other points NaN, and the angles
     computed from cos and sin NaN unless asked), without the pose store's bookkeeping."""
     m = sp.mechanism
@@ -915,9 +915,9 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
     call = cached(sp, ("motion", select), _motion_call, select)
     if call is None:
         return None
-    kp, want_links, want_points, names, slide = call
-    if slide is not None and not (np.abs(X) <= slide).all():
-        return None                         # a runaway slide: the general route refuses it
+    kp, want_links, want_points, names, rotary = call
+    if not rotary:
+        _check_inputs(sp, X)                # a slide: the general route's checks (the kernel's is finiteness)
     M, nj = X.shape[0], m.n_joints
     T = np.empty((m.n_links, 3, M))
     P = np.empty((kp.hosts.size, 2, M))
@@ -936,14 +936,13 @@ def _compiled_motion(sp: SolvePlan, X: np.ndarray, select=None) -> KinematicStat
 def _motion_call(sp: SolvePlan, select):
     """What :func:`_compiled_motion` passes on every call for ``outputs=`` ``select``,
     looked up once: the lowered plan, the wanted rows' masks, the tracer points' names
-    and the largest slide of a P driver (None for an R driver, :func:`_check_inputs`);
+    and whether the driver turns (a P driver's slides are checked by :func:`_check_inputs`);
     None when a step is not compiled."""
     kp = kernel.kernel_plan(sp)
     if not kp.complete:
         return None
     m = sp.mechanism
-    slide = None if m.is_rotary(m.drivers[0]) else MAX_SLIDE * sp.size
-    return (kp, *_wanted_rows(sp, select), tuple(p.name for p in m.points), slide)
+    return (kp, *_wanted_rows(sp, select), tuple(p.name for p in m.points), m.is_rotary(m.drivers[0]))
 
 
 def _all_ok(M: int) -> np.ndarray:
