@@ -14,11 +14,12 @@ import inspect
 
 import numba
 import numpy as np
-from numba.extending import register_jitable
 
 from ._jit_cache import as_new_as
-from .groups.base import INLINE_HELPERS, SCALAR_HELPERS, SINCOS_MEDIUM, arctan2, sincos_medium
+from ._scalar_nb import JIT as _JIT
+from .groups.base import SCALAR_HELPERS, SINCOS_MEDIUM, arctan2, sincos_medium
 from .groups.registry import COMPILED, LOWERING
+from .groups.step import Deferred
 
 __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", "finish_rows", "SLOTS"]
 
@@ -26,26 +27,36 @@ __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", 
 def _fresh_cache() -> None:
     """Touch this file when a compiled step's source is newer (numba's cache would
     otherwise keep the old code); a read-only install is left alone."""
-    as_new_as(__file__, {inspect.getsourcefile(f) for f in (*COMPILED.values(), *LOWERING.values(), *SCALAR_HELPERS)})
+    as_new_as(__file__, {inspect.getsourcefile(_python(f)) for f in (*COMPILED.values(), *LOWERING.values(),
+                                                                      *SCALAR_HELPERS)})
+
+
+def _python(f):
+    """The Python function of a registry entry (a :class:`~kin.groups.step.Deferred`
+    one's compiled function's)."""
+    return f.resolve().py_func if isinstance(f, Deferred) else f
+
+
+def _compiled(f):
+    """A registry entry compiled: a :class:`~kin.groups.step.Deferred` one is compiled in
+    its own module already."""
+    return f.resolve() if isinstance(f, Deferred) else numba.njit(**_JIT)(f)
 
 
 _fresh_cache()                             # before the decorators read the timestamp
-#: the number of scalar steps the kernel dispatches on (the registry's order): 8 taken, so
-#: four more kinds with a compiled step need no edit here
+#: the number of scalar steps the kernel dispatches on (the registry's order): 9 taken, so
+#: three more kinds with a compiled step need no edit here
 SLOTS = 12
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
 
 
 def _unused(ip, fp, X, W, F, T, C, S, PP, out) -> None:  # pragma: no cover - a free slot
     out[:] = 1
 
 
-for _helper in SCALAR_HELPERS:            # helpers the scalar steps call
-    register_jitable(**_JIT, **({"inline": "always"} if _helper in INLINE_HELPERS else {}))(_helper)
 if len(COMPILED) > SLOTS:  # pragma: no cover - a new kind needs a branch below
     raise ImportError(f"kin._kernel_nb dispatches on {SLOTS} compiled steps; the registry has {len(COMPILED)}")
 _s0, _s1, _s2, _s3, _s4, _s5, _s6, _s7, _s8, _s9, _s10, _s11 = (
-    numba.njit(**_JIT)(f) for f in (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
+    _compiled(f) for f in (*COMPILED.values(), *(_unused,) * (SLOTS - len(COMPILED))))
 
 
 def _no_lowering(q, P, U, O, size, out) -> None:  # pragma: no cover - a key without one

@@ -203,7 +203,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     shape = (geo.D, X.shape[-2])
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
-    if kp is not None and kp.covers(steps) and kp.lowered(steps):
+    if kp is not None and kp.covers(steps, tracked=True) and kp.lowered(steps):
         floats = kernel.lower_designs(sp, kp, geo, steps)           # (no step bound in Python)
         store = kernel.design_work("poses", (mechanism.n_links, 3) + shape) if reuse else None
         G = _batch_store(geo, shape, store)
@@ -212,7 +212,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     if any(b is None for b in bound):
         return _per_design(sp, geo, X, shape, outputs, deadline)
     G = _batch_store(geo, shape)
-    if kp is not None and kp.covers(steps):
+    if kp is not None and kp.covers(steps, tracked=True):
         return _compiled(sp, geo, G, kp, kernel.design_floats(kp, bound, steps, geo.origins(), geo.D), steps, X)
     for k, step in zip(steps, bound):
         step.jit = kp is not None                # a triad's compiled tracker, say

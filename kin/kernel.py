@@ -19,9 +19,13 @@ lowering (:func:`lower_designs`: the adapter's ``compiled_lower``, the floats it
 in one call, no step bound in Python; a kind without one is bound and lowered by its
 adapter (:func:`design_floats`).  The NumPy path stays as the oracle
 (``tests/test_kernels.py``, ``tests/test_synthesis_kernel.py``) and solves what the
-kernel does not: a plan with a triad, a class IV group or a Newton group, the probes of
-the continuation walk, velocities and accelerations, and the reasons of the rows that
-fail.  A triad's or class IV group's tracker along one design's path runs its all-modes
+kernel does not: a plan with a class IV group or a Newton group, the probes of the
+continuation walk, velocities and accelerations, and the reasons of the rows that fail.
+A triad's compiled step follows its mode along each design's inputs
+(:func:`kin.groups._triad_nb.triad_place`, Hunt 1983's modes; the NumPy tracker's steps,
+modes and statuses): it serves batches of designs only (a *tracked* step,
+:meth:`KernelPlan.covers`), since ``solve``'s kernel routes solve a failed row again on
+its own.  A class IV group's tracker, and a triad's in ``solve``, run their all-modes
 phases compiled (:mod:`kin.groups._triad_nb`) in the same modes as the plan kernel
 (:func:`kin.kernel_mode.chooses`).
 
@@ -87,7 +91,9 @@ class KernelPlan:
     for batches of designs (:data:`~kin.groups.registry.LOWERING`) and ``rows``
     (n_steps, width) the joint rows and links that lowering reads
     (:meth:`~kin.groups.step.GroupStep.lower_indices`; rows of
-    :meth:`~kin.geometry.Geometry.gather`'s tables)."""
+    :meth:`~kin.geometry.Geometry.gather`'s tables), ``tracked`` (n_steps,) whether its
+    compiled step follows a mode along the inputs (:attr:`~kin.groups.step.GroupStep.tracked`:
+    batches of designs only, ``complete`` then False)."""
 
     codes: np.ndarray
     ints: np.ndarray
@@ -100,10 +106,15 @@ class KernelPlan:
     complete: bool = False
     lowers: np.ndarray | None = None
     rows: np.ndarray | None = None
+    tracked: np.ndarray | None = None
 
-    def covers(self, steps) -> bool:
-        """Whether every step of ``steps`` has a compiled step."""
-        return _every(self.codes >= 0, steps, self.complete)
+    def covers(self, steps, tracked: bool = False) -> bool:
+        """Whether every step of ``steps`` has a compiled step, a tracked one only with
+        ``tracked`` (a batch of designs, each solved along its own inputs: ``solve``'s
+        routes solve a failed row again on its own, which a followed mode does not allow)."""
+        if tracked:
+            return _every(self.codes >= 0, steps, bool(np.all(self.codes >= 0)))
+        return _every((self.codes >= 0) & ~self.tracked, steps, self.complete)
 
     def lowered(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled lowering for batches of designs
@@ -139,11 +150,13 @@ def lower_plan(sp) -> KernelPlan:
     trig = np.array(sorted({(d, 1 if sign > 0 else -1) for lw in low if lw is not None for d, sign in lw.trig}),
                     np.int64).reshape(-1, 2)
     trig.flags.writeable = False
+    tracked = np.array([lw is not None and bool(st.closed.tracked) for st, lw in zip(sp.steps, low)], bool)
+    tracked.flags.writeable = False
     return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
                       sp.mechanism.link_names.index(sp.mechanism.frame), trig,
-                      *_hosts(sp), bool(np.all(codes >= 0)), lowers, rows)
+                      *_hosts(sp), bool(np.all(codes >= 0) and not tracked.any()), lowers, rows, tracked)
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:

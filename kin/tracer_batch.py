@@ -55,13 +55,13 @@ class TracerBatch:
     def of(cls, mechanism, names, point: str) -> "TracerBatch | None":
         """The batch of ``point`` for designs with columns ``names``, kept on the plan;
         None when it has no compiled route: no numba, a step without a compiled step or
-        lowering (a triad's, Newton's), more than one driver, or a point on the frame."""
+        lowering (a class IV group's, Newton's), more than one driver, or a point on the frame."""
         sp = plan_of(mechanism)
         if kernel.load() is None or len(mechanism.drivers) != 1:
             return None
         kp = kernel.kernel_plan(sp)
         every = range(len(sp.steps))
-        if not (kp.covers(every) and kp.lowered(every)):
+        if not (kp.covers(every, tracked=True) and kp.lowered(every)):
             return None
         tb = cached(sp, ("tracer batch", tuple(names), point), _make, (tuple(names), point))
         return None if tb.host == kp.frame else tb

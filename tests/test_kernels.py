@@ -108,7 +108,8 @@ def test_catalogue_against_numpy(name):
     sp = plan_of(m)
     X = _inputs(m, sp)
     if not _covered(m):                    # a triad or class IV group: the NumPy path solves it
-        assert kernel.kernel_plan(sp).codes.min() == -1
+        kp = kernel.kernel_plan(sp)         # (a triad's compiled tracker serves batches of designs only)
+        assert kp.codes.min() == -1 or kp.tracked.any()
         with kernel.using("on"):
             assert solve_mod._compiled_run(sp, X, range(len(sp.steps)), {}, True) is None
         return

@@ -20,17 +20,17 @@ pytestmark = pytest.mark.skipif(not kernel.compiled_batches(),
                                 reason="design batches do not run compiled (no numba, or MULTILOOP_KERNEL=off)")
 
 
-def _case(name, D=3, N=12, seed=2):
+def _case(name, D=3, N=12, seed=2, span=None):
     m = load_named(name)
     names, X = _designs(m, D=D, rel=0.01, seed=seed)
     rng = np.random.default_rng(seed)
     rotary = m.is_rotary(0)
-    span = (np.pi if rotary else 0.3 * m.size)
+    span = span or (np.pi if rotary else 0.3 * m.size)
     PHI = np.sort(rng.uniform(-span, span, (D, N)), axis=1)
     return m, names, X, PHI
 
 
-@pytest.mark.parametrize("name", DYAD_MECHANISMS)
+@pytest.mark.parametrize("name", [*DYAD_MECHANISMS, "stephenson_3_triad"])
 def test_the_point_and_its_derivatives_are_the_pose_stores_to_the_bit(name):
     m, names, X, PHI = _case(name)
     pts = [p.name for p in m.points] or [next(j.name for j in m.joints[::-1] if m.frame not in j.links)]
@@ -46,8 +46,9 @@ def test_the_point_and_its_derivatives_are_the_pose_stores_to_the_bit(name):
         assert np.array_equal(tb.solve(X, PHI)[0], W, equal_nan=True) and tb.solve(X, PHI)[1] is None
 
 
-def test_the_derivatives_are_central_differences_of_the_point():
-    m, names, X, PHI = _case("watt_1", D=2, N=6)
+@pytest.mark.parametrize("name", ["watt_1", "stephenson_3_triad"])
+def test_the_derivatives_are_central_differences_of_the_point(name):
+    m, names, X, PHI = _case(name, D=2, N=6, span=0.5)       # (every input assembles: the triad's too)
     tb = TracerBatch.of(m, names, m.points[0].name)
     W, dW = tb.solve(X, PHI, jacobian=True)
     assert np.all(np.isfinite(W))
@@ -67,9 +68,9 @@ def test_the_derivatives_are_central_differences_of_the_point():
 
 
 def test_plans_without_a_compiled_route_and_frame_points_are_refused():
-    tri = load_named("stephenson_3_triad")
-    names, _ = _designs(tri, D=2)
-    assert TracerBatch.of(tri, names, tri.points[0].name) is None          # (a triad: no compiled step)
+    c4 = load_named("stephenson_3")
+    names, _ = _designs(c4, D=2)
+    assert TracerBatch.of(c4, names, c4.points[0].name) is None            # (a class IV group: no compiled step)
     m = load_named("four_bar")
     names, _ = _designs(m, D=2)
     ground = next(j.name for j in m.joints if m.frame in j.links)

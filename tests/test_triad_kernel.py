@@ -95,6 +95,28 @@ def test_track_designs_against_numpy(seed, move, N):
     assert (s0[3] != 0).any()
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.floats(0.0, 0.3), st.integers(2, 140), st.sampled_from([1, 3, 8, 32]))
+def test_the_plan_kernels_tracker_against_numpy(seed, move, N, stride):
+    """The plan kernel's whole tracker (``_triad_nb.track_path``, a triad's step in a batch
+    of designs) against the NumPy tracker alone (``triad_track``) from the reference
+    points: the same statuses, points and angles within 1e-12, on every route of the
+    tracker (all modes at every input; coarse inputs with their neighbours accepted or
+    refused and refollowed; a lost mode and its tail)."""
+    from multiloop.kin.groups import _triad_nb
+    from multiloop.kin.groups.triad import triad_track
+    A, b, L, _ = _random_triads(6, N, seed, move)
+    for d in range(len(A)):
+        ref = triad_track(A[d], b[d], L[d], b[d], stride=stride)
+        P, th, status = np.empty((N, 3, 2)), np.empty(N), np.empty(N, np.int64)
+        _triad_nb.track_path(np.ascontiguousarray(A[d]), b[d].copy(), np.ascontiguousarray(L[d]), stride, P, th,
+                             status)
+        np.testing.assert_array_equal(status, ref.status)
+        np.testing.assert_array_equal(np.isnan(P), np.isnan(ref.P))
+        assert np.nanmax(np.abs(P - ref.P), initial=0.0) <= 1e-12
+        assert np.nanmax(np.abs(th - ref.theta), initial=0.0) <= 1e-12
+
+
 @settings(max_examples=30, deadline=None)
 @given(st.integers(0, 10_000), st.booleans())
 def test_companion_roots_against_lapack(seed, double):
@@ -128,21 +150,29 @@ def test_companion_roots_against_lapack(seed, double):
 
 
 def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
-    """``solve_designs`` hands the triad's tracker the compiled route with the kernel on,
-    the NumPy route with it off (the step's ``jit``)."""
-    from multiloop.kin.groups import triad
-    seen = []
-    real = triad._kernel
-    monkeypatch.setattr(triad, "_kernel", lambda: seen.append(1) or real())
-    m = load_named("stephenson_3_triad")
-    cols, X = design_population(m, 4, 0.003, 0)
+    """With the kernel on, ``solve_designs`` solves a triad's designs by the plan kernel's
+    compiled step (``_triad_nb.triad_place``: no NumPy step runs), with it off by the
+    NumPy route; a class IV group's tracker (no plan-kernel step) takes its compiled
+    phases with the kernel on only (the step's ``jit``)."""
+    from multiloop.kin.groups import class4, triad
+    numpy_steps, phases = [], []
+    real_designs, real_kernel = triad.TriadStep._designs, triad._kernel
+    monkeypatch.setattr(triad.TriadStep, "_designs", lambda self, G: numpy_steps.append(1) or real_designs(self, G))
+    monkeypatch.setattr(triad, "_kernel", lambda: phases.append(1) or real_kernel())
+    monkeypatch.setattr(class4, "_kernel", triad._kernel)
     x = np.linspace(0.0, 1.0, 96)
-    with kernel.using("off"):
-        solve_designs(m, cols, X, x)
-    assert not seen
-    with kernel.using("on"):
-        solve_designs(m, cols, X, x)
-    assert seen
+    for name, numpy_when_on in (("stephenson_3_triad", False), ("stephenson_3", True)):
+        m = load_named(name)
+        cols, X = design_population(m, 4, 0.003, 0)
+        numpy_steps.clear()
+        phases.clear()
+        with kernel.using("off"):
+            solve_designs(m, cols, X, x)
+        assert not phases and bool(numpy_steps) == (name == "stephenson_3_triad")
+        numpy_steps.clear()
+        with kernel.using("on"):
+            solve_designs(m, cols, X, x)
+        assert bool(phases) == numpy_when_on and not numpy_steps
 
 
 @settings(max_examples=15, deadline=None)

@@ -25,9 +25,27 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["fill_fine", "modes_many", "predict_modes", "follow_batch", "companion_roots"]
+from . import triad_tables as _tables
+from .._jit_cache import as_new_as
+from .._scalar_nb import JIT as _JIT
+from .base import SINGULAR_RTOL as _RTOL, carry, place, place_along
 
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
+__all__ = ["fill_fine", "modes_many", "predict_modes", "follow_batch", "companion_roots", "track_path",
+           "triad_place"]
+
+
+def _fresh_cache() -> None:
+    """Touch this file when the tracker's constants (:mod:`kin.groups.triad_tables`) or
+    the scalar helpers it calls (:mod:`kin.groups.base`) are newer (numba keys the cache
+    on this file alone); a read-only install is left alone."""
+    from . import base
+    as_new_as(__file__, [_tables.__file__, base.__file__])
+
+
+_fresh_cache()                             # before the decorators read the timestamp
+#: the tracker's tables and tolerances, constants of the compiled code
+_Z16, _DFT, _GRID, _BASIS = _tables.Z16, _tables.DFT, _tables.GRID, _tables.BASIS
+_ITERS, _ACCEPT, _STRIDE = _tables.NEWTON_ITERS, _tables.ACCEPT, _tables.STRIDE
 
 
 @numba.njit(**_JIT)
@@ -558,23 +576,253 @@ def modes_many(A, bb, l, Z, E, GRID, BASIS, iters, tol, accept, rtol, P, th):
     NaN-padded).  The polynomial's coefficients come from a direct 16-point DFT and its
     roots from :func:`_roots` (rounding apart from NumPy's FFT and LAPACK), each root near
     the unit circle polished by the NumPy route's Newton (:func:`_polish`)."""
-    q, a = np.empty(7), np.zeros((7, 7))
-    wr, wi, w = np.empty(7), np.empty(7), np.empty(24)
-    Pk, thk, valid = np.empty((6, 3, 2)), np.empty(6), np.empty(6, np.bool_)
-    bc, av = np.empty(2, np.complex128), np.empty(2, np.complex128)
+    work = _modes_work()
     for k in range(A.shape[0]):
-        for i in range(2):
-            bc[i] = bb[k, i + 1, 0] + 1j * bb[k, i + 1, 1]
-            av[i] = (A[k, i + 1, 0] - A[k, 0, 0]) + 1j * (A[k, i + 1, 1] - A[k, 0, 1])
-        sigma = _shifted_poly(bc, av, l[k], Z, E, GRID, BASIS, q)
-        ok = _roots(q, a, wr, wi)
-        for j in range(6):
-            t = wr[j + 1]
-            valid[j] = ok and abs(wi[j + 1]) < 0.5 * 1e-3 * (1.0 + (t * t + wi[j + 1] * wi[j + 1]))
-            if valid[j]:
-                px, py = _start_point(A[k], bc, av, l[k], sigma + 2.0 * np.arctan(t))
-                thj, res = _polish(A[k], bb[k], l[k], px, py, sigma + 2.0 * np.arctan(t), Pk[j], w, iters, tol, rtol)
-                thk[j] = _wrap(thj)
-                valid[j] = res <= accept
-        scale = max(l[k, 0], max(l[k, 1], l[k, 2]))
-        _merge_sort(Pk, thk, valid, scale, P[k], th[k])
+        _modes_at(A[k], bb[k], l[k], Z, E, GRID, BASIS, iters, tol, accept, rtol, P[k], th[k], work)
+
+
+@numba.njit(**_JIT)
+def _modes_work():
+    """:func:`_modes_at`'s work arrays."""
+    return (np.empty(7), np.zeros((7, 7)), np.empty(7), np.empty(7), np.empty(24), np.empty((6, 3, 2)),
+            np.empty(6), np.empty(6, np.bool_), np.empty(2, np.complex128), np.empty(2, np.complex128))
+
+
+@numba.njit(**_JIT)
+def _modes_at(A, bb, l, Z, E, GRID, BASIS, iters, tol, accept, rtol, P, th, work):
+    """:func:`modes_many` at one position: ``A``, ``bb`` (3, 2), ``l`` (3,); writes ``P``
+    (6, 3, 2) and ``th`` (6,); ``work`` from :func:`_modes_work`."""
+    q, a, wr, wi, w, Pk, thk, valid, bc, av = work
+    for i in range(2):
+        bc[i] = bb[i + 1, 0] + 1j * bb[i + 1, 1]
+        av[i] = (A[i + 1, 0] - A[0, 0]) + 1j * (A[i + 1, 1] - A[0, 1])
+    sigma = _shifted_poly(bc, av, l, Z, E, GRID, BASIS, q)
+    ok = _roots(q, a, wr, wi)
+    for j in range(6):
+        t = wr[j + 1]
+        valid[j] = ok and abs(wi[j + 1]) < 0.5 * 1e-3 * (1.0 + (t * t + wi[j + 1] * wi[j + 1]))
+        if valid[j]:
+            px, py = _start_point(A, bc, av, l, sigma + 2.0 * np.arctan(t))
+            thj, res = _polish(A, bb, l, px, py, sigma + 2.0 * np.arctan(t), Pk[j], w, iters, tol, rtol)
+            thk[j] = _wrap(thj)
+            valid[j] = res <= accept
+    scale = max(l[0], max(l[1], l[2]))
+    _merge_sort(Pk, thk, valid, scale, P, th)
+
+
+# --------------------------------------------------------------------------- one path
+# :func:`kin.groups.triad.triad_track`'s tracker along one design's path, compiled whole:
+# the plan kernel's step for a triad in a batch of designs (:func:`triad_place`).
+
+
+@numba.njit(**_JIT)
+def _follow(A, bb, l, start, P, th, idx, status):
+    """``triad._full_follow``'s compiled route on a path of K inputs: the mode nearest
+    ``start`` (3, 2) at the first input followed (:func:`_next_mode`): ``idx``, ``status``
+    (K,) (all 1 when the first input has no mode), and every mode ``P`` (K, 6, 3, 2),
+    ``th`` (K, 6) (:func:`_modes_at`) of the inputs reached (NaN after a loss: the
+    following is causal, so they are never read)."""
+    K = A.shape[0]
+    work = _modes_work()
+    P[:] = np.nan
+    th[:] = np.nan
+    _modes_at(A[0], bb, l[0], _Z16, _DFT, _GRID, _BASIS, _ITERS, 1e-12, _ACCEPT, _RTOL, P[0], th[0], work)
+    valid = np.zeros((K, 6), np.bool_)
+    valid[0] = np.isfinite(th[0])
+    j, best = -1, np.inf
+    for m in range(6):
+        if valid[0, m]:
+            d = _dist(P[0, m], start)
+            if d < best:                           # (NaN: never)
+                j, best = m, d
+    idx[:] = -1
+    status[:] = 3
+    if j < 0:
+        status[:] = 1
+        return
+    pred = np.empty((K, 6, 3, 2))                  # (only the followed mode's: the others are never read)
+    w = np.empty(24)
+    status[0], idx[0] = 0, j
+    for i in range(K - 1):                         # (the modes of an input only once it is reached)
+        _modes_at(A[i + 1], bb, l[i + 1], _Z16, _DFT, _GRID, _BASIS, _ITERS, 1e-12, _ACCEPT, _RTOL, P[i + 1],
+                  th[i + 1], work)
+        valid[i + 1] = np.isfinite(th[i + 1])
+        _predict(A[i], P[i, j], A[i + 1], l[i], l[i + 1], pred[i, j], w, _RTOL)
+        j = _next_mode(P, valid, pred, i, j, 0.5)
+        if j < 0:
+            status[i + 1] = 2
+            break
+        idx[i + 1], status[i + 1] = j, 0
+
+
+@numba.njit(**_JIT)
+def _take(Pm, thm, idx, lo, P, th):
+    """The followed mode ``idx`` of each input (from ``Pm``, ``thm``) into ``P``, ``th``
+    from input ``lo`` on (where it was followed)."""
+    for r in range(idx.size):
+        if idx[r] >= 0:
+            P[lo + r] = Pm[r, idx[r]]
+            th[lo + r] = thm[r, idx[r]]
+
+
+@numba.njit(**_JIT)
+def _separation(Pm, thm, j, Pc):
+    """``triad._separation`` at one input: the followed pose ``Pc`` (mode ``j``)'s distance
+    to the nearest other mode (``inf``: alone)."""
+    sep = np.inf
+    for m in range(6):
+        if m != j and np.isfinite(thm[m]):
+            d = _dist(Pm[m], Pc)
+            if d < sep:
+                sep = d
+    return sep
+
+
+@numba.njit(**_JIT)
+def track_path(A, b, l, stride, P, th, status):
+    """``triad._track`` (:func:`kin.groups.triad.triad_track`'s tracker) compiled: one mode
+    of a triad followed along the anchors ``A`` (N, 3, 2) from the one nearest the
+    reference points ``b`` (3, 2) at ``A[0]``, legs ``l`` (N, 3); writes ``P`` (N, 3, 2),
+    ``th`` and ``status`` (N,) (0 ok, 1 no assembly, 2 lost here, 3 after).  All modes at
+    every ``stride``-th input, each other input predicted from its nearest such one and
+    Newton-polished, accepted only well inside its mode's basin (else its interval is
+    followed at full resolution), the same steps, modes and statuses as the NumPy route
+    (the floats to rounding)."""
+    N = A.shape[0]
+    bb = b - b[0]
+    P[:] = np.nan
+    th[:] = np.nan
+    status[:] = 3
+    if stride <= 1 or N <= 2 * stride:
+        Pm, thm, idx = np.empty((N, 6, 3, 2)), np.empty((N, 6)), np.empty(N, np.int64)
+        _follow(A, bb, l, b, Pm, thm, idx, status)
+        _take(Pm, thm, idx, 0, P, th)
+        return
+    nc = (N - 1) // stride + (1 if (N - 1) % stride else 0) + 1
+    c = np.empty(nc, np.int64)                    # (``triad._coarse``: every stride-th input and the last)
+    for k in range(nc):
+        c[k] = min(k * stride, N - 1)
+    Pm, thm, ic, sc = np.empty((nc, 6, 3, 2)), np.empty((nc, 6)), np.empty(nc, np.int64), np.empty(nc, np.int64)
+    _follow(A[c], bb, l[c], b, Pm, thm, ic, sc)
+    if ic[0] < 0:
+        status[:] = 1
+        return
+    kmax = 0
+    while kmax + 1 < nc and ic[kmax + 1] >= 0:
+        kmax += 1
+    Pc, thc, sep = np.empty((kmax + 1, 3, 2)), np.empty(kmax + 1), np.empty(kmax + 1)
+    for k in range(kmax + 1):
+        Pc[k], thc[k] = Pm[k, ic[k]], thm[k, ic[k]]
+        sep[k] = _separation(Pm[k], thm[k], ic[k], Pc[k])
+        P[c[k]], th[c[k]], status[c[k]] = Pc[k], thc[k], 0
+    bad = np.zeros(nc, np.bool_)
+    w, Pp = np.empty(24), np.empty((3, 2))
+    for f in range(c[kmax]):
+        left = f // stride
+        if f == c[left]:
+            continue
+        k = left if f - c[left] <= c[left + 1] - f else left + 1
+        dth, sing = _predict(A[c[k]], Pc[k], A[f], l[c[k]], l[f], Pp, w, _RTOL)
+        Pf = np.empty((3, 2))
+        thf, res = _polish(A[f], bb, l[f], Pp[0, 0], Pp[0, 1], thc[k] + dth, Pf, w, _ITERS, 1e-12, _RTOL)
+        if res <= _ACCEPT and not sing and _dist(Pf, Pp) <= 0.25 * sep[k] and _dist(Pf, Pc[k]) <= 0.5 * sep[k]:
+            P[f], th[f], status[f] = Pf, _wrap(thf), 0
+        else:
+            bad[left] = True
+    if kmax < nc - 1:
+        bad[kmax] = True
+    _refine(A, b, bb, l, c, kmax, bad, Pc, P, th, status)
+    _first_failure(P, th, status)
+
+
+@numba.njit(**_JIT)
+def _refine(A, b, bb, l, c, kmax, bad, Pc, P, th, status):
+    """``triad._refine``: the refused intervals ``bad`` (and the tail after ``c[kmax]``)
+    followed at full resolution, in place; a loss inside one, or arriving in another mode
+    than the coarse point's, loses the rest."""
+    N, lmax = A.shape[0], np.max(l)
+    for k in range(c.size):
+        if not bad[k]:
+            continue
+        lo = c[k]
+        hi = N - 1 if k >= kmax else c[k + 1]
+        if status[lo] != 0:
+            break
+        n = hi - lo + 1
+        Pm, thm, idx, st = np.empty((n, 6, 3, 2)), np.empty((n, 6)), np.empty(n, np.int64), np.empty(n, np.int64)
+        _follow(A[lo:hi + 1], bb, l[lo:hi + 1], P[lo].copy(), Pm, thm, idx, st)
+        _take(Pm, thm, idx, lo, P, th)
+        status[lo:hi + 1] = st
+        last = idx[n - 1] >= 0
+        if not (last and k < kmax and _dist(P[hi], Pc[k + 1]) <= 1e-9 * lmax):
+            P[hi + 1:] = np.nan
+            th[hi + 1:] = np.nan
+            status[hi + 1:] = 3
+            if last and k < kmax:                 # reached another mode: refuse it
+                status[hi] = 2
+                P[hi] = np.nan
+                th[hi] = np.nan
+            break
+
+
+@numba.njit(**_JIT)
+def _first_failure(P, th, status):
+    """``triad._first_failure_final``: after the first failed input every later one is lost."""
+    for i in range(status.size):
+        if status[i] != 0:
+            if status[i] != 1:
+                status[i] = 2
+            status[i + 1:] = 3
+            P[i:] = np.nan
+            th[i:] = np.nan
+            return
+
+
+@numba.njit(**_JIT)
+def triad_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A triad step of the plan kernel (:mod:`kin.kernel`) along one design's N inputs,
+    as :meth:`kin.groups.triad.TriadStep.positions` gives a batch of designs: the outer
+    joints carried by their known links from the pose store ``T``, ``C``, ``S``, the mode
+    of the reference followed (:func:`track_path`, about the first outer joint's
+    reference point), the ternary placed from its first inner joint with the followed
+    rotation (its angle row set) and each binary from its outer joint along its leg (its
+    angle pending, ``PP``); ``out`` each input's status (0 ok, 1 no assembly, 2 lost
+    here, 3 after).  An input whose known pins are not finite loses the whole path, as
+    the NumPy route does (:func:`kin.groups.triad.track_designs`).
+
+    ``ip`` = (known links of A1..A3, the ternary, binaries 1..3); ``fp`` =
+    (:func:`kin.groups.triad.triad_lower`'s layout)."""
+    N = X.shape[0]
+    ox, oy = fp[27], fp[28]
+    A, Aa = np.empty((N, 3, 2)), np.empty((N, 3, 2))
+    finite = True
+    for n in range(N):
+        for i in range(3):
+            ax, ay = carry(ip[i], n, T, C, S, fp[2 * i], fp[2 * i + 1])
+            Aa[n, i, 0], Aa[n, i, 1] = ax, ay
+            A[n, i, 0], A[n, i, 1] = ax - ox, ay - oy
+            finite = finite and np.isfinite(ax) and np.isfinite(ay)
+    for i in range(4, 7):
+        PP[ip[i]] = 1
+    if not finite:
+        out[:] = 3
+        return
+    b, l = np.empty((3, 2)), np.empty((N, 3))
+    for i in range(3):
+        b[i, 0], b[i, 1] = fp[6 + 2 * i], fp[7 + 2 * i]
+        for n in range(N):
+            l[n, i] = fp[12 + i]
+    P, th, status = np.empty((N, 3, 2)), np.empty(N), np.empty(N, np.int64)
+    track_path(A, b, l, _STRIDE, P, th, status)
+    k = ip[3]
+    for n in range(N):
+        out[n] = status[n]
+        if status[n] != 0:
+            continue
+        c, s = np.cos(th[n]), np.sin(th[n])
+        place(k, n, T, C, S, P[n, 0, 0] + ox, P[n, 0, 1] + oy, fp[29], fp[30], c, s)
+        T[k, 2, n] = th[n]
+        for i in range(3):
+            px, py = P[n, i, 0] + ox, P[n, i, 1] + oy
+            place_along(ip[4 + i], n, T, C, S, Aa[n, i, 0], Aa[n, i, 1], fp[15 + 2 * i], fp[16 + 2 * i],
+                        px - Aa[n, i, 0], py - Aa[n, i, 1], fp[21 + 2 * i], fp[22 + 2 * i])

@@ -46,8 +46,8 @@ from ..continuation import Probe
 from ..geometry import Geometry
 from ..result import Status
 
-__all__ = ["Outcome", "GroupStep", "Lowered", "AngleDef", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES", "GUIDES_HINT",
-           "trig_row"]
+__all__ = ["Outcome", "GroupStep", "Lowered", "Deferred", "AngleDef", "dyad_outcome", "SINGULAR", "PARALLEL_GUIDES",
+           "GUIDES_HINT", "trig_row"]
 
 #: relative determinant below which a position is singular
 SINGULAR = 1e-9
@@ -56,6 +56,21 @@ SINGULAR = 1e-9
 PARALLEL_GUIDES = 1e-6
 #: the advice for a singular reference of a linear dyad (PRP, RPP: their guides)
 GUIDES_HINT = "parallel guides of a PRP dyad or α = 0 of an RPP dyad are structurally singular"
+
+
+class Deferred(NamedTuple):
+    """A compiled step kept in a module that imports numba itself (a tracker whose
+    compiled parts live there), named by ``module`` (absolute) and ``name`` and imported
+    only when the kernel loads (:mod:`kin._kernel_nb`): the adapter's module stays free
+    of numba, so that the command line's cold start does not grow."""
+
+    module: str
+    name: str
+
+    def resolve(self):
+        """The compiled function (a numba dispatcher)."""
+        import importlib
+        return getattr(importlib.import_module(self.module), self.name)
 
 
 class Lowered(NamedTuple):
@@ -126,6 +141,11 @@ class GroupStep:
     #: points ``O`` (D, n_links, 2), the plan's ``size`` and the step's rows and links
     #: ``q`` (:meth:`lower_indices`); None: :meth:`lower` binds the batch in NumPy
     compiled_lower = None
+    #: whether the step's solution at an input depends on the inputs before it (a
+    #: followed assembly mode): its compiled step serves batches of designs along each
+    #: design's own path (:func:`kin.kernel.run_designs`), not ``solve``'s kernel routes,
+    #: which solve a failed row again on its own
+    tracked = False
     #: whether a batch of designs takes the step's own compiled route, where it has one
     #: (set by :func:`kin.design.solve_designs` from :func:`kin.kernel.wanted`)
     jit = False

@@ -38,22 +38,21 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import SINGULAR_RTOL, quiet
+from .base import SINGULAR_RTOL, num, put_off, put_rel, quiet
 from ..continuation import Probe
 from ..kernel_mode import chooses
 from ..poses import known_on
 from ..result import Status
 from .newton import jacobian_rates
-from .step import AngleDef, GroupStep, Outcome
+from .step import AngleDef, Deferred, GroupStep, Lowered, Outcome
+from .triad_tables import ACCEPT, BASIS, DFT, GRID, NEWTON_ITERS, ON_CIRCLE, STRIDE, Z16
 
 __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track",
            "triad_rates", "follow_modes", "follow_modes_batch", "track_designs", "MAX_MODES", "TriadStep"]
 
 #: maximum number of real assembly modes of a triad / class IV group.
 MAX_MODES = 6
-_ACCEPT = 1e-9        # relative residual for an accepted mode
-_ON_CIRCLE = 1e-3     # | |z| - 1 | below which a root is tried as a real mode
-_NEWTON_ITERS = 8
+_ACCEPT, _ON_CIRCLE, _NEWTON_ITERS = ACCEPT, ON_CIRCLE, NEWTON_ITERS
 
 
 class TriadModes(NamedTuple):
@@ -258,20 +257,7 @@ def _position_from_angle(A, bc, a, l, th):
     return np.where(np.isfinite(p), p, A[..., 0, :])
 
 
-def _tan_half_basis():
-    """Rows j = 3..-3: ascending coefficients in t of (1+it)^(3+j) (1-it)^(3-j),
-    i.e. ``e^{ijψ}(1+t²)³`` with ``t = tan(ψ/2)``."""
-    from numpy.polynomial import polynomial as npp
-    rows = []
-    for j in range(3, -4, -1):
-        rows.append(npp.polymul(npp.polypow([1, 1j], 3 + j), npp.polypow([1, -1j], 3 - j)))
-    return np.array(rows)                                # (7, 7) complex
-
-
-_BASIS = _tan_half_basis()
-_GRID = np.exp(1j * np.outer(np.arange(3, -4, -1), 2 * np.pi * np.arange(16) / 16))  # (7, 16)
-_Z16 = np.exp(2j * np.pi * np.arange(16) / 16)                                        # (16,)
-_DFT = np.exp(-2j * np.pi * np.outer(np.arange(3, -4, -1), np.arange(16)) / 16)       # (7, 16)
+_BASIS, _GRID, _Z16, _DFT = BASIS, GRID, Z16, DFT
 
 
 def _unit_circle_roots(coef):
@@ -702,7 +688,7 @@ def _track(A, b, l, start, stride, nb=None):
 
 
 @quiet
-def triad_track(A, b, l, start, *, stride=32, jit=False) -> TriadTrack:
+def triad_track(A, b, l, start, *, stride=STRIDE, jit=False) -> TriadTrack:
     """Follow one assembly mode of a triad along a batch of anchor positions.
 
     Parameters
@@ -814,7 +800,7 @@ def _coarse_follow(A, b, l, start, nb=None):
 
 
 @quiet
-def track_designs(A, b, l, start, *, stride=32, jit=False):
+def track_designs(A, b, l, start, *, stride=STRIDE, jit=False):
     """Follow each design's mode along its inputs, as :func:`~kin.groups.triad.triad_track`.
 
     Parameters
@@ -1105,13 +1091,36 @@ TRACK_STATUS = {1: (Status.OUT_OF_REACH, "no assembly (out of reach)"),
                 3: (Status.MODE_LOST, "mode lost earlier in the path")}
 
 
+def triad_lower(q, P, U, O, size, out) -> None:
+    """:meth:`TriadStep.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of the outer joints A1..A3, of the inner joints b1..b3; the known
+    links of A1..A3, the ternary, the binaries 1..3)."""
+    for d in range(P.shape[0]):
+        ox, oy = P[d, q[0], 0], P[d, q[0], 1]
+        for i in range(3):
+            ax, ay, bx, by = P[d, q[i], 0], P[d, q[i], 1], P[d, q[3 + i], 0], P[d, q[3 + i], 1]
+            h = np.hypot(bx - ax, by - ay)
+            put_rel(out, d, 2 * i, ax, ay, O, q[6 + i])
+            out[d, 6 + 2 * i], out[d, 7 + 2 * i] = bx - ox, by - oy
+            out[d, 12 + i] = h
+            put_off(out, d, 15 + 2 * i, ax, ay, O, q[10 + i])
+            out[d, 21 + 2 * i], out[d, 22 + 2 * i] = (bx - ax) / h, (by - ay) / h
+        out[d, 27], out[d, 28] = ox, oy
+        put_off(out, d, 29, P[d, q[3], 0], P[d, q[3], 1], O, q[9])
+
+
 class TriadStep(GroupStep):
     """A class III triad of a plan, tracked in the mode of the reference
-    (:func:`triad_track`); rates from the group's Jacobian."""
+    (:func:`triad_track`); rates from the group's Jacobian.  Batches of designs run
+    its tracker compiled, each design along its own inputs
+    (:func:`kin.groups._triad_nb.triad_place`)."""
 
     solver = "triad"
 
     kind = GroupKind.TRIAD
+    compiled = Deferred(f"{__package__}._triad_nb", "triad_place")
+    compiled_lower = staticmethod(triad_lower)
+    tracked = True
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -1175,3 +1184,29 @@ class TriadStep(GroupStep):
         return Outcome(status == 0, {}, None)
 
     rates = jacobian_rates
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`kin.groups._triad_nb.triad_place` (:func:`triad_lower`'s
+        layout): each outer joint relative to its known link, each inner joint relative
+        to the first outer one (the tracker's origin), the legs' lengths, each binary's
+        reference point from its outer joint, the legs' unit directions, the origin and
+        the ternary's reference point from its first inner joint."""
+        o = origins
+        lay, A, b = self.layout, self.A, self.b
+        v = b - A
+        u = v / self.lengths[..., None]
+        f = [*(x for i in range(3) for x in self.rel(o, self.link_index(self.known[i]), A[..., i, :])),
+             *(num(x) for i in range(3) for x in (b[..., i, 0] - A[..., 0, 0], b[..., i, 1] - A[..., 0, 1])),
+             *(num(self.lengths[..., i]) for i in range(3)),
+             *(x for i in range(3) for x in self.off(o, self.link_index(lay.binaries[i]), A[..., i, :])),
+             *(num(x) for i in range(3) for x in (u[..., i, 0], u[..., i, 1])),
+             num(A[..., 0, 0]), num(A[..., 0, 1]), *self.off(o, self.link_index(lay.ternary), b[..., 0, :])]
+        ints = (*(self.link_index(k) for k in self.known), self.link_index(lay.ternary),
+                *(self.link_index(k) for k in lay.binaries))
+        return Lowered(self.kind, ints, tuple(f))
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (*(row(j) for j in lay.outers), *(row(j) for j in lay.inners),
+                *(self.link_index(k) for k in self.known), self.link_index(lay.ternary),
+                *(self.link_index(k) for k in lay.binaries))
