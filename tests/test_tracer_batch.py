@@ -92,8 +92,34 @@ def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(monkeypat
     Z = pr.x0[None] + 1e-3 * m.size * rng.standard_normal((3, len(pr.x0)))
     PHI = x[None] + 0.01 * rng.standard_normal((3, len(x)))
     fast = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
-    monkeypatch.setattr(Problem, "_tracer", lambda self: None)
+    monkeypatch.setattr(Problem, "_tracer", lambda self, walked=False: None)
     store = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
+    assert np.array_equal(fast[0], store[0], equal_nan=True)
+    for a, b in zip(fast[1], store[1]):
+        assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_a_triads_polish_residuals_and_jacobian_along_its_walk_are_the_same_by_both_routes(monkeypatch):
+    """A path-dependent plan (the triad's followed mode): its polish solves each design
+    along the walk from the reference to its targets, by the tracer batch as by the pose
+    store, bit for bit; its population keeps the pose store (the grid's two paths)."""
+    from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
+    from multiloop.catalogue.dimensional.targets import PathTarget
+    from multiloop.kin.solve import solve
+    m = load_named("stephenson_3_triad")
+    pt = m.points[0].name
+    x = np.linspace(0.1, 1.0, 8)
+    st = solve(m, x)
+    T = st.point_positions[:, st.point_index(pt)] * 1.01
+    pr = Problem(Evaluator(m, design_space(m, [pt])), PathTarget(T, pt))
+    assert pr.ev.path_dependent and pr._tracer() is None and pr._tracer(walked=True) is not None
+    rng = np.random.default_rng(0)
+    Z = pr.x0[None] + 1e-3 * m.size * rng.standard_normal((3, len(pr.x0)))
+    PHI = x[None] + 0.01 * rng.standard_normal((3, len(x)))
+    fast = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
+    monkeypatch.setattr(Problem, "_tracer", lambda self, walked=False: None)
+    store = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
+    assert np.isfinite(fast[0]).all()
     assert np.array_equal(fast[0], store[0], equal_nan=True)
     for a, b in zip(fast[1], store[1]):
         assert np.array_equal(a, b, equal_nan=True)
@@ -148,7 +174,7 @@ def test_the_population_objective_is_the_same_by_both_routes(cons, monkeypatch):
     Z = pr.x0 + 0.08 * (pr.upper - pr.lower) * rng.uniform(-1, 1, (60, len(pr.x0)))
     assert pr._tracer() is not None
     fast = pr.batch(Z)
-    monkeypatch.setattr(Problem, "_tracer", lambda self: None)
+    monkeypatch.setattr(Problem, "_tracer", lambda self, walked=False: None)
     slow = pr.batch(Z)
     assert np.array_equal(fast, slow) and np.isfinite(fast).sum() > 10
 

@@ -753,8 +753,10 @@ class Problem:
                 self.kept_features(Z, self.ev.poses(Z[:, :self.nx], PHI))
             return self.diff(F, T, size).reshape(Z.shape[0], -1)
         W, at = self.walk(PHI)
-        st = self.ev.poses(Z[:, :self.nx], W)
-        return self.diff(self.kept_features(Z, st)[:, at], T, size).reshape(Z.shape[0], -1)
+        tracer = self._tracer(walked=True)
+        F = tracer.solve(Z[:, :self.nx], W)[0] if tracer is not None else \
+            self.kept_features(Z, self.ev.poses(Z[:, :self.nx], W))
+        return self.diff(F[:, at], T, size).reshape(Z.shape[0], -1)
 
     @property
     def exact_jacobian(self) -> bool:
@@ -781,10 +783,10 @@ class Problem:
         P, N = PHI.shape
         X = Z[:, :self.nx]
         T, size = self.targets_for(Z)
-        tracer = None if self.ev.path_dependent else self._tracer()
+        tracer = self._tracer(walked=True)
         if tracer is not None:
-            at = np.arange(N)
-            (F, dF), frame = tracer.solve(X, PHI, jacobian=True), None
+            W, at = self.walk(PHI) if self.ev.path_dependent else (PHI, np.arange(N))
+            (F, dF), frame = tracer.solve(X, W, jacobian=True), None
         else:
             F, dF, frame, at = self._features_and_jacobian(Z, PHI)
         R = self.diff(F[:, at], T, size)
@@ -813,12 +815,16 @@ class Problem:
             J = np.concatenate([J, self._penalty_gradient(X, J.shape[2])[:, None, :]], axis=1)
         return R, J
 
-    def _tracer(self):
+    def _tracer(self, walked: bool = False):
         """A path target's tracer point on the compiled kernels straight from the design
         matrix (:class:`multiloop.kin.tracer_batch.TracerBatch`: the same floats as the
         pose store's, without it) when populations run compiled and the plan has a
-        compiled step and lowering for every step and no path-dependent one; else None."""
-        if not (isinstance(self.target, PathTarget) and kernel.compiled_batches()) or self.ev.path_dependent:
+        compiled step and lowering for every step; else None.  A path-dependent plan's
+        (a triad's followed mode) only for a caller that solves it along :meth:`walk`
+        (``walked``: the polish's residuals and Jacobian), not on the grid's two paths
+        (:meth:`grid_poses`) nor at the targets' own inputs."""
+        if not (isinstance(self.target, PathTarget) and kernel.compiled_batches()) or \
+                (self.ev.path_dependent and not walked):
             return None
         return cached(self, "tracer batch", _tracer_batch)[0]            # (the plan and names are fixed)
 
