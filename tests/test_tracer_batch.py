@@ -77,42 +77,22 @@ def test_plans_without_a_compiled_route_and_frame_points_are_refused():
     assert TracerBatch.of(m, names, ground) is None                         # (on the frame: nothing to solve)
 
 
-def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(monkeypatch):
+@pytest.mark.parametrize("name,span", [("four_bar", (0.2, 2.0)), ("stephenson_3_triad", (0.1, 1.0))])
+def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(name, span, monkeypatch):
+    """The polish's residuals and Jacobian by the tracer batch and by the pose store, bit
+    for bit; a path-dependent plan (the triad's followed mode) solved along the walk from
+    the reference to its targets by both (its population keeps the pose store: the
+    grid's two paths)."""
     from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
     from multiloop.catalogue.dimensional.targets import PathTarget
     from multiloop.kin.solve import solve
-    m = load_named("four_bar")
-    x = np.linspace(0.2, 2.0, 8)
-    st = solve(m, x)
-    T = st.point_positions[:, st.point_index("P")] * 1.01
-    ev = Evaluator(m, design_space(m, ["P"]))
-    pr = Problem(ev, PathTarget(T, "P"))
-    assert pr._tracer() is not None
-    rng = np.random.default_rng(0)
-    Z = pr.x0[None] + 1e-3 * m.size * rng.standard_normal((3, len(pr.x0)))
-    PHI = x[None] + 0.01 * rng.standard_normal((3, len(x)))
-    fast = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
-    monkeypatch.setattr(Problem, "_tracer", lambda self, walked=False: None)
-    store = pr.residuals_batch(Z, PHI), pr.jacobian_batch(Z, PHI)
-    assert np.array_equal(fast[0], store[0], equal_nan=True)
-    for a, b in zip(fast[1], store[1]):
-        assert np.array_equal(a, b, equal_nan=True)
-
-
-def test_a_triads_polish_residuals_and_jacobian_along_its_walk_are_the_same_by_both_routes(monkeypatch):
-    """A path-dependent plan (the triad's followed mode): its polish solves each design
-    along the walk from the reference to its targets, by the tracer batch as by the pose
-    store, bit for bit; its population keeps the pose store (the grid's two paths)."""
-    from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
-    from multiloop.catalogue.dimensional.targets import PathTarget
-    from multiloop.kin.solve import solve
-    m = load_named("stephenson_3_triad")
+    m = load_named(name)
     pt = m.points[0].name
-    x = np.linspace(0.1, 1.0, 8)
+    x = np.linspace(*span, 8)
     st = solve(m, x)
     T = st.point_positions[:, st.point_index(pt)] * 1.01
     pr = Problem(Evaluator(m, design_space(m, [pt])), PathTarget(T, pt))
-    assert pr.ev.path_dependent and pr._tracer() is None and pr._tracer(walked=True) is not None
+    assert pr._tracer(walked=True) is not None and (pr._tracer() is None) == pr.ev.path_dependent
     rng = np.random.default_rng(0)
     Z = pr.x0[None] + 1e-3 * m.size * rng.standard_normal((3, len(pr.x0)))
     PHI = x[None] + 0.01 * rng.standard_normal((3, len(x)))
