@@ -3,10 +3,11 @@ one kernel that runs a lowered plan over a batch of positions.
 
 Imported only by :func:`kin.kernel.load` (importing numba costs ~0.3 s).  The compiled
 code is cached on disk (``cache=True``, numba's ``__pycache__/*.nbi``/``*.nbc`` beside
-this file, or ``NUMBA_CACHE_DIR``).  numba keys the kernel's cache on *this* file's
-timestamp only, so on import a scalar step or helper edited after it
-(``kin/groups/*.py``) makes this file as new as that edit (:func:`_fresh_cache`): the
-cache is then rebuilt once.
+this file, or ``NUMBA_CACHE_DIR``).  numba keys the kernel's cache on *this* file
+alone, so on import the files of the scalar steps, lowerings and helpers it compiles
+(``kin/groups/*.py``), the registry and its adapters are registered as its sources
+(:func:`_fresh_cache`, :func:`kin._jit_cache.depends_on`): after an edit there the cache
+is rebuilt once.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import inspect
 import numba
 import numpy as np
 
-from ._jit_cache import as_new_as
+from ._jit_cache import depends_on
 from ._scalar_nb import JIT as _JIT
 from .groups.base import SCALAR_HELPERS, SINCOS_MEDIUM, arctan2, sincos_medium
 from .groups.registry import COMPILED, LOWERING
@@ -25,10 +26,13 @@ __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", 
 
 
 def _fresh_cache() -> None:
-    """Touch this file when a compiled step's source is newer (numba's cache would
-    otherwise keep the old code); a read-only install is left alone."""
-    as_new_as(__file__, {inspect.getsourcefile(_python(f)) for f in (*COMPILED.values(), *LOWERING.values(),
-                                                                      *SCALAR_HELPERS)})
+    """Register the files of the compiled steps, lowerings and helpers, the registry (its
+    order is the kernel's dispatch) and its adapters as this file's cache's sources
+    (numba's cache would otherwise keep the old code)."""
+    from .groups import registry
+    depends_on(__file__, {inspect.getsourcefile(_python(f)) for f in (*COMPILED.values(), *LOWERING.values(),
+                                                                      *SCALAR_HELPERS)}
+               | {registry.__file__} | {inspect.getsourcefile(a) for a in registry.BUILT_IN})
 
 
 def _python(f):
@@ -43,7 +47,7 @@ def _compiled(f):
     return f.resolve() if isinstance(f, Deferred) else numba.njit(**_JIT)(f)
 
 
-_fresh_cache()                             # before the decorators read the timestamp
+_fresh_cache()                             # before the decorators read the stamp
 #: the number of scalar steps the kernel dispatches on (the registry's order): 9 taken, so
 #: three more kinds with a compiled step need no edit here
 SLOTS = 12

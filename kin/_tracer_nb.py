@@ -13,9 +13,10 @@ numbers by each kind's compiled lowering (:func:`kin._kernel_nb.lower_designs`),
 at one to three designs and ten inputs, where the Python between those calls had cost
 several times the calls themselves.
 
-numba keys a cache on this file's timestamp only, and this file's code inlines the
-kernels it calls: on import it is made as new as the newest of them (:func:`_fresh_cache`),
-so that an edit there rebuilds its cache once.
+numba keys a cache on this file alone, and this file's code inlines the kernels it
+calls: their files (and theirs, transitively) are registered as its sources
+(:func:`_fresh_cache`, :func:`kin._jit_cache.depends_on`), so that an edit there rebuilds
+its cache once.
 """
 from __future__ import annotations
 
@@ -23,18 +24,18 @@ import numba
 import numpy as np
 
 from . import _kernel_nb, _sensitivity_nb
-from ._jit_cache import as_new_as
+from ._jit_cache import depends_on
 
 __all__ = ["tracer_point"]
 
 
 def _fresh_cache() -> None:
-    """Touch this file when a kernel it calls is newer (:func:`kin._kernel_nb._fresh_cache`
-    has made that one as new as its own sources); a read-only install is left alone."""
-    as_new_as(__file__, [m.__file__ for m in (_kernel_nb, _sensitivity_nb)])
+    """Register the kernels this file's code inlines as its cache's sources (theirs come
+    with them: :func:`kin._kernel_nb._fresh_cache`)."""
+    depends_on(__file__, [m.__file__ for m in (_kernel_nb, _sensitivity_nb)])
 
 
-_fresh_cache()                             # before the decorators read the timestamp
+_fresh_cache()                             # before the decorators read the stamp
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 
 

@@ -19,14 +19,14 @@ lowering (:func:`lower_designs`: the adapter's ``compiled_lower``, the floats it
 in one call, no step bound in Python; a kind without one is bound and lowered by its
 adapter (:func:`design_floats`).  The NumPy path stays as the oracle
 (``tests/test_kernels.py``, ``tests/test_synthesis_kernel.py``) and solves what the
-kernel does not: a plan with a class IV group or a Newton group, the probes of the
-continuation walk, velocities and accelerations, and the reasons of the rows that fail.
-A triad's compiled step follows its mode along each design's inputs
-(:func:`kin.groups._triad_nb.triad_place`, Hunt 1983's modes; the NumPy tracker's steps,
-modes and statuses): it serves batches of designs only (a *tracked* step,
-:meth:`KernelPlan.covers`), since ``solve``'s kernel routes solve a failed row again on
-its own.  A class IV group's tracker, and a triad's in ``solve``, run their all-modes
-phases compiled (:mod:`kin.groups._triad_nb`) in the same modes as the plan kernel
+kernel does not: a plan with a Newton group, the probes of the continuation walk,
+velocities and accelerations, and the reasons of the rows that fail.  A triad's and a
+class IV group's compiled steps follow their mode along each design's inputs
+(:func:`kin.groups._triad_nb.triad_place`, ``class4_place``: Hunt 1983's modes, the NumPy
+tracker's steps, modes and statuses): they serve batches of designs only (*tracked*
+steps, :meth:`KernelPlan.covers`), since ``solve``'s kernel routes solve a failed row
+again on its own; in ``solve`` their trackers run the all-modes phases compiled
+(:mod:`kin.groups._triad_nb`) in the same modes as the plan kernel
 (:func:`kin.kernel_mode.chooses`).
 
 Why numba: it is the JIT that pylinkage uses (the peer we measure against), it ships

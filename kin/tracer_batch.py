@@ -55,7 +55,7 @@ class TracerBatch:
     def of(cls, mechanism, names, point: str) -> "TracerBatch | None":
         """The batch of ``point`` for designs with columns ``names``, kept on the plan;
         None when it has no compiled route: no numba, a step without a compiled step or
-        lowering (a class IV group's, Newton's), more than one driver, or a point on the frame."""
+        lowering (a Newton group's), more than one driver, or a point on the frame."""
         sp = plan_of(mechanism)
         if kernel.load() is None or len(mechanism.drivers) != 1:
             return None

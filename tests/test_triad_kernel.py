@@ -11,7 +11,9 @@ oracle, the NumPy route (:func:`kin.groups.triad.track_designs` with ``jit=False
   codes, points and angles within 1e-12.
 * The compiled companion eigenvalues (balanced Hessenberg QR) against LAPACK's on
   random degree-6 polynomials, with and without a double root.
-* The wiring: the compiled tracker is taken with the kernel on, never with it off.
+* The plan kernel's whole tracker (``_triad_nb.track_path``) against ``triad_track``.
+* The wiring: batches of designs take the plan kernel's compiled steps with the kernel
+  on, the NumPy route with it off; ``solve`` keeps the NumPy step.
 """
 from __future__ import annotations
 
@@ -100,17 +102,19 @@ def test_track_designs_against_numpy(seed, move, N):
 def test_the_plan_kernels_tracker_against_numpy(seed, move, N, stride):
     """The plan kernel's whole tracker (``_triad_nb.track_path``, a triad's step in a batch
     of designs) against the NumPy tracker alone (``triad_track``) from the reference
-    points: the same statuses, points and angles within 1e-12, on every route of the
+    points or a random mode, the legs varying along the inputs: the same statuses,
+    points and angles within 1e-12, on every route of the
     tracker (all modes at every input; coarse inputs with their neighbours accepted or
     refused and refollowed; a lost mode and its tail)."""
     from multiloop.kin.groups import _triad_nb
     from multiloop.kin.groups.triad import triad_track
-    A, b, L, _ = _random_triads(6, N, seed, move)
+    A, b, L, start = _random_triads(6, N, seed, move)
     for d in range(len(A)):
-        ref = triad_track(A[d], b[d], L[d], b[d], stride=stride)
+        first = b[d] if d % 2 else start[d]          # (the reference's points, or a random mode)
+        ref = triad_track(A[d], b[d], L[d], first, stride=stride)
         P, th, status = np.empty((N, 3, 2)), np.empty(N), np.empty(N, np.int64)
-        _triad_nb.track_path(np.ascontiguousarray(A[d]), b[d].copy(), np.ascontiguousarray(L[d]), stride, P, th,
-                             status)
+        _triad_nb.track_path(np.ascontiguousarray(A[d]), b[d].copy(), np.ascontiguousarray(L[d]), first.copy(), stride,
+                             P, th, status)
         np.testing.assert_array_equal(status, ref.status)
         np.testing.assert_array_equal(np.isnan(P), np.isnan(ref.P))
         assert np.nanmax(np.abs(P - ref.P), initial=0.0) <= 1e-12
@@ -150,29 +154,35 @@ def test_companion_roots_against_lapack(seed, double):
 
 
 def test_the_compiled_tracker_is_taken_only_when_wanted(monkeypatch):
-    """With the kernel on, ``solve_designs`` solves a triad's designs by the plan kernel's
-    compiled step (``_triad_nb.triad_place``: no NumPy step runs), with it off by the
-    NumPy route; a class IV group's tracker (no plan-kernel step) takes its compiled
-    phases with the kernel on only (the step's ``jit``)."""
+    """With the kernel on, ``solve_designs`` solves a triad's and a class IV group's
+    designs by the plan kernel's compiled steps (``_triad_nb.triad_place``,
+    ``class4_place``: no NumPy step runs), with it off by the NumPy route, whose tracker
+    takes no compiled phase; ``solve`` (one design, its kernel routes re-solve a failed row
+    alone) keeps the NumPy step, its tracker's phases compiled with the kernel on."""
     from multiloop.kin.groups import class4, triad
+    from multiloop.kin.solve import solve
     numpy_steps, phases = [], []
-    real_designs, real_kernel = triad.TriadStep._designs, triad._kernel
-    monkeypatch.setattr(triad.TriadStep, "_designs", lambda self, G: numpy_steps.append(1) or real_designs(self, G))
+    real_kernel = triad._kernel
+    for cls in (triad.TriadStep, class4.Class4Step):
+        real = cls._designs
+        monkeypatch.setattr(cls, "_designs", lambda self, G, real=real: numpy_steps.append(1) or real(self, G))
     monkeypatch.setattr(triad, "_kernel", lambda: phases.append(1) or real_kernel())
     monkeypatch.setattr(class4, "_kernel", triad._kernel)
     x = np.linspace(0.0, 1.0, 96)
-    for name, numpy_when_on in (("stephenson_3_triad", False), ("stephenson_3", True)):
+    for name in NAMES:
         m = load_named(name)
         cols, X = design_population(m, 4, 0.003, 0)
         numpy_steps.clear()
         phases.clear()
         with kernel.using("off"):
             solve_designs(m, cols, X, x)
-        assert not phases and bool(numpy_steps) == (name == "stephenson_3_triad")
+        assert numpy_steps and not phases
         numpy_steps.clear()
         with kernel.using("on"):
             solve_designs(m, cols, X, x)
-        assert bool(phases) == numpy_when_on and not numpy_steps
+            assert not numpy_steps and not phases
+            solve(m, x)
+        assert phases
 
 
 @settings(max_examples=15, deadline=None)

@@ -14,8 +14,8 @@ as :func:`.optimise.polish_batch` charges the run's meter; the caller checks the
 clock between calls.  The singular values come from numba's LAPACK binding (SciPy's
 ``gesdd``) where the NumPy route called NumPy's: the two agree to rounding, not bit for bit.
 
-numba keys a cache on this file's timestamp only: on import it is made as new as the
-compiled modules it calls (:func:`multiloop.kin._jit_cache.as_new_as`).
+numba keys a cache on this file alone: on import the compiled modules it calls are
+registered as its sources (:func:`multiloop.kin._jit_cache.depends_on`).
 """
 from __future__ import annotations
 
@@ -23,13 +23,13 @@ import numba
 import numpy as np
 
 from multiloop.kin import _tracer_nb
-from multiloop.kin._jit_cache import as_new_as
+from multiloop.kin._jit_cache import depends_on
 
 from . import _trust_nb
 
 __all__ = ["rounds"]
 
-as_new_as(__file__, [_tracer_nb.__file__, _trust_nb.__file__])     # (before the decorators read it)
+depends_on(__file__, [_tracer_nb.__file__, _trust_nb.__file__])    # (before the decorators read the stamp)
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 #: the helpers are inlined into :func:`rounds` (numba IR), so that the tracer's kernel tree,
 #: which every compiled caller links and optimises again, is compiled into one caller only

@@ -26,23 +26,23 @@ import numba
 import numpy as np
 
 from . import triad_tables as _tables
-from .._jit_cache import as_new_as
+from .._jit_cache import depends_on
 from .._scalar_nb import JIT as _JIT
 from .base import SINGULAR_RTOL as _RTOL, carry, place, place_along
 
 __all__ = ["fill_fine", "modes_many", "predict_modes", "follow_batch", "companion_roots", "track_path",
-           "triad_place"]
+           "triad_place", "class4_place"]
 
 
 def _fresh_cache() -> None:
-    """Touch this file when the tracker's constants (:mod:`kin.groups.triad_tables`) or
-    the scalar helpers it calls (:mod:`kin.groups.base`) are newer (numba keys the cache
-    on this file alone); a read-only install is left alone."""
+    """Register the tracker's constants (:mod:`kin.groups.triad_tables`) and the scalar
+    helpers it calls (:mod:`kin.groups.base`) as its cache's sources (numba keys the
+    cache on this file alone)."""
     from . import base
-    as_new_as(__file__, [_tables.__file__, base.__file__])
+    depends_on(__file__, [_tables.__file__, base.__file__])
 
 
-_fresh_cache()                             # before the decorators read the timestamp
+_fresh_cache()                             # before the decorators read the stamp
 #: the tracker's tables and tolerances, constants of the compiled code
 _Z16, _DFT, _GRID, _BASIS = _tables.Z16, _tables.DFT, _tables.GRID, _tables.BASIS
 _ITERS, _ACCEPT, _STRIDE = _tables.NEWTON_ITERS, _tables.ACCEPT, _tables.STRIDE
@@ -679,10 +679,11 @@ def _separation(Pm, thm, j, Pc):
 
 
 @numba.njit(**_JIT)
-def track_path(A, b, l, stride, P, th, status):
+def track_path(A, b, l, start, stride, P, th, status):
     """``triad._track`` (:func:`kin.groups.triad.triad_track`'s tracker) compiled: one mode
-    of a triad followed along the anchors ``A`` (N, 3, 2) from the one nearest the
-    reference points ``b`` (3, 2) at ``A[0]``, legs ``l`` (N, 3); writes ``P`` (N, 3, 2),
+    of a triad (inner joints ``b`` (3, 2) in its reference) followed along the anchors
+    ``A`` (N, 3, 2) from the one nearest ``start`` (3, 2) at ``A[0]``, legs ``l`` (N, 3)
+    (per input: class IV's reduction's third leg varies); writes ``P`` (N, 3, 2),
     ``th`` and ``status`` (N,) (0 ok, 1 no assembly, 2 lost here, 3 after).  All modes at
     every ``stride``-th input, each other input predicted from its nearest such one and
     Newton-polished, accepted only well inside its mode's basin (else its interval is
@@ -695,7 +696,7 @@ def track_path(A, b, l, stride, P, th, status):
     status[:] = 3
     if stride <= 1 or N <= 2 * stride:
         Pm, thm, idx = np.empty((N, 6, 3, 2)), np.empty((N, 6)), np.empty(N, np.int64)
-        _follow(A, bb, l, b, Pm, thm, idx, status)
+        _follow(A, bb, l, start, Pm, thm, idx, status)
         _take(Pm, thm, idx, 0, P, th)
         return
     nc = (N - 1) // stride + (1 if (N - 1) % stride else 0) + 1
@@ -703,7 +704,7 @@ def track_path(A, b, l, stride, P, th, status):
     for k in range(nc):
         c[k] = min(k * stride, N - 1)
     Pm, thm, ic, sc = np.empty((nc, 6, 3, 2)), np.empty((nc, 6)), np.empty(nc, np.int64), np.empty(nc, np.int64)
-    _follow(A[c], bb, l[c], b, Pm, thm, ic, sc)
+    _follow(A[c], bb, l[c], start, Pm, thm, ic, sc)
     if ic[0] < 0:
         status[:] = 1
         return
@@ -779,6 +780,22 @@ def _first_failure(P, th, status):
 
 
 @numba.njit(**_JIT)
+def _known_pins(k, ip, fp, N, T, C, S, ox, oy):
+    """The group's first ``k`` outer pins at every input, each carried by its known link
+    ``ip[i]`` from its offset ``fp[2i:2i+2]``: ``(N, k, 2)`` as they are and about
+    ``(ox, oy)``, and whether all are finite."""
+    Pa, Pd = np.empty((N, k, 2)), np.empty((N, k, 2))
+    finite = True
+    for n in range(N):
+        for i in range(k):
+            x, y = carry(ip[i], n, T, C, S, fp[2 * i], fp[2 * i + 1])
+            Pa[n, i, 0], Pa[n, i, 1] = x, y
+            Pd[n, i, 0], Pd[n, i, 1] = x - ox, y - oy
+            finite = finite and np.isfinite(x) and np.isfinite(y)
+    return Pa, Pd, finite
+
+
+@numba.njit(**_JIT)
 def triad_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     """A triad step of the plan kernel (:mod:`kin.kernel`) along one design's N inputs,
     as :meth:`kin.groups.triad.TriadStep.positions` gives a batch of designs: the outer
@@ -794,14 +811,7 @@ def triad_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     (:func:`kin.groups.triad.triad_lower`'s layout)."""
     N = X.shape[0]
     ox, oy = fp[27], fp[28]
-    A, Aa = np.empty((N, 3, 2)), np.empty((N, 3, 2))
-    finite = True
-    for n in range(N):
-        for i in range(3):
-            ax, ay = carry(ip[i], n, T, C, S, fp[2 * i], fp[2 * i + 1])
-            Aa[n, i, 0], Aa[n, i, 1] = ax, ay
-            A[n, i, 0], A[n, i, 1] = ax - ox, ay - oy
-            finite = finite and np.isfinite(ax) and np.isfinite(ay)
+    Aa, A, finite = _known_pins(3, ip, fp, N, T, C, S, ox, oy)
     for i in range(4, 7):
         PP[ip[i]] = 1
     if not finite:
@@ -813,7 +823,7 @@ def triad_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
         for n in range(N):
             l[n, i] = fp[12 + i]
     P, th, status = np.empty((N, 3, 2)), np.empty(N), np.empty(N, np.int64)
-    track_path(A, b, l, _STRIDE, P, th, status)
+    track_path(A, b, l, b, _STRIDE, P, th, status)
     k = ip[3]
     for n in range(N):
         out[n] = status[n]
@@ -826,3 +836,59 @@ def triad_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
             px, py = P[n, i, 0] + ox, P[n, i, 1] + oy
             place_along(ip[4 + i], n, T, C, S, Aa[n, i, 0], Aa[n, i, 1], fp[15 + 2 * i], fp[16 + 2 * i],
                         px - Aa[n, i, 0], py - Aa[n, i, 1], fp[21 + 2 * i], fp[22 + 2 * i])
+
+
+@numba.njit(**_JIT)
+def class4_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
+    """A class IV group's step of the plan kernel along one design's N inputs, as
+    :meth:`kin.groups.class4.Class4Step.positions` gives a batch of designs: the outer
+    pins O1, O2 carried by their known links, the group's triad reduction in T1's frame
+    (anchors J1 − O1, J2 − O1 and O1, legs |J1J3|, |J2J4| and |O1O2| along the inputs)
+    followed from the reference (:func:`track_path`), the rotations θ1 (of the line O1O2
+    against the reduction's) and θ2 = θ1 + φ, the ternaries placed at their outer pins
+    (their angle rows set) and the binaries from J1, J2 toward J3, J4 (pending, ``PP``);
+    ``out`` each input's status, the whole path lost where a known pin is not finite.
+
+    ``ip`` = (known links of O1, O2; ternaries 1, 2; binaries 1, 2); ``fp`` =
+    (:func:`kin.groups.class4.class4_lower`'s layout)."""
+    N = X.shape[0]
+    ox, oy = fp[14], fp[15]
+    Oa, Od, finite = _known_pins(2, ip, fp, N, T, C, S, ox, oy)
+    PP[ip[4]] = PP[ip[5]] = 1
+    if not finite:
+        out[:] = 3
+        return
+    r = np.empty((4, 2))
+    for k in range(4):
+        r[k, 0], r[k, 1] = fp[4 + 2 * k], fp[5 + 2 * k]
+    A, b, l, start = np.zeros((N, 3, 2)), np.zeros((3, 2)), np.empty((N, 3)), np.empty((3, 2))
+    for n in range(N):
+        A[n, 0], A[n, 1] = r[0], r[1]
+        ex, ey = Od[n, 1, 0] - Od[n, 0, 0], Od[n, 1, 1] - Od[n, 0, 1]
+        l[n, 0], l[n, 1], l[n, 2] = fp[12], fp[13], np.hypot(ex, ey)
+    b[0], b[1] = r[2], r[3]
+    for k in range(2):                     # (J3, J4 of the reference pose at the first input, then O2, about O1)
+        start[k, 0] = (Od[0, 1, 0] + r[2 + k, 0]) - Od[0, 0, 0]
+        start[k, 1] = (Od[0, 1, 1] + r[2 + k, 1]) - Od[0, 0, 1]
+    start[2, 0], start[2, 1] = Od[0, 1, 0] - Od[0, 0, 0], Od[0, 1, 1] - Od[0, 0, 1]
+    P, phi, status = np.empty((N, 3, 2)), np.empty(N), np.empty(N, np.int64)
+    track_path(A, b, l, start, _STRIDE, P, phi, status)
+    J = np.empty((4, 2))
+    for n in range(N):
+        out[n] = status[n]
+        if status[n] != 0:
+            continue
+        ex, ey = Od[n, 1, 0] - Od[n, 0, 0], Od[n, 1, 1] - Od[n, 0, 1]
+        th1 = _wrap(np.arctan2(ey, ex) - np.arctan2(P[n, 2, 1], P[n, 2, 0]))
+        th2 = _wrap(th1 + phi[n])
+        for i, th in ((0, th1), (1, th2)):
+            c, s = np.cos(th), np.sin(th)
+            for k in (2 * i, 2 * i + 1):   # (class4_points)
+                J[k, 0] = Od[n, i, 0] + (c * r[k, 0] - s * r[k, 1]) + ox
+                J[k, 1] = Od[n, i, 1] + (s * r[k, 0] + c * r[k, 1]) + oy
+            t = ip[2 + i]
+            place(t, n, T, C, S, Oa[n, i, 0], Oa[n, i, 1], fp[16 + 2 * i], fp[17 + 2 * i], c, s)
+            T[t, 2, n] = th
+        for i in range(2):
+            place_along(ip[4 + i], n, T, C, S, J[i, 0], J[i, 1], fp[20 + 2 * i], fp[21 + 2 * i],
+                        J[i + 2, 0] - J[i, 0], J[i + 2, 1] - J[i, 1], fp[24 + 2 * i], fp[25 + 2 * i])

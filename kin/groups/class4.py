@@ -25,14 +25,14 @@ import numpy as np
 
 from multiloop.topo.assur import GroupKind
 
-from .base import cramer, is_singular, quiet
+from .base import cramer, is_singular, num, put_off, put_rel, quiet
 from .triad import MAX_MODES, _as_batch, _kernel, _rot, _track, _wrap, track_designs, triad_modes
 from ..continuation import Probe
 from ..kernel_mode import chooses
 from ..poses import known_on
 from ..result import Status
 from .newton import jacobian_rates
-from .step import GroupStep, Outcome
+from .step import Deferred, GroupStep, Lowered, Outcome
 from .triad import TRACK_STATUS
 
 __all__ = ["Class4Modes", "Class4Track", "Class4Rates", "class4_modes",
@@ -252,13 +252,40 @@ def class4_track(O, r, m, start, *, stride=32, jit=False) -> Class4Track:
     return Class4Track(J, theta, ok, det, status)
 
 
+def class4_lower(q, P, U, O, size, out) -> None:
+    """:meth:`Class4Step.lower` of D designs for the compiled kernel: the same floats.
+    ``q`` = (rows of O1, O2, J1..J4; the known links of O1, O2, the ternaries 1, 2, the
+    binaries 1, 2)."""
+    for d in range(P.shape[0]):
+        o1x, o1y, o2x, o2y = P[d, q[0], 0], P[d, q[0], 1], P[d, q[1], 0], P[d, q[1], 1]
+        put_rel(out, d, 0, o1x, o1y, O, q[6])
+        put_rel(out, d, 2, o2x, o2y, O, q[7])
+        for k in range(4):
+            jx, jy = P[d, q[2 + k], 0], P[d, q[2 + k], 1]
+            out[d, 4 + 2 * k], out[d, 5 + 2 * k] = (jx - o1x, jy - o1y) if k < 2 else (jx - o2x, jy - o2y)
+        out[d, 14], out[d, 15] = o1x, o1y
+        put_off(out, d, 16, o1x, o1y, O, q[8])
+        put_off(out, d, 18, o2x, o2y, O, q[9])
+        for i in range(2):
+            ax, ay, bx, by = P[d, q[2 + i], 0], P[d, q[2 + i], 1], P[d, q[4 + i], 0], P[d, q[4 + i], 1]
+            h = np.hypot(bx - ax, by - ay)
+            out[d, 12 + i] = h
+            put_off(out, d, 20 + 2 * i, ax, ay, O, q[10 + i])
+            out[d, 24 + 2 * i], out[d, 25 + 2 * i] = (bx - ax) / h, (by - ay) / h
+
+
 class Class4Step(GroupStep):
     """A class IV order-2 group of a plan, tracked in the mode of the reference
-    (:func:`class4_track`); rates from the group's Jacobian."""
+    (:func:`class4_track`); rates from the group's Jacobian.  Batches of designs run
+    its tracker compiled, each design along its own inputs
+    (:func:`kin.groups._triad_nb.class4_place`)."""
 
     solver = "class4"
 
     kind = GroupKind.CLASS_IV
+    compiled = Deferred(f"{__package__}._triad_nb", "class4_place")
+    compiled_lower = staticmethod(class4_lower)
+    tracked = True
 
     @classmethod
     def assembly_modes(cls, m, group) -> int:
@@ -333,3 +360,29 @@ class Class4Step(GroupStep):
         return Outcome(ok, {}, None)
 
     rates = jacobian_rates
+
+    def lower(self, origins) -> Lowered | None:
+        """Flat numbers of :func:`kin.groups._triad_nb.class4_place` (:func:`class4_lower`'s
+        layout): O1 and O2 relative to their known links, ``r`` (J1 − O1, J2 − O1,
+        J3 − O2, J4 − O2), the binaries' lengths, O1 (the tracker's origin), each
+        ternary's reference point from its outer pin, each binary's from J1 or J2, and
+        the binaries' unit directions."""
+        o, lay, Oref, J = origins, self.layout, self.O, self.J
+        v = J[..., 2:, :] - J[..., :2, :]
+        u = v / self.lengths[..., None]
+        f = [*self.rel(o, self.link_index(self.known[0]), Oref[..., 0, :]),
+             *self.rel(o, self.link_index(self.known[1]), Oref[..., 1, :]),
+             *(num(x) for k in range(4) for x in (self.r[..., k, 0], self.r[..., k, 1])),
+             *(num(self.lengths[..., i]) for i in range(2)), num(Oref[..., 0, 0]), num(Oref[..., 0, 1]),
+             *self.off(o, self.link_index(lay.ternary1), Oref[..., 0, :]),
+             *self.off(o, self.link_index(lay.ternary2), Oref[..., 1, :]),
+             *self.off(o, self.link_index(lay.binary1), J[..., 0, :]),
+             *self.off(o, self.link_index(lay.binary2), J[..., 1, :]),
+             *(num(x) for i in range(2) for x in (u[..., i, 0], u[..., i, 1]))]
+        return Lowered(self.kind, tuple(self.link_index(k) for k in (*self.known, lay.ternary1, lay.ternary2,
+                                                                     lay.binary1, lay.binary2)), tuple(f))
+
+    def lower_indices(self, row) -> tuple[int, ...]:
+        lay = self.layout
+        return (*(row(j) for j in (lay.outer1, lay.outer2, lay.j11, lay.j12, lay.j21, lay.j22)),
+                *(self.link_index(k) for k in (*self.known, lay.ternary1, lay.ternary2, lay.binary1, lay.binary2)))
