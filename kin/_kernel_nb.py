@@ -12,6 +12,7 @@ is rebuilt once.
 from __future__ import annotations
 
 import inspect
+import types
 
 import numba
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from ._jit_cache import depends_on
 from ._scalar_nb import JIT as _JIT
 from .groups.base import SCALAR_HELPERS, SINCOS_MEDIUM, arctan2, sincos_medium
-from .groups.registry import COMPILED, LOWERING
+from .groups.registry import COMPILED, LOWERING, TRACKED
 from .groups.step import Deferred
 
 __all__ = ["solve_positions", "solve_motion", "solve_designs", "lower_designs", "finish_rows", "SLOTS"]
@@ -158,7 +159,7 @@ def solve_positions(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail,
     :func:`finish_rows` (the derived angle rows, the points ``P`` of ``hosts``).
     Returns the number of rows that failed.
     """
-    failed = _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend)
+    failed = _plain_steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend)
     finish_rows(T, C, S, pend, np.ones(T.shape[0], np.int8), hosts, offs, np.ones(hosts.size, np.int8), P)
     return failed
 
@@ -183,6 +184,23 @@ def _steps(codes, ints, floats, unknown, steps, X, W, F, T, C, S, fail, pend) ->
     return failed
 
 
+
+
+def _recompiled(fn, name: str, **swap):
+    """The compiled function ``fn`` of this module compiled once more as ``name``, the
+    globals ``swap`` replaced (its own cache entry, the same source)."""
+    py = types.FunctionType(fn.py_func.__code__, {**fn.py_func.__globals__, **swap}, name)
+    py.__qualname__ = name
+    return numba.njit(**_JIT)(py)
+
+
+#: :func:`_step` and :func:`_steps` without the tracked steps (a triad's or class IV group's
+#: whole tracker, which ``solve``'s kernels never run: :data:`~kin.groups.registry.TRACKED`),
+#: for :func:`solve_positions` and :func:`solve_motion`, whose compile then does not link
+#: and optimise the trackers' code again
+_plain_step = _recompiled(_step, "_plain_step", **{f"_s{i}": numba.njit(**_JIT)(_unused)
+                                                   for i, key in enumerate(COMPILED) if key in TRACKED})
+_plain_steps = _recompiled(_steps, "_plain_steps", _step=_plain_step)
 
 
 @numba.njit(**_JIT)
@@ -247,7 +265,7 @@ def solve_motion(codes, ints, floats, unknown, trig, frame, X, W, C, S, T, fail,
                 return -1
     _trig_table(trig, X, W, True)
     _frame_rows(frame, T, C, S)
-    failed = _steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
+    failed = _plain_steps(codes, ints, floats, unknown, np.arange(codes.shape[0]), X, W,
                     np.ones((codes.shape[0], 1)), T, C, S, fail, pend)
     finish_rows(T, C, S, pend, want_links, hosts, offs, want_points, P)
     return failed

@@ -37,7 +37,7 @@ from .rrr import RRRStep
 from .step import GroupStep
 from .triad import TriadStep
 
-__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "LOWERING", "register", "unregister", "registered",
+__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "LOWERING", "TRACKED", "register", "unregister", "registered",
            "adapter_of", "closed_form_step", "newton_step", "has_closed_form", "mode_count", "angle_defs",
            "reference_margin", "singular_hint"]
 
@@ -70,6 +70,11 @@ COMPILED: dict = {"drive_R": turn_place, "drive_P": slide_place,
 #: absent here is lowered by the adapter's own :meth:`~kin.groups.step.GroupStep.lower`
 LOWERING: dict = {"drive_R": turn_lower, "drive_P": slide_lower,
                   **{a.kind: a.compiled_lower for a in BUILT_IN if a.compiled_lower is not None}}
+
+
+#: the compiled steps' keys whose step follows a mode along the inputs (the adapter's
+#: ``tracked``): batches of designs run them, ``solve``'s kernels never do
+TRACKED: frozenset = frozenset(a.kind for a in BUILT_IN if a.compiled is not None and a.tracked)
 
 
 def register(adapter: type[GroupStep]) -> None:
