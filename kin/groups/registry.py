@@ -37,8 +37,8 @@ from .rrr import RRRStep
 from .step import GroupStep
 from .triad import TriadStep
 
-__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "LOWERING", "TRACKED", "register", "unregister", "registered",
-           "adapter_of", "closed_form_step", "newton_step", "has_closed_form", "mode_count", "angle_defs",
+__all__ = ["BUILT_IN", "KINDS", "CLOSED_FORM", "COMPILED", "LOWERING", "TRACKED", "register", "unregister",
+           "registered", "adapter_of", "closed_form_step", "newton_step", "has_closed_form", "mode_count", "angle_defs",
            "reference_margin", "singular_hint"]
 
 #: the library's closed-form adapters, in the compiled kernel's order
