@@ -269,3 +269,15 @@ def test_lost_designs_take_the_batched_route(monkeypatch):
     for seed in range(5):
         track_designs(*_random_triads(24, 100, seed, 0.4), jit=True)
     assert seen["partial"] >= 60 and seen["done"] >= 0.9 * seen["partial"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_no_input_gives_an_empty_batch(name):
+    """Designs at no input: an empty batch by both routes (the compiled step once wrote
+    past its arrays, the NumPy tracker raised an IndexError)."""
+    m = load_named(name)
+    cols, X = design_population(m, 3, 0.003, 0)
+    for mode in ("off", "on"):
+        with kernel.using(mode):
+            st = solve_designs(m, cols, X, np.zeros(0))
+        assert st.ok.shape == (3, 0)

@@ -694,6 +694,8 @@ def track_path(A, b, l, start, stride, P, th, status):
     P[:] = np.nan
     th[:] = np.nan
     status[:] = 3
+    if N == 0:
+        return
     if stride <= 1 or N <= 2 * stride:
         Pm, thm, idx = np.empty((N, 6, 3, 2)), np.empty((N, 6)), np.empty(N, np.int64)
         _follow(A, bb, l, start, Pm, thm, idx, status)
@@ -852,6 +854,8 @@ def class4_place(ip, fp, X, W, F, T, C, S, PP, out) -> None:
     ``ip`` = (known links of O1, O2; ternaries 1, 2; binaries 1, 2); ``fp`` =
     (:func:`kin.groups.class4.class4_lower`'s layout)."""
     N = X.shape[0]
+    if N == 0:                             # (no input: nothing to follow)
+        return
     ox, oy = fp[14], fp[15]
     Oa, Od, finite = _known_pins(2, ip, fp, N, T, C, S, ox, oy)
     PP[ip[4]] = PP[ip[5]] = 1

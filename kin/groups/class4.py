@@ -343,6 +343,8 @@ class Class4Step(GroupStep):
         e = Od[..., 1, :] - Od[..., 0, :]
         L = np.hypot(e[..., 0], e[..., 1])
         Dn, N = L.shape
+        if N == 0:                           # (no input: nothing to follow)
+            return Outcome(np.zeros((Dn, 0), bool), {}, None)
         zero = np.zeros((Dn, 1, 2))
         anchors = np.broadcast_to(np.stack([r[:, 0, 0], r[:, 0, 1], zero[:, 0]], axis=1)[:, None], (Dn, N, 3, 2))
         b = np.stack([r[:, 0, 2], r[:, 0, 3], zero[:, 0]], axis=1)

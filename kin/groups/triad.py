@@ -835,6 +835,8 @@ def track_designs(A, b, l, start, *, stride=STRIDE, jit=False):
     the mode the tracker would follow (:func:`_near_first`); any other is tracked.
     """
     Dn, N = A.shape[:2]
+    if N == 0:                                    # (no input: nothing to follow)
+        return np.zeros((Dn, 0, 3, 2)), np.zeros((Dn, 0)), np.zeros((Dn, 0), int)
     L = np.broadcast_to(l[:, None] if l.ndim == 2 else l, (Dn, N, 3))
     nb = _kernel() if jit else None
     near = _near_rows(A, b, L, start)
