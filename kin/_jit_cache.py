@@ -17,6 +17,7 @@ stamp:
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 
@@ -28,6 +29,7 @@ __all__ = ["depends_on", "source_stamp"]
 _SOURCES: dict[str, tuple[str, ...]] = {}
 
 
+@functools.lru_cache(maxsize=None)
 def _key(path: str) -> str:
     return os.path.normcase(os.path.realpath(path))
 
@@ -55,10 +57,18 @@ def source_stamp(path: str, _seen=None) -> str:
         if f in seen:
             continue
         seen.add(f)
-        with open(f, "rb") as fh:
-            h.update(f.encode() + b"\0" + hashlib.sha256(fh.read()).digest())
+        st = os.stat(f)
+        h.update(f.encode() + b"\0" + _digest(f, st.st_mtime_ns, st.st_size))
         h.update(source_stamp(f, seen).encode())
     return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def _digest(path: str, mtime_ns: int, size: int) -> bytes:
+    """The hash of a file's content, read once per version of it in a process (every
+    compiled function of a module asks for its stamp)."""
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).digest()
 
 
 class _WithSources:
