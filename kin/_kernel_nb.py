@@ -198,8 +198,8 @@ def _recompiled(fn, name: str, **swap):
 #: whole tracker, which ``solve``'s kernels never run: :data:`~kin.groups.registry.TRACKED`),
 #: for :func:`solve_positions` and :func:`solve_motion`, whose compile then does not link
 #: and optimise the trackers' code again
-_plain_step = _recompiled(_step, "_plain_step", **{f"_s{i}": numba.njit(**_JIT)(_unused)
-                                                   for i, key in enumerate(COMPILED) if key in TRACKED})
+_free = numba.njit(**_JIT)(_unused)
+_plain_step = _recompiled(_step, "_plain_step", **{f"_s{i}": _free for i, key in enumerate(COMPILED) if key in TRACKED})
 _plain_steps = _recompiled(_steps, "_plain_steps", _step=_plain_step)
 
 

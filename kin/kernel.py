@@ -56,6 +56,7 @@ References
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import threading
 import warnings
@@ -103,7 +104,6 @@ class KernelPlan:
     trig: np.ndarray | None = None
     hosts: np.ndarray | None = None
     offs: np.ndarray | None = None
-    complete: bool = False
     lowers: np.ndarray | None = None
     rows: np.ndarray | None = None
     tracked: np.ndarray | None = None
@@ -112,17 +112,40 @@ class KernelPlan:
         """Whether every step of ``steps`` has a compiled step, a tracked one only with
         ``tracked`` (a batch of designs, each solved along its own inputs: ``solve``'s
         routes solve a failed row again on its own, which a followed mode does not allow)."""
-        if tracked:
-            return _every(self.codes >= 0, steps, bool(np.all(self.codes >= 0)))
-        return _every((self.codes >= 0) & ~self.tracked, steps, self.complete)
+        return _every(*(self._batch_steps if tracked else self._solve_steps), steps)
 
     def lowered(self, steps) -> bool:
         """Whether every step of ``steps`` has a compiled lowering for batches of designs
         (:func:`lower_designs`)."""
-        return _every(self.lowers, steps, bool(self.lowers.all()))
+        return _every(*self._lowered_steps, steps)
+
+    @property
+    def complete(self) -> bool:
+        """Whether ``solve``'s kernels run every step (each compiled, none tracked)."""
+        return self._solve_steps[1]
+
+    @functools.cached_property
+    def _solve_steps(self) -> tuple[np.ndarray, bool]:
+        """The steps ``solve``'s kernels run (compiled, not tracked), and whether all are."""
+        return _with_all((self.codes >= 0) & ~self.tracked)
+
+    @functools.cached_property
+    def _batch_steps(self) -> tuple[np.ndarray, bool]:
+        """The steps a batch of designs runs compiled, and whether all are."""
+        return _with_all(self.codes >= 0)
+
+    @functools.cached_property
+    def _lowered_steps(self) -> tuple[np.ndarray, bool]:
+        """The steps with a compiled lowering, and whether all have one."""
+        return _with_all(self.lowers)
 
 
-def _every(mask: np.ndarray, steps, whole: bool) -> bool:
+def _with_all(mask: np.ndarray) -> tuple[np.ndarray, bool]:
+    mask.flags.writeable = False
+    return mask, bool(mask.all())
+
+
+def _every(mask: np.ndarray, whole: bool, steps) -> bool:
     """Whether ``mask`` holds at every step of ``steps`` (``whole``: at every step)."""
     if len(steps) == len(mask):
         return whole
@@ -155,8 +178,7 @@ def lower_plan(sp) -> KernelPlan:
     return KernelPlan(codes, _table([lw.ints if lw else () for lw in low], np.int64, -1),
                       _table([lw.floats if lw else () for lw in low], float, np.nan),
                       _table([st.unknown for st in sp.steps], np.int64, -1),
-                      sp.mechanism.link_names.index(sp.mechanism.frame), trig,
-                      *_hosts(sp), bool(np.all(codes >= 0) and not tracked.any()), lowers, rows, tracked)
+                      sp.mechanism.link_names.index(sp.mechanism.frame), trig, *_hosts(sp), lowers, rows, tracked)
 
 
 def _hosts(sp) -> tuple[np.ndarray, np.ndarray]:

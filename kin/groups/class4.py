@@ -381,10 +381,14 @@ class Class4Step(GroupStep):
              *self.off(o, self.link_index(lay.binary1), J[..., 0, :]),
              *self.off(o, self.link_index(lay.binary2), J[..., 1, :]),
              *(num(x) for i in range(2) for x in (u[..., i, 0], u[..., i, 1]))]
-        return Lowered(self.kind, tuple(self.link_index(k) for k in (*self.known, lay.ternary1, lay.ternary2,
-                                                                     lay.binary1, lay.binary2)), tuple(f))
+        return Lowered(self.kind, self._links(), tuple(f))
 
     def lower_indices(self, row) -> tuple[int, ...]:
         lay = self.layout
-        return (*(row(j) for j in (lay.outer1, lay.outer2, lay.j11, lay.j12, lay.j21, lay.j22)),
-                *(self.link_index(k) for k in (*self.known, lay.ternary1, lay.ternary2, lay.binary1, lay.binary2)))
+        return (*(row(j) for j in (lay.outer1, lay.outer2, lay.j11, lay.j12, lay.j21, lay.j22)), *self._links())
+
+    def _links(self) -> tuple[int, ...]:
+        """The links the compiled step reads and places: O1's and O2's known links, the
+        ternaries, the binaries."""
+        lay = self.layout
+        return tuple(self.link_index(k) for k in (*self.known, lay.ternary1, lay.ternary2, lay.binary1, lay.binary2))

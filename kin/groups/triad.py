@@ -52,7 +52,6 @@ __all__ = ["TriadModes", "TriadTrack", "TriadRates", "triad_modes", "triad_track
 
 #: maximum number of real assembly modes of a triad / class IV group.
 MAX_MODES = 6
-_ACCEPT, _ON_CIRCLE, _NEWTON_ITERS = ACCEPT, ON_CIRCLE, NEWTON_ITERS
 
 
 class TriadModes(NamedTuple):
@@ -135,7 +134,7 @@ def _det(A, P):
     return _solve3c(m, [0.0, 0.0, 0.0])[1]
 
 
-def _polish(A, bb, l, p, th, iters=_NEWTON_ITERS, tol=1e-12):
+def _polish(A, bb, l, p, th, iters=NEWTON_ITERS, tol=1e-12):
     """Newton on the three closure equations, vectorised over any batch shape.
 
     ``A`` (..., 3, 2), ``bb`` (3, 2) or broadcastable (..., 3, 2) = b - b_1, ``l``
@@ -209,8 +208,8 @@ def _modes_nb(nb, A, bb, l):
     position) by :func:`kin.groups._triad_nb.modes_many`."""
     K = A.shape[0]
     P, th = np.empty((K, MAX_MODES, 3, 2)), np.empty((K, MAX_MODES))
-    nb.modes_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), _Z16, _DFT, _GRID, _BASIS,
-                  _NEWTON_ITERS, 1e-12, _ACCEPT, SINGULAR_RTOL, P, th)
+    nb.modes_many(_flat(A, (K, 3, 2)), _flat(bb, (K, 3, 2)), _flat(l, (K, 3)), Z16, DFT, GRID, BASIS,
+                  NEWTON_ITERS, 1e-12, ACCEPT, SINGULAR_RTOL, P, th)
     return P, th
 
 
@@ -257,9 +256,6 @@ def _position_from_angle(A, bc, a, l, th):
     return np.where(np.isfinite(p), p, A[..., 0, :])
 
 
-_BASIS, _GRID, _Z16, _DFT = BASIS, GRID, Z16, DFT
-
-
 def _unit_circle_roots(coef):
     """Angles of the roots of ``z³F(z)`` on the unit circle (the real modes).
 
@@ -272,11 +268,11 @@ def _unit_circle_roots(coef):
     the circle) and the per-position ``good`` mask.
     """
     N = coef.shape[0]
-    samples = (coef @ _GRID).real                        # F at 2πk/16
+    samples = (coef @ GRID).real                        # F at 2πk/16
     kmax = np.argmax(np.abs(samples), axis=-1)
     sigma = 2 * np.pi * kmax / 16 - np.pi
     shifted = coef * np.exp(1j * np.outer(sigma, np.arange(3, -4, -1)))
-    q = (shifted @ _BASIS).real                          # ascending in t, (N, 7)
+    q = (shifted @ BASIS).real                          # ascending in t, (N, 7)
     lead = q[:, 6]
     good = np.isfinite(q).all(axis=-1) & (np.abs(lead) > 0)
     comp = np.zeros((N, 6, 6))
@@ -286,7 +282,7 @@ def _unit_circle_roots(coef):
     good &= np.isfinite(comp).all(axis=(1, 2))
     comp[~good] = np.eye(6) * 10.0
     t = np.linalg.eigvals(comp)                          # (N, 6) complex
-    cand = np.abs(t.imag) < 0.5 * _ON_CIRCLE * (1.0 + np.abs(t) ** 2)
+    cand = np.abs(t.imag) < 0.5 * ON_CIRCLE * (1.0 + np.abs(t) ** 2)
     th0 = sigma[:, None] + 2.0 * np.arctan(t.real)
     return th0, cand & good[:, None], good
 
@@ -346,7 +342,7 @@ def triad_modes(A, b, l) -> TriadModes:
     th = np.full((N, MAX_MODES), np.nan)
     res = np.full((N, MAX_MODES), np.inf)
     P[ri, ki], th[ri, ki], res[ri, ki] = Pk, _wrap(thk), resk
-    valid = cand & good[:, None] & (res <= _ACCEPT)
+    valid = cand & good[:, None] & (res <= ACCEPT)
     # merge duplicates (same pose reached from two roots)
     scale = np.max(l, axis=-1)[:, None, None]
     p1 = P[:, :, 0, :]
@@ -627,7 +623,7 @@ def _from_coarse(A0, P0, th0, sep0, A1, l0, l1, bb):
     (well inside the followed mode's basin).  ``P``, ``theta`` and the acceptance."""
     Pp, dth, sing = _predict(A0, P0, A1, l0, l1)
     Pf, thf, res = _polish(A1, bb, l1, Pp[..., 0, :], th0 + dth)
-    acc = (res <= _ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep0) & (_dist(Pf, P0) <= 0.5 * sep0)
+    acc = (res <= ACCEPT) & ~sing & (_dist(Pf, Pp) <= 0.25 * sep0) & (_dist(Pf, P0) <= 0.5 * sep0)
     return Pf, thf, acc
 
 
@@ -898,7 +894,7 @@ def _near_first(A, b, L, first, tracked, nb):
     sep = np.min(d, axis=1)                                                          # (N,)
     bb = b - b[:, :1]
     Pf, thf, res = _polish(A, bb[:, None], L, np.broadcast_to(P0[:, 0], (K, N, 2)), np.broadcast_to(th0, (K, N)))
-    kept = np.all((res <= _ACCEPT) & (_dist(Pf, P0) <= 0.25 * sep), axis=1)
+    kept = np.all((res <= ACCEPT) & (_dist(Pf, P0) <= 0.25 * sep), axis=1)
     return kept, Pf[kept], _wrap(thf[kept])
 
 
@@ -1082,7 +1078,7 @@ def _fill_compiled(nb, g, A, bb, L, cfk, Pc, thc, sep):
     Pd, thd, done = np.empty((Gn, N, 3, 2)), np.empty((Gn, N)), np.empty(Gn, bool)
     # (the indices copied: the kept read-only ones would be another compiled signature)
     f, i = (lambda a: np.ascontiguousarray(a, float)), (lambda a: np.array(a, np.int64))  # noqa: E731
-    nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), _NEWTON_ITERS, 1e-12, _ACCEPT,
+    nb.fill_fine(f(A), f(bb), f(L), f(Pc), f(thc), f(sep), *map(i, cfk), NEWTON_ITERS, 1e-12, ACCEPT,
                  SINGULAR_RTOL, Pd, thd, done)
     return (g, Pd, thd) if done.all() else (g[done], Pd[done], thd[done])
 
@@ -1203,12 +1199,14 @@ class TriadStep(GroupStep):
              *(x for i in range(3) for x in self.off(o, self.link_index(lay.binaries[i]), A[..., i, :])),
              *(num(x) for i in range(3) for x in (u[..., i, 0], u[..., i, 1])),
              num(A[..., 0, 0]), num(A[..., 0, 1]), *self.off(o, self.link_index(lay.ternary), b[..., 0, :])]
-        ints = (*(self.link_index(k) for k in self.known), self.link_index(lay.ternary),
-                *(self.link_index(k) for k in lay.binaries))
-        return Lowered(self.kind, ints, tuple(f))
+        return Lowered(self.kind, self._links(), tuple(f))
 
     def lower_indices(self, row) -> tuple[int, ...]:
         lay = self.layout
-        return (*(row(j) for j in lay.outers), *(row(j) for j in lay.inners),
-                *(self.link_index(k) for k in self.known), self.link_index(lay.ternary),
-                *(self.link_index(k) for k in lay.binaries))
+        return (*(row(j) for j in lay.outers), *(row(j) for j in lay.inners), *self._links())
+
+    def _links(self) -> tuple[int, ...]:
+        """The links the compiled step reads and places: the outer joints' known links,
+        the ternary, the binaries."""
+        lay = self.layout
+        return tuple(self.link_index(k) for k in (*self.known, lay.ternary, *lay.binaries))
