@@ -486,9 +486,8 @@ class Problem:
         tim = self.timing_for(Z)
         if tim is not None and self.ev.path_dependent:
             return self._prescribed_walk(Z, tim)
-        span = None if tim is None else self._reach_span(tim)
-        if span is not None:
-            return self._prescribed(Z, tim, span)
+        if tim is not None and self.targets_only(tim):
+            return self.score_at(Z, tim)
         M = self.M
         tracer = self._tracer() if tim is None and not self.cons.min_transmission else None
         if tracer is not None:              # (a path's curve straight from the design matrix: no pose store)
@@ -517,55 +516,30 @@ class Problem:
         f = np.sqrt(cost / self.n_targets) + self.cons.weight * violation
         return np.where(np.isfinite(f), f, _FAIL)
 
-    def _reach_span(self, tim: np.ndarray) -> tuple[np.ndarray, int] | None:
-        """Prescribed timing: the driver grid's samples that decide whether the targets'
-        driver values ``tim`` (P, N) are reached from the reference (:meth:`_batch`'s
-        test on the whole grid, :meth:`curve`): indices into the grid, from the reference
-        forward to the first sample at or past the largest value, then backward (−δ, −2δ,
-        …) past the smallest; the samples beyond them cannot change the test.  None when
-        the whole grid is needed: a constraint read over the whole motion (full rotation,
-        transmission), or a span as long as the grid.  Returns the indices and how many of
-        them are forward.  (A path-dependent plan has :meth:`_prescribed_walk`.)"""
-        c = self.cons
-        if c.on_motion or not np.all(np.isfinite(tim)):
-            return None
-        d, top, low = self.delta, float(np.max(tim)), float(np.min(tim))
-        nf = max(1, int(np.ceil((top - 1e-12) / d)) + 1)
-        while (nf - 1) * d + 1e-12 < top:
-            nf += 1
-        nb = max(0, int(np.ceil((-low - 1e-12) / d)))
-        while -nb * d - 1e-12 > low:
-            nb += 1
-        M, half = self.M, self.M // 2
-        if self.rotary:
-            return (np.r_[np.arange(nf), M - 1 - np.arange(nb)], nf) if nf + nb < M else None
-        return (np.r_[np.arange(nf), half + np.arange(nb)], nf) if nf <= half and nb <= half else None
+    def targets_only(self, tim: np.ndarray) -> bool:
+        """Whether prescribed timing's population is solved at the targets' driver values
+        ``tim`` (P, N) alone (:meth:`score_at`): unless a constraint reads the whole
+        motion (full rotation, transmission), for which the driver grid is solved anyway
+        and its samples from the reference decide whether the motion reaches the targets."""
+        return not self.cons.on_motion and bool(np.all(np.isfinite(tim)))
 
-    def _prescribed(self, Z: np.ndarray, tim: np.ndarray, span: tuple[np.ndarray, int]) -> np.ndarray:
-        """:meth:`_batch` with prescribed timing on the grid's samples ``span``
-        (:meth:`_reach_span`) and the targets' driver values: the same objective, bit for
-        bit.  :meth:`curve` reaches from the reference forward to the first failing
-        sample ``f`` and backward to ``b``, and a target's value must lie in
-        ``[−b δ, (f − 1) δ]`` (or the driver turn fully); a side whose samples in the
-        span all assemble reaches past every value on that side (a full turn, too)."""
-        X = Z[:, :self.nx]
-        idx, nf = span
-        K = len(idx)
-        st = self.ev.poses(X, np.concatenate([np.broadcast_to(self.grid[idx], (Z.shape[0], K)), tim], axis=1),
-                           keep=False)
-        T, size = self.targets_for(Z)
-        F = self.features(Z, st)
-        ok = st.ok[:, :K]
-        reach = []
-        for part, sign in ((ok[:, :nf], 1.0), (ok[:, nf:], -1.0)):
-            n = part.shape[1]
-            first = np.where(part.all(axis=1), n, np.argmin(part, axis=1) if n else 0)
-            end = (first - 1.0 if sign > 0 else -first) * self.delta
-            reach.append(np.where(first < n, end, sign * np.inf))
-        hi, lo = reach
-        inside = (tim >= lo[:, None] - 1e-12) & (tim <= hi[:, None] + 1e-12)
-        cost = np.where(inside.all(1), np.sum(np.square(self.diff(F[:, K:], T, size)), axis=(1, 2)), np.inf)
-        return self._score(cost, self.violation(X, st, None))
+    def score_at(self, Z: np.ndarray, PHI: np.ndarray) -> np.ndarray:
+        """The objective ``(P,)`` of designs ``Z`` each solved at its own driver values
+        ``PHI`` (P, N) alone: the RMS of the relative residuals the polish minimises
+        (:meth:`residuals_batch`) plus the weighted constraint violation (the grid's, only
+        for a constraint read over the whole motion).  Prescribed timing's search
+        (:meth:`targets_only`) and free timing's searched route
+        (:class:`~.searched_timing.SearchedTiming`) score their candidates so; whether the
+        motion reaches the targets continuously from the reference is decided for the
+        chosen design by the certified walk (:func:`~.synthesise._certified`), not by a
+        grid."""
+        R = self.residuals_batch(Z, PHI)
+        cost = np.einsum("pk,pk->p", R, R)
+        if self.cons.on_motion:
+            violation = self.penalty_batch(Z) / self.cons.weight
+        else:
+            violation = self.violation(Z[:, :self.nx], None, None)
+        return self._score(cost, violation)
 
     def _prescribed_walk(self, Z: np.ndarray, tim: np.ndarray) -> np.ndarray:
         """:meth:`_batch` with prescribed timing on a path-dependent plan (a triad's or

@@ -94,12 +94,4 @@ class SearchedTiming:
         residuals at their own driver values plus the weighted constraint violation (the
         grid's, only for a constraint read over the whole motion), as
         :meth:`~.objective.Problem.batch` scores them."""
-        p = self.problem
-        Z, PHI = self.split(Y)
-        R = p.residuals_batch(Z, PHI)
-        cost = np.einsum("pk,pk->p", R, R)
-        if p.cons.on_motion:
-            violation = p.penalty_batch(Z) / p.cons.weight
-        else:
-            violation = p.violation(Z[:, :p.nx], None, np.zeros(len(Z), bool))
-        return p._score(cost, violation)
+        return self.problem.score_at(*self.split(Y))

@@ -1,9 +1,10 @@
-"""Prescribed timing solves the targets' driver values and only the grid samples between
-the reference and them (objective.Problem._reach_span): the objective equals the whole
-grid's bit for bit, on R and P drivers, with targets inside, beyond and on both sides of
-the reachable motion; the whole grid is kept where a constraint reads the whole motion.
-A path-dependent plan's targets are solved along the walk from the reference, apart from
-the grid, in the search and in the final assessment (free timing too)."""
+"""Prescribed timing's search solves each candidate at the targets' driver values alone
+(objective.Problem.score_at): no grid sample is solved; where the driver grid finds the
+targets reached from the reference, the objective is the grid route's; whether the chosen
+design reaches its targets continuously is the certified walk's answer; the grid is kept
+where a constraint reads the whole motion.  A path-dependent plan's targets are solved
+along the walk from the reference, apart from the grid, in the search and in the final
+assessment (free timing too)."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,9 +12,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from multiloop.catalogue.dimensional.evaluator import Evaluator, design_space
-from multiloop.catalogue.dimensional.objective import Constraints, Problem
-from multiloop.catalogue.dimensional.targets import PathTarget
+from multiloop.catalogue.dimensional.objective import _FAIL, Constraints, Problem
+from multiloop.catalogue.dimensional.targets import FunctionTarget, PathTarget
 from multiloop.catalogue.named import load_named
+from multiloop.kin.tracer_batch import TracerBatch
 
 from test_design_batch import _slider_driven as _slider_driven_with
 
@@ -30,17 +32,56 @@ def _problem(name, timing, cons=Constraints()):
     return m, Problem(ev, PathTarget(T, pt, timing=np.asarray(timing, float)), cons)
 
 
-def _whole_grid(pr, Z, monkeypatch):
+def _solved_inputs(pr, monkeypatch) -> list:
+    """Every inputs array the problem's population is solved at (the pose store's and the
+    tracer batch's routes), recorded."""
+    seen = []
+    poses, solve = type(pr.ev).poses, TracerBatch.solve
+
+    def spy_poses(ev, X, inputs, *a, **k):
+        seen.append(np.broadcast_to(inputs, (len(X),) + np.shape(inputs)[-1:]))
+        return poses(ev, X, inputs, *a, **k)
+
+    def spy_solve(tb, X, inputs, *a, **k):
+        seen.append(np.asarray(inputs))
+        return solve(tb, X, inputs, *a, **k)
+    monkeypatch.setattr(type(pr.ev), "poses", spy_poses)
+    monkeypatch.setattr(TracerBatch, "solve", spy_solve)
+    return seen
+
+
+def _grid_route(pr, Z, monkeypatch):
+    """The objective on the driver grid (the route before: the grid's samples from the
+    reference decide whether the targets are reached)."""
     with monkeypatch.context() as mp:
-        mp.setattr(pr, "_reach_span", lambda tim: None)
+        mp.setattr(pr, "targets_only", lambda tim: False)
         return pr.batch(Z)
+
+
+@pytest.mark.parametrize("name", ["four_bar", "watt_1", "crank_slider", "slider driven"])
+def test_the_search_solves_the_target_inputs_alone(name, monkeypatch):
+    m = _slider_driven() if name == "slider driven" else load_named(name)
+    span = np.pi if m.is_rotary(0) else m.size
+    timing = np.array([-0.3, 0.1, 0.2, 0.5, 0.6]) * span
+    _, pr = _problem(name, timing)
+    Z = np.clip(pr.x0[None] + 0.05 * m.size * np.random.default_rng(1).standard_normal((40, len(pr.x0))),
+                pr.lower, pr.upper)
+    seen = _solved_inputs(pr, monkeypatch)
+    pr.batch(Z)
+    assert seen and all(np.array_equal(np.reshape(s, (len(Z), -1)), np.broadcast_to(timing, (len(Z), 5)))
+                        for s in seen)
 
 
 @settings(max_examples=30, deadline=None)
 @given(name=st.sampled_from(["four_bar", "watt_1", "crank_slider", "slider driven"]),
        seed=st.integers(0, 2**31 - 1), reach=st.sampled_from([0.1, 0.5, 1.0, 2.5]),
        spread=st.sampled_from([0.01, 0.05, 0.2]), side=st.sampled_from([-1.0, 0.0, 1.0]))
-def test_the_span_gives_the_whole_grids_objective_to_the_bit(name, seed, reach, spread, side):
+def test_where_the_grid_finds_the_targets_reached_the_objective_is_the_grids(name, seed, reach, spread, side):
+    """Both routes score a candidate by its relative residuals at the targets: where the grid's
+    samples from the reference reach every target, the two objectives are the same (to the
+    rounding of the sums' order); a candidate that does not assemble at a target fails both;
+    the targets-only route also scores a candidate whose grid misses a target between two
+    samples (the certified walk judges the chosen design's continuity)."""
     rng = np.random.default_rng(seed)
     m = _slider_driven() if name == "slider driven" else load_named(name)
     span = np.pi if m.is_rotary(0) else m.size
@@ -52,36 +93,36 @@ def test_the_span_gives_the_whole_grids_objective_to_the_bit(name, seed, reach, 
     got = pr.batch(Z)
     mp = pytest.MonkeyPatch()
     try:
-        assert np.array_equal(got, _whole_grid(pr, Z, mp))
+        grid = _grid_route(pr, Z, mp)
     finally:
         mp.undo()
+    scored = grid != _FAIL
+    assert np.allclose(got[scored], grid[scored], rtol=1e-12, atol=0.0)
+    assembles = pr.ev.poses(Z[:, :pr.nx], np.broadcast_to(timing, (len(Z), 5))).ok.all(axis=1)
+    assert np.array_equal(got == _FAIL, ~assembles)        # (a target not assembled fails both)
 
 
-def test_a_function_target_on_its_span_is_the_whole_grids_to_the_bit(monkeypatch):
-    from multiloop.catalogue.dimensional.targets import FunctionTarget
+def test_a_function_targets_search_solves_its_target_inputs_alone(monkeypatch):
     m = load_named("four_bar")
-    pr = Problem(Evaluator(m, design_space(m, [])),
-                 FunctionTarget(np.radians([0.0, 15.0, 30.0, 45.0, 60.0]), np.radians([0.0, 5.0, 12.0, 20.0, 26.0]), "O4"))
+    x = np.radians([0.0, 15.0, 30.0, 45.0, 60.0])
+    pr = Problem(Evaluator(m, design_space(m, [])), FunctionTarget(x, np.radians([0.0, 5.0, 12.0, 20.0, 26.0]), "O4"))
     Z = np.clip(pr.x0[None] + 0.05 * m.size * np.random.default_rng(0).standard_normal((100, len(pr.x0))),
                 pr.lower, pr.upper)
-    assert len(pr._reach_span(pr.timing_for(Z))[0]) == 17
     got = pr.batch(Z)
-    monkeypatch.setattr(pr, "_reach_span", lambda tim: None)
-    assert np.array_equal(got, pr.batch(Z))
+    grid = _grid_route(pr, Z, monkeypatch)
+    ok = grid != _FAIL
+    assert ok.sum() > 50 and np.allclose(got[ok], grid[ok], rtol=1e-12, atol=0.0)
+    seen = _solved_inputs(pr, monkeypatch)
+    pr.batch(Z)
+    assert seen and all(np.array_equal(np.reshape(s, (len(Z), -1)), np.broadcast_to(x, (len(Z), 5))) for s in seen)
 
 
-def test_narrow_timing_solves_a_few_samples_and_constraints_on_the_motion_keep_the_grid():
-    m, pr = _problem("four_bar", np.radians([0.0, 20.0, 40.0, 60.0]))
-    idx, nf = pr._reach_span(pr.timing_for(pr.x0[None]))
-    assert nf == len(idx) == 17 and np.array_equal(idx, np.arange(17))          # 0 .. 60° at 3.75°
-    _, pr = _problem("four_bar", np.radians([-30.0, 10.0]))
-    idx, nf = pr._reach_span(pr.timing_for(pr.x0[None]))
-    assert nf == 4 and np.array_equal(idx[nf:], pr.M - 1 - np.arange(8))           # back to −30°
+def test_constraints_on_the_motion_keep_the_grid():
+    _, pr = _problem("four_bar", np.radians([0.0, 20.0, 40.0, 60.0]))
+    assert pr.targets_only(pr.timing_for(pr.x0[None]))
     for cons in (Constraints(full_rotation=True), Constraints(min_transmission=30.0)):
         _, pr = _problem("four_bar", np.radians([0.0, 20.0]), cons)
-        assert pr._reach_span(pr.timing_for(pr.x0[None])) is None
-    _, pr = _problem("four_bar", np.radians([-179.0, 179.0]))                     # (a whole turn's span)
-    assert pr._reach_span(pr.timing_for(pr.x0[None])) is None
+        assert not pr.targets_only(pr.timing_for(pr.x0[None]))
 
 
 # -- a path-dependent plan (a triad's mode followed along the inputs) -----------------------------
