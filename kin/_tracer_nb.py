@@ -25,6 +25,7 @@ import numpy as np
 
 from . import _kernel_nb, _sensitivity_nb
 from ._jit_cache import depends_on
+from ._scalar_nb import JIT as _JIT
 
 __all__ = ["tracer_point"]
 
@@ -36,7 +37,6 @@ def _fresh_cache() -> None:
 
 
 _fresh_cache()                             # before the decorators read the stamp
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
 
 
 @numba.njit(**_JIT)

@@ -13,9 +13,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["free_timing_costs"]
+from multiloop.kin._scalar_nb import JIT as _JIT
 
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
+__all__ = ["free_timing_costs"]
 
 
 @numba.njit(**_JIT)

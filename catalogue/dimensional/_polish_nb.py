@@ -24,13 +24,13 @@ import numpy as np
 
 from multiloop.kin import _tracer_nb
 from multiloop.kin._jit_cache import depends_on
+from multiloop.kin._scalar_nb import JIT as _JIT
 
 from . import _trust_nb
 
 __all__ = ["rounds"]
 
 depends_on(__file__, [_tracer_nb.__file__, _trust_nb.__file__])    # (before the decorators read the stamp)
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
 #: the helpers are inlined into :func:`rounds` (numba IR), so that the tracer's kernel tree,
 #: which every compiled caller links and optimises again, is compiled into one caller only
 _INLINE = dict(_JIT, inline="always")

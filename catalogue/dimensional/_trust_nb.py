@@ -14,9 +14,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["tr_steps", "tr_propose", "tr_accept"]
+from multiloop.kin._scalar_nb import JIT as _JIT
 
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
+__all__ = ["tr_steps", "tr_propose", "tr_accept"]
 
 
 @numba.njit(**_JIT)
