@@ -28,6 +28,7 @@ from .geometry import joint_tables, origin_joint
 from .memo import cached
 from .poses import unit
 from .sensitivity import offset_columns, sensitivity_plan
+from .design import batched
 from .solve import SolvePlan, plan_of
 
 __all__ = ["TracerBatch"]
@@ -55,13 +56,15 @@ class TracerBatch:
     def of(cls, mechanism, names, point: str) -> "TracerBatch | None":
         """The batch of ``point`` for designs with columns ``names``, kept on the plan;
         None when it has no compiled route: no numba, a step without a compiled step or
-        lowering (a Newton group's), more than one driver, or a point on the frame."""
+        lowering (a Newton group's) or whose kind declares no batched form (its designs
+        are solved one by one, as :func:`~kin.design.solve_designs` solves them), more
+        than one driver, or a point on the frame."""
         sp = plan_of(mechanism)
         if kernel.load() is None or len(mechanism.drivers) != 1:
             return None
         kp = kernel.kernel_plan(sp)
         every = range(len(sp.steps))
-        if not (kp.covers(every, tracked=True) and kp.lowered(every)):
+        if not (kp.covers(every, tracked=True) and kp.lowered(every) and batched(sp, every)):
             return None
         tb = cached(sp, ("tracer batch", tuple(names), point), _make, (tuple(names), point))
         return None if tb.host == kp.frame else tb

@@ -78,6 +78,20 @@ def test_plans_without_a_compiled_route_and_frame_points_are_refused():
     assert TracerBatch.of(m, names, ground) is None                         # (on the frame: nothing to solve)
 
 
+def test_a_kind_without_a_batched_form_has_no_tracer_batch(monkeypatch):
+    """A kind that declares no batched form is solved design by design by ``solve_designs``;
+    the tracer batch refuses it too (it had served the class IV group's compiled step, so
+    the slow path's synthesis test ran its search on the kernel for 80 s: its simulated
+    clock, advanced by each design solved, stood still)."""
+    from multiloop.kin.groups.class4 import Class4Step
+    m = load_named("stephenson_3")
+    names, _ = _designs(m, D=2)
+    pt = m.points[0].name
+    assert TracerBatch.of(m, names, pt) is not None
+    monkeypatch.setattr(Class4Step, "batched", False)
+    assert TracerBatch.of(m, names, pt) is None
+
+
 @pytest.mark.parametrize("name,span", [("four_bar", (0.2, 2.0)), ("stephenson_3_triad", (0.1, 1.0))])
 def test_the_polish_residuals_and_jacobian_are_the_same_by_both_routes(name, span, monkeypatch):
     """The polish's residuals and Jacobian by the tracer batch and by the pose store, bit
