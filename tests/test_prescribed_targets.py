@@ -24,12 +24,12 @@ def _slider_driven():
     return _slider_driven_with(point=True)
 
 
-def _problem(name, timing, cons=Constraints()):
+def _problem(name, timing, cons=Constraints(), shape_only=False):
     m = _slider_driven() if name == "slider driven" else load_named(name)
     pt = m.points[0].name
     ev = Evaluator(m, design_space(m, [pt]))
     T = np.random.default_rng(0).normal(0.0, m.size, (len(timing), 2))
-    return m, Problem(ev, PathTarget(T, pt, timing=np.asarray(timing, float)), cons)
+    return m, Problem(ev, PathTarget(T, pt, timing=np.asarray(timing, float), shape_only=shape_only), cons)
 
 
 def _solved_inputs(pr, monkeypatch) -> list:
@@ -75,20 +75,21 @@ def test_the_search_solves_the_target_inputs_alone(name, monkeypatch):
 @settings(max_examples=30, deadline=None)
 @given(name=st.sampled_from(["four_bar", "watt_1", "crank_slider", "slider driven"]),
        seed=st.integers(0, 2**31 - 1), reach=st.sampled_from([0.1, 0.5, 1.0, 2.5]),
-       spread=st.sampled_from([0.01, 0.05, 0.2]), side=st.sampled_from([-1.0, 0.0, 1.0]))
-def test_where_the_grid_finds_the_targets_reached_the_objective_is_the_grids(name, seed, reach, spread, side):
+       spread=st.sampled_from([0.01, 0.05, 0.2]), side=st.sampled_from([-1.0, 0.0, 1.0]), shape_only=st.booleans())
+def test_where_the_grid_finds_the_targets_reached_the_objective_is_the_grids(name, seed, reach, spread, side,
+                                                                             shape_only):
     """Both routes score a candidate by its relative residuals at the targets: where the grid's
     samples from the reference reach every target, the two objectives are the same (to the
     rounding of the sums' order); a candidate that does not assemble at a target fails both;
     the targets-only route also scores a candidate whose grid misses a target between two
-    samples (the certified walk judges the chosen design's continuity)."""
+    samples (the certified walk judges the chosen design's continuity).  Shape-only targets too."""
     rng = np.random.default_rng(seed)
     m = _slider_driven() if name == "slider driven" else load_named(name)
     span = np.pi if m.is_rotary(0) else m.size
     timing = np.sort(rng.uniform(-reach, reach, 5)) * span
     if side:                                     # (every target on one side of the reference)
         timing = side * np.sort(np.abs(timing))
-    _, pr = _problem(name, timing)
+    _, pr = _problem(name, timing, shape_only=shape_only)
     Z = np.clip(pr.x0[None] + spread * m.size * rng.standard_normal((60, len(pr.x0))), pr.lower, pr.upper)
     got = pr.batch(Z)
     mp = pytest.MonkeyPatch()
