@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+
 from ._scalar_nb import JIT as _JIT
 
 __all__ = ["sensitivities"]
-
 
 
 @numba.njit(inline="always", **_JIT)

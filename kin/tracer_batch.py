@@ -24,11 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel
+from .design import batched
 from .geometry import joint_tables, origin_joint
 from .memo import cached
 from .poses import unit
 from .sensitivity import offset_columns, sensitivity_plan
-from .design import batched
 from .solve import SolvePlan, plan_of
 
 __all__ = ["TracerBatch"]

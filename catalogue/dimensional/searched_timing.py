@@ -90,8 +90,7 @@ class SearchedTiming:
         return Z, t[:, :1] + (sense * t[:, 1])[:, None] * steps
 
     def batch(self, Y: np.ndarray) -> np.ndarray:
-        """The objective of search points ``Y`` ``(P, n + …)``: the RMS of the relative
-        residuals at their own driver values plus the weighted constraint violation (the
-        grid's, only for a constraint read over the whole motion), as
-        :meth:`~.objective.Problem.batch` scores them."""
+        """The objective of search points ``Y`` ``(P, n + …)``: each design scored at its
+        own driver values (:meth:`~.objective.Problem.score_at`, as prescribed timing's
+        search scores its candidates at the targets' values)."""
         return self.problem.score_at(*self.split(Y))
