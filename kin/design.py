@@ -42,7 +42,7 @@ from .poses import Poses
 from .solve import SolvePlan, check_finite_inputs, needed_steps, plan_of, solve
 
 __all__ = ["DesignPoses", "solve_designs", "with_cells", "design_names", "design_mechanism", "branch_signs",
-           "unbatched_steps", "batched"]
+           "unbatched_steps", "compiled_batch"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,7 +203,7 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     shape = (geo.D, X.shape[-2])
     steps = list(range(len(sp.steps))) if outputs is None else needed_steps(sp, outputs)
     kp = kernel.kernel_plan(sp) if kernel.wanted(shape[0] * shape[1]) else None
-    if kp is not None and kp.covers(steps, tracked=True) and kp.lowered(steps) and batched(sp, steps):
+    if kp is not None and compiled_batch(sp, kp, steps):
         floats = kernel.lower_designs(sp, kp, geo, steps)           # (no step bound in Python)
         store = kernel.design_work("poses", (mechanism.n_links, 3) + shape) if reuse else None
         G = _batch_store(geo, shape, store)
@@ -223,10 +223,14 @@ def solve_designs(mechanism: Mechanism, names, designs, inputs, *, outputs=None,
     return DesignPoses(sp, geo, G, ok)
 
 
-def batched(sp: SolvePlan, steps) -> bool:
-    """Whether every step of ``steps`` has a batched form (a kind may declare it has none:
-    its designs are then solved one by one, the compiled kernel's steps too)."""
-    return all(sp.steps[k].closed is None or type(sp.steps[k].closed).batched for k in steps)
+def compiled_batch(sp: SolvePlan, kp, steps) -> bool:
+    """Whether a batch of designs runs the steps ``steps`` of plan ``sp`` compiled straight
+    from the design matrix (kernel plan ``kp``): every step has a compiled step (a tracked
+    one too) and a compiled lowering, and its kind a batched form (a kind may declare it
+    has none: its designs are then solved one by one, the compiled kernel's steps too).
+    :func:`solve_designs` and :class:`~kin.tracer_batch.TracerBatch` decide by it."""
+    return (kp.covers(steps, tracked=True) and kp.lowered(steps)
+            and all(sp.steps[k].closed is None or type(sp.steps[k].closed).batched for k in steps))
 
 
 def _batch_store(geo: Geometry, shape: tuple, store=None) -> Poses:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel
-from .design import batched
+from .design import compiled_batch
 from .geometry import joint_tables, origin_joint
 from .memo import cached
 from .poses import unit
@@ -64,7 +64,7 @@ class TracerBatch:
             return None
         kp = kernel.kernel_plan(sp)
         every = range(len(sp.steps))
-        if not (kp.covers(every, tracked=True) and kp.lowered(every) and batched(sp, every)):
+        if not compiled_batch(sp, kp, every):
             return None
         tb = cached(sp, ("tracer batch", tuple(names), point), _make, (tuple(names), point))
         return None if tb.host == kp.frame else tb
