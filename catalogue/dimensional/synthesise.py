@@ -243,8 +243,11 @@ def _assess_unbounded(problem: Problem, z: np.ndarray, phi: np.ndarray):
     d = np.diff(phi)
     ordered = bool(np.all(d >= -1e-12) or np.all(d <= 1e-12))
     if valid.any():
-        lo, hi = cphi[valid].min(), cphi[valid].max()
-        inside = bool(full[0]) or bool(np.all((phi >= lo - 1e-9) & (phi <= hi + 1e-9)))
+        # the grid proves only where the motion cannot go: a sample that does not assemble
+        # (the first one past the reached run, δ beyond its ends); a target between the run's
+        # last sample and that one is the certified walk's to decide (:func:`_certified`)
+        lo, hi = cphi[valid].min() - problem.delta, cphi[valid].max() + problem.delta
+        inside = bool(full[0]) or bool(np.all((phi > lo + 1e-9) & (phi < hi - 1e-9)))
     else:                   # (the design does not assemble at its reference: nothing is reached)
         inside = False
     F, reached = targets
